@@ -1,0 +1,29 @@
+# One virtual environment for everything; created and filled on first use.
+#   make demo   -> the main job: diagonal cloth fold (small by default)
+#   make test   -> the test suite
+PYTHON ?= python3
+VENV   ?= .venv
+PY     := $(VENV)/bin/python
+STAMP  := $(VENV)/.dopt-installed
+# The CPU build of torch must be installed before the project, or pip pulls GBs of CUDA wheels.
+TORCH  ?= torch==2.13.0
+
+.PHONY: demo test install bench clean
+
+$(STAMP): pyproject.toml
+	test -x $(PY) || $(PYTHON) -m venv $(VENV)
+	$(PY) -m pip install --quiet --upgrade pip
+	$(PY) -m pip install --quiet "$(TORCH)"
+	$(PY) -m pip install --quiet -e ".[plots,cluster,dev]"
+	touch $(STAMP)
+
+install: $(STAMP)
+
+demo: $(STAMP)
+	MUJOCO_GL=egl $(PY) experiments/cloth_fold.py --goal diagonal --out results/cloth_diagonal
+
+test: $(STAMP)
+	MUJOCO_GL=egl OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 $(PY) -m pytest -q tests
+
+clean:
+	rm -rf $(VENV) results
