@@ -1,0 +1,174 @@
+"""State rows and tangent-space position arithmetic.
+
+A state is one ``mjSTATE_INTEGRATION`` row (time, qpos, qvel, act, history, warmstart, ctrl,
+applied forces, eq_active, mocap, userdata, plugin, plastic): everything MuJoCo needs to
+reproduce the next step bit for bit. ``mjSTATE_FULLPHYSICS`` alone is not enough (it lacks the
+warmstart, controls and eq_active; cloth branches then diverge by centimetres).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import mujoco
+import numpy as np
+
+INTEGRATION = int(mujoco.mjtState.mjSTATE_INTEGRATION)
+
+# single-bit state components, in the order MuJoCo lays them out in a state row
+_COMPONENTS = [(name[len("mjSTATE_"):].lower(), int(bit))
+               for name, bit in mujoco.mjtState.__members__.items()
+               if name != "mjNSTATE" and int(bit) & (int(bit) - 1) == 0]
+_COMPONENTS.sort(key=lambda c: c[1])
+
+
+@dataclass(frozen=True)
+class StateLayout:
+    """Where each component sits inside a state row of ``spec``.
+
+    Attributes:
+        spec: the mjtState bits of the row.
+        size: row length ns.
+        slices: component name ("time", "qpos", "qvel", "act", "warmstart", "ctrl",
+            "eq_active", ...) -> slice of the row.
+    """
+
+    spec: int
+    size: int
+    slices: dict[str, slice]
+
+    @classmethod
+    def of(cls, model: mujoco.MjModel, spec: int = INTEGRATION) -> "StateLayout":
+        slices, offset = {}, 0
+        for name, bit in _COMPONENTS:
+            if spec & bit:
+                n = mujoco.mj_stateSize(model, bit)
+                slices[name] = slice(offset, offset + n)
+                offset += n
+        size = mujoco.mj_stateSize(model, spec)
+        if offset != size:  # a component MuJoCo added that this list does not know
+            raise RuntimeError(f"state layout mismatch: components sum to {offset}, "
+                               f"mj_stateSize gives {size}")
+        return cls(spec, size, slices)
+
+    def __getitem__(self, name: str) -> slice:
+        try:
+            return self.slices[name]
+        except KeyError:
+            raise ValueError(f"state spec {self.spec} has no component {name!r}; "
+                             f"it has {sorted(self.slices)}") from None
+
+
+def get_state(model: mujoco.MjModel, data: mujoco.MjData, spec: int = INTEGRATION) -> np.ndarray:
+    """Save ``data``'s state: returns the (ns,) row of ``spec``."""
+    state = np.empty(mujoco.mj_stateSize(model, spec))
+    mujoco.mj_getState(model, data, state, spec)
+    return state
+
+
+def set_state(model: mujoco.MjModel, data: mujoco.MjData, state: np.ndarray,
+              spec: int = INTEGRATION) -> None:
+    """Restore a (ns,) row of ``spec`` into ``data`` (derived quantities are not recomputed)."""
+    state = check_states(model, state, spec, batched=False)
+    mujoco.mj_setState(model, data, state, spec)
+
+
+def check_states(model: mujoco.MjModel, states, spec: int = INTEGRATION, *,
+                 batched: bool | None = None, name: str = "state") -> np.ndarray:
+    """Validate state rows: (ns,) or (P, ns) float, finite. Returns a C-contiguous float64 array.
+
+    ``batched`` True requires (P, ns), False requires (ns,), None accepts either.
+    """
+    arr = np.asarray(states)
+    if arr.dtype == object or not (np.issubdtype(arr.dtype, np.floating)
+                                   or np.issubdtype(arr.dtype, np.integer)):
+        raise TypeError(f"{name} must be a float array, got dtype {arr.dtype}")
+    ns = mujoco.mj_stateSize(model, spec)
+    ndim_ok = {None: (1, 2), True: (2,), False: (1,)}[batched]
+    if arr.ndim not in ndim_ok or arr.shape[-1] != ns:
+        want = {None: f"({ns},) or (P, {ns})", True: f"(P, {ns})", False: f"({ns},)"}[batched]
+        raise ValueError(f"{name} must have shape {want} (mjSTATE_INTEGRATION rows), "
+                         f"got {arr.shape}")
+    if arr.ndim == 2 and arr.shape[0] == 0:
+        raise ValueError(f"{name} is empty")
+    if not np.all(np.isfinite(arr)):
+        bad = np.argwhere(~np.isfinite(np.atleast_2d(arr)))[0]
+        raise ValueError(f"{name} contains NaN/inf (first at row {bad[0]}, column {bad[1]})")
+    return np.ascontiguousarray(arr, dtype=np.float64)
+
+
+class Tangent:
+    """Vectorised tangent-space arithmetic on qpos for one model (free and ball joints use
+    quaternions in qpos but 3 angular-velocity DoFs in qvel).
+
+    ``difference`` equals ``mujoco.mj_differentiatePos`` row by row (to rounding), without a
+    Python loop; ``perturb`` calls ``mujoco.mj_integratePos`` so that a perturbed state is
+    bit-identical to the one ``mjd_transitionFD`` builds.
+    """
+
+    def __init__(self, model: mujoco.MjModel):
+        self.model = model
+        lin_q, lin_v, quat_q, quat_v = [], [], [], []
+        for j in range(model.njnt):
+            qa, va, jt = model.jnt_qposadr[j], model.jnt_dofadr[j], int(model.jnt_type[j])
+            if jt == int(mujoco.mjtJoint.mjJNT_FREE):
+                lin_q += range(qa, qa + 3)
+                lin_v += range(va, va + 3)
+                quat_q.append(qa + 3)
+                quat_v.append(va + 3)
+            elif jt == int(mujoco.mjtJoint.mjJNT_BALL):
+                quat_q.append(qa)
+                quat_v.append(va)
+            else:
+                lin_q.append(qa)
+                lin_v.append(va)
+        self._lin_q, self._lin_v = np.array(lin_q, int), np.array(lin_v, int)
+        self._quat_q = np.array(quat_q, int)[:, None] + np.arange(4)  # (nquat, 4)
+        self._quat_v = np.array(quat_v, int)[:, None] + np.arange(3)  # (nquat, 3)
+        self._unit = np.eye(model.nv)
+
+    def difference(self, qpos1: np.ndarray, qpos2: np.ndarray, h: float = 1.0) -> np.ndarray:
+        """Velocity taking qpos1 to qpos2 in time h: (B, nq), (B, nq) -> (B, nv)."""
+        out = np.empty(qpos1.shape[:-1] + (self.model.nv,))
+        inv_h = 1.0 / h
+        out[..., self._lin_v] = inv_h * (qpos2[..., self._lin_q] - qpos1[..., self._lin_q])
+        if len(self._quat_q):
+            qa = qpos1[..., self._quat_q]
+            qb = qpos2[..., self._quat_q]
+            qa = qa / np.linalg.norm(qa, axis=-1, keepdims=True)
+            qb = qb / np.linalg.norm(qb, axis=-1, keepdims=True)
+            out[..., self._quat_v] = inv_h * _quat_log(_quat_mul(_quat_conj(qa), qb))
+        return out
+
+    def perturb(self, qpos: np.ndarray, dofs: np.ndarray, eps: float) -> np.ndarray:
+        """Move each row of qpos (B, nq) by eps along tangent DoF dofs[b] (B,) -> (B, nq).
+
+        Exactly ``mj_integratePos(model, qpos[b], e_dofs[b], eps)``, as mjd_transitionFD does.
+        """
+        out = np.array(qpos, dtype=np.float64, copy=True)
+        for row, dof in zip(out, dofs):
+            mujoco.mj_integratePos(self.model, row, self._unit[dof], eps)
+        return out
+
+
+def _quat_conj(q: np.ndarray) -> np.ndarray:
+    return q * np.array([1.0, -1.0, -1.0, -1.0])
+
+
+def _quat_mul(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    aw, ax, ay, az = np.moveaxis(a, -1, 0)
+    bw, bx, by, bz = np.moveaxis(b, -1, 0)
+    return np.stack([aw * bw - ax * bx - ay * by - az * bz,
+                     aw * bx + ax * bw + ay * bz - az * by,
+                     aw * by - ax * bz + ay * bw + az * bx,
+                     aw * bz + ax * by - ay * bx + az * bw], axis=-1)
+
+
+def _quat_log(q: np.ndarray) -> np.ndarray:
+    """Rotation vector (axis * angle, angle wrapped to (-pi, pi]) of unit quaternions (..., 4)."""
+    vec = q[..., 1:]
+    s = np.linalg.norm(vec, axis=-1)
+    angle = 2.0 * np.arctan2(s, q[..., 0])
+    angle = np.where(angle > np.pi, angle - 2.0 * np.pi, angle)
+    scale = np.divide(angle, s, out=np.zeros_like(s), where=s > 1e-15)
+    return vec * scale[..., None]

@@ -1,0 +1,30 @@
+import os
+import sys
+
+import mujoco
+import numpy as np
+import pytest
+
+sys.path.insert(0, os.path.dirname(__file__))
+from models import MIXED_JOINTS  # noqa: E402
+
+from dopt.scene import Scene  # noqa: E402
+
+
+@pytest.fixture(scope="module")
+def scene():
+    return Scene.from_xml(MIXED_JOINTS)
+
+
+@pytest.fixture
+def moving_state(scene):
+    """An mjSTATE_INTEGRATION row of the mixed model in motion, with contacts."""
+    m = scene.model
+    d = mujoco.MjData(m)
+    rng = np.random.default_rng(3)
+    d.qvel[:] = rng.normal(0, 0.3, m.nv)
+    for _ in range(40):
+        d.ctrl[:] = rng.uniform(-1, 1, m.nu)
+        mujoco.mj_step(m, d)
+    assert d.ncon > 0
+    return scene.state_of(d)

@@ -1,0 +1,37 @@
+"""Small MJCF models shared by the dopt tests."""
+
+# free, ball, hinge and slide joints, contacts with the floor and between bodies, motors with
+# limited ctrl (one control sits at its limit in the tests) and one unlimited
+MIXED_JOINTS = """
+<mujoco>
+  <option timestep="0.005"/>
+  <worldbody>
+    <geom name="floor" type="plane" size="2 2 .1"/>
+    <body name="arm" pos="0 0 .4">
+      <joint name="slide" type="slide" axis="1 0 0" damping=".5"/>
+      <geom type="box" size=".05 .05 .05" mass="1"/>
+      <body name="link" pos="0 0 -.1">
+        <joint name="hinge" type="hinge" axis="0 1 0" damping=".1"/>
+        <geom type="capsule" fromto="0 0 0 0 0 -.2" size=".03" mass=".3"/>
+        <body name="wrist" pos="0 0 -.22">
+          <joint name="ball" type="ball" damping=".05"/>
+          <geom type="capsule" fromto="0 0 0 .1 0 -.05" size=".02" mass=".1"/>
+        </body>
+      </body>
+    </body>
+    <body name="box" pos=".15 0 .041">
+      <freejoint name="box_free"/>
+      <geom type="box" size=".04 .04 .04" mass=".2"/>
+    </body>
+    <body name="ball_obj" pos="-.2 .1 .031">
+      <freejoint/>
+      <geom type="sphere" size=".03" mass=".1"/>
+    </body>
+  </worldbody>
+  <actuator>
+    <motor joint="slide" ctrlrange="-5 5" ctrllimited="true"/>
+    <motor joint="hinge" ctrlrange="-1 1" ctrllimited="true"/>
+    <motor joint="ball" gear="0 1 0" ctrllimited="false"/>
+  </actuator>
+</mujoco>
+"""
