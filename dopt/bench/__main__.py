@@ -1,0 +1,45 @@
+"""python -m dopt.bench {rollout,derivatives} [options]: print timings as JSON."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(prog="python -m dopt.bench", description=__doc__)
+    sub = ap.add_subparsers(dest="bench", required=True)
+
+    def common(p, task="clutter"):
+        p.add_argument("--task", default=task, help="task scene from dopt.tasks (default %(default)s)")
+        p.add_argument("--threads", type=int, default=0, help="simulation threads (0: all cores)")
+        p.add_argument("--repeats", type=int, default=5, help="timed repeats; the best is kept")
+        p.add_argument("--seed", type=int, default=0, help="seed of the scene layout and controls")
+
+    p = sub.add_parser("rollout", help="P open-loop rollouts of T steps in one batched call")
+    common(p)
+    p.add_argument("--P", type=int, default=64, help="number of rollouts")
+    p.add_argument("--T", type=int, default=80, help="steps per rollout")
+
+    p = sub.add_parser("derivatives", help="reduced FD derivatives over a horizon vs full set")
+    common(p)
+    p.add_argument("--T", type=int, default=80, help="horizon")
+    p.add_argument("--objects", type=int, default=2,
+                   help="objects in the active set besides the robot (2 -> |C| = 7 + 12 = 19)")
+    p.add_argument("--centered", action="store_true", help="centred differences")
+
+    args = ap.parse_args(argv)
+    if args.bench == "rollout":
+        from dopt.bench.rollout import bench_rollout
+        out = bench_rollout(args.task, args.P, args.T, args.threads, args.repeats, args.seed)
+    elif args.bench == "derivatives":
+        from dopt.bench.rollout import bench_derivatives
+        out = bench_derivatives(args.task, args.objects, args.T, args.threads, args.repeats,
+                                args.centered, args.seed)
+    print(json.dumps(out))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
