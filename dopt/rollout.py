@@ -65,9 +65,9 @@ class RolloutResult:
 
 @dataclass(frozen=True)
 class Trajectory:
-    """states: (T+1, ns). Row t is the state before step t holding control u_t, so rows[:T]
-    feed ``derivatives`` directly; the last row is the final state (holding u_{T-1}).
-    controls: (T, nu)."""
+    """states: (..., T+1, ns). Row t is the state before step t holding control u_t, so
+    rows[:T] feed ``derivatives`` directly; the last row is the final state (holding u_{T-1}).
+    controls: (..., T, nu), the controls applied (after clamping, where a call clamps)."""
 
     states: np.ndarray
     controls: np.ndarray
@@ -172,6 +172,70 @@ class RolloutService:
         states[0, self._ctrl] = u[0]
         states[1:-1, self._ctrl] = u[1:]
         return Trajectory(states, np.array(u))
+
+    def rollout_feedback(self, initial_state, controls, ref_states, gains, dofs) -> Trajectory:
+        """P closed-loop rollouts in lock-step: u_t = U[p, t] + K_t dx_C(x_t, ref_t).
+
+        The feedback acts on the tangent deviation of the active DoFs from the reference,
+        dx_C = [q_C (-) q_ref_C ; v_C - v_ref_C], as iLQR's forward pass (Eq. 12) needs; the
+        dynamics are the full nonlinear model. Controls are clamped to ctrlrange where limited.
+
+        Args:
+            initial_state: (ns,) start state of every rollout.
+            controls: (P, T, nu) feed-forward controls (e.g. u_bar + alpha_p k for P alphas).
+            ref_states: (T, ns) reference rows the deviation is measured from.
+            gains: (T, nu, 2|C|) feedback gains on the active set.
+            dofs: the active DoF set C (indices, group names).
+
+        Returns:
+            Trajectory with states (P, T+1, ns) (row t holds the applied u_t) and the applied
+            controls (P, T, nu).
+        """
+        m = self.model
+        x0 = check_states(m, initial_state, batched=False, name="initial_state")
+        u = _as_float(controls, "controls")
+        ref = check_states(m, ref_states, batched=True, name="ref_states")
+        K = _as_float(gains, "gains")
+        C = self.scene.as_dofs(dofs)
+        P, T = u.shape[:2] if u.ndim == 3 else (0, 0)
+        if u.ndim != 3 or u.shape[2] != m.nu or T == 0:
+            raise ValueError(f"controls must have shape (P, T, {m.nu}), got {u.shape}")
+        if ref.shape[0] != T or K.shape != (T, m.nu, 2 * len(C)):
+            raise ValueError(f"ref_states must be ({T}, ns) and gains ({T}, {m.nu}, "
+                             f"{2 * len(C)}); got {ref.shape} and {K.shape}")
+        lo, hi = self._ctrl_bounds()
+        ref_q, ref_v = ref[:, self._qpos], ref[:, self._qvel][:, C]
+        out = np.empty((P, T + 1, self.scene.nstate))
+        applied = np.empty((P, T, m.nu))
+        diff = self.scene.tangent.difference
+        with self._lock:
+            batch, ids = self._batch_of(P)
+            rows = batch.state
+            rows[:P] = x0
+            batch.warning[:P] = 0
+            try:
+                for t in range(T):
+                    x = rows[:P]
+                    dx = np.concatenate([diff(ref_q[t], x[:, self._qpos])[:, C],
+                                         x[:, self._qvel][:, C] - ref_v[t]], axis=1)
+                    ut = np.clip(u[:, t] + dx @ K[t].T, lo, hi)
+                    rows[:P, self._ctrl] = ut
+                    applied[:, t] = ut
+                    out[:, t] = rows[:P]
+                    batch.step(ids=ids)
+            except SimulationError as e:
+                raise RolloutError(f"rollout_feedback: {e}") from e
+            out[:, T] = rows[:P]
+            times = out[:, 1:, self.scene.layout["time"]][:, :, 0]
+            self._check_stable(batch, P, out[:, T], times, "rollout_feedback")
+        return Trajectory(out, applied)
+
+    def _ctrl_bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        """(nu,) lower and upper control bounds (+-inf where not limited)."""
+        m = self.model
+        limited = m.actuator_ctrllimited.astype(bool)
+        return (np.where(limited, m.actuator_ctrlrange[:, 0], -np.inf),
+                np.where(limited, m.actuator_ctrlrange[:, 1], np.inf))
 
     # --------------------------------------------------------------- derivatives
     def derivatives(self, states, dofs=None, fd: FDConfig = FDConfig()) -> Derivatives:

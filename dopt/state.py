@@ -128,8 +128,10 @@ class Tangent:
         self._unit = np.eye(model.nv)
 
     def difference(self, qpos1: np.ndarray, qpos2: np.ndarray, h: float = 1.0) -> np.ndarray:
-        """Velocity taking qpos1 to qpos2 in time h: (B, nq), (B, nq) -> (B, nv)."""
-        out = np.empty(qpos1.shape[:-1] + (self.model.nv,))
+        """Velocity taking qpos1 to qpos2 in time h: (..., nq), (..., nq) -> (..., nv).
+
+        The leading dimensions broadcast against each other."""
+        out = np.empty(np.broadcast_shapes(qpos1.shape, qpos2.shape)[:-1] + (self.model.nv,))
         inv_h = 1.0 / h
         out[..., self._lin_v] = inv_h * (qpos2[..., self._lin_q] - qpos1[..., self._lin_q])
         if len(self._quat_q):

@@ -1,0 +1,196 @@
+"""iLQR with state-vector reduction (iLQR-SVR, Sec. 4.1 of the state-vector-reduction paper).
+
+Derivatives A^C, B^C come from the rollout service for the active DoF set C only; the cost
+derivatives and the backward pass (Eq. 8-10) run in torch on the reduced tangent state
+x^C = [q_C; v_C] (2|C|); the forward pass rolls the full nonlinear model out with the reduced
+feedback u = u_bar + alpha k + K^C (x_hat^C - x^C) (Eq. 11-13), one rollout per line-search
+alpha, all alphas in one lock-stepped batch. With C = all DoFs this is plain iLQR.
+
+Shapes: T horizon, nu controls, c = |C|, n = 2c, ns state row, A alphas.
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+import torch
+
+from dopt.costs import QuadraticCost
+from dopt.rollout import FDConfig, RolloutService
+
+log = logging.getLogger(__name__)
+
+
+def _default_alphas() -> tuple[float, ...]:
+    """The authors' 7 line-search step sizes, alpha_i = (i/7)^2, largest first."""
+    return tuple((i / 7) ** 2 for i in range(7, 0, -1))
+
+
+@dataclass(frozen=True)
+class ILQRConfig:
+    """fd: finite differences of the dynamics (authors: centred, eps 1e-6).
+    mu_init/mu_min/mu_max/mu_factor: Levenberg-Marquardt regularisation of Q_uu (authors:
+    0.1, 1e-4..10, x10). alphas: line-search step sizes tried in parallel."""
+
+    fd: FDConfig = FDConfig(eps=1e-6, centered=True)
+    mu_init: float = 0.1
+    mu_min: float = 1e-4
+    mu_max: float = 10.0
+    mu_factor: float = 10.0
+    alphas: tuple[float, ...] = field(default_factory=_default_alphas)
+
+    def __post_init__(self):
+        if not 0 <= self.mu_min <= self.mu_init <= self.mu_max:
+            raise ValueError("need 0 <= mu_min <= mu_init <= mu_max")
+        if self.mu_factor <= 1:
+            raise ValueError("mu_factor must be > 1")
+        if not self.alphas or any(not 0 < a <= 1 for a in self.alphas):
+            raise ValueError(f"alphas must be in (0, 1], got {self.alphas}")
+
+
+@dataclass(frozen=True)
+class ILQRStep:
+    """One iteration. controls (T, nu) and states (T+1, ns): the new nominal (the old one
+    when no alpha improved); K (T, nu, 2c), k (T, nu): the gains of the backward pass; dofs
+    (c,): the active set; cost_before/cost_after: J of the old and new nominal; alpha: the
+    accepted step (0 if rejected); mu: the regularisation used; seconds: wall time of
+    'derivatives', 'backward', 'forward'."""
+
+    controls: np.ndarray
+    states: np.ndarray
+    K: torch.Tensor
+    k: torch.Tensor
+    dofs: np.ndarray
+    cost_before: float
+    cost_after: float
+    alpha: float
+    mu: float
+    seconds: dict
+
+    @property
+    def accepted(self) -> bool:
+        return self.alpha > 0
+
+
+@dataclass(frozen=True)
+class ILQRResult:
+    """controls (T, nu), states (T+1, ns), costs: J after each iteration (iteration 0 is the
+    initial guess), steps: every ILQRStep."""
+
+    controls: np.ndarray
+    states: np.ndarray
+    costs: list
+    steps: list
+
+
+class ILQR:
+    """iLQR on a reduced DoF set over a RolloutService and a QuadraticCost.
+
+    ``iterate`` runs one iteration (the MPC mode); ``solve`` iterates to convergence. The
+    regularisation mu persists between calls, as in an MPC loop.
+    """
+
+    def __init__(self, service: RolloutService, cost: QuadraticCost,
+                 config: ILQRConfig = ILQRConfig()):
+        if cost.scene is not service.scene:
+            raise ValueError("cost and rollout service must share one Scene")
+        self.service, self.cost, self.config = service, cost, config
+        self.mu = config.mu_init
+        self._alphas = np.asarray(config.alphas, dtype=float)
+
+    def iterate(self, x0: np.ndarray, controls: np.ndarray, dofs=None,
+                nominal: np.ndarray | None = None) -> ILQRStep:
+        """One iteration from state x0 (ns,) and controls (T, nu) on the DoF set ``dofs``
+        (None: all). ``nominal`` (T+1, ns) may pass the trajectory of these controls if the
+        caller has it; otherwise it is rolled out."""
+        svc, scene = self.service, self.service.scene
+        C = scene.dofs() if dofs is None else scene.as_dofs(dofs)
+        U = np.ascontiguousarray(controls, dtype=float)
+        X = svc.trajectory(x0, U).states if nominal is None else nominal
+        J0 = float(self.cost.total(X, U))
+
+        t0 = time.perf_counter()
+        D = svc.derivatives(X[:-1], C, self.config.fd)
+        t1 = time.perf_counter()
+        cd = self.cost.derivatives(X, U, C)
+        A, B = torch.from_numpy(D.A), torch.from_numpy(D.B)
+        while True:
+            gains = backward_pass(A, B, cd.lx, cd.lxx, cd.lu, cd.luu, self.mu)
+            if gains is not None or self.mu >= self.config.mu_max:
+                break
+            self.mu = min(self.mu * self.config.mu_factor, self.config.mu_max)
+        t2 = time.perf_counter()
+        if gains is None:
+            log.warning("backward pass failed at mu=%g; keeping the nominal", self.mu)
+            return ILQRStep(U, X, torch.zeros(len(U), scene.nu, 2 * len(C)),
+                            torch.zeros(len(U), scene.nu), C, J0, J0, 0.0, self.mu,
+                            {"derivatives": t1 - t0, "backward": t2 - t1, "forward": 0.0})
+        K, k = gains
+        ff = U[None] + self._alphas[:, None, None] * k.numpy()[None]     # (A, T, nu)
+        trial = svc.rollout_feedback(x0, ff, X[:-1], K.numpy(), C)
+        costs = self.cost.total(trial.states, trial.controls).numpy()    # (A,)
+        t3 = time.perf_counter()
+        best = int(np.argmin(costs))
+        seconds = {"derivatives": t1 - t0, "backward": t2 - t1, "forward": t3 - t2}
+        if costs[best] < J0:
+            self.mu = max(self.mu / self.config.mu_factor, self.config.mu_min)
+            return ILQRStep(trial.controls[best], trial.states[best], K, k, C, J0,
+                            float(costs[best]), float(self._alphas[best]), self.mu, seconds)
+        self.mu = min(self.mu * self.config.mu_factor, self.config.mu_max)
+        return ILQRStep(U, X, K, k, C, J0, J0, 0.0, self.mu, seconds)
+
+    def solve(self, x0: np.ndarray, controls: np.ndarray, dofs=None, max_iterations: int = 50,
+              rtol: float = 1e-6) -> ILQRResult:
+        """Iterate until the relative improvement drops below rtol after an accepted step,
+        the regularisation saturates, or max_iterations."""
+        if max_iterations < 1:
+            raise ValueError("max_iterations must be >= 1")
+        U, X = np.asarray(controls, dtype=float), None
+        steps, costs = [], []
+        for _ in range(max_iterations):
+            step = self.iterate(x0, U, dofs, nominal=X)
+            steps.append(step)
+            if not costs:
+                costs.append(step.cost_before)
+            costs.append(step.cost_after)
+            U, X = step.controls, step.states
+            gain = (step.cost_before - step.cost_after) / max(abs(step.cost_before), 1e-300)
+            if step.accepted and gain < rtol:
+                break
+            if not step.accepted and self.mu >= self.config.mu_max:
+                break
+        return ILQRResult(U, X, costs, steps)
+
+
+def backward_pass(A: torch.Tensor, B: torch.Tensor, lx: torch.Tensor, lxx: torch.Tensor,
+                  lu: torch.Tensor, luu: torch.Tensor, mu: float):
+    """Riccati recursion (Eq. 8-10) on the reduced state with Q_uu + mu I.
+
+    A (T, n, n), B (T, n, nu), lx (T+1, n), lxx (T+1, n, n), lu (T, nu), luu (T, nu, nu).
+    Returns (K (T, nu, n), k (T, nu)), or None if some Q_uu + mu I is not positive definite.
+    """
+    T, n, nu = B.shape
+    K = torch.empty(T, nu, n, dtype=A.dtype)
+    k = torch.empty(T, nu, dtype=A.dtype)
+    Vx, Vxx = lx[T], lxx[T]
+    eye = torch.eye(nu, dtype=A.dtype)
+    for t in range(T - 1, -1, -1):
+        At, Bt = A[t], B[t]
+        VA, VB = Vxx @ At, Vxx @ Bt
+        Qx = lx[t] + At.T @ Vx
+        Qu = lu[t] + Bt.T @ Vx
+        Qxx = lxx[t] + At.T @ VA
+        Quu = luu[t] + Bt.T @ VB
+        Qux = Bt.T @ VA
+        L, info = torch.linalg.cholesky_ex(Quu + mu * eye)
+        if int(info):
+            return None
+        sol = torch.cholesky_solve(torch.cat([Qu[:, None], Qux], 1), L)
+        k[t], K[t] = -sol[:, 0], -sol[:, 1:]
+        Vx = Qx + K[t].T @ (Quu @ k[t]) + K[t].T @ Qu + Qux.T @ k[t]
+        Vxx = Qxx + K[t].T @ Quu @ K[t] + K[t].T @ Qux + Qux.T @ K[t]
+        Vxx = 0.5 * (Vxx + Vxx.T)
+    return K, k

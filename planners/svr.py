@@ -1,0 +1,112 @@
+"""DoF importance from the feedback gains K and the DoF-selection methods (Sec. 4.2, 5).
+
+Importance (per DoF j of the active set C, c = |C|, from K of shape (T, nu, 2c)):
+
+- ``sum`` (Eq. 15): sum over t and controls of |K_t(p, j)| + |K_t(p, j + c)|, over T;
+- ``svd`` (Eq. 17): K_t = U S V^T; sum over t and the first g singular triplets of
+  (|V_t(j, n)| + |V_t(j + c, n)|) sigma_n, over T.
+
+The paper writes both without absolute values; gains of either sign matter equally, and the
+sign of a singular vector is arbitrary, so magnitudes are used (as the authors' code does).
+
+Methods by name: ``baseline`` (all DoFs), ``rand`` (the robot plus theta random DoFs, redrawn
+every iteration), ``naive`` (the robot plus the DoFs the cost weights), ``svr-sum`` and
+``svr-svd`` (start from all DoFs; before each optimisation re-add theta random unused DoFs;
+after it remove the DoFs whose importance is below rho). Robot DoFs are never removed.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import torch
+
+METHODS = ("baseline", "rand", "naive", "svr-sum", "svr-svd")
+
+
+def importance_sum(K: torch.Tensor) -> torch.Tensor:
+    """Eq. 15: (T, nu, 2c) -> (c,)."""
+    c = K.shape[-1] // 2
+    a = K.abs().sum(dim=(0, 1))
+    return (a[:c] + a[c:]) / K.shape[0]
+
+
+def importance_svd(K: torch.Tensor, g: int = 3) -> torch.Tensor:
+    """Eq. 17 with the first g singular values: (T, nu, 2c) -> (c,)."""
+    c = K.shape[-1] // 2
+    _, S, Vh = torch.linalg.svd(K, full_matrices=False)     # S (T, r), Vh (T, r, 2c)
+    g = min(g, S.shape[-1])
+    w = (Vh[:, :g, :].abs() * S[:, :g, None]).sum(dim=(0, 1))  # (2c,)
+    return (w[:c] + w[c:]) / K.shape[0]
+
+
+@dataclass(frozen=True)
+class SelectionConfig:
+    """method: one of METHODS; rho: importance threshold below which SVR removes a DoF;
+    theta: random unused DoFs (re-)introduced per iteration (rand: DoFs besides the robot);
+    g: singular values used by svr-svd."""
+
+    method: str = "svr-sum"
+    rho: float = 1.0
+    theta: int = 4
+    g: int = 3
+
+    def __post_init__(self):
+        if self.method not in METHODS:
+            raise ValueError(f"unknown method {self.method!r}; choose from {METHODS}")
+        if not np.isfinite(self.rho) or self.rho < 0:
+            raise ValueError(f"rho must be >= 0, got {self.rho}")
+        if not isinstance(self.theta, (int, np.integer)) or self.theta < 0:
+            raise ValueError(f"theta must be an int >= 0, got {self.theta}")
+        if self.g < 1:
+            raise ValueError(f"g must be >= 1, got {self.g}")
+
+
+class DofSelector:
+    """Keeps the active DoF set C of one MPC run (Alg. 1 lines 1, 6-8 and 10-12).
+
+    Args:
+        nv: number of DoFs.
+        robot: (r,) robot DoFs, always active.
+        costed: DoFs the cost weights (for ``naive``).
+        config: the method and its parameters.
+        rng: the generator of every random choice.
+    """
+
+    def __init__(self, nv: int, robot, costed, config: SelectionConfig,
+                 rng: np.random.Generator):
+        if not isinstance(rng, np.random.Generator):
+            raise TypeError("rng must be a numpy.random.Generator")
+        self.nv, self.config, self.rng = nv, config, rng
+        self.robot = np.unique(np.asarray(robot, dtype=int))
+        if config.method == "naive":
+            self.active = np.union1d(self.robot, np.asarray(costed, dtype=int))
+        else:
+            self.active = np.arange(nv)   # baseline and SVR start from F (rand redraws)
+        self.importance: np.ndarray | None = None
+
+    def before(self) -> np.ndarray:
+        """The DoF set for the next optimisation (adds theta random unused DoFs for SVR)."""
+        method, theta = self.config.method, self.config.theta
+        if method == "rand":
+            others = np.setdiff1d(np.arange(self.nv), self.robot)
+            pick = self.rng.choice(others, size=min(theta, len(others)), replace=False)
+            self.active = np.union1d(self.robot, pick)
+        elif method.startswith("svr"):
+            unused = np.setdiff1d(np.arange(self.nv), self.active)
+            if len(unused) and theta:
+                pick = self.rng.choice(unused, size=min(theta, len(unused)), replace=False)
+                self.active = np.union1d(self.active, pick)
+        return self.active
+
+    def after(self, K: torch.Tensor, dofs: np.ndarray) -> np.ndarray:
+        """Remove DoFs of ``dofs`` below rho given their gains K (T, nu, 2|dofs|) (SVR only)."""
+        method = self.config.method
+        if not method.startswith("svr"):
+            return self.active
+        imp = importance_sum(K) if method == "svr-sum" else importance_svd(K, self.config.g)
+        self.importance = imp.numpy()
+        keep = (self.importance >= self.config.rho) | np.isin(dofs, self.robot)
+        self.active = np.asarray(dofs)[keep]
+        return self.active

@@ -1,0 +1,158 @@
+"""Reduced iLQR against independent references: cvxpy on an LQ problem, and a plain numpy
+iLQR iteration built on mujoco.mjd_transitionFD."""
+
+import os
+import sys
+
+import cvxpy as cp
+import mujoco
+import numpy as np
+import pytest
+import torch
+
+sys.path.insert(0, os.path.join(os.path.dirname(__file__), "..", "dopt"))
+from models import MIXED_JOINTS  # noqa: E402
+
+from dopt import FDConfig, RolloutService, Scene  # noqa: E402
+from dopt.costs import QuadraticCost  # noqa: E402
+from planners.ilqr import ILQR, ILQRConfig, backward_pass  # noqa: E402
+
+# two damped point masses on slides, no gravity, no contacts: linear dynamics under Euler
+LINEAR = """<mujoco><option timestep="0.02" gravity="0 0 0"/><worldbody>
+  <body name="a"><joint name="ax" type="slide" axis="1 0 0" damping=".3"/>
+    <geom size=".05" mass="1" contype="0" conaffinity="0"/></body>
+  <body name="b" pos="0 1 0"><joint name="bx" type="slide" axis="1 0 0" damping=".1"/>
+    <joint name="by" type="slide" axis="0 1 0"/><geom size=".05" mass="2" contype="0"
+    conaffinity="0"/></body></worldbody>
+  <actuator><motor joint="ax"/><motor joint="by" ctrllimited="false"/></actuator></mujoco>"""
+
+
+def lq_reference(A, B, x0, xref, w, w_f, r, T):
+    """Solve the LQ problem as a QP with cvxpy: the optimal (T, nu) controls."""
+    n, nu = B.shape
+    X, U = cp.Variable((T + 1, n)), cp.Variable((T, nu))
+    cost = sum(cp.sum(cp.multiply(w, cp.square(X[t] - xref))) +
+               cp.sum(cp.multiply(r, cp.square(U[t]))) for t in range(T))
+    cost += cp.sum(cp.multiply(w_f, cp.square(X[T] - xref)))
+    cons = [X[0] == x0] + [X[t + 1] == A @ X[t] + B @ U[t] for t in range(T)]
+    cp.Problem(cp.Minimize(cost), cons).solve(solver=cp.CLARABEL)
+    return U.value
+
+
+def test_lq_converges_in_one_iteration_to_the_qp_solution():
+    scene = Scene.from_xml(LINEAR)
+    m = scene.model
+    d = mujoco.MjData(m)
+    d.qvel[:] = [0.3, -0.2, 0.1]
+    mujoco.mj_forward(m, d)
+    x0 = scene.state_of(d)
+    T = 30
+    q_ref = np.array([0.5, -0.2, 0.3])
+    w = np.array([1.0, 0.5, 2.0, 0.1, 0.1, 0.1])
+    w_f = 20 * w
+    r = np.array([1e-2, 5e-3])
+    cost = QuadraticCost(scene, q_ref, w, w_f, r)
+    svc = RolloutService(scene)
+    ilqr = ILQR(svc, cost, ILQRConfig(fd=FDConfig(1e-6, centered=True), mu_init=0.0,
+                                      mu_min=0.0))
+    step = ilqr.iterate(x0, np.zeros((T, m.nu)))
+    assert step.alpha == 1.0
+
+    A, B = np.zeros((6, 6)), np.zeros((6, 2))
+    mujoco.mjd_transitionFD(m, d, 1e-6, True, A, B, None, None)
+    xs = np.concatenate([d.qpos, d.qvel])
+    U_ref = lq_reference(A, B, xs, np.concatenate([q_ref, np.zeros(3)]), w, w_f, r, T)
+    np.testing.assert_allclose(step.controls, U_ref, rtol=1e-4, atol=1e-5 * np.abs(U_ref).max())
+    # a second iteration cannot improve on the optimum
+    again = ilqr.iterate(x0, step.controls)
+    assert again.cost_after >= step.cost_after * (1 - 1e-7)
+
+
+def numpy_ilqr_gains(scene, X, U, cost, eps, mu):
+    """Independent full-state iLQR backward pass on mjd_transitionFD (numpy)."""
+    m = scene.model
+    d = mujoco.MjData(m)
+    n = 2 * m.nv
+    T = len(U)
+    As, Bs = np.zeros((T, n, n)), np.zeros((T, n, m.nu))
+    for t in range(T):
+        mujoco.mj_setState(m, d, X[t], mujoco.mjtState.mjSTATE_INTEGRATION)
+        mujoco.mjd_transitionFD(m, d, eps, False, As[t], Bs[t], None, None)
+    e = cost.errors(X).numpy()
+    w = np.vstack([np.tile(cost.w.numpy(), (T, 1)), cost.w_f.numpy()])
+    r = cost.r.numpy()
+    Vx, Vxx = 2 * w[T] * e[T], np.diag(2 * w[T])
+    K, k = np.zeros((T, m.nu, n)), np.zeros((T, m.nu))
+    for t in range(T - 1, -1, -1):
+        A, B = As[t], Bs[t]
+        Qx, Qu = 2 * w[t] * e[t] + A.T @ Vx, 2 * r * U[t] + B.T @ Vx
+        Qxx = np.diag(2 * w[t]) + A.T @ Vxx @ A
+        Quu = np.diag(2 * r) + B.T @ Vxx @ B
+        Qux = B.T @ Vxx @ A
+        Qi = np.linalg.inv(Quu + mu * np.eye(m.nu))
+        k[t], K[t] = -Qi @ Qu, -Qi @ Qux
+        Vx = Qx + K[t].T @ Quu @ k[t] + K[t].T @ Qu + Qux.T @ k[t]
+        Vxx = Qxx + K[t].T @ Quu @ K[t] + K[t].T @ Qux + Qux.T @ K[t]
+        Vxx = 0.5 * (Vxx + Vxx.T)
+    return K, k
+
+
+def mixed_problem():
+    scene = Scene.from_xml(MIXED_JOINTS)
+    m = scene.model
+    d = mujoco.MjData(m)
+    mujoco.mj_forward(m, d)
+    q_ref = m.qpos0.copy()
+    q_ref[0] = 0.2
+    box = m.jnt_qposadr[m.joint("box_free").id]
+    q_ref[box] = 0.3
+    w = np.zeros(2 * m.nv)
+    w[[0, 5]] = [5.0, 10.0]
+    w[m.nv:m.nv + 5] = 0.01
+    cost = QuadraticCost(scene, q_ref, w, 10 * w, np.full(m.nu, 1e-3))
+    return scene, scene.state_of(d), cost
+
+
+def test_all_dofs_equal_plain_ilqr_on_transitionFD():
+    scene, x0, cost = mixed_problem()
+    T = 15
+    rng = np.random.default_rng(0)
+    U = rng.uniform(-0.3, 0.3, (T, scene.nu))
+    svc = RolloutService(scene)
+    ilqr = ILQR(svc, cost, ILQRConfig(fd=FDConfig(1e-6, centered=False), mu_init=0.1))
+    step = ilqr.iterate(x0, U)
+    X = svc.trajectory(x0, U).states
+    K_ref, k_ref = numpy_ilqr_gains(scene, X, U, cost, 1e-6, 0.1)
+    scale = np.abs(K_ref).max()
+    np.testing.assert_allclose(step.K.numpy(), K_ref, atol=1e-6 * scale, rtol=0)
+    np.testing.assert_allclose(step.k.numpy(), k_ref, atol=1e-6 * np.abs(k_ref).max(), rtol=0)
+    assert step.accepted and step.cost_after < step.cost_before
+    assert set(step.seconds) == {"derivatives", "backward", "forward"}
+
+
+def test_reduced_gains_match_subset_problem_and_solve_descends():
+    scene, x0, cost = mixed_problem()
+    T = 15
+    U = np.zeros((T, scene.nu))
+    svc = RolloutService(scene)
+    C = scene.dofs("robot", "object:box")
+    step = ILQR(svc, cost).iterate(x0, U, C)
+    assert step.K.shape == (T, scene.nu, 2 * len(C))
+    # the same backward pass fed the rows/columns of the full derivatives gives the same gains
+    X = svc.trajectory(x0, U).states
+    full = svc.derivatives(X[:-1], None, ILQRConfig().fd)
+    idx = scene.tangent_indices(C)
+    cd = cost.derivatives(X, U, C)
+    K, k = backward_pass(torch.from_numpy(full.A[:, idx][:, :, idx]),
+                         torch.from_numpy(full.B[:, idx]), cd.lx, cd.lxx, cd.lu, cd.luu, 0.1)
+    torch.testing.assert_close(step.K, K, rtol=0, atol=0)
+    res = ILQR(svc, cost).solve(x0, U, C, max_iterations=6)
+    assert res.costs[-1] < res.costs[0]
+    assert all(b >= a for a, b in zip(res.costs[1:], res.costs[:-1]))
+
+
+def test_bad_config():
+    with pytest.raises(ValueError):
+        ILQRConfig(alphas=(0.0,))
+    with pytest.raises(ValueError):
+        ILQRConfig(mu_init=100.0)
