@@ -22,6 +22,8 @@ from dataclasses import dataclass
 import numpy as np
 import torch
 
+from dopt.mpc import Plan
+
 METHODS = ("baseline", "rand", "naive", "svr-sum", "svr-svd")
 
 
@@ -110,3 +112,24 @@ class DofSelector:
         keep = (self.importance >= self.config.rho) | np.isin(dofs, self.robot)
         self.active = np.asarray(dofs)[keep]
         return self.active
+
+
+class SVROptimiser:
+    """One MPC optimisation of Alg. 1 (lines 5-12): update the DoF set, run one iLQR
+    iteration on it, drop unimportant DoFs. Implements dopt.mpc.Optimiser.
+
+    Args:
+        ilqr: a planners.ilqr.ILQR.
+        selector: the DofSelector of this run.
+    """
+
+    def __init__(self, ilqr, selector: DofSelector):
+        self.ilqr, self.selector = ilqr, selector
+
+    def optimise(self, state: np.ndarray, plan: Plan) -> Plan:
+        C = self.selector.before()
+        step = self.ilqr.iterate(state, plan.controls, C)
+        self.selector.after(step.K, step.dofs)
+        info = dict(step.seconds, cost=step.cost_after, alpha=step.alpha, n_dofs=len(C))
+        return Plan(controls=step.controls, states=step.states, K=step.K.numpy(),
+                    dofs=step.dofs, info=info)

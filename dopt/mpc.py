@@ -1,0 +1,272 @@
+"""Asynchronous MPC (Alg. 1 of the state-vector-reduction paper) and its MPC_cost (Eq. 5).
+
+An *agent* thread steps the "real" system (its own MjData) in real time, one step every
+``dt * slowdown`` wall seconds: it executes the first control of the current plan, drops it and
+pads the plan with its last control. An *optimiser* thread repeatedly reads the agent's current
+state, improves the plan (one optimiser iteration) and publishes it, shifted by the number of
+steps the agent executed meanwhile, so that control t of the plan is applied at the time it was
+computed for. Policy lag is therefore real: a slower optimiser acts on older states.
+
+The heavy work of both threads runs in MuJoCo (``mj_step``, ``mujoco.batch``) and torch, which
+release the GIL; the agent sleeps between steps. The synchronous mode (the agent waits for the
+optimiser, ``steps_per_plan`` steps per optimisation) is deterministic, for tests and debugging.
+
+dopt knows no planner: the optimiser is any object with ``optimise(state, plan) -> Plan``.
+"""
+
+from __future__ import annotations
+
+import logging
+import threading
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field, replace
+from typing import Protocol
+
+import mujoco
+import numpy as np
+
+from dopt.errors import UnstableRolloutError
+from dopt.scene import Scene
+from dopt.state import INTEGRATION, check_states
+
+log = logging.getLogger(__name__)
+_BAD = (mujoco.mjtWarning.mjWARN_BADQACC, mujoco.mjtWarning.mjWARN_BADQVEL,
+        mujoco.mjtWarning.mjWARN_BADQPOS)
+
+
+@dataclass(frozen=True)
+class Plan:
+    """A control plan for the next T steps.
+
+    controls: (T, nu). Optional feedback: states (T+1, ns) the nominal rows, K (T, nu, 2c)
+    gains on the DoF set dofs (c,). info: what the optimiser reports (timings, |C|, cost).
+    """
+
+    controls: np.ndarray
+    states: np.ndarray | None = None
+    K: np.ndarray | None = None
+    dofs: np.ndarray | None = None
+    info: dict = field(default_factory=dict)
+
+    def shifted(self, steps: int) -> "Plan":
+        """Drop the first ``steps`` controls and pad with the last one (gains pad with 0)."""
+        if steps <= 0:
+            return self
+        T = len(self.controls)
+        s = min(steps, T)
+        pad = np.repeat(self.controls[-1:], s, axis=0)
+        out = replace(self, controls=np.concatenate([self.controls[s:], pad]))
+        if self.states is not None:
+            out = replace(out, states=np.concatenate(
+                [self.states[s:], np.repeat(self.states[-1:], s, axis=0)]))
+        if self.K is not None:
+            out = replace(out, K=np.concatenate([self.K[s:], np.zeros_like(self.K[:s])]))
+        return out
+
+
+class Optimiser(Protocol):
+    def optimise(self, state: np.ndarray, plan: Plan) -> Plan:
+        """One optimisation from the state row (ns,) starting at the current plan."""
+
+
+@dataclass(frozen=True)
+class MPCConfig:
+    """timeout: task timeout Y in agent steps. slowdown: wall seconds per agent step over the
+    model timestep (1 = real time). synchronous: the agent waits for the optimiser and runs
+    ``steps_per_plan`` steps per optimisation. feedback: add K (x - x_nominal) on the measured
+    state to the executed control (the paper's authors did not). control_noise: standard
+    deviation of Gaussian noise on executed controls, as a fraction of each control's range.
+    warmup: optimiser iterations before the agent starts."""
+
+    timeout: int
+    slowdown: float = 1.0
+    synchronous: bool = False
+    steps_per_plan: int = 1
+    feedback: bool = False
+    control_noise: float = 0.0
+    warmup: int = 0
+
+    def __post_init__(self):
+        if self.timeout < 1:
+            raise ValueError(f"timeout must be >= 1 step, got {self.timeout}")
+        if not self.slowdown > 0:
+            raise ValueError(f"slowdown must be > 0, got {self.slowdown}")
+        if self.steps_per_plan < 1:
+            raise ValueError("steps_per_plan must be >= 1")
+        if self.control_noise < 0:
+            raise ValueError("control_noise must be >= 0")
+        if self.warmup < 0:
+            raise ValueError("warmup must be >= 0")
+
+
+@dataclass(frozen=True)
+class MPCResult:
+    """states: (S+1, ns) executed state rows (row t holds the control executed at step t);
+    controls: (S, nu) executed; S = steps run (timeout, or earlier on success). success: the
+    success condition was met. opt_seconds: wall time of each optimisation; opt_step: the agent
+    step each optimisation started from; n_dofs: |C| of each; dofs: the active set of each;
+    lag_steps: agent steps elapsed during each optimisation; late_steps: agent steps that
+    started behind schedule."""
+
+    states: np.ndarray
+    controls: np.ndarray
+    success: bool
+    opt_seconds: list
+    opt_step: list
+    n_dofs: list
+    dofs: list
+    lag_steps: list
+    late_steps: int
+
+
+class MPC:
+    """Runs one MPC episode of an optimiser on a scene.
+
+    Args:
+        scene: the real system's model (the agent steps its own MjData of it).
+        optimiser: see ``Optimiser``.
+        config: MPCConfig.
+        rng: generator of the control noise.
+        success: optional predicate on a state row that ends the task early.
+    """
+
+    def __init__(self, scene: Scene, optimiser: Optimiser, config: MPCConfig,
+                 rng: np.random.Generator, success: Callable[[np.ndarray], bool] | None = None):
+        if not isinstance(rng, np.random.Generator):
+            raise TypeError("rng must be a numpy.random.Generator")
+        self.scene, self.optimiser, self.config = scene, optimiser, config
+        self.rng, self.success = rng, success
+        m = scene.model
+        span = np.where(m.actuator_ctrllimited.astype(bool),
+                        m.actuator_ctrlrange[:, 1] - m.actuator_ctrlrange[:, 0], 1.0)
+        self._noise_std = config.control_noise * span
+        self._lock = threading.Lock()
+
+    def run(self, initial_state: np.ndarray, plan: Plan) -> MPCResult:
+        """Run until the timeout or success from the state row (ns,) and an initial plan."""
+        x0 = check_states(self.scene.model, initial_state, batched=False, name="initial_state")
+        if plan.controls.ndim != 2 or plan.controls.shape[1] != self.scene.nu:
+            raise ValueError(f"plan.controls must be (T, {self.scene.nu}), "
+                             f"got {plan.controls.shape}")
+        self._reset(x0, plan)
+        for _ in range(self.config.warmup):
+            self._optimise_once()
+        if self.config.synchronous:
+            while not self._done:
+                self._optimise_once()
+                for _ in range(self.config.steps_per_plan):
+                    if not self._done:
+                        self._agent_step()
+        else:
+            worker = threading.Thread(target=self._optimiser_loop, name="mpc-optimiser",
+                                      daemon=True)
+            worker.start()
+            try:
+                self._agent_loop()
+            finally:
+                self._stop.set()
+                worker.join()
+            if self._error is not None:
+                raise self._error
+        n = self._step
+        return MPCResult(np.array(self._states[:n + 1]), np.array(self._controls[:n]),
+                         self._succeeded, self._log["seconds"], self._log["step"],
+                         self._log["n_dofs"], self._log["dofs"], self._log["lag"], self._late)
+
+    # ---------------------------------------------------------------- internals
+    def _reset(self, x0: np.ndarray, plan: Plan) -> None:
+        m = self.scene.model
+        self._data = mujoco.MjData(m)
+        mujoco.mj_setState(m, self._data, x0, INTEGRATION)
+        mujoco.mj_forward(m, self._data)
+        self._plan, self._step, self._late = plan, 0, 0
+        self._states, self._controls = [x0.copy()], []
+        self._succeeded, self._error = False, None
+        self._stop = threading.Event()
+        self._log = {"seconds": [], "step": [], "n_dofs": [], "dofs": [], "lag": []}
+
+    @property
+    def _done(self) -> bool:
+        return self._succeeded or self._step >= self.config.timeout or self._stop.is_set()
+
+    def _optimise_once(self) -> None:
+        with self._lock:
+            state, plan, start = self._states[-1].copy(), self._plan, self._step
+        t0 = time.perf_counter()
+        new = self.optimiser.optimise(state, plan)
+        seconds = time.perf_counter() - t0
+        with self._lock:
+            lag = self._step - start
+            self._plan = new.shifted(lag)
+            lg = self._log
+            lg["seconds"].append(seconds)
+            lg["step"].append(start)
+            lg["lag"].append(lag)
+            dofs = new.dofs if new.dofs is not None else np.arange(self.scene.nv)
+            lg["n_dofs"].append(len(dofs))
+            lg["dofs"].append(np.asarray(dofs).tolist())
+
+    def _agent_step(self) -> None:
+        m, d = self.scene.model, self._data
+        with self._lock:
+            plan = self._plan
+            u = plan.controls[0].copy()
+            if self.config.feedback and plan.K is not None and plan.states is not None:
+                u += plan.K[0] @ self._deviation(plan)
+            self._plan = plan.shifted(1)
+        if self._noise_std.any():
+            u += self.rng.normal(0.0, self._noise_std)
+        d.ctrl[:] = u
+        row = self.scene.state_of(d)             # the row holds the control executed now
+        mujoco.mj_step(m, d)
+        bad = [w for w in _BAD if d.warning[w].number]
+        if bad or not np.isfinite(d.qpos).all():
+            reason = bad[0].name if bad else "non-finite state"
+            raise UnstableRolloutError(0, self._step, reason, "mpc agent")
+        nxt = self.scene.state_of(d)
+        with self._lock:
+            self._states[-1] = row
+            self._controls.append(u)
+            self._states.append(nxt)
+            self._step += 1
+            if self.success is not None and self.success(nxt):
+                self._succeeded = True
+
+    def _deviation(self, plan: Plan) -> np.ndarray:
+        """[q_C (-) q_nom_C ; v_C - v_nom_C] of the agent's state against plan row 0: (2c,)."""
+        lay, C = self.scene.layout, plan.dofs
+        x, ref = self._states[-1], plan.states[0]
+        dq = self.scene.tangent.difference(ref[lay["qpos"]], x[lay["qpos"]])[C]
+        return np.concatenate([dq, x[lay["qvel"]][C] - ref[lay["qvel"]][C]])
+
+    def _agent_loop(self) -> None:
+        period = self.scene.model.opt.timestep * self.config.slowdown
+        start = time.perf_counter()
+        while not self._done:
+            if self._error is not None:
+                return
+            due = start + self._step * period
+            wait = due - time.perf_counter()
+            if wait > 0:
+                time.sleep(wait)
+            else:
+                self._late += 1
+            self._agent_step()
+
+    def _optimiser_loop(self) -> None:
+        try:
+            while not self._done:
+                self._optimise_once()
+        except Exception as e:  # surfaced in the caller's thread
+            log.exception("optimiser failed")
+            self._error = e
+            self._stop.set()
+
+
+def mpc_cost(cost, result: MPCResult) -> float:
+    """MPC_cost (Eq. 5): the task cost of the executed trajectory, l_f at its last state.
+
+    ``cost`` has ``total(states (S+1, ns), controls (S, nu))`` (e.g. dopt.costs.QuadraticCost).
+    """
+    return float(cost.total(result.states, result.controls))
