@@ -237,7 +237,7 @@ class MPC:
         """[q_C (-) q_nom_C ; v_C - v_nom_C] of the agent's state against plan row 0: (2c,)."""
         lay, C = self.scene.layout, plan.dofs
         x, ref = self._states[-1], plan.states[0]
-        dq = self.scene.tangent.difference(ref[lay["qpos"]], x[lay["qpos"]])[C]
+        dq = self.scene.tangent.difference(ref[lay["qpos"]], x[lay["qpos"]], 1.0, C)
         return np.concatenate([dq, x[lay["qvel"]][C] - ref[lay["qvel"]][C]])
 
     def _agent_loop(self) -> None:

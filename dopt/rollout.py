@@ -216,7 +216,7 @@ class RolloutService:
             try:
                 for t in range(T):
                     x = rows[:P]
-                    dx = np.concatenate([diff(ref_q[t], x[:, self._qpos])[:, C],
+                    dx = np.concatenate([diff(ref_q[t], x[:, self._qpos], 1.0, C),
                                          x[:, self._qvel][:, C] - ref_v[t]], axis=1)
                     ut = np.clip(u[:, t] + dx @ K[t].T, lo, hi)
                     rows[:P, self._ctrl] = ut
@@ -317,7 +317,7 @@ class RolloutService:
 
         def dstate(a, b, h):
             """(T, k, .) next states a -> b, tangent difference on C: (T, k, 2c)."""
-            dq = diff(qpos[:, a], qpos[:, b], h)[..., C]
+            dq = diff(qpos[:, a], qpos[:, b], h, C)
             dv = (1.0 / h) * (qvel[:, b][..., C] - qvel[:, a][..., C])
             return np.concatenate([dq, dv], axis=-1)
 

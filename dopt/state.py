@@ -127,20 +127,31 @@ class Tangent:
         self._quat_v = np.array(quat_v, int)[:, None] + np.arange(3)  # (nquat, 3)
         self._unit = np.eye(model.nv)
 
-    def difference(self, qpos1: np.ndarray, qpos2: np.ndarray, h: float = 1.0) -> np.ndarray:
-        """Velocity taking qpos1 to qpos2 in time h: (..., nq), (..., nq) -> (..., nv).
-
-        The leading dimensions broadcast against each other."""
-        out = np.empty(np.broadcast_shapes(qpos1.shape, qpos2.shape)[:-1] + (self.model.nv,))
+    def difference(self, qpos1: np.ndarray, qpos2: np.ndarray, h: float = 1.0,
+                   dofs: np.ndarray | None = None) -> np.ndarray:
+        """Velocity taking qpos1 to qpos2 in time h: (..., nq), (..., nq) -> (..., nv), or
+        (..., len(dofs)) for just the DoFs ``dofs`` (sorted, unique). Leading dimensions
+        broadcast against each other."""
+        lin_q, lin_v, quat_q, quat_v = self._parts(dofs)
+        lead = np.broadcast_shapes(qpos1.shape, qpos2.shape)[:-1]
+        out = np.empty(lead + (self.model.nv,))
         inv_h = 1.0 / h
-        out[..., self._lin_v] = inv_h * (qpos2[..., self._lin_q] - qpos1[..., self._lin_q])
-        if len(self._quat_q):
-            qa = qpos1[..., self._quat_q]
-            qb = qpos2[..., self._quat_q]
+        out[..., lin_v] = inv_h * (qpos2[..., lin_q] - qpos1[..., lin_q])
+        if len(quat_q):
+            qa = qpos1[..., quat_q]
+            qb = qpos2[..., quat_q]
             qa = qa / np.linalg.norm(qa, axis=-1, keepdims=True)
             qb = qb / np.linalg.norm(qb, axis=-1, keepdims=True)
-            out[..., self._quat_v] = inv_h * _quat_log(_quat_mul(_quat_conj(qa), qb))
-        return out
+            out[..., quat_v] = inv_h * _quat_log(_quat_mul(_quat_conj(qa), qb))
+        return out if dofs is None else out[..., dofs]
+
+    def _parts(self, dofs: np.ndarray | None):
+        """Index arrays of the linear and quaternion parts needed for ``dofs`` (None: all)."""
+        if dofs is None:
+            return self._lin_q, self._lin_v, self._quat_q, self._quat_v
+        lin = np.isin(self._lin_v, dofs)
+        quat = np.isin(self._quat_v, dofs).any(axis=1)
+        return self._lin_q[lin], self._lin_v[lin], self._quat_q[quat], self._quat_v[quat]
 
     def perturb(self, qpos: np.ndarray, dofs: np.ndarray, eps: float) -> np.ndarray:
         """Move each row of qpos (B, nq) by eps along tangent DoF dofs[b] (B,) -> (B, nq).

@@ -76,3 +76,13 @@ def test_perturb_is_mj_integratePos(scene):
     # and differencing undoes it, DoF by DoF
     back = tan.difference(q, got, -1e-3)
     np.testing.assert_allclose(back, np.eye(m.nv), atol=1e-7)
+
+
+def test_difference_on_a_dof_subset(scene):
+    m, rng = scene.model, np.random.default_rng(4)
+    tan = Tangent(m)
+    q1, q2 = random_qpos(m, rng, 6), random_qpos(m, rng, 6)
+    full = tan.difference(q1, q2, 0.5)
+    for dofs in ([0], [3], [2, 4, 9, 16], list(range(m.nv))):
+        np.testing.assert_array_equal(tan.difference(q1, q2, 0.5, np.array(dofs)),
+                                      full[:, dofs])
