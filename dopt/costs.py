@@ -8,12 +8,17 @@ sees, not what a trajectory costs.
     l(x, u)  = e^T diag(w) e + u^T diag(r) u        running cost, t = 0 .. T-1
     l_f(x)   = e^T diag(w_f) e                      terminal cost, t = T
     J(X, U)  = l_f(x_T) + sum_t l(x_t, u_t)
+
+Optional residual terms add w_i |r_i(x)|^2 to l and l_f (e.g. the end effector's distance to
+the object it should push, through torch forward kinematics); their derivatives are
+Gauss-Newton (2 w J^T r, 2 w J^T J) with J from autograd.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 
+import mujoco
 import numpy as np
 import torch
 
@@ -33,17 +38,70 @@ class CostDerivatives:
     luu: torch.Tensor
 
 
+class EEDistanceTerm:
+    """w |P (fk(q_arm) - target)|^2 with target = offset + M q_target, a linear function of
+    some qpos entries (an object's position, or the mean of a soft body's vertices).
+
+    Only DoFs whose tangent coordinate equals their qpos coordinate may enter (hinge, slide,
+    free-joint translation), so the Jacobian in qpos is the Jacobian in the tangent space.
+
+    Args:
+        scene: the scene.
+        fk: callable (B, len(arm_dofs)) joint positions -> (B, 3) end-effector positions
+            (torch, differentiable; e.g. a pytorch-kinematics chain).
+        arm_dofs: (a,) DoFs of the arm joints, in fk's order.
+        target_dofs: (k,) DoFs the target depends on; target_map: (3, k); offset: (3,).
+        axes: which of x, y, z enter the distance.
+        weight, terminal_weight: w in l and in l_f.
+    """
+
+    def __init__(self, scene: Scene, fk, arm_dofs, target_dofs, target_map, offset,
+                 axes=(0, 1, 2), weight: float = 1.0, terminal_weight: float = 1.0):
+        m = scene.model
+        self.arm_dofs = np.asarray(arm_dofs, dtype=int)
+        self.target_dofs = np.asarray(target_dofs, dtype=int)
+        dofs = np.concatenate([self.arm_dofs, self.target_dofs])
+        self._qadr = np.array([_linear_qpos_index(m, d) for d in dofs])
+        self.fk = fk
+        self.M = torch.as_tensor(np.asarray(target_map, dtype=float).reshape(3, -1))
+        if self.M.shape[1] != len(self.target_dofs):
+            raise ValueError(f"target_map must be (3, {len(self.target_dofs)})")
+        self.offset = torch.as_tensor(_vector(offset, 3, "offset"))
+        self.axes = list(axes)
+        self.weight, self.terminal_weight = float(weight), float(terminal_weight)
+        self.dofs = dofs
+        self.column = {int(d): i for i, d in enumerate(dofs)}   # DoF -> Jacobian column
+        if len(self.column) != len(dofs):
+            raise ValueError("arm_dofs and target_dofs overlap")
+
+    def residual(self, qpos: torch.Tensor) -> torch.Tensor:
+        """(..., nq) -> (..., len(axes))."""
+        x = qpos[..., self._qadr]
+        a = len(self.arm_dofs)
+        lead = x.shape[:-1]
+        ee = self.fk(x[..., :a].reshape(-1, a)).reshape(*lead, 3)
+        target = self.offset + x[..., a:] @ self.M.T
+        return (ee - target)[..., self.axes]
+
+    def weights(self, T: int) -> torch.Tensor:
+        """(T+1,) weight per row: running, then terminal."""
+        w = torch.full((T + 1,), self.weight, dtype=torch.float64)
+        w[-1] = self.terminal_weight
+        return w
+
+
 class QuadraticCost:
-    """Diagonal quadratic cost on the full tangent state and the controls.
+    """Diagonal quadratic cost on the full tangent state and the controls, plus residual terms.
 
     Args:
         scene: the scene whose state rows are costed.
         q_ref: (nq,) reference positions; v_ref: (nv,) reference velocities (default 0).
         w, w_f: (2nv,) running and terminal weights on [dq; dv].
         r: (nu,) control weights.
+        terms: residual terms (EEDistanceTerm) added to every row's cost.
     """
 
-    def __init__(self, scene: Scene, q_ref, w, w_f, r, v_ref=None):
+    def __init__(self, scene: Scene, q_ref, w, w_f, r, v_ref=None, terms=()):
         m = scene.model
         self.scene = scene
         self.q_ref = _vector(q_ref, m.nq, "q_ref")
@@ -51,14 +109,16 @@ class QuadraticCost:
         self.w = torch.as_tensor(_vector(w, 2 * m.nv, "w", nonneg=True))
         self.w_f = torch.as_tensor(_vector(w_f, 2 * m.nv, "w_f", nonneg=True))
         self.r = torch.as_tensor(_vector(r, m.nu, "r", nonneg=True))
+        self.terms = tuple(terms)
         self._qpos, self._qvel = scene.layout["qpos"], scene.layout["qvel"]
 
     @property
     def costed_dofs(self) -> np.ndarray:
-        """DoFs with a non-zero running or terminal weight (what the 'naive' method keeps)."""
+        """DoFs with a non-zero running or terminal weight, or in a residual term."""
         nv = self.scene.nv
         weight = (self.w + self.w_f).numpy()
-        return np.nonzero((weight[:nv] > 0) | (weight[nv:] > 0))[0]
+        own = np.nonzero((weight[:nv] > 0) | (weight[nv:] > 0))[0]
+        return np.unique(np.concatenate([own] + [t.dofs for t in self.terms]))
 
     def errors(self, states: np.ndarray) -> torch.Tensor:
         """Tangent error of state rows: (..., ns) -> (..., 2nv)."""
@@ -71,7 +131,14 @@ class QuadraticCost:
         e = self.errors(states)
         u = torch.as_tensor(controls)
         running = (e[..., :-1, :] ** 2 * self.w).sum(-1) + (u ** 2 * self.r).sum(-1)
-        return running.sum(-1) + (e[..., -1, :] ** 2 * self.w_f).sum(-1)
+        total = running.sum(-1) + (e[..., -1, :] ** 2 * self.w_f).sum(-1)
+        if self.terms:
+            qpos = torch.from_numpy(np.ascontiguousarray(states[..., self._qpos]))
+            T = u.shape[-2]
+            with torch.no_grad():
+                for term in self.terms:
+                    total = total + ((term.residual(qpos) ** 2).sum(-1) * term.weights(T)).sum(-1)
+        return total
 
     def derivatives(self, states: np.ndarray, controls: np.ndarray,
                     dofs: np.ndarray) -> CostDerivatives:
@@ -81,9 +148,49 @@ class QuadraticCost:
         e = self.errors(states)[:, idx]                                   # (T+1, 2c)
         w = torch.cat([self.w[idx].expand(len(e) - 1, -1), self.w_f[idx][None]], 0)
         u = torch.as_tensor(controls)
-        return CostDerivatives(lx=2 * w * e, lxx=torch.diag_embed(2 * w),
-                               lu=2 * self.r * u,
+        lx, lxx = 2 * w * e, torch.diag_embed(2 * w)
+        if self.terms:
+            C = np.asarray(dofs)
+            qpos = torch.from_numpy(np.ascontiguousarray(states[:, self._qpos]))
+            for term in self.terms:
+                at = np.nonzero(np.isin(C, term.dofs))[0]       # positions of C in the term
+                if not len(at):
+                    continue
+                cols = [term.column[d] for d in C[at]]
+                J, r = _residual_jacobian(term, qpos)          # (T+1, na, ndofs), (T+1, na)
+                J = J[:, :, cols]
+                wt = term.weights(len(u))[:, None]
+                at_t = torch.as_tensor(at)
+                lx[:, at_t] += 2 * wt * torch.einsum("tad,ta->td", J, r)
+                lxx[:, at_t[:, None], at_t[None, :]] += 2 * wt[:, :, None] * \
+                    torch.einsum("tad,tae->tde", J, J)
+        return CostDerivatives(lx=lx, lxx=lxx, lu=2 * self.r * u,
                                luu=torch.diag_embed(2 * self.r).expand(len(u), -1, -1))
+
+
+def _residual_jacobian(term: EEDistanceTerm, qpos: torch.Tensor):
+    """d residual / d term.dofs at each row: (B, nq) -> J (B, na, ndofs), r (B, na)."""
+    x = qpos[:, term._qadr].clone().requires_grad_(True)
+    full = qpos.detach().clone()
+
+    def f(xs):
+        q = full.clone()
+        q[:, term._qadr] = xs
+        return term.residual(q)
+
+    r = f(x)
+    rows = [torch.autograd.grad(r[:, i].sum(), x, retain_graph=True)[0]
+            for i in range(r.shape[1])]
+    return torch.stack(rows, dim=1).detach(), r.detach()
+
+
+def _linear_qpos_index(model, dof: int) -> int:
+    """qpos index of a DoF whose tangent coordinate is its qpos coordinate."""
+    j = model.dof_jntid[dof]
+    k, jt = dof - model.jnt_dofadr[j], int(model.jnt_type[j])
+    if jt == int(mujoco.mjtJoint.mjJNT_BALL) or (jt == int(mujoco.mjtJoint.mjJNT_FREE) and k >= 3):
+        raise ValueError(f"DoF {dof} is rotational (ball/free): not allowed in a residual term")
+    return int(model.jnt_qposadr[j] + k)
 
 
 def _vector(x, n: int, name: str, nonneg: bool = False) -> np.ndarray:
