@@ -126,6 +126,7 @@ class Tangent:
         self._quat_q = np.array(quat_q, int)[:, None] + np.arange(4)  # (nquat, 4)
         self._quat_v = np.array(quat_v, int)[:, None] + np.arange(3)  # (nquat, 3)
         self._unit = np.eye(model.nv)
+        self._parts_cache: dict[bytes, tuple] = {}
 
     def difference(self, qpos1: np.ndarray, qpos2: np.ndarray, h: float = 1.0,
                    dofs: np.ndarray | None = None) -> np.ndarray:
@@ -146,12 +147,20 @@ class Tangent:
         return out if dofs is None else out[..., dofs]
 
     def _parts(self, dofs: np.ndarray | None):
-        """Index arrays of the linear and quaternion parts needed for ``dofs`` (None: all)."""
+        """Index arrays of the linear and quaternion parts needed for ``dofs`` (None: all);
+        cached per DoF set, since hot loops difference the same set at every step."""
         if dofs is None:
             return self._lin_q, self._lin_v, self._quat_q, self._quat_v
-        lin = np.isin(self._lin_v, dofs)
-        quat = np.isin(self._quat_v, dofs).any(axis=1)
-        return self._lin_q[lin], self._lin_v[lin], self._quat_q[quat], self._quat_v[quat]
+        key = np.asarray(dofs, dtype=np.int64).tobytes()
+        parts = self._parts_cache.get(key)
+        if parts is None:
+            lin = np.isin(self._lin_v, dofs)
+            quat = np.isin(self._quat_v, dofs).any(axis=1)
+            parts = self._lin_q[lin], self._lin_v[lin], self._quat_q[quat], self._quat_v[quat]
+            if len(self._parts_cache) >= 256:
+                self._parts_cache.clear()
+            self._parts_cache[key] = parts
+        return parts
 
     def perturb(self, qpos: np.ndarray, dofs: np.ndarray, eps: float) -> np.ndarray:
         """Move each row of qpos (B, nq) by eps along tangent DoF dofs[b] (B,) -> (B, nq).

@@ -1,4 +1,4 @@
-"""python -m dopt.bench {rollout,derivatives} [options]: print timings as JSON."""
+"""python -m dopt.bench {rollout,derivatives,ilqr} [options]: print timings as JSON."""
 
 from __future__ import annotations
 
@@ -29,6 +29,16 @@ def main(argv=None) -> int:
                    help="objects in the active set besides the robot (2 -> |C| = 7 + 12 = 19)")
     p.add_argument("--centered", action="store_true", help="centred differences")
 
+    p = sub.add_parser("ilqr", help="one iLQR(-SVR) iteration per DoF-selection method")
+    common(p)
+    p.add_argument("--methods", default="baseline,rand,naive,svr-sum,svr-svd",
+                   help="comma-separated methods (default %(default)s)")
+    p.add_argument("--rho", type=float, default=1.0, help="SVR importance threshold")
+    p.add_argument("--theta", type=int, default=12,
+                   help="random DoFs re-added per iteration (rand: DoFs besides the robot)")
+    p.add_argument("--iterations", type=int, default=5, help="timed iterations per method")
+    p.add_argument("--warmup", type=int, default=3, help="untimed iterations per method first")
+
     args = ap.parse_args(argv)
     if args.bench == "rollout":
         from dopt.bench.rollout import bench_rollout
@@ -37,7 +47,12 @@ def main(argv=None) -> int:
         from dopt.bench.rollout import bench_derivatives
         out = bench_derivatives(args.task, args.objects, args.T, args.threads, args.repeats,
                                 args.centered, args.seed)
-    print(json.dumps(out))
+    elif args.bench == "ilqr":
+        from dopt.bench.ilqr import bench_ilqr
+        out = bench_ilqr(args.task, args.methods.split(","), args.rho, args.theta,
+                         args.iterations, args.warmup, args.threads, args.seed)
+    for obj in out if isinstance(out, list) else [out]:
+        print(json.dumps(obj))
     return 0
 
 

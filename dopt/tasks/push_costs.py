@@ -1,0 +1,148 @@
+"""The pushing tasks' costs (Eq. 2-3 of the state-vector-reduction paper) and success tests.
+
+Every cost is diagonal-quadratic in the full tangent state plus one end-effector term:
+
+- the goal object's x, y to the goal (for the soft body: every vertex to its place in the
+  block translated onto the goal), running weight ``goal`` and terminal ``goal_f``;
+- each distractor's x, y to where it started ("minimally disturbing"), ``distractor``;
+- the arm's joint velocities, ``arm_velocity``; torques scaled by their limits, ``torque``;
+- the end effector's x, y distance to the object it should push (the goal cylinder in
+  clutter, the soft body's centroid in soft and soft_rigid), ``ee``: without it no gradient
+  reaches the arm before the pusher touches the object.
+
+The weights are ours (the paper does not give its W, R, W_f); they are in ``PushWeights``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import mujoco
+import numpy as np
+
+from dopt.costs import EEDistanceTerm, QuadraticCost
+from dopt.scene import Scene
+from dopt.tasks import TaskModel
+from dopt.tasks.panda import TAU_MAX
+
+
+@dataclass(frozen=True)
+class PushWeights:
+    goal: float = 100.0
+    goal_f: float = 1000.0
+    distractor: float = 20.0
+    distractor_f: float = 200.0
+    arm_velocity: float = 0.05
+    arm_velocity_f: float = 0.5
+    torque: float = 1e-2
+    ee: float = 10.0
+    ee_f: float = 10.0
+    success_radius: float = 0.02     # m: goal object centre within this of the goal ends the task
+
+
+def _object_xy(tm: TaskModel, scene: Scene, body_ids) -> tuple[np.ndarray, np.ndarray]:
+    """(k,) qpos indices and (k,) DoFs of the x, y translations of bodies (free or slides)."""
+    m = scene.model
+    dofs = [d for b in body_ids for d in _xy_dofs(m, b)]
+    qadr = [m.jnt_qposadr[m.dof_jntid[d]] + d - m.jnt_dofadr[m.dof_jntid[d]] for d in dofs]
+    return np.array(qadr, dtype=int), np.array(dofs, dtype=int)
+
+
+def _xy_dofs(m: mujoco.MjModel, body: int) -> list[int]:
+    out = []
+    for j in range(m.body_jntadr[body], m.body_jntadr[body] + m.body_jntnum[body]):
+        adr = m.jnt_dofadr[j]
+        if m.jnt_type[j] == mujoco.mjtJoint.mjJNT_FREE:
+            out += [adr, adr + 1]
+        elif m.jnt_type[j] == mujoco.mjtJoint.mjJNT_SLIDE and abs(m.jnt_axis[j][2]) < 1e-9:
+            out.append(adr)
+    return out
+
+
+def _goal_bodies(tm: TaskModel) -> list[int]:
+    m = tm.model
+    flex = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_FLEX, tm.goal_object)
+    if flex >= 0:
+        start = m.flex_vertadr[flex]
+        return [int(b) for b in m.flex_vertbodyid[start:start + m.flex_vertnum[flex]]]
+    return [m.body(tm.goal_object).id]
+
+
+def _soft_bodies(tm: TaskModel) -> list[int]:
+    m = tm.model
+    flex = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_FLEX, tm.soft_body)
+    start = m.flex_vertadr[flex]
+    return [int(b) for b in m.flex_vertbodyid[start:start + m.flex_vertnum[flex]]]
+
+
+def _centroid_map(m: mujoco.MjModel, bodies: list[int], qadr: np.ndarray, state_qpos):
+    """Mean x, y of vertex bodies as offset + M q: world x = body_pos x + q_x (world slides)."""
+    n = len(bodies)
+    M = np.zeros((3, len(qadr)))
+    M[0, 0::2] = 1.0 / n
+    M[1, 1::2] = 1.0 / n
+    offset = np.zeros(3)
+    offset[:2] = m.body_pos[bodies, :2].mean(axis=0)
+    return M, offset
+
+
+def push_cost(tm: TaskModel, scene: Scene, weights: PushWeights = PushWeights()) -> QuadraticCost:
+    """The task's cost over the full state of ``scene`` (built on ``tm.model``)."""
+    m, W = scene.model, weights
+    x0 = np.asarray(tm.initial_state)
+    q0 = x0[scene.layout["qpos"]]
+    nv = m.nv
+    q_ref = q0.copy()
+    w, w_f = np.zeros(2 * nv), np.zeros(2 * nv)
+
+    goal_q, goal_d = _object_xy(tm, scene, _goal_bodies(tm))
+    start_xy = q0[goal_q].reshape(-1, 2)
+    if len(goal_q) > 2:   # a soft body: translate every vertex so that the centroid is the goal
+        shift = tm.goal_position[:2] - (m.body_pos[_goal_bodies(tm), :2] + start_xy).mean(0)
+        q_ref[goal_q] = (start_xy + shift).ravel()
+        per_vertex = 1.0 / (len(goal_q) // 2)
+    else:
+        q_ref[goal_q] = tm.goal_position[:2]
+        per_vertex = 1.0
+    w[goal_d], w_f[goal_d] = W.goal * per_vertex, W.goal_f * per_vertex
+
+    if tm.distractors:
+        _, dis_d = _object_xy(tm, scene, [m.body(n).id for n in tm.distractors])
+        w[dis_d], w_f[dis_d] = W.distractor, W.distractor_f
+    arm = tm.robot_dofs
+    w[nv + arm], w_f[nv + arm] = W.arm_velocity, W.arm_velocity_f
+    r = W.torque / TAU_MAX ** 2
+
+    from dopt.tasks.panda import ee_chain
+    chain = ee_chain()
+
+    def fk(q):
+        return chain.forward_kinematics(q).get_matrix()[:, :3, 3]
+
+    if tm.soft_body is not None:
+        bodies = _soft_bodies(tm)
+        t_q, t_d = _object_xy(tm, scene, bodies)
+        M, offset = _centroid_map(m, bodies, t_q, q0)
+    else:
+        _, t_d = _object_xy(tm, scene, _goal_bodies(tm))
+        M, offset = np.eye(3)[:, :2], np.zeros(3)
+    term = EEDistanceTerm(scene, fk, arm, t_d, M, offset, axes=(0, 1), weight=W.ee,
+                          terminal_weight=W.ee_f)
+    return QuadraticCost(scene, q_ref, w, w_f, r, terms=[term])
+
+
+def goal_distance(tm: TaskModel, scene: Scene) -> Callable[[np.ndarray], float]:
+    """State row (ns,) -> distance (m) in x, y of the goal object's centre to the goal."""
+    m = scene.model
+    bodies = _goal_bodies(tm)
+    qadr, _ = _object_xy(tm, scene, bodies)
+    base = m.body_pos[bodies, :2].mean(axis=0) if len(bodies) > 1 else np.zeros(2)
+    qpos = scene.layout["qpos"]
+    goal = np.asarray(tm.goal_position[:2])
+
+    def distance(state: np.ndarray) -> float:
+        xy = state[qpos][qadr].reshape(-1, 2).mean(axis=0) + base
+        return float(np.linalg.norm(xy - goal))
+
+    return distance
