@@ -1,0 +1,108 @@
+"""One asynchronous-MPC trial of the state-vector-reduction paper, and the aggregation of many.
+
+``run_trial(params)`` is a pure function of (task, method, parameters, seed): it builds its own
+task instance, cost, rollout service, iLQR and DoF selector, runs one MPC episode in real time
+(times ``slowdown``), and returns a JSON-able dict. The same seed gives every method the same
+task layout, so costs are compared pairwise against baseline.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from stats import mean_ci
+
+TRIAL_DEFAULTS = dict(rho=1.0, theta=12, slowdown=None, timeout=None, threads=0,
+                      feedback=False, control_noise=0.0, synchronous=False)
+
+
+def trial_key(p: dict) -> str:
+    """File-name key of a trial: everything that changes its outcome."""
+    parts = [p["task"], p["method"], f"rho{p['rho']:g}", f"theta{p['theta']}",
+             f"slow{p['slowdown']:g}", f"Y{p['timeout']}", f"seed{p['seed']}"]
+    if p.get("feedback"):
+        parts.append("fb")
+    if p.get("control_noise"):
+        parts.append(f"noise{p['control_noise']:g}")
+    return "-".join(parts)
+
+
+def run_trial(params: dict) -> dict:
+    """Run one MPC episode; see TRIAL_DEFAULTS for the optional parameters."""
+    import torch
+
+    from dopt import RolloutConfig, RolloutService, Scene
+    from dopt.mpc import MPC, MPCConfig, Plan, mpc_cost
+    from dopt.tasks import get_task
+    from dopt.tasks.push_costs import PushWeights, goal_distance, push_cost
+    from planners.ilqr import ILQR
+    from planners.svr import DofSelector, SelectionConfig, SVROptimiser
+
+    p = {**TRIAL_DEFAULTS, **params}
+    torch.set_num_threads(1)
+    seed = int(p["seed"])
+    tm = get_task(p["task"])(np.random.default_rng(seed))
+    scene = Scene(tm.model)
+    cost = push_cost(tm, scene)
+    svc = RolloutService(scene, RolloutConfig(threads=int(p["threads"])))
+    selector = DofSelector(scene.nv, tm.robot_dofs, cost.costed_dofs,
+                           SelectionConfig(p["method"], rho=float(p["rho"]),
+                                           theta=int(p["theta"])),
+                           np.random.default_rng([seed, 1]))
+    optimiser = SVROptimiser(ILQR(svc, cost), selector)
+    distance = goal_distance(tm, scene)
+    radius = PushWeights().success_radius
+    config = MPCConfig(timeout=int(p["timeout"] or tm.timeout),
+                       slowdown=float(p["slowdown"] or tm.slowdown),
+                       synchronous=bool(p["synchronous"]), feedback=bool(p["feedback"]),
+                       control_noise=float(p["control_noise"]))
+    mpc = MPC(scene, optimiser, config, np.random.default_rng([seed, 2]),
+              success=lambda x: distance(x) < radius)
+    res = mpc.run(tm.initial_state, Plan(np.zeros((tm.horizon, scene.nu))))
+    return {
+        "mpc_cost": mpc_cost(cost, res),
+        "success": bool(res.success),
+        "steps": int(len(res.controls)),
+        "goal_distance_start": distance(tm.initial_state),
+        "goal_distance_end": distance(res.states[-1]),
+        "opt_ms_mean": 1e3 * float(np.mean(res.opt_seconds)),
+        "dofs_mean": float(np.mean(res.n_dofs)),
+        "n_optimisations": len(res.opt_seconds),
+        "lag_steps_mean": float(np.mean(res.lag_steps)),
+        "late_steps": int(res.late_steps),
+        "opt_ms": [1e3 * s for s in res.opt_seconds],
+        "n_dofs": res.n_dofs,
+        "opt_step": res.opt_step,
+        "active_dofs": res.dofs,
+        "slowdown": config.slowdown,
+        "timeout": config.timeout,
+    }
+
+
+def aggregate(records: list[dict], baseline: str = "baseline", level: float = 0.90) -> dict:
+    """Per method: MPC cost normalised by baseline's on the same task instance (seed), mean and
+    CI half-width at ``level``; optimisation time, DoFs, success rate, trial count.
+
+    records: {"params", "result"} of finished trials of one task.
+    """
+    by = {}
+    for r in records:
+        p = r["params"]
+        by.setdefault(p["method"], {})[(p["seed"], p["rho"], p["theta"])] = r["result"]
+    base = {k[0]: v["mpc_cost"] for k, v in by.get(baseline, {}).items()}
+    out = {}
+    for method, trials in by.items():
+        res = list(trials.values())
+        norm = [v["mpc_cost"] / base[k[0]] for k, v in trials.items() if k[0] in base]
+        mean, ci = mean_ci(norm, level) if norm else (float("nan"), float("nan"))
+        out[method] = {
+            "mpc_cost_normalised_mean": mean,
+            "mpc_cost_normalised_ci90": ci,
+            "mpc_cost_mean": float(np.mean([v["mpc_cost"] for v in res])),
+            "opt_ms_mean": float(np.mean([v["opt_ms_mean"] for v in res])),
+            "dofs_mean": float(np.mean([v["dofs_mean"] for v in res])),
+            "success_rate": float(np.mean([v["success"] for v in res])),
+            "goal_distance_end_mean": float(np.mean([v["goal_distance_end"] for v in res])),
+            "trials": len(res),
+        }
+    return out
