@@ -17,6 +17,7 @@ dopt knows no planner: the optimiser is any object with ``optimise(state, plan) 
 from __future__ import annotations
 
 import logging
+import sys
 import threading
 import time
 from collections.abc import Callable
@@ -161,12 +162,17 @@ class MPC:
         else:
             worker = threading.Thread(target=self._optimiser_loop, name="mpc-optimiser",
                                       daemon=True)
+            # the agent needs the GIL for ~0.1 ms per step; with the default 5 ms switch
+            # interval the optimiser's Python code could hold it past the agent's deadline
+            interval = sys.getswitchinterval()
+            sys.setswitchinterval(min(interval, self._period / 20))
             worker.start()
             try:
                 self._agent_loop()
             finally:
                 self._stop.set()
                 worker.join()
+                sys.setswitchinterval(interval)
             if self._error is not None:
                 raise self._error
         n = self._step
@@ -240,8 +246,13 @@ class MPC:
         dq = self.scene.tangent.difference(ref[lay["qpos"]], x[lay["qpos"]], 1.0, C)
         return np.concatenate([dq, x[lay["qvel"]][C] - ref[lay["qvel"]][C]])
 
+    @property
+    def _period(self) -> float:
+        """Wall seconds per agent step."""
+        return self.scene.model.opt.timestep * self.config.slowdown
+
     def _agent_loop(self) -> None:
-        period = self.scene.model.opt.timestep * self.config.slowdown
+        period = self._period
         start = time.perf_counter()
         while not self._done:
             if self._error is not None:
