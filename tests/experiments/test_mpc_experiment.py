@@ -1,0 +1,59 @@
+"""experiments/mpc.py end to end (quick), its resume, its Ray path and its input errors."""
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[2]
+SCRIPT = ROOT / "experiments" / "mpc.py"
+
+
+def run(*args, check=True):
+    env = dict(os.environ, PYTHONPATH=str(ROOT))
+    proc = subprocess.run([sys.executable, str(SCRIPT), *args], capture_output=True, text=True,
+                          env=env, timeout=300)
+    if check and proc.returncode != 0:
+        raise AssertionError(proc.stderr[-3000:])
+    return proc
+
+
+def test_quick_run_writes_table_and_resumes(tmp_path):
+    out = tmp_path / "mpc"
+    run("--quick", "--methods", "baseline,svr-sum", "--out", str(out))
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["task"] == "clutter"
+    assert set(summary["methods"]) == {"baseline", "svr-sum"}
+    base = summary["methods"]["baseline"]
+    assert base["mpc_cost_normalised_mean"] == 1.0 and base["trials"] == 1
+    assert base["dofs_mean"] == 55.0 and base["opt_ms_mean"] > 0
+    assert "| svr-sum |" in (out / "table1.md").read_text()
+    assert (out / "table1.csv").exists()
+    files = sorted((out / "trials").glob("*.json"))
+    assert len(files) == 2
+    stamps = [f.stat().st_mtime_ns for f in files]
+    run("--quick", "--methods", "baseline,svr-sum", "--out", str(out))
+    assert [f.stat().st_mtime_ns for f in files] == stamps     # nothing was redone
+
+
+def test_ray_path(tmp_path):
+    pytest.importorskip("ray")
+    out = tmp_path / "ray"
+    run("--quick", "--methods", "naive", "--ray", "--out", str(out))
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["methods"]["naive"]["trials"] == 1
+
+
+@pytest.mark.parametrize("args, message", [
+    (["--task", "nope"], "unknown task"),
+    (["--methods", "baseline,svr"], "unknown method"),
+    (["--rho", "-1"], "--rho must be >= 0"),
+    (["--theta", "-2"], "--theta must be >= 0"),
+    (["--trials", "0"], "--trials must be >= 1"),
+])
+def test_bad_arguments(tmp_path, args, message):
+    proc = run(*args, "--out", str(tmp_path), check=False)
+    assert proc.returncode == 2 and message in proc.stderr
