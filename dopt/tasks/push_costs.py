@@ -31,6 +31,8 @@ from dopt.tasks.panda import TAU_MAX
 class PushWeights:
     goal: float = 100.0
     goal_f: float = 1000.0
+    goal_velocity: float = 1.0      # slows the goal object down near the goal: no overshoot
+    goal_velocity_f: float = 10.0
     distractor: float = 20.0
     distractor_f: float = 200.0
     arm_velocity: float = 0.05
@@ -106,6 +108,8 @@ def push_cost(tm: TaskModel, scene: Scene, weights: PushWeights = PushWeights())
         q_ref[goal_q] = tm.goal_position[:2]
         per_vertex = 1.0
     w[goal_d], w_f[goal_d] = W.goal * per_vertex, W.goal_f * per_vertex
+    w[nv + goal_d] = W.goal_velocity * per_vertex
+    w_f[nv + goal_d] = W.goal_velocity_f * per_vertex
 
     if tm.distractors:
         _, dis_d = _object_xy(tm, scene, [m.body(n).id for n in tm.distractors])
