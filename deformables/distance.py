@@ -1,0 +1,142 @@
+"""Exact point-to-surface distances and the Hausdorff distance between triangle meshes.
+
+Shape letters: Q query points, V vertices, F faces of a mesh.
+
+Point-triangle distances come from ``trimesh.triangles.closest_point``. Candidate triangles are
+found with a k-d tree over triangle centroids and made exact with the bound
+``dist(p, T) >= |p - centroid(T)| - radius(T)``, where ``radius(T)`` is the largest
+centroid-vertex distance of T: no triangle that could be nearer than the best one found is
+skipped.
+"""
+from __future__ import annotations
+
+import numpy as np
+import trimesh
+from scipy.spatial import cKDTree
+
+#: centroids fetched per point and triangle group before falling back to a ball search
+_NEIGHBOURS = 16
+#: nearest centroids whose triangles give the first upper bound of a point's distance
+_FIRST_GUESS = 4
+
+
+class _TriangleGroup:
+    """Triangles of similar size: their centroids in a k-d tree and their largest radius."""
+
+    def __init__(self, ids: np.ndarray, centroids: np.ndarray, radius: np.ndarray):
+        self.ids = ids
+        self.tree = cKDTree(centroids[ids])
+        self.max_radius = float(radius[ids].max())
+
+
+class SurfaceDistance:
+    """Exact distances from points to the surface of one triangle mesh, built once per mesh.
+
+    A triangle T can only be nearer to p than ``u`` if ``|p - centroid(T)| < u + radius(T)``,
+    with ``radius(T)`` the largest centroid-vertex distance of T. Triangles are grouped by
+    radius (powers of two of the median), so the tall triangles of a crease in the z-stretched
+    space do not widen the search around the small ones.
+
+    Args:
+        vertices: ``(V, 3)`` mesh vertices.
+        faces: ``(F, 3)`` triangles.
+    """
+
+    def __init__(self, vertices: np.ndarray, faces: np.ndarray):
+        vertices = np.asarray(vertices, dtype=float)
+        faces = np.asarray(faces, dtype=np.int64)
+        self.triangles = vertices[faces]                                       # (F, 3, 3)
+        self.centroids = self.triangles.mean(axis=1)
+        self.radius = np.linalg.norm(self.triangles - self.centroids[:, None], axis=2).max(axis=1)
+        scale = max(float(np.median(self.radius)), 1e-300)
+        level = np.ceil(np.log2(np.maximum(self.radius / scale, 1.0))).astype(np.int64)
+        self.groups = [_TriangleGroup(np.flatnonzero(level == g), self.centroids, self.radius)
+                       for g in np.unique(level)]
+        self.tree = cKDTree(self.centroids)
+        self.vertex_tree = cKDTree(vertices[np.unique(faces)])
+
+    def distances(self, points: np.ndarray) -> np.ndarray:
+        """Exact distances ``(Q,)`` from ``points`` ``(Q, 3)`` to the surface."""
+        points = np.asarray(points, dtype=float)
+        # upper bound: the triangles of the nearest few centroids, then the exhaustive search
+        k = min(_FIRST_GUESS, len(self.centroids))
+        near = self.tree.query(points, k=k)[1].reshape(len(points), k)
+        rows = np.repeat(np.arange(len(points)), k)
+        best = self._pair_distance(points, rows, near.ravel()).reshape(len(points), k).min(axis=1)
+        for group in self.groups:
+            reach = best + group.max_radius
+            k = min(_NEIGHBOURS, len(group.ids))
+            _, near = group.tree.query(points, k=k, distance_upper_bound=float(reach.max()))
+            near = near.reshape(len(points), k)
+            rows, cols = np.nonzero(near < len(group.ids))
+            tris = near[rows, cols]
+            crowded = np.flatnonzero(near[:, -1] < len(group.ids))   # maybe more than k
+            if len(crowded):
+                balls = group.tree.query_ball_point(points[crowded], reach[crowded])
+                extra = [np.asarray(b, dtype=np.int64) for b in balls]
+                rows = np.concatenate([rows, np.repeat(crowded, [len(b) for b in extra])])
+                tris = np.concatenate([tris] + extra)
+            tris = group.ids[tris]
+            lower = np.linalg.norm(points[rows] - self.centroids[tris], axis=1) - self.radius[tris]
+            keep = lower < best[rows]
+            rows, tris = rows[keep], tris[keep]
+            if len(rows):
+                np.minimum.at(best, rows, self._pair_distance(points, rows, tris))
+        return best
+
+    def _pair_distance(self, points: np.ndarray, rows: np.ndarray, tris: np.ndarray) -> np.ndarray:
+        """Distances ``(P,)`` from ``points[rows]`` to ``triangles[tris]``."""
+        closest = trimesh.triangles.closest_point(self.triangles[tris], points[rows])
+        return np.linalg.norm(closest - points[rows], axis=1)
+
+    def max_distance(self, points: np.ndarray, chunk: int = 256) -> float:
+        """``max_q dist(points[q], surface)`` for ``points`` ``(Q, 3)``.
+
+        The distance to the nearest mesh vertex bounds each point's distance from above, so
+        points are resolved from the largest bound down, in chunks, until no remaining bound
+        exceeds the largest exact distance found."""
+        points = np.asarray(points, dtype=float)
+        upper = self.vertex_tree.query(points)[0]
+        order = np.argsort(-upper, kind="stable")
+        best = 0.0
+        for begin in range(0, len(order), chunk):
+            batch = order[begin:begin + chunk]
+            batch = batch[upper[batch] > best]
+            if len(batch) == 0:
+                break
+            best = max(best, float(self.distances(points[batch]).max()))
+        return best
+
+
+def sample_surface(vertices: np.ndarray, faces: np.ndarray, step: float) -> np.ndarray:
+    """Deterministic samples ``(Q, 3)`` of a mesh: on each triangle a barycentric grid whose
+    spacing along the longest edge is at most ``step`` (vertices and edges included)."""
+    samples = []
+    for a, b, c in np.asarray(vertices, dtype=float)[np.asarray(faces)]:
+        longest = max(np.linalg.norm(b - a), np.linalg.norm(c - a), np.linalg.norm(c - b))
+        m = max(1, int(np.ceil(longest / step)))
+        i, j = np.meshgrid(np.arange(m + 1), np.arange(m + 1), indexing="ij")
+        inside = i + j <= m
+        u, v = i[inside, None] / m, j[inside, None] / m
+        samples.append(a + u * (b - a) + v * (c - a))
+    return np.concatenate(samples, axis=0)
+
+
+def hausdorff(original: SurfaceDistance, original_points: np.ndarray, vertices: np.ndarray,
+              faces: np.ndarray, step: float) -> tuple[float, float]:
+    """The two one-sided Hausdorff distances between an original and a simplified mesh.
+
+    Args:
+        original: distance to the original surface.
+        original_points: ``(N, 3)`` points of the original (its vertices).
+        vertices, faces: the simplified mesh ``(V, 3)``, ``(F, 3)``.
+        step: sampling step on the simplified surface.
+
+    Returns:
+        ``(simplified_to_original, original_to_simplified)``: the largest distance from the
+        simplified surface (sampled at ``step``) to the original surface, and from the original
+        points to the simplified surface.
+    """
+    to_original = original.max_distance(sample_surface(vertices, faces, step))
+    to_simplified = SurfaceDistance(vertices, faces).max_distance(original_points)
+    return to_original, to_simplified

@@ -1,0 +1,113 @@
+"""Alg. 1 of the key-particle paper, generic over the simplifier and the error, and its result.
+
+Shape letters: N particles of the original model, M vertices and E elements (segments or
+triangles) of the simplified model, K key particles, S model sizes tried.
+"""
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass
+from typing import Callable, Generic, TypeVar
+
+import numpy as np
+
+logger = logging.getLogger(__name__)
+
+Model = TypeVar("Model")
+
+
+@dataclass(frozen=True)
+class Reduction(Generic[Model]):
+    """Outcome of the Alg. 1 loop.
+
+    Attributes:
+        size: the accepted model size (the first one whose error is below the threshold).
+        model: the simplified model of that size.
+        sizes: ``(S,)`` model sizes tried, in order.
+        errors: ``(S,)`` error of each size tried.
+    """
+
+    size: int
+    model: Model
+    sizes: np.ndarray
+    errors: np.ndarray
+
+    @property
+    def error(self) -> float:
+        """Error of the accepted model."""
+        return float(self.errors[-1])
+
+
+def grow_until_below(simplify: Callable[[int], Model], error: Callable[[Model], float],
+                     threshold: float, max_size: int, min_size: int = 2) -> Reduction[Model]:
+    """Alg. 1, lines 1-6: simplify to size ``min_size, min_size + 1, ...`` until the error of the
+    simplified model is below ``threshold``.
+
+    Args:
+        simplify: size -> simplified model of that size.
+        error: simplified model -> its distance to the original goal.
+        threshold: accept the first model with ``error < threshold``.
+        max_size: the largest size tried.
+
+    Raises:
+        ValueError: if no size up to ``max_size`` reaches the threshold (the message gives the
+            best error seen and its size).
+    """
+    if max_size < min_size:
+        raise ValueError(f"max_size {max_size} is below the smallest model size {min_size}")
+    sizes: list[int] = []
+    errors: list[float] = []
+    for size in range(min_size, max_size + 1):
+        model = simplify(size)
+        err = float(error(model))
+        sizes.append(size)
+        errors.append(err)
+        logger.debug("size %d: error %.6g (threshold %.6g)", size, err, threshold)
+        if err < threshold:
+            arr_sizes = np.array(sizes, dtype=np.int64)
+            arr_errors = np.array(errors)
+            arr_sizes.setflags(write=False)
+            arr_errors.setflags(write=False)
+            return Reduction(size, model, arr_sizes, arr_errors)
+    best = int(np.nanargmin(errors)) if np.isfinite(errors).any() else 0
+    raise ValueError(f"the error never fell below the threshold {threshold:.6g} for model sizes "
+                     f"{min_size}..{max_size} (best {errors[best]:.6g} at size {sizes[best]}); "
+                     f"raise the threshold or the size cap")
+
+
+@dataclass(frozen=True)
+class KeyParticles:
+    """Key particles of a goal and the simplified model they come from.
+
+    Attributes:
+        indices: ``(K,)`` sorted particle indices (the reduced action space).
+        n_elements: segments (rope) or triangles (cloth) of the accepted simplified model.
+        vertices: ``(M, 3)`` vertices of the simplified model, metres.
+        elements: ``(E, 2)`` segments or ``(E, 3)`` triangles of the simplified model.
+        sizes: ``(S,)`` model sizes tried by Alg. 1 (vertices for rope, triangles for cloth).
+        errors: ``(S,)`` error at each size tried, metres (cloth: in the z-scaled space).
+        error: the accepted model's error.
+        threshold: the threshold used, metres (cloth: in the z-scaled space).
+        seconds: wall time of the whole reduction, seconds.
+    """
+
+    indices: np.ndarray
+    n_elements: int
+    vertices: np.ndarray
+    elements: np.ndarray
+    sizes: np.ndarray
+    errors: np.ndarray
+    error: float
+    threshold: float
+    seconds: float
+
+    def __post_init__(self):
+        for name in ("indices", "vertices", "elements", "sizes", "errors"):
+            arr = np.array(getattr(self, name), copy=True)
+            arr.setflags(write=False)
+            object.__setattr__(self, name, arr)
+
+    @property
+    def n_keys(self) -> int:
+        """K, the number of key particles."""
+        return int(len(self.indices))

@@ -1,0 +1,34 @@
+"""experiments/key_particles.py --quick writes its outputs with the counts."""
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def test_quick_run_writes_summary_curves_and_plots(tmp_path):
+    subprocess.run([sys.executable, str(ROOT / "experiments" / "key_particles.py"), "--task",
+                    "all", "--quick", "--out", str(tmp_path)], check=True, cwd=ROOT,
+                   capture_output=True, timeout=120)
+    summary = json.loads((tmp_path / "summary.json").read_text())
+    tasks = summary["tasks"]
+    assert tasks["rope_straighten"]["n_keys"] == 2
+    assert tasks["rope_fold"]["n_keys"] == 4 and tasks["rope_fold_unequal"]["n_keys"] == 4
+    assert tasks["cloth_diagonal"]["n_keys"] == 4 and tasks["cloth_diagonal"]["n_elements"] == 4
+    assert tasks["cloth_side"]["n_keys"] == 6 and tasks["cloth_side"]["n_elements"] == 6
+    assert [g["goal"] for g in tasks["cloth_underneath"]["intermediate_goals"]] == [
+        "cloth_side", "cloth_reflective"]
+    for name, entry in tasks.items():
+        assert len(entry["indices"]) == entry["n_keys"]
+        assert entry["error"] < entry["threshold"] and entry["seconds"] > 0
+        assert (tmp_path / f"{name}.png").stat().st_size > 10_000
+        rows = (tmp_path / f"curve_{name}.csv").read_text().splitlines()
+        assert rows[0] == "size,error,threshold,accepted" and len(rows) == len(entry["sizes"]) + 1
+
+
+def test_help_explains_every_flag():
+    out = subprocess.run([sys.executable, str(ROOT / "experiments" / "key_particles.py"),
+                          "--help"], check=True, capture_output=True, text=True).stdout
+    for flag in ["--task", "--out", "--seed", "--quick", "--cloth-n"]:
+        assert flag in out
