@@ -73,8 +73,9 @@ def decimate(vertices: np.ndarray, faces: np.ndarray, n_faces: int,
     """
     if backend not in _IMPLEMENTATIONS:
         raise ValueError(f"unknown decimation backend {backend!r}; choose from {BACKENDS}")
-    v, f = _IMPLEMENTATIONS[backend](np.ascontiguousarray(vertices, dtype=float),
-                                     np.ascontiguousarray(faces, dtype=np.int64), n_faces)
+    # writable C-ordered copies: the native back-ends reject read-only (frozen goal) arrays
+    v, f = _IMPLEMENTATIONS[backend](np.array(vertices, dtype=float, order="C"),
+                                     np.array(faces, dtype=np.int64, order="C"), n_faces)
     if len(f) == 0:
         raise ValueError(f"decimation to {n_faces} faces ({backend}) returned an empty mesh")
     return _compact(v, f)
