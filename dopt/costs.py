@@ -18,7 +18,6 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-import mujoco
 import numpy as np
 import torch
 
@@ -61,7 +60,7 @@ class EEDistanceTerm:
         self.arm_dofs = np.asarray(arm_dofs, dtype=int)
         self.target_dofs = np.asarray(target_dofs, dtype=int)
         dofs = np.concatenate([self.arm_dofs, self.target_dofs])
-        self._qadr = np.array([_linear_qpos_index(m, d) for d in dofs])
+        self._qadr = scene.linear_qpos_indices(dofs)
         self.fk = fk
         self.M = torch.as_tensor(np.asarray(target_map, dtype=float).reshape(3, -1))
         if self.M.shape[1] != len(self.target_dofs):
@@ -182,15 +181,6 @@ def _residual_jacobian(term: EEDistanceTerm, qpos: torch.Tensor):
     rows = [torch.autograd.grad(r[:, i].sum(), x, retain_graph=True)[0]
             for i in range(r.shape[1])]
     return torch.stack(rows, dim=1).detach(), r.detach()
-
-
-def _linear_qpos_index(model, dof: int) -> int:
-    """qpos index of a DoF whose tangent coordinate is its qpos coordinate."""
-    j = model.dof_jntid[dof]
-    k, jt = dof - model.jnt_dofadr[j], int(model.jnt_type[j])
-    if jt == int(mujoco.mjtJoint.mjJNT_BALL) or (jt == int(mujoco.mjtJoint.mjJNT_FREE) and k >= 3):
-        raise ValueError(f"DoF {dof} is rotational (ball/free): not allowed in a residual term")
-    return int(model.jnt_qposadr[j] + k)
 
 
 def _vector(x, n: int, name: str, nonneg: bool = False) -> np.ndarray:

@@ -112,6 +112,21 @@ class Scene:
                 out.append(qa)
         return np.unique(np.asarray(out, dtype=int))
 
+    def linear_qpos_indices(self, dofs) -> np.ndarray:
+        """qpos index of each DoF, in the given order, for DoFs whose tangent coordinate is
+        their qpos coordinate (hinge, slide, free-joint translation); ValueError for the
+        rotational DoFs of ball and free joints."""
+        m, out = self.model, []
+        for dof in np.asarray(dofs, dtype=int).ravel():
+            j = m.dof_jntid[dof]
+            k, jt = dof - m.jnt_dofadr[j], int(m.jnt_type[j])
+            if jt == int(mujoco.mjtJoint.mjJNT_BALL) or (
+                    jt == int(mujoco.mjtJoint.mjJNT_FREE) and k >= 3):
+                raise ValueError(f"DoF {dof} is rotational (ball/free joint): it has no single "
+                                 "qpos coordinate")
+            out.append(int(m.jnt_qposadr[j] + k))
+        return np.asarray(out, dtype=int)
+
     def state_of(self, data: mujoco.MjData) -> np.ndarray:
         """The (ns,) mjSTATE_INTEGRATION row of data."""
         state = np.empty(self.nstate)

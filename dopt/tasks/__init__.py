@@ -15,116 +15,13 @@ DoFs (``model.nv``).
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterable
-from dataclasses import dataclass
+from collections.abc import Callable
 
-import mujoco
 import numpy as np
 
-from dopt.tasks.panda import BODY_NAMES, EE_SITE, JOINT_NAMES
-
-
-@dataclass(frozen=True, eq=False)
-class TaskModel:
-    """One instance of a task: what to simulate, from where, and what the cost looks at.
-
-    Attributes:
-        name: the task's CLI name (a key of ``TASKS``).
-        model: the compiled model, fresh for each build (mutable: changes to its options
-            reach everything that holds this TaskModel).
-        initial_state: (ns,) ``mjSTATE_INTEGRATION`` state to start every episode from (written
-            by ``mujoco.mj_getState``; time 0, objects at rest).
-        goal_object: what the cost brings to the goal: a body name for a rigid object
-            (clutter, soft_rigid), or the flex name for the soft task, whose position is the
-            mean of its vertices.
-        goal_position: (3,) world position of the goal region's centre on the table (m); the
-            paper's costs use its x and y.
-        distractors: bodies whose displacement from their initial position the cost penalises
-            (the clutter; empty elsewhere).
-        soft_body: name of the flex (the soft body), or None.
-        horizon: T, the optimisation horizon (control steps).
-        dt: the model time step (s), equal to ``model.opt.timestep``.
-        timeout: Y, the number of agent time steps until the task ends.
-        slowdown: how many times slower than real time the paper ran the agent thread.
-        robot_joints: the arm's 7 hinge joints, in the order of the actuators (``ctrl[i]`` is
-            the torque of ``robot_joints[i]``, N m).
-        robot_bodies: the arm's bodies, base first, pusher tool last.
-        ee_site: the end-effector site (the centre of the pusher's round tip).
-    """
-
-    name: str
-    model: mujoco.MjModel
-    initial_state: np.ndarray
-    goal_object: str
-    goal_position: np.ndarray
-    distractors: tuple[str, ...]
-    soft_body: str | None
-    horizon: int
-    dt: float
-    timeout: int
-    slowdown: int
-    robot_joints: tuple[str, ...] = JOINT_NAMES
-    robot_bodies: tuple[str, ...] = BODY_NAMES
-    ee_site: str = EE_SITE
-
-    @property
-    def robot_dofs(self) -> np.ndarray:
-        """(7,) indices into qvel (and the tangent state) of ``robot_joints``."""
-        return np.array([self.model.joint(name).dofadr[0] for name in self.robot_joints])
-
-    @property
-    def cost_dofs(self) -> np.ndarray:
-        """(k,) indices into qvel of the object DoFs the cost reads directly.
-
-        The world x and y translations of ``goal_object`` (of every vertex, for a flex) and of
-        each distractor. ``robot_dofs`` + ``cost_dofs`` is the paper's iLQR-Naive DoF set:
-        7 + 16 = 23 (clutter), 7 + 72 = 79 (soft), 7 + 2 = 9 (soft_rigid).
-        """
-        flex = mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_FLEX, self.goal_object)
-        if flex >= 0:
-            start = self.model.flex_vertadr[flex]
-            bodies = list(self.model.flex_vertbodyid[start : start + self.model.flex_vertnum[flex]])
-        else:
-            bodies = [self.model.body(self.goal_object).id]
-        bodies += [self.model.body(name).id for name in self.distractors]
-        return _planar_dofs(self.model, bodies)
-
-
-def require_generator(rng: object) -> np.random.Generator:
-    """Return ``rng`` if it is a ``numpy.random.Generator``; raise TypeError otherwise."""
-    if not isinstance(rng, np.random.Generator):
-        raise TypeError(
-            f"rng must be a numpy.random.Generator (e.g. numpy.random.default_rng(seed)), got {type(rng).__name__}"
-        )
-    return rng
-
-
-def _planar_dofs(model: mujoco.MjModel, body_ids: Iterable[int]) -> np.ndarray:
-    """Indices into qvel of the world x and y translations of the given bodies.
-
-    A free joint contributes its first two DoFs (its linear velocity is in the world frame); a
-    slide joint along world x or y (the joints of a flex vertex) contributes its DoF.
-
-    Returns:
-        (k,) int array, in the order of ``body_ids`` and then of the joints.
-    """
-    dofs = []
-    for body in body_ids:
-        start = model.body_jntadr[body]
-        for joint in range(start, start + model.body_jntnum[body]):
-            kind, adr = model.jnt_type[joint], model.jnt_dofadr[joint]
-            axis = np.abs(model.jnt_axis[joint])
-            if kind == mujoco.mjtJoint.mjJNT_FREE:
-                dofs += [adr, adr + 1]
-            elif kind == mujoco.mjtJoint.mjJNT_SLIDE and np.isclose(axis[2], 0.0) and np.isclose(axis.max(), 1.0):
-                dofs.append(adr)
-    return np.array(dofs, dtype=int)
-
-
-# The builders import TaskModel and the helpers above from this module, so they are imported
-# only now that those exist.
-from dopt.tasks.clutter import build_clutter  # noqa: E402
-from dopt.tasks.soft import build_soft, build_soft_rigid  # noqa: E402
+from dopt.tasks.base import TaskModel, planar_dofs, require_generator
+from dopt.tasks.clutter import build_clutter
+from dopt.tasks.soft import build_soft, build_soft_rigid
 
 TaskBuilder = Callable[[np.random.Generator], TaskModel]
 
@@ -143,4 +40,5 @@ def get_task(name: str) -> TaskBuilder:
         raise ValueError(f"unknown task {name!r}; known tasks: {', '.join(sorted(TASKS))}") from None
 
 
-__all__ = ["TASKS", "TaskBuilder", "TaskModel", "get_task", "require_generator"]
+__all__ = ["TASKS", "TaskBuilder", "TaskModel", "get_task", "planar_dofs",
+           "require_generator"]

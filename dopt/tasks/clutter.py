@@ -19,7 +19,7 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
-from dopt.tasks import TaskModel, require_generator
+from dopt.tasks.base import TaskModel, require_generator
 from dopt.tasks.panda import TOOL_RADIUS, ik_pointing_down, rest_state, table_scene_spec
 
 log = logging.getLogger(__name__)

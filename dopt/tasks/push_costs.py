@@ -23,7 +23,7 @@ import numpy as np
 
 from dopt.costs import EEDistanceTerm, QuadraticCost
 from dopt.scene import Scene
-from dopt.tasks import TaskModel
+from dopt.tasks.base import TaskModel, planar_dofs
 from dopt.tasks.panda import TAU_MAX
 
 
@@ -43,45 +43,17 @@ class PushWeights:
     success_radius: float = 0.02     # m: goal object centre within this of the goal ends the task
 
 
-def _object_xy(tm: TaskModel, scene: Scene, body_ids) -> tuple[np.ndarray, np.ndarray]:
-    """(k,) qpos indices and (k,) DoFs of the x, y translations of bodies (free or slides)."""
-    m = scene.model
-    dofs = [d for b in body_ids for d in _xy_dofs(m, b)]
-    qadr = [m.jnt_qposadr[m.dof_jntid[d]] + d - m.jnt_dofadr[m.dof_jntid[d]] for d in dofs]
-    return np.array(qadr, dtype=int), np.array(dofs, dtype=int)
+def _xy(scene: Scene, bodies: list[int]) -> tuple[np.ndarray, np.ndarray]:
+    """(k,) qpos indices and (k,) DoFs of the world x, y translations of bodies."""
+    dofs = planar_dofs(scene.model, bodies)
+    return scene.linear_qpos_indices(dofs), dofs
 
 
-def _xy_dofs(m: mujoco.MjModel, body: int) -> list[int]:
-    out = []
-    for j in range(m.body_jntadr[body], m.body_jntadr[body] + m.body_jntnum[body]):
-        adr = m.jnt_dofadr[j]
-        if m.jnt_type[j] == mujoco.mjtJoint.mjJNT_FREE:
-            out += [adr, adr + 1]
-        elif m.jnt_type[j] == mujoco.mjtJoint.mjJNT_SLIDE and abs(m.jnt_axis[j][2]) < 1e-9:
-            out.append(adr)
-    return out
-
-
-def _goal_bodies(tm: TaskModel) -> list[int]:
-    m = tm.model
-    flex = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_FLEX, tm.goal_object)
-    if flex >= 0:
-        start = m.flex_vertadr[flex]
-        return [int(b) for b in m.flex_vertbodyid[start:start + m.flex_vertnum[flex]]]
-    return [m.body(tm.goal_object).id]
-
-
-def _soft_bodies(tm: TaskModel) -> list[int]:
-    m = tm.model
-    flex = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_FLEX, tm.soft_body)
-    start = m.flex_vertadr[flex]
-    return [int(b) for b in m.flex_vertbodyid[start:start + m.flex_vertnum[flex]]]
-
-
-def _centroid_map(m: mujoco.MjModel, bodies: list[int], qadr: np.ndarray, state_qpos):
-    """Mean x, y of vertex bodies as offset + M q: world x = body_pos x + q_x (world slides)."""
+def _centroid_map(m: mujoco.MjModel, bodies: list[int], k: int):
+    """Mean x, y of vertex bodies as offset + M q over their k x/y slide coordinates
+    (x, y interleaved): world x = body_pos x + q_x, since vertex slides are world-aligned."""
     n = len(bodies)
-    M = np.zeros((3, len(qadr)))
+    M = np.zeros((3, k))
     M[0, 0::2] = 1.0 / n
     M[1, 1::2] = 1.0 / n
     offset = np.zeros(3)
@@ -98,10 +70,10 @@ def push_cost(tm: TaskModel, scene: Scene, weights: PushWeights = PushWeights())
     q_ref = q0.copy()
     w, w_f = np.zeros(2 * nv), np.zeros(2 * nv)
 
-    goal_q, goal_d = _object_xy(tm, scene, _goal_bodies(tm))
+    goal_q, goal_d = _xy(scene, tm.goal_bodies)
     start_xy = q0[goal_q].reshape(-1, 2)
     if len(goal_q) > 2:   # a soft body: translate every vertex so that the centroid is the goal
-        shift = tm.goal_position[:2] - (m.body_pos[_goal_bodies(tm), :2] + start_xy).mean(0)
+        shift = tm.goal_position[:2] - (m.body_pos[tm.goal_bodies, :2] + start_xy).mean(0)
         q_ref[goal_q] = (start_xy + shift).ravel()
         per_vertex = 1.0 / (len(goal_q) // 2)
     else:
@@ -112,7 +84,7 @@ def push_cost(tm: TaskModel, scene: Scene, weights: PushWeights = PushWeights())
     w_f[nv + goal_d] = W.goal_velocity_f * per_vertex
 
     if tm.distractors:
-        _, dis_d = _object_xy(tm, scene, [m.body(n).id for n in tm.distractors])
+        _, dis_d = _xy(scene, [m.body(n).id for n in tm.distractors])
         w[dis_d], w_f[dis_d] = W.distractor, W.distractor_f
     arm = tm.robot_dofs
     w[nv + arm], w_f[nv + arm] = W.arm_velocity, W.arm_velocity_f
@@ -125,11 +97,10 @@ def push_cost(tm: TaskModel, scene: Scene, weights: PushWeights = PushWeights())
         return chain.forward_kinematics(q).get_matrix()[:, :3, 3]
 
     if tm.soft_body is not None:
-        bodies = _soft_bodies(tm)
-        t_q, t_d = _object_xy(tm, scene, bodies)
-        M, offset = _centroid_map(m, bodies, t_q, q0)
+        _, t_d = _xy(scene, tm.soft_bodies)
+        M, offset = _centroid_map(m, tm.soft_bodies, len(t_d))
     else:
-        _, t_d = _object_xy(tm, scene, _goal_bodies(tm))
+        _, t_d = _xy(scene, tm.goal_bodies)
         M, offset = np.eye(3)[:, :2], np.zeros(3)
     term = EEDistanceTerm(scene, fk, arm, t_d, M, offset, axes=(0, 1), weight=W.ee,
                           terminal_weight=W.ee_f)
@@ -139,8 +110,8 @@ def push_cost(tm: TaskModel, scene: Scene, weights: PushWeights = PushWeights())
 def goal_distance(tm: TaskModel, scene: Scene) -> Callable[[np.ndarray], float]:
     """State row (ns,) -> distance (m) in x, y of the goal object's centre to the goal."""
     m = scene.model
-    bodies = _goal_bodies(tm)
-    qadr, _ = _object_xy(tm, scene, bodies)
+    bodies = tm.goal_bodies
+    qadr, _ = _xy(scene, bodies)
     base = m.body_pos[bodies, :2].mean(axis=0) if len(bodies) > 1 else np.zeros(2)
     qpos = scene.layout["qpos"]
     goal = np.asarray(tm.goal_position[:2])

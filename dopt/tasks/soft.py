@@ -24,7 +24,7 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
-from dopt.tasks import TaskModel, require_generator
+from dopt.tasks.base import TaskModel, require_generator
 from dopt.tasks.clutter import (
     CYLINDER_HALF_HEIGHT,
     CYLINDER_RADIUS,
