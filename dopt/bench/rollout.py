@@ -28,7 +28,7 @@ def bench_rollout(task: str, P: int, T: int, threads: int, repeats: int, seed: i
     u = _controls(scene, rng, (P, T))
     svc = RolloutService(scene, RolloutConfig(threads=threads))
     wall = best_wall(lambda: svc.rollout(x0, u), repeats)
-    step = mj_step_seconds(scene.model, x0, u[0], repeats)
+    step = mj_step_seconds(scene.model, x0, u[: min(P, 8)], repeats)
     limit = P * T * step / svc.threads
     return {"bench": "rollout", "task": task, "P": P, "T": T, "nv": scene.nv,
             "threads": svc.threads, "wall_s": wall, "mj_step_us": step * 1e6,

@@ -26,14 +26,18 @@ def mj_step_seconds(model: mujoco.MjModel, state: np.ndarray, controls: np.ndarr
                     repeats: int) -> float:
     """Seconds of one plain ``mj_step`` on one thread: the physical limit's unit.
 
-    Steps a single MjData from ``state`` (ns,) through ``controls`` (T, nu); best of repeats.
+    Steps a single MjData from ``state`` (ns,) through ``controls`` (T, nu), or through each of
+    several control sequences (S, T, nu) in turn (the average over a sample of the workload);
+    best of repeats.
     """
     data = mujoco.MjData(model)
+    seqs = controls[None] if controls.ndim == 2 else controls
 
     def run():
-        mujoco.mj_setState(model, data, state, INTEGRATION)
-        for u in controls:
-            data.ctrl[:] = u
-            mujoco.mj_step(model, data)
+        for seq in seqs:
+            mujoco.mj_setState(model, data, state, INTEGRATION)
+            for u in seq:
+                data.ctrl[:] = u
+                mujoco.mj_step(model, data)
 
-    return best_wall(run, repeats) / len(controls)
+    return best_wall(run, repeats) / (seqs.shape[0] * seqs.shape[1])
