@@ -39,9 +39,9 @@ def parse_args(argv=None) -> argparse.Namespace:
                     help="comma-separated DoF-selection methods (default: all five)")
     ap.add_argument("--rho", type=float, default=TRIAL_DEFAULTS["rho"],
                     help="SVR importance threshold: DoFs below it leave the active set")
-    ap.add_argument("--theta", type=int, default=TRIAL_DEFAULTS["theta"],
+    ap.add_argument("--theta", type=int, default=None,
                     help="random DoFs re-added per iteration (svr) / used besides the robot "
-                         "(rand)")
+                         "(rand); default: the paper's Table 1, rand 5, svr 10")
     ap.add_argument("--trials", type=int, default=20, help="task instances (seeds) per method")
     ap.add_argument("--seed", type=int, default=0, help="first seed; trials use seed..seed+N-1")
     ap.add_argument("--slowdown", type=float, default=None,
@@ -70,7 +70,7 @@ def parse_args(argv=None) -> argparse.Namespace:
     args.methods = methods
     if args.rho < 0:
         ap.error("--rho must be >= 0")
-    if args.theta < 0:
+    if args.theta is not None and args.theta < 0:
         ap.error("--theta must be >= 0")
     if args.trials < 1:
         ap.error("--trials must be >= 1")
@@ -89,13 +89,20 @@ def make_trials(args, methods=None, rhos=None, thetas=None):
     for seed in range(args.seed, args.seed + args.trials):
         for method in methods or args.methods:
             for rho in rhos or [args.rho]:
-                for theta in thetas or [args.theta]:
+                for theta in thetas or [_theta(args.theta, method)]:
                     p = dict(task=args.task, method=method, rho=rho, theta=theta, seed=seed,
                              slowdown=args.slowdown or _default_slowdown(args.task),
                              timeout=args.timeout or 0, threads=args.threads,
                              feedback=args.feedback, control_noise=args.control_noise)
                     out.append(Trial(trial_key(p), p))
     return out
+
+
+def _theta(theta: int | None, method: str) -> int:
+    """--theta, or the paper's Table 1 value for the method (rand 5, svr 10; unused else)."""
+    if theta is not None:
+        return theta
+    return {"rand": 5, "svr-sum": 10, "svr-svd": 10}.get(method, 0)
 
 
 def _default_slowdown(task: str) -> float:
@@ -143,7 +150,8 @@ def main(argv=None) -> int:
     methods = aggregate([r for k, r in records.items() if k in wanted])
     order = {m: i for i, m in enumerate(METHODS)}
     methods = dict(sorted(methods.items(), key=lambda kv: order.get(kv[0], 99)))
-    summary = {"task": args.task, "rho": args.rho, "theta": args.theta,
+    summary = {"task": args.task, "rho": args.rho,
+               "theta": {m: _theta(args.theta, m) for m in args.methods},
                "slowdown": trials[0].params["slowdown"], "methods": methods}
     (out / "summary.json").write_text(json.dumps(summary, indent=2))
     write_table(out, args.task, methods)

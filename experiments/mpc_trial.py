@@ -12,7 +12,7 @@ import numpy as np
 
 from stats import mean_ci
 
-TRIAL_DEFAULTS = dict(rho=1.0, theta=12, slowdown=None, timeout=None, threads=0,
+TRIAL_DEFAULTS = dict(rho=1.0, theta=10, slowdown=None, timeout=None, threads=0,
                       feedback=False, control_noise=0.0, synchronous=False)
 
 
