@@ -1,0 +1,197 @@
+"""Rope and cloth scenes with the picker, and the pick-and-place task that CEM evaluates.
+
+``DeformableScene`` is a compiled flex object plus the picker (built by ``dopt.tasks.rope`` and
+``dopt.tasks.cloth``). ``PickPlaceTask`` holds a scene, a start state and a goal shape, and turns
+a population of pick-and-place action sequences into costs with one batched rollout: the
+paper's objective (Eq. 2), the mean distance of the particles to their goal positions.
+
+Shapes: P population, H actions per sequence, K steps per action, N particles, ns state size.
+"""
+
+from __future__ import annotations
+
+import mujoco
+import numpy as np
+
+from dopt.rollout import RolloutConfig, RolloutService
+from dopt.scene import Scene
+from dopt.state import check_states
+from dopt.tasks.picker import CONTROL_SPEC, Picker, PickerConfig, fix_grasp_anchors
+
+class DeformableScene:
+    """A compiled rope or cloth (one flex) with the picker.
+
+    Args:
+        model: compiled model holding flex ``flex`` and the picker (see ``picker_mjcf``).
+        flex: name of the flex; its vertex bodies are ``<flex>_<i>``.
+        picker: the picker config the model was built with.
+        settle: seconds the object settles to make ``initial_state``.
+        positions: (N, 3) start positions of the particles (None: the compiled layout).
+
+    Attributes:
+        scene: the ``dopt.Scene``; picker: the ``Picker``; radius: particle radius (m);
+        initial_state: (ns,) the settled start state; n_particles: N.
+    """
+
+    def __init__(self, model: mujoco.MjModel, flex: str, picker: PickerConfig,
+                 settle: float = 0.2,
+                 positions: np.ndarray | None = None):
+        fix_grasp_anchors(model)
+        self.model = model
+        self.scene = Scene(model)
+        self.flex = flex
+        f = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_FLEX, flex)
+        if f < 0:
+            raise ValueError(f"model has no flex named {flex!r}")
+        self.n_particles = int(model.flex_vertnum[f])
+        self.radius = float(model.flex_radius[f])
+        bodies = model.flex_vertbodyid[model.flex_vertadr[f]:][:self.n_particles]
+        self._qpos = np.stack([self.scene.qpos_indices(f"vertex:{model.flex_vertadr[f] + i}")
+                               for i in range(self.n_particles)])                     # (N, 3)
+        self._origin = model.body_pos[bodies] - model.qpos0[self._qpos]               # (N, 3)
+        self.picker = Picker(model, self.n_particles, picker)
+        state = self.scene.state_of(mujoco.MjData(model))
+        if positions is not None:
+            state = self.with_positions(state, positions)
+        self.initial_state = self.settle(state, settle)
+
+    @property
+    def nstate(self) -> int:
+        return self.scene.nstate
+
+    def positions(self, states: np.ndarray) -> np.ndarray:
+        """Particle positions of state rows: (..., ns) -> (..., N, 3)."""
+        qpos = np.asarray(states)[..., self.scene.layout["qpos"]]
+        return self._origin + qpos[..., self._qpos]
+
+    def with_positions(self, state: np.ndarray, positions: np.ndarray) -> np.ndarray:
+        """A copy of state row (ns,) with the particles placed at positions (N, 3), at rest."""
+        pos = np.asarray(positions, dtype=float)
+        if pos.shape != (self.n_particles, 3) or not np.all(np.isfinite(pos)):
+            raise ValueError(f"positions must be a finite ({self.n_particles}, 3) array, "
+                             f"got shape {pos.shape}")
+        out = np.array(state, dtype=float, copy=True)
+        lay = self.scene.layout
+        qpos = out[lay["qpos"]]
+        qpos[self._qpos] = pos - self._origin
+        out[lay["qpos"]] = qpos
+        out[lay["qvel"]] = 0.0
+        out[lay["warmstart"]] = 0.0
+        return out
+
+    def settle(self, state: np.ndarray, seconds: float) -> np.ndarray:
+        """Let the object come to rest holding nothing: (ns,) -> (ns,)."""
+        m = self.model
+        data = mujoco.MjData(m)
+        mujoco.mj_setState(m, data, check_states(m, state, batched=False),
+                           self.scene.layout.spec)
+        mujoco.mj_setState(m, data, self.picker.idle_row, CONTROL_SPEC)
+        for _ in range(int(round(seconds / m.opt.timestep))):
+            mujoco.mj_step(m, data)
+        return self.scene.state_of(data)
+
+
+def mean_distance(positions: np.ndarray, goal: np.ndarray) -> np.ndarray:
+    """Eq. 2 of the paper as a mean: mean particle distance to the goal (m).
+
+    positions (..., N, 3), goal (N, 3) -> (...).
+    """
+    return np.linalg.norm(np.asarray(positions) - goal, axis=-1).mean(axis=-1)
+
+
+def end_to_end(positions: np.ndarray) -> np.ndarray:
+    """Distance between the first and last particle (m): (..., N, 3) -> (...)."""
+    p = np.asarray(positions)
+    return np.linalg.norm(p[..., -1, :] - p[..., 0, :], axis=-1)
+
+
+class PickPlaceTask:
+    """Bring a scene's object from a start state to a goal shape with pick-and-place actions.
+
+    This is what ``planners.cem`` asks for costs: ``evaluate`` runs a population of action
+    sequences as one batched rollout and returns Eq. 2 for each.
+
+    Args:
+        scene: the rope or cloth scene.
+        goal: (N, 3) goal particle positions (m).
+        start_state: (ns,) state to plan from (default: the scene's initial state).
+        rollout: the rollout service (default: a new one on every core).
+    """
+
+    def __init__(self, scene: DeformableScene, goal: np.ndarray,
+                 start_state: np.ndarray | None = None,
+                 rollout: RolloutService | None = None):
+        self.scene = scene
+        goal = np.asarray(goal, dtype=float)
+        if goal.shape != (scene.n_particles, 3) or not np.all(np.isfinite(goal)):
+            raise ValueError(f"goal must be a finite ({scene.n_particles}, 3) array, "
+                             f"got shape {goal.shape}")
+        self.goal = goal
+        state = scene.initial_state if start_state is None else start_state
+        self.start_state = check_states(scene.model, state, batched=False, name="start_state")
+        self.service = rollout or RolloutService(scene.scene, RolloutConfig())
+        self.picker = scene.picker
+
+    @property
+    def n_particles(self) -> int:
+        return self.scene.n_particles
+
+    @property
+    def bound(self) -> np.ndarray:
+        """(3,) largest displacement per axis (m)."""
+        return self.picker.bound
+
+    def with_start(self, state: np.ndarray) -> "PickPlaceTask":
+        """The same task from another start state (ns,)."""
+        return PickPlaceTask(self.scene, self.goal, state, self.service)
+
+    def with_goal(self, goal: np.ndarray) -> "PickPlaceTask":
+        """The same start state with another goal (N, 3)."""
+        return PickPlaceTask(self.scene, goal, self.start_state, self.service)
+
+    def rollout(self, particles, displacements, start: np.ndarray | None = None) -> np.ndarray:
+        """Final states of a population of action sequences: (P, H), (P, H, 3) -> (P, ns),
+        from ``start`` (ns,) (default: the task's start state).
+
+        Raises:
+            ValueError: a bad action (see ``Picker.check``).
+            dopt.errors.UnstableRolloutError: a simulation went unstable.
+        """
+        U = self.picker.encode(_numpy(particles), _numpy(displacements))
+        x0 = self.start_state if start is None else start
+        return self.service.rollout(x0, U, control_spec=CONTROL_SPEC).final_states
+
+    def cost(self, states: np.ndarray) -> np.ndarray:
+        """Eq. 2 (mean particle distance to the goal, m) of state rows: (..., ns) -> (...)."""
+        return mean_distance(self.scene.positions(states), self.goal)
+
+    def evaluate(self, particles, displacements):
+        """Costs of a population: (P, H) ints (NONE = -1), (P, H, 3) metres -> (P,) torch
+        float64 tensor (numpy in, numpy out)."""
+        costs = self.cost(self.rollout(particles, displacements))
+        if _is_torch(particles) or _is_torch(displacements):
+            import torch
+            return torch.from_numpy(costs)
+        return costs
+
+    def positions(self, states: np.ndarray) -> np.ndarray:
+        """Particle positions: (..., ns) -> (..., N, 3)."""
+        return self.scene.positions(states)
+
+    def execute(self, particles, displacements, start: np.ndarray | None = None) -> np.ndarray:
+        """Final state of one action sequence: (H,), (H, 3) -> (ns,), from ``start`` (ns,)
+        (default: the task's start state)."""
+        return self.rollout(np.asarray(_numpy(particles))[None],
+                            np.asarray(_numpy(displacements), dtype=float)[None], start)[0]
+
+    def step(self, state: np.ndarray, particle: int, displacement) -> np.ndarray:
+        """One action from ``state``: (ns,) -> (ns,)."""
+        return self.execute([particle], np.reshape(displacement, (1, 3)), state)
+
+
+def _is_torch(x) -> bool:
+    return type(x).__module__.startswith("torch")
+
+
+def _numpy(x):
+    return x.detach().cpu().numpy() if _is_torch(x) else x

@@ -1,0 +1,111 @@
+"""A rope (MuJoCo 1D ``flexcomp``, a discrete elastic rod) on a floor, with the picker.
+
+MuJoCo 4.0 removed ``composite``/cable: the rope is a 1D flexcomp with inextensible edges
+(``<edge equality="true"/>``, a flex equality that must stay active) and ``<elasticity young>``
+for bending and twist (which adds per-edge twist joints and plastic state). Settings from
+notes/feasibility-cloth-rope-cem.md: discrete integrator, CG, dt 0.02 s. Young's modulus 1e4 Pa
+(not the notes' 1e6): a stiffer rod springs back towards its straight rest shape, a crumpled
+1e6 rope straightens itself to 75-100 % of its length within 0.4 s, a 1e4 one stays put (< 3 mm).
+
+Particle i lies at x = -length/2 + i * length/(n-1) when straight.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import mujoco
+import numpy as np
+
+from dopt.tasks.deformable_task import DeformableScene
+from dopt.tasks.picker import PickerConfig, picker_mjcf
+
+FLEX = "rope"
+
+
+@dataclass(frozen=True)
+class RopeConfig:
+    """Rope, material and solver settings.
+
+    Attributes:
+        n: particles (N).
+        length: rest length (m).
+        mass: total mass (kg).
+        radius: particle radius (m).
+        young, damping: rod elasticity (bending and twist).
+        edge_solref: solref of the inextensibility constraint.
+        friction: sliding friction with the floor.
+        selfcollide: rope-rope contacts.
+        timestep, iterations, tolerance: dt (s) and CG settings.
+        settle: seconds the rope settles before the initial state.
+    """
+
+    n: int = 40
+    length: float = 0.5
+    mass: float = 0.05
+    radius: float = 0.005
+    young: float = 1e4
+    damping: float = 1e-3
+    edge_solref: tuple[float, float] = (0.004, 1.0)
+    friction: float = 0.8
+    selfcollide: bool = False
+    timestep: float = 0.02
+    iterations: int = 50
+    tolerance: float = 1e-6
+    settle: float = 0.4
+
+    def __post_init__(self):
+        if self.n < 3:
+            raise ValueError(f"a rope needs n >= 3 particles, got {self.n}")
+        for name in ("length", "mass", "radius", "young", "timestep"):
+            v = getattr(self, name)
+            if not (np.isfinite(v) and v > 0):
+                raise ValueError(f"{name} must be a positive finite number, got {v!r}")
+
+
+def rope_xml(config: RopeConfig = RopeConfig(), picker: PickerConfig = PickerConfig(),
+             pickable: Sequence[int] | None = None) -> str:
+    """MJCF of the straight rope on a floor with the picker; ``pickable`` particles get a grasp
+    equality (None: all N)."""
+    c = config
+    sp = c.length / (c.n - 1)
+    body, eqs, acts = picker_mjcf(FLEX, range(c.n) if pickable is None else pickable, picker)
+    fr = f"{c.friction} 0.005 0.0001"
+    return f"""
+<mujoco model="rope{c.n}">
+  <option timestep="{c.timestep}" integrator="discrete" solver="CG" iterations="{c.iterations}"
+          tolerance="{c.tolerance}"/>
+  <size memory="64M"/>
+  <visual><global offwidth="640" offheight="480"/></visual>
+  <worldbody>
+    <light pos="0 0 2" dir="0 0 -1" diffuse=".8 .8 .8"/>
+    <geom name="floor" type="plane" size="2 2 .05" friction="{fr}" rgba=".85 .85 .8 1"/>
+    <flexcomp name="{FLEX}" type="grid" dim="1" count="{c.n} 1 1" spacing="{sp} {sp} {sp}"
+              pos="0 0 {c.radius + 1e-4}" radius="{c.radius}" mass="{c.mass}"
+              rgba=".2 .3 .8 1">
+      <contact selfcollide="{'auto' if c.selfcollide else 'none'}" friction="{fr}"
+               solref="0.01 1" solimp="0.95 0.99 0.0001"/>
+      <edge equality="true" solref="{c.edge_solref[0]} {c.edge_solref[1]}"/>
+      <elasticity young="{c.young}" damping="{c.damping}"/>
+    </flexcomp>
+    {body}
+  </worldbody>
+  <equality>{eqs}</equality>
+  <actuator>{acts}</actuator>
+</mujoco>"""
+
+
+def make_rope(config: RopeConfig = RopeConfig(), picker: PickerConfig = PickerConfig(),
+              pickable: Sequence[int] | None = None,
+              positions: np.ndarray | None = None) -> DeformableScene:
+    """The rope at rest on the floor: straight, or placed at ``positions`` (N, 3) first (e.g.
+    a crumpled shape from ``deformables.goals.rope_crumpled``) and settled."""
+    model = mujoco.MjModel.from_xml_string(rope_xml(config, picker, pickable))
+    return DeformableScene(model, FLEX, picker, settle=config.settle, positions=positions)
+
+
+def rope_task(rng: np.random.Generator | None = None, **overrides) -> DeformableScene:
+    """Registry factory: the default straight rope (``RopeConfig(**overrides)``), every particle
+    pickable. ``rng`` is unused."""
+    return make_rope(RopeConfig(**overrides))
