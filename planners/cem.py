@@ -1,0 +1,250 @@
+"""Torch-batched cross-entropy method (CEM) over sequences of pick-and-place actions.
+
+An action is ``(i, dx, dy, dz)``: pick particle i, move it by a displacement bounded per axis,
+release; or None (particle index ``NONE = -1``). A plan is a sequence of H actions. CEM keeps,
+for every action slot h,
+
+- a categorical distribution over the C candidate particles plus None, and
+- a Gaussian over the displacement for each candidate (mean and std per axis, clipped to the
+  bound when sampled),
+
+samples a population of P sequences, asks the task for their costs, and refits both to the
+E elite sequences, blending with the previous distribution by ``smoothing``. A candidate's
+Gaussian moves towards its elites' mean and std by the share of elites that chose it (all E:
+a plain smoothed refit; one: a small step, since one sample tells nothing of a spread).
+
+The planner knows nothing of ropes or cloth: it talks to a ``PickTask`` (anything with
+``bound`` and ``evaluate``; ``dopt.tasks.deformable_task.PickPlaceTask`` is one), and every
+random draw goes through the caller's ``torch.Generator``.
+
+Shapes: P population, E elites, H horizon (actions per sequence), C candidates (+1: None).
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Protocol
+
+import numpy as np
+import torch
+
+log = logging.getLogger(__name__)
+
+#: particle index of the None action
+NONE = -1
+
+
+class PickTask(Protocol):
+    """What CEM needs from a task."""
+
+    bound: np.ndarray
+    """(3,) largest |displacement| per axis (m)."""
+
+    def evaluate(self, particles: torch.Tensor, displacements: torch.Tensor) -> torch.Tensor:
+        """Costs of P action sequences: (P, H) int64 particles (NONE = -1), (P, H, 3) float64
+        displacements -> (P,) float64 costs (lower is better)."""
+
+
+@dataclass(frozen=True)
+class CEMConfig:
+    """CEM settings.
+
+    Attributes:
+        population: P, sequences sampled per iteration.
+        elites: E, sequences the distribution is refitted to.
+        iterations: refits.
+        horizon: H, actions per sequence.
+        smoothing: weight of the previous distribution in each refit (0: plain refit).
+        init_std: initial displacement std, as a fraction of the bound.
+        min_std: floor of the displacement std, as a fraction of the bound.
+        min_prob: floor of every categorical probability after a refit (keeps exploring).
+        keep_best: put the best sequence found so far back into every population.
+    """
+
+    population: int = 32
+    elites: int = 4
+    iterations: int = 15
+    horizon: int = 3
+    smoothing: float = 0.3
+    init_std: float = 0.5
+    min_std: float = 0.05
+    min_prob: float = 0.0
+    keep_best: bool = True
+
+    def __post_init__(self):
+        if not (1 <= self.elites <= self.population):
+            raise ValueError(f"need 1 <= elites <= population, got elites={self.elites}, "
+                             f"population={self.population}")
+        if self.iterations < 1 or self.horizon < 1:
+            raise ValueError(f"iterations and horizon must be >= 1, got {self.iterations}, "
+                             f"{self.horizon}")
+        if not 0.0 <= self.smoothing < 1.0:
+            raise ValueError(f"smoothing must be in [0, 1), got {self.smoothing}")
+        if not (self.init_std > 0 and 0 <= self.min_std <= self.init_std):
+            raise ValueError(f"need init_std > 0 and 0 <= min_std <= init_std, got "
+                             f"{self.init_std}, {self.min_std}")
+        if not 0.0 <= self.min_prob < 1.0:
+            raise ValueError(f"min_prob must be in [0, 1), got {self.min_prob}")
+
+
+@dataclass
+class Distribution:
+    """The sampling distribution over action sequences.
+
+    Attributes:
+        probs: (H, C+1) categorical over the candidates, the last column None.
+        mean, std: (H, C+1, 3) displacement Gaussian per slot and candidate (m).
+    """
+
+    probs: torch.Tensor
+    mean: torch.Tensor
+    std: torch.Tensor
+
+
+@dataclass(frozen=True)
+class Samples:
+    """A population: choice (P, H) index into the candidates (C = None), particles (P, H)
+    particle indices (NONE = -1), displacements (P, H, 3) in metres."""
+
+    choice: torch.Tensor
+    particles: torch.Tensor
+    displacements: torch.Tensor
+
+
+@dataclass(frozen=True)
+class CEMResult:
+    """Outcome of ``CEM.plan``.
+
+    Attributes:
+        particles: (H,) the best sequence's particles (NONE = -1 for None).
+        displacements: (H, 3) its displacements (m).
+        cost: its cost.
+        cost_history: (iterations,) best cost found up to each iteration.
+        elite_history: (iterations,) mean elite cost of each iteration.
+        seconds_per_iteration: (iterations,) wall time of each iteration.
+        candidates: (C,) the candidate particles planned over.
+    """
+
+    particles: np.ndarray
+    displacements: np.ndarray
+    cost: float
+    cost_history: np.ndarray
+    elite_history: np.ndarray
+    seconds_per_iteration: np.ndarray
+    candidates: np.ndarray
+
+
+class CEM:
+    """Cross-entropy method over pick-and-place sequences (see the module docstring)."""
+
+    def __init__(self, config: CEMConfig = CEMConfig()):
+        self.config = config
+
+    # ----------------------------------------------------------------- pieces
+    def initial(self, n_candidates: int, bound: torch.Tensor) -> Distribution:
+        """Uniform over the C candidates and None; zero-mean displacements with
+        std = init_std * bound."""
+        H, C = self.config.horizon, n_candidates
+        probs = torch.full((H, C + 1), 1.0 / (C + 1), dtype=torch.float64)
+        mean = torch.zeros((H, C + 1, 3), dtype=torch.float64)
+        std = (self.config.init_std * bound).expand(H, C + 1, 3).clone()
+        return Distribution(probs, mean, std)
+
+    def sample(self, dist: Distribution, candidates: torch.Tensor, bound: torch.Tensor,
+               generator: torch.Generator) -> Samples:
+        """Draw P sequences; displacements are clipped to the bound and zero for None."""
+        P = self.config.population
+        H, C1 = dist.probs.shape
+        choice = torch.multinomial(dist.probs, P, replacement=True, generator=generator).T
+        slot = torch.arange(H).expand(P, H)
+        noise = torch.randn((P, H, 3), generator=generator, dtype=torch.float64)
+        disp = dist.mean[slot, choice] + dist.std[slot, choice] * noise
+        disp = torch.maximum(torch.minimum(disp, bound), -bound)
+        is_none = choice == C1 - 1
+        disp[is_none] = 0.0
+        with_none = torch.cat([candidates, torch.tensor([NONE])])
+        return Samples(choice, with_none[choice], disp)
+
+    def refit(self, dist: Distribution, samples: Samples, costs: torch.Tensor,
+              bound: torch.Tensor) -> tuple[Distribution, torch.Tensor]:
+        """Refit to the E lowest-cost samples; returns the new distribution and the elite
+        indices (E,). Candidates no elite chose keep their Gaussian."""
+        cfg = self.config
+        H, C1 = dist.probs.shape
+        elite = torch.argsort(costs, stable=True)[:cfg.elites]
+        onehot = torch.nn.functional.one_hot(samples.choice[elite], C1).to(torch.float64)
+        counts = onehot.sum(0)                                                   # (H, C+1)
+        probs = counts / cfg.elites
+        a = cfg.smoothing
+        probs = a * dist.probs + (1 - a) * probs
+        if cfg.min_prob:
+            probs = torch.clamp(probs, min=cfg.min_prob)
+            probs = probs / probs.sum(-1, keepdim=True)
+        d = samples.displacements[elite]                                          # (E, H, 3)
+        n = counts.clamp(min=1)[..., None]
+        mu = torch.einsum("ehc,ehd->hcd", onehot, d) / n
+        var = torch.einsum("ehc,ehd->hcd", onehot, d ** 2) / n - mu ** 2
+        sd = var.clamp(min=0).sqrt()
+        # each candidate's Gaussian moves by the share of elites that chose it: all elites
+        # agreeing is a plain smoothed refit, a single elite barely moves it (one sample says
+        # nothing about a spread), and an unchosen candidate keeps its Gaussian
+        step = ((1 - a) * counts / cfg.elites)[..., None]
+        mean = dist.mean + step * (mu - dist.mean)
+        std = dist.std + step * (sd - dist.std)
+        std = torch.maximum(std, cfg.min_std * bound)
+        return Distribution(probs, mean, std), elite
+
+    # ------------------------------------------------------------------- plan
+    def plan(self, task: PickTask, candidates, generator: torch.Generator,
+             on_iteration: Callable[[int, float], None] | None = None) -> CEMResult:
+        """Optimise H-action sequences over the candidate particles.
+
+        Args:
+            task: evaluates a population (see ``PickTask``).
+            candidates: (C,) particle indices the picker may grasp (None is always allowed).
+            generator: the only source of randomness; the same seed gives the same result.
+            on_iteration: called as ``on_iteration(i, best_cost)`` after every iteration
+                (progress bars live in the caller).
+
+        Raises:
+            ValueError: empty or repeated candidates.
+            whatever ``task.evaluate`` raises (bad actions, an unstable simulation).
+        """
+        cfg = self.config
+        cand = torch.tensor(np.array(candidates, dtype=np.int64)).reshape(-1)
+        if cand.numel() == 0:
+            raise ValueError("candidates is empty: give at least one particle to pick")
+        if torch.unique(cand).numel() != cand.numel():
+            raise ValueError(f"candidates has repeated particles: {cand.tolist()}")
+        if (cand < 0).any():
+            raise ValueError(f"candidates must be particle indices >= 0, got {cand.tolist()}")
+        bound = torch.as_tensor(np.asarray(task.bound, dtype=float), dtype=torch.float64)
+        dist = self.initial(cand.numel(), bound)
+        best_cost, best = float("inf"), None
+        history, elite_hist, seconds = [], [], []
+        for it in range(cfg.iterations):
+            t0 = time.perf_counter()
+            s = self.sample(dist, cand, bound, generator)
+            if cfg.keep_best and best is not None:
+                s.choice[0], s.particles[0], s.displacements[0] = best
+            costs = torch.as_tensor(task.evaluate(s.particles, s.displacements),
+                                    dtype=torch.float64)
+            costs = torch.where(torch.isfinite(costs), costs, torch.inf)
+            dist, elite = self.refit(dist, s, costs, bound)
+            i = int(elite[0])
+            if float(costs[i]) < best_cost:
+                best_cost = float(costs[i])
+                best = (s.choice[i].clone(), s.particles[i].clone(), s.displacements[i].clone())
+            history.append(best_cost)
+            elite_hist.append(float(costs[elite].mean()))
+            seconds.append(time.perf_counter() - t0)
+            log.debug("CEM iteration %d: best %.4g, elite mean %.4g, %.2f s", it, best_cost,
+                      elite_hist[-1], seconds[-1])
+            if on_iteration is not None:
+                on_iteration(it, best_cost)
+        return CEMResult(best[1].numpy().copy(), best[2].numpy().copy(), best_cost,
+                         np.array(history), np.array(elite_hist), np.array(seconds),
+                         cand.numpy().copy())
