@@ -1,4 +1,4 @@
-"""python -m dopt.bench {rollout,derivatives,ilqr} [options]: print timings as JSON."""
+"""python -m dopt.bench {rollout,derivatives,ilqr,cem} [options]: print timings as JSON."""
 
 from __future__ import annotations
 
@@ -39,6 +39,15 @@ def main(argv=None) -> int:
     p.add_argument("--iterations", type=int, default=5, help="timed iterations per method")
     p.add_argument("--warmup", type=int, default=3, help="untimed iterations per method first")
 
+    p = sub.add_parser("cem", help="one CEM iteration of the cloth or rope pick-and-place task")
+    common(p, task="cloth")
+    p.add_argument("--n", type=int, default=None,
+                   help="cloth particles per side (default 12) or rope particles (default 40)")
+    p.add_argument("--P", type=int, default=32, help="CEM population")
+    p.add_argument("--H", type=int, default=2, help="actions per sequence")
+    p.add_argument("--bound", type=float, default=None,
+                   help="picker displacement bound per axis, m (default: cloth 0.3, rope 0.1)")
+
     args = ap.parse_args(argv)
     if args.bench == "rollout":
         from dopt.bench.rollout import bench_rollout
@@ -51,6 +60,10 @@ def main(argv=None) -> int:
         from dopt.bench.ilqr import bench_ilqr
         out = bench_ilqr(args.task, args.methods.split(","), args.rho, args.theta,
                          args.iterations, args.warmup, args.threads, args.seed)
+    elif args.bench == "cem":
+        from dopt.bench.cem import bench_cem
+        out = bench_cem(args.task, args.n, args.P, args.H, args.bound, args.threads,
+                        args.repeats, args.seed)
     for obj in out if isinstance(out, list) else [out]:
         print(json.dumps(obj))
     return 0
