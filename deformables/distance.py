@@ -7,6 +7,12 @@ found with a k-d tree over triangle centroids and made exact with the bound
 ``dist(p, T) >= |p - centroid(T)| - radius(T)``, where ``radius(T)`` is the largest
 centroid-vertex distance of T: no triangle that could be nearer than the best one found is
 skipped.
+
+The largest distance of many points (the Hausdorff distance) needs exact distances for few of
+them: a dense sample of the surface whose covering radius ``rho`` is known (every surface point
+lies within ``rho`` of a sample) bounds each point's distance ``d`` by ``u - rho <= d <= u``,
+with ``u`` the distance to the nearest sample (one k-d tree query). Only points whose upper
+bound exceeds every other point's lower bound can hold the maximum.
 """
 from __future__ import annotations
 
@@ -18,6 +24,10 @@ from scipy.spatial import cKDTree
 _NEIGHBOURS = 16
 #: nearest centroids whose triangles give the first upper bound of a point's distance
 _FIRST_GUESS = 4
+#: every this many points form the probe that gives max_distance its first exact value
+_PROBE_STRIDE = 16
+#: probe points (largest upper bounds first) resolved exactly for that first value
+_PROBE_EXACT = 32
 
 
 class _TriangleGroup:
@@ -40,9 +50,15 @@ class SurfaceDistance:
     Args:
         vertices: ``(V, 3)`` mesh vertices.
         faces: ``(F, 3)`` triangles.
+        cover_step: sampling step of the surface sample that bounds distances in
+            :meth:`max_distance` (covering radius ``cover_step / sqrt(3)``); ``None`` uses the
+            median edge length.
+        cover: ``(C, 3)`` a sample of the surface taken with :func:`sample_surface` at
+            ``cover_step``, when the caller already has it.
     """
 
-    def __init__(self, vertices: np.ndarray, faces: np.ndarray):
+    def __init__(self, vertices: np.ndarray, faces: np.ndarray, cover_step: float | None = None,
+                 cover: np.ndarray | None = None):
         vertices = np.asarray(vertices, dtype=float)
         faces = np.asarray(faces, dtype=np.int64)
         self.triangles = vertices[faces]                                       # (F, 3, 3)
@@ -53,7 +69,14 @@ class SurfaceDistance:
         self.groups = [_TriangleGroup(np.flatnonzero(level == g), self.centroids, self.radius)
                        for g in np.unique(level)]
         self.tree = cKDTree(self.centroids)
-        self.vertex_tree = cKDTree(vertices[np.unique(faces)])
+        if cover_step is None:
+            sides = np.linalg.norm(self.triangles - np.roll(self.triangles, 1, axis=1), axis=2)
+            cover_step = float(np.median(sides))
+        if cover is None:
+            cover = sample_surface(vertices, faces, cover_step)
+        self.cover_tree = cKDTree(cover)
+        #: every surface point lies within this distance of a point of ``cover``
+        self.cover_radius = cover_step / np.sqrt(3.0)
 
     def distances(self, points: np.ndarray) -> np.ndarray:
         """Exact distances ``(Q,)`` from ``points`` ``(Q, 3)`` to the surface."""
@@ -90,35 +113,52 @@ class SurfaceDistance:
         return np.linalg.norm(closest - points[rows], axis=1)
 
     def max_distance(self, points: np.ndarray, chunk: int = 256) -> float:
-        """``max_q dist(points[q], surface)`` for ``points`` ``(Q, 3)``.
+        """``max_q dist(points[q], surface)`` for ``points`` ``(Q, 3)``, exact.
 
-        The distance to the nearest mesh vertex bounds each point's distance from above, so
-        points are resolved from the largest bound down, in chunks, until no remaining bound
-        exceeds the largest exact distance found."""
+        Each point's distance lies in ``[u - rho, u]`` (``u``: distance to the nearest cover
+        sample, ``rho``: the covering radius). A first exact value ``best`` comes from the
+        points of a coarse probe with the largest ``u``; the nearest-sample query of all points
+        is then cut off at ``best`` (points nearer than that cannot beat it). The remaining
+        points are resolved exactly from the largest ``u`` down, in chunks, until no remaining
+        ``u`` exceeds the largest value known to be reached: the best exact distance, or the
+        best lower bound ``L`` (if the maximum hides among the skipped points it is at most
+        ``L`` and at least ``L``, so it equals ``L``)."""
         points = np.asarray(points, dtype=float)
-        upper = self.vertex_tree.query(points)[0]
+        probe = points[::_PROBE_STRIDE]
+        upper = self.cover_tree.query(probe)[0]
+        best = float(self.distances(probe[np.argsort(-upper)[:_PROBE_EXACT]]).max())
+        cut = self.cover_tree.query(points, distance_upper_bound=best)[0]
+        candidates = points[~(cut <= best)]                 # cut is inf beyond the bound
+        if len(candidates) == 0:
+            return best
+        upper = self.cover_tree.query(candidates)[0]
+        best = max(best, float(upper.max()) - self.cover_radius)
         order = np.argsort(-upper, kind="stable")
-        best = 0.0
         for begin in range(0, len(order), chunk):
             batch = order[begin:begin + chunk]
             batch = batch[upper[batch] > best]
             if len(batch) == 0:
                 break
-            best = max(best, float(self.distances(points[batch]).max()))
+            best = max(best, float(self.distances(candidates[batch]).max()))
         return best
 
 
 def sample_surface(vertices: np.ndarray, faces: np.ndarray, step: float) -> np.ndarray:
     """Deterministic samples ``(Q, 3)`` of a mesh: on each triangle a barycentric grid whose
-    spacing along the longest edge is at most ``step`` (vertices and edges included)."""
+    spacing along the longest edge is at most ``step`` (vertices and edges included).
+
+    The grid splits each triangle into copies of itself scaled by ``1 / m`` with longest edge
+    at most ``step``, so every surface point lies within ``step / sqrt(3)`` of a sample."""
+    triangles = np.asarray(vertices, dtype=float)[np.asarray(faces)]                 # (F, 3, 3)
+    longest = np.linalg.norm(triangles - np.roll(triangles, 1, axis=1), axis=2).max(axis=1)
+    splits = np.maximum(1, np.ceil(longest / step)).astype(np.int64)
     samples = []
-    for a, b, c in np.asarray(vertices, dtype=float)[np.asarray(faces)]:
-        longest = max(np.linalg.norm(b - a), np.linalg.norm(c - a), np.linalg.norm(c - b))
-        m = max(1, int(np.ceil(longest / step)))
+    for m in np.unique(splits):
         i, j = np.meshgrid(np.arange(m + 1), np.arange(m + 1), indexing="ij")
         inside = i + j <= m
-        u, v = i[inside, None] / m, j[inside, None] / m
-        samples.append(a + u * (b - a) + v * (c - a))
+        u, v = i[inside] / m, j[inside] / m                                             # (G,)
+        a, b, c = (triangles[splits == m, k][:, None] for k in range(3))                # (T, 1, 3)
+        samples.append((a + u[:, None] * (b - a) + v[:, None] * (c - a)).reshape(-1, 3))
     return np.concatenate(samples, axis=0)
 
 
@@ -135,8 +175,9 @@ def hausdorff(original: SurfaceDistance, original_points: np.ndarray, vertices: 
     Returns:
         ``(simplified_to_original, original_to_simplified)``: the largest distance from the
         simplified surface (sampled at ``step``) to the original surface, and from the original
-        points to the simplified surface.
+        points to the simplified surface; both exact for these point sets.
     """
-    to_original = original.max_distance(sample_surface(vertices, faces, step))
-    to_simplified = SurfaceDistance(vertices, faces).max_distance(original_points)
-    return to_original, to_simplified
+    samples = sample_surface(vertices, faces, step)
+    to_original = original.max_distance(samples)
+    simplified = SurfaceDistance(vertices, faces, cover_step=step, cover=samples)
+    return to_original, simplified.max_distance(original_points)
