@@ -15,6 +15,7 @@ import csv
 import json
 import logging
 import sys
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -95,8 +96,10 @@ def plot_task(path: Path, task: str, goal, result, z_scale: float) -> None:
 
 
 def robustness(rng: np.random.Generator, rope_config: RopeConfig, cloth_config: ClothConfig,
-               resolutions: list[int], noise_sigmas: list[float], seeds: int) -> dict:
-    """Key counts over cloth resolutions x triangulations, and under Gaussian goal noise."""
+               resolutions: list[int], noise_sigmas: list[float], noise_resolutions: list[int],
+               seeds: int) -> dict:
+    """Key counts over cloth resolutions x triangulations, and under Gaussian goal noise (rope at
+    its default size, cloth at each of ``noise_resolutions`` particles per side)."""
     out = {"cloth_grid": [], "noise": []}
     for task in CLOTH_TASKS:
         for n in resolutions:
@@ -111,22 +114,20 @@ def robustness(rng: np.random.Generator, rope_config: RopeConfig, cloth_config: 
                                           **row})
                 logger.info("grid %s n=%d %s: %s", task, n, triangulation, row)
     for task in TASKS:
-        for sigma in noise_sigmas:
-            counts = []
-            for _ in range(seeds):
-                goal = make_goal(task) if task in ROPE_TASKS else make_goal(task, n=25)
-                noisy = goal.positions + rng.normal(0.0, sigma, goal.positions.shape)
-                try:
-                    if task in ROPE_TASKS:
-                        counts.append(rope_key_particles(noisy, config=rope_config).n_keys)
-                    else:
-                        counts.append(cloth_key_particles(
-                            noisy, goal.faces, rest_positions=goal.rest_positions,
-                            config=cloth_config).n_keys)
-                except ValueError:
-                    counts.append(None)
-            out["noise"].append({"task": task, "sigma_m": sigma, "n_keys": counts})
-            logger.info("noise %s sigma=%g: %s", task, sigma, counts)
+        for n in [None] if task in ROPE_TASKS else noise_resolutions:
+            goal = make_goal(task) if n is None else make_goal(task, n=n)
+            for sigma in noise_sigmas:
+                counts = []
+                for _ in range(seeds):
+                    noisy = goal.positions + rng.normal(0.0, sigma, goal.positions.shape)
+                    try:
+                        counts.append(reduce_goal(replace(goal, positions=noisy), rope_config,
+                                                  cloth_config).n_keys)
+                    except ValueError:
+                        counts.append(None)
+                out["noise"].append({"task": task, "n": n or len(goal.positions),
+                                     "sigma_m": sigma, "n_keys": counts})
+                logger.info("noise %s n=%s sigma=%g: %s", task, n, sigma, counts)
     return out
 
 
@@ -173,9 +174,9 @@ def main(argv=None) -> int:
                     result.n_keys, result.indices.tolist(), result.seconds)
     if not args.quick:
         summary["robustness"] = robustness(rng, rope_config, cloth_config,
-                                           resolutions=[21, 25, 28, 32, 40],
-                                           noise_sigmas=[2e-5, 5e-5, 1e-4, 1e-3, 2e-3],
-                                           seeds=3)
+                                           resolutions=[16, 21, 25, 28, 32, 40],
+                                           noise_sigmas=[2e-5, 5e-5, 1e-4, 5e-4, 1e-3, 2e-3],
+                                           noise_resolutions=[16, 25, 40], seeds=3)
     (args.out / "summary.json").write_text(json.dumps(summary, indent=1))
     return 0
 
