@@ -16,6 +16,7 @@ Methods (the paper's Sec. IV-C.2):
 
 from __future__ import annotations
 
+import argparse
 import csv
 import hashlib
 import json
@@ -66,6 +67,9 @@ class Problem:
     metrics: Callable[[np.ndarray], dict]
 
 
+SCRIPTED = {"lift": 0.02, "tolerance": 0.01, "per_particle": 3, "max_actions": 12}
+
+
 def parse_methods(text: str) -> list[str]:
     """Comma-separated method names -> list, ValueError on an unknown one."""
     methods = [m.strip() for m in text.split(",") if m.strip()]
@@ -73,6 +77,95 @@ def parse_methods(text: str) -> list[str]:
     if bad or not methods:
         raise ValueError(f"unknown methods {bad}; choose from {', '.join(METHODS)}")
     return methods
+
+
+def experiment_parser(doc: str, goals: Sequence[str], kind: str, help_: dict,
+                      bound: float) -> argparse.ArgumentParser:
+    """The flags both experiments share. ``help_`` holds the experiment-specific help texts of
+    "goal", "seed", "quick", "n", "iterations", "horizon"."""
+    ap = argparse.ArgumentParser(description=doc,
+                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--goal", choices=goals, default=goals[0], help=help_["goal"])
+    ap.add_argument("--methods", default=",".join(METHODS),
+                    help="comma-separated subset of " + ", ".join(METHODS) + " (default: all)")
+    ap.add_argument("--seeds", type=int, default=3, help="seeds per method (default %(default)s)")
+    ap.add_argument("--seed", type=int, default=0, help=help_["seed"])
+    ap.add_argument("--out", type=Path, default=None,
+                    help=f"output folder (default results/{kind}_<goal>)")
+    ap.add_argument("--quick", action="store_true", help=help_["quick"])
+    ap.add_argument("--n", type=int, default=None, help=help_["n"])
+    ap.add_argument("--population", type=int, default=None, help="CEM population P (default 32)")
+    ap.add_argument("--elites", type=int, default=None, help="CEM elites (default 6)")
+    ap.add_argument("--iterations", type=int, default=None, help=help_["iterations"])
+    ap.add_argument("--horizon", type=int, default=None, help=help_["horizon"])
+    ap.add_argument("--bound", type=float, default=bound,
+                    help="largest picker displacement per axis, metres (default %(default)s)")
+    ap.add_argument("--threads", type=int, default=0,
+                    help="simulation threads (0: one per core, the default)")
+    ap.add_argument("--no-render", action="store_true", help="skip the PNG renders")
+    ap.add_argument("-v", "--verbose", action="store_true", help="log the cost of each stage")
+    return ap
+
+
+def parse_experiment_args(ap: argparse.ArgumentParser, argv, min_n: int) -> argparse.Namespace:
+    """Parse and check: counts >= 1, --n >= min_n, known methods (exits with a usage error)."""
+    args = ap.parse_args(argv)
+    for name in ("seeds", "population", "elites", "iterations", "horizon"):
+        v = getattr(args, name)
+        if v is not None and v < 1:
+            ap.error(f"--{name} must be >= 1")
+    if args.n is not None and args.n < min_n:
+        ap.error(f"--n must be >= {min_n}")
+    if not args.bound > 0:
+        ap.error("--bound must be > 0")
+    try:
+        args.methods = parse_methods(args.methods)
+    except ValueError as e:
+        ap.error(str(e))
+    return args
+
+
+def cem_settings(args: argparse.Namespace, iterations: int, horizon: int) -> dict:
+    """CEMConfig fields from the flags; --quick shrinks the population and iterations."""
+    quick = args.quick
+    return {"population": args.population or (8 if quick else 32),
+            "elites": args.elites or (2 if quick else 6),
+            "iterations": args.iterations or (2 if quick else iterations),
+            "horizon": args.horizon or horizon, "smoothing": 0.3, "init_std": 1.0,
+            "min_std": 0.05}
+
+
+def run_experiment(args: argparse.Namespace, kind: str, settings: dict,
+                   build: Callable[[dict], Problem], metrics: Sequence[str],
+                   distance: float) -> dict:
+    """The whole experiment: every trial (resuming), then the report; prints a table.
+
+    ``settings`` are the JSON-able trial settings without method and seed; ``build(params)``
+    makes a trial's problem; ``distance`` is the render camera's distance (m)."""
+    logging.basicConfig(level=logging.INFO if args.verbose else logging.WARNING,
+                        format="%(levelname)s %(name)s: %(message)s")
+    out = args.out or Path("results") / f"{kind}_{args.goal}"
+    out.mkdir(parents=True, exist_ok=True)
+    seeds = range(args.seed, args.seed + (1 if args.quick else args.seeds))
+    problem = build({**settings, "seed": seeds[0]})
+    print(f"{kind} ({problem.scene.n_particles} particles), goal {args.goal}: "
+          + "; ".join(f"{s.name}: {len(s.keys)} key particles {s.keys.tolist()}"
+                      for s in problem.stages))
+    start = time.perf_counter()
+    per_trial = settings["cem"]["iterations"] * len(problem.stages)
+    results = run_trials(build, settings, args.methods, seeds, out, per_trial)
+    summary = write_report(out, args.goal, results, args.methods, metrics, settings,
+                           problem.scene, problem.stages[-1].goal, not args.no_render,
+                           distance, wall_s=time.perf_counter() - start)
+    for m, e in summary["methods"].items():
+        ci = e["final_cost_ci95"]
+        line = (f"{m:9s} final cost {e['final_cost_mean'] * 1e3:6.1f} mm"
+                + (f" +- {ci * 1e3:.1f}" if ci is not None else ""))
+        if "end_to_end_ratio_mean" in e:
+            line += f", end-to-end / length {e['end_to_end_ratio_mean']:.3f}"
+        print(line + f"  ({e['n_candidates']} candidates)")
+    print(f"wrote {out}/summary.json in {summary['wall_s']:.0f} s")
+    return summary
 
 
 def candidates(method: str, keys: np.ndarray, n_particles: int,
@@ -239,6 +332,7 @@ def plot_curves(path: Path, results: dict, methods: Sequence[str], title: str) -
     ax.set_ylabel("best cost: mean particle distance to goal (mm)")
     ax.set_title(title)
     ax.set_xlim(1, max(n_iter, 2))
+    ax.set_ylim(bottom=0)
     ax.grid(alpha=0.3)
     ax.legend()
     fig.tight_layout()
@@ -280,10 +374,12 @@ def render_state(scene: DeformableScene, state: np.ndarray, path: Path, title: s
 
 def write_report(out: Path, goal: str, results: dict, methods: Sequence[str],
                  metrics: Sequence[str], settings: dict, scene: DeformableScene,
-                 final_goal: np.ndarray, render: bool, distance: float) -> dict:
+                 final_goal: np.ndarray, render: bool, distance: float,
+                 wall_s: float | None = None) -> dict:
     """summary.json, curves.csv, cost_curves.png, final_<method>.png (first seed) and goal.png.
     Returns the summary."""
     summary = summarize(goal, results, methods, metrics, settings)
+    summary["wall_s"] = wall_s
     with open(out / "summary.json", "w") as f:
         json.dump(summary, f, indent=2)
     write_curves(out / "curves.csv", results)

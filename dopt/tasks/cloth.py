@@ -17,7 +17,7 @@ import mujoco
 import numpy as np
 
 from dopt.tasks.deformable_task import DeformableScene
-from dopt.tasks.picker import PickerConfig, picker_mjcf
+from dopt.tasks.picker import PickerConfig, check_positive, picker_mjcf
 
 FLEX = "cloth"
 
@@ -66,10 +66,7 @@ class ClothConfig:
     def __post_init__(self):
         if self.n < 2:
             raise ValueError(f"a cloth needs n >= 2 particles per side, got {self.n}")
-        for name in ("side", "mass", "young", "thickness", "timestep"):
-            v = getattr(self, name)
-            if not (np.isfinite(v) and v > 0):
-                raise ValueError(f"{name} must be a positive finite number, got {v!r}")
+        check_positive(self, "side", "mass", "young", "thickness", "timestep")
 
     @property
     def spacing(self) -> float:

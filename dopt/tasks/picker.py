@@ -35,6 +35,14 @@ CONTROL_SPEC = int(mujoco.mjtState.mjSTATE_CTRL) | int(mujoco.mjtState.mjSTATE_E
 _AXES = "xyz"
 
 
+def check_positive(config, *names: str) -> None:
+    """Raise ValueError unless each named attribute of config is a positive finite number."""
+    for name in names:
+        v = getattr(config, name)
+        if not (np.isfinite(v) and v > 0):
+            raise ValueError(f"{name} must be a positive finite number, got {v!r}")
+
+
 @dataclass(frozen=True)
 class PickerConfig:
     """Picker mechanics and action timing.
@@ -67,10 +75,7 @@ class PickerConfig:
         b = np.asarray(self.bound, dtype=float)
         if b.shape != (3,) or not np.all(np.isfinite(b)) or np.any(b <= 0):
             raise ValueError(f"bound must be three positive finite numbers, got {self.bound!r}")
-        for name in ("speed", "settle", "kv", "mass"):
-            v = getattr(self, name)
-            if not (np.isfinite(v) and v > 0):
-                raise ValueError(f"{name} must be a positive finite number, got {v!r}")
+        check_positive(self, "speed", "settle", "kv", "mass")
         if self.snap_steps < 1 or self.hold_steps < 0:
             raise ValueError(f"snap_steps must be >= 1 and hold_steps >= 0, got "
                              f"{self.snap_steps}, {self.hold_steps}")

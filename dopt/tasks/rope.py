@@ -19,7 +19,7 @@ import mujoco
 import numpy as np
 
 from dopt.tasks.deformable_task import DeformableScene
-from dopt.tasks.picker import PickerConfig, picker_mjcf
+from dopt.tasks.picker import PickerConfig, check_positive, picker_mjcf
 
 FLEX = "rope"
 
@@ -58,10 +58,7 @@ class RopeConfig:
     def __post_init__(self):
         if self.n < 3:
             raise ValueError(f"a rope needs n >= 3 particles, got {self.n}")
-        for name in ("length", "mass", "radius", "young", "timestep"):
-            v = getattr(self, name)
-            if not (np.isfinite(v) and v > 0):
-                raise ValueError(f"{name} must be a positive finite number, got {v!r}")
+        check_positive(self, "length", "mass", "radius", "young", "timestep")
 
 
 def rope_xml(config: RopeConfig = RopeConfig(), picker: PickerConfig = PickerConfig(),
