@@ -139,11 +139,7 @@ class Tangent:
         inv_h = 1.0 / h
         out[..., lin_v] = inv_h * (qpos2[..., lin_q] - qpos1[..., lin_q])
         if len(quat_q):
-            qa = qpos1[..., quat_q]
-            qb = qpos2[..., quat_q]
-            qa = qa / np.linalg.norm(qa, axis=-1, keepdims=True)
-            qb = qb / np.linalg.norm(qb, axis=-1, keepdims=True)
-            out[..., quat_v] = inv_h * _quat_log(_quat_mul(_quat_conj(qa), qb))
+            out[..., quat_v] = inv_h * _quat_difference(qpos1[..., quat_q], qpos2[..., quat_q])
         return out if dofs is None else out[..., dofs]
 
     def _parts(self, dofs: np.ndarray | None):
@@ -173,24 +169,19 @@ class Tangent:
         return out
 
 
-def _quat_conj(q: np.ndarray) -> np.ndarray:
-    return q * np.array([1.0, -1.0, -1.0, -1.0])
+def _quat_difference(qa: np.ndarray, qb: np.ndarray) -> np.ndarray:
+    """Rotation vector of conj(qa) * qb after normalising both: (..., 4), (..., 4) -> (..., 3).
 
-
-def _quat_mul(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    aw, ax, ay, az = np.moveaxis(a, -1, 0)
-    bw, bx, by, bz = np.moveaxis(b, -1, 0)
-    return np.stack([aw * bw - ax * bx - ay * by - az * bz,
-                     aw * bx + ax * bw + ay * bz - az * by,
-                     aw * by - ax * bz + ay * bw + az * bx,
-                     aw * bz + ax * by - ay * bx + az * bw], axis=-1)
-
-
-def _quat_log(q: np.ndarray) -> np.ndarray:
-    """Rotation vector (axis * angle, angle wrapped to (-pi, pi]) of unit quaternions (..., 4)."""
-    vec = q[..., 1:]
-    s = np.linalg.norm(vec, axis=-1)
-    angle = 2.0 * np.arctan2(s, q[..., 0])
+    As mju_subQuat (angle wrapped to (-pi, pi]); written with few numpy calls because the MPC
+    and line-search loops call it at every step on a handful of quaternions."""
+    qa = qa / np.sqrt(np.einsum("...i,...i->...", qa, qa))[..., None]
+    qb = qb / np.sqrt(np.einsum("...i,...i->...", qb, qb))[..., None]
+    aw, bw = qa[..., :1], qb[..., :1]
+    av, bv = qa[..., 1:], qb[..., 1:]
+    w = aw[..., 0] * bw[..., 0] + np.einsum("...i,...i->...", av, bv)
+    v = aw * bv - bw * av - np.cross(av, bv)
+    s = np.sqrt(np.einsum("...i,...i->...", v, v))
+    angle = 2.0 * np.arctan2(s, w)
     angle = np.where(angle > np.pi, angle - 2.0 * np.pi, angle)
     scale = np.divide(angle, s, out=np.zeros_like(s), where=s > 1e-15)
-    return vec * scale[..., None]
+    return v * scale[..., None]
