@@ -82,7 +82,7 @@ def parse_methods(text: str) -> list[str]:
 def experiment_parser(doc: str, goals: Sequence[str], kind: str, help_: dict,
                       bound: float) -> argparse.ArgumentParser:
     """The flags both experiments share. ``help_`` holds the experiment-specific help texts of
-    "goal", "seed", "quick", "n", "iterations", "horizon"."""
+    "goal", "seed", "quick", "n", "population", "elites", "iterations", "horizon"."""
     ap = argparse.ArgumentParser(description=doc,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--goal", choices=goals, default=goals[0], help=help_["goal"])
@@ -94,8 +94,8 @@ def experiment_parser(doc: str, goals: Sequence[str], kind: str, help_: dict,
                     help=f"output folder (default results/{kind}_<goal>)")
     ap.add_argument("--quick", action="store_true", help=help_["quick"])
     ap.add_argument("--n", type=int, default=None, help=help_["n"])
-    ap.add_argument("--population", type=int, default=None, help="CEM population P (default 32)")
-    ap.add_argument("--elites", type=int, default=None, help="CEM elites (default 6)")
+    ap.add_argument("--population", type=int, default=None, help=help_["population"])
+    ap.add_argument("--elites", type=int, default=None, help=help_["elites"])
     ap.add_argument("--iterations", type=int, default=None, help=help_["iterations"])
     ap.add_argument("--horizon", type=int, default=None, help=help_["horizon"])
     ap.add_argument("--bound", type=float, default=bound,
@@ -125,11 +125,13 @@ def parse_experiment_args(ap: argparse.ArgumentParser, argv, min_n: int) -> argp
     return args
 
 
-def cem_settings(args: argparse.Namespace, iterations: int, horizon: int) -> dict:
-    """CEMConfig fields from the flags; --quick shrinks the population and iterations."""
+def cem_settings(args: argparse.Namespace, iterations: int, horizon: int,
+                 population: int = 32, elites: int = 6) -> dict:
+    """CEMConfig fields from the flags, else the given defaults; --quick shrinks the population
+    and iterations."""
     quick = args.quick
-    return {"population": args.population or (8 if quick else 32),
-            "elites": args.elites or (2 if quick else 6),
+    return {"population": args.population or (8 if quick else population),
+            "elites": args.elites or (2 if quick else elites),
             "iterations": args.iterations or (2 if quick else iterations),
             "horizon": args.horizon or horizon, "smoothing": 0.3, "init_std": 1.0,
             "min_std": 0.05}
@@ -328,6 +330,7 @@ def plot_curves(path: Path, results: dict, methods: Sequence[str], title: str) -
         if runs:
             ax.axhline(np.mean([r["final_cost"] for r in runs]) * 1e3, color=COLOURS["scripted"],
                        ls="--", label=LABELS["scripted"] + " (final)")
+    ax.xaxis.get_major_locator().set_params(integer=True)
     ax.set_xlabel("CEM iteration")
     ax.set_ylabel("best cost: mean particle distance to goal (mm)")
     ax.set_title(title)

@@ -55,6 +55,8 @@ def parse_args(argv=None):
                 "start of straighten (default %(default)s)",
         "quick": "smoke-sized run: 20 particles, population 8, 2 iterations, horizon 2, 1 seed",
         "n": "rope particles (default 40)",
+        "population": "CEM population P (default 32)",
+        "elites": "CEM elites (default 6)",
         "iterations": "CEM iterations (default 20)",
         "horizon": "actions per plan H (default 6)"}, bound=0.1)
     return parse_experiment_args(ap, argv, min_n=3)

@@ -22,7 +22,8 @@ class DeformableScene:
     """A compiled rope or cloth (one flex) with the picker.
 
     Args:
-        model: compiled model holding flex ``flex`` and the picker (see ``picker_mjcf``).
+        model: compiled model holding flex ``flex`` and the picker (see ``picker_mjcf``); its
+            grasp anchors are fixed in place (``fix_grasp_anchors``).
         flex: name of the flex; its vertex bodies are ``<flex>_<i>``.
         picker: the picker config the model was built with.
         settle: seconds the object settles to make ``initial_state``.
