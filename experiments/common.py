@@ -4,7 +4,8 @@ A trial is one method on one seed: plan every stage of the task (one stage, or t
 goals of Sec. III-D in turn), execute the plan, measure the final state. Trials go through
 ``dopt.sweep.run_sweep``, so each finished trial is written at once to
 ``OUT/trials/<key>.json`` and a rerun skips it (the key holds a hash of the settings, so
-changed settings are rerun, not mixed in). Then ``write_report`` writes summary.json,
+changed settings are rerun, not mixed in; the hash does not cover the code, so delete
+OUT/trials after changing the library, e.g. the key-particle extraction). Then ``write_report`` writes summary.json,
 curves.csv, the Fig. 7-style plot and one rendered image of the final state per method.
 
 Methods (the paper's Sec. IV-C.2):
