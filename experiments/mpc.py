@@ -131,10 +131,14 @@ def write_table(out: Path, task: str, methods: dict) -> None:
     rows = [("method", "MPC cost (normalised) mean", "CI90 +-", "median (all)",
              "opt. time (ms)", "DoFs", "lag (steps)", "success", "goal dist. (m, median)",
              "outliers", "trials")]
+    def num(x, digits=2):
+        """A number to the table, or n/a when there is none (no baseline for the pairing)."""
+        return "n/a" if x is None or x != x else f"{x:.{digits}f}"
+
     for name, m in methods.items():
-        rows.append((name, f"{m['mpc_cost_normalised_mean']:.2f}",
-                     f"{m['mpc_cost_normalised_ci90']:.2f}",
-                     f"{m['mpc_cost_normalised_median']:.2f}", f"{m['opt_ms_mean']:.0f}",
+        rows.append((name, num(m["mpc_cost_normalised_mean"]),
+                     num(m["mpc_cost_normalised_ci90"]),
+                     num(m["mpc_cost_normalised_median"]), f"{m['opt_ms_mean']:.0f}",
                      f"{m['dofs_mean']:.1f}", f"{m['lag_steps_mean']:.0f}",
                      f"{m['success_rate']:.2f}", f"{m['goal_distance_end_median']:.3f}",
                      str(m["outliers"]), str(m["trials"])))

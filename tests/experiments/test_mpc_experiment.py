@@ -45,6 +45,8 @@ def test_ray_path(tmp_path):
     run("--quick", "--methods", "naive", "--ray", "--out", str(out))
     summary = json.loads((out / "summary.json").read_text())
     assert summary["methods"]["naive"]["trials"] == 1
+    # no baseline in this sweep: nothing to normalise by, said so in the table
+    assert "| naive | n/a |" in (out / "table1.md").read_text()
 
 
 @pytest.mark.parametrize("args, message", [
