@@ -16,7 +16,7 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
-from dopt.tasks.deformable_task import DeformableScene
+from dopt.tasks.deformable_task import DeformableScene, floor_scene_xml
 from dopt.tasks.picker import PickerConfig, check_positive, picker_mjcf
 
 FLEX = "cloth"
@@ -84,29 +84,19 @@ def cloth_xml(config: ClothConfig = ClothConfig(), picker: PickerConfig = Picker
     c = config
     n, sp, r = c.n, c.spacing, c.particle_radius
     ids = range(n * n) if pickable is None else pickable
-    body, eqs, acts = picker_mjcf(FLEX, ids, picker)
     fr = f"{c.friction} 0.005 0.0001"
-    return f"""
-<mujoco model="cloth{n}">
-  <option timestep="{c.timestep}" integrator="discrete" solver="CG" iterations="{c.iterations}"
-          tolerance="{c.tolerance}" cone="{c.cone}" impratio="{c.impratio}"/>
-  <size memory="{max(64, n * n // 2)}M"/>
-  <visual><global offwidth="640" offheight="480"/></visual>
-  <worldbody>
-    <light pos="0 0 2" dir="0 0 -1" diffuse=".8 .8 .8"/>
-    <geom name="floor" type="plane" size="2 2 .05" condim="3" friction="{fr}" rgba=".85 .85 .8 1"/>
-    <flexcomp name="{FLEX}" type="grid" dim="2" count="{n} {n} 1" spacing="{sp} {sp} {sp}"
+    flexcomp = f"""<flexcomp name="{FLEX}" type="grid" dim="2" count="{n} {n} 1" spacing="{sp} {sp} {sp}"
               pos="0 0 {r + 1e-4}" radius="{r}" mass="{c.mass}" rgba=".8 .3 .2 1">
       <contact selfcollide="{'auto' if c.selfcollide else 'none'}" condim="3" friction="{fr}"
                solref="0.01 1" solimp="0.95 0.99 0.0001"/>
       <elasticity young="{c.young}" poisson="{c.poisson}" thickness="{c.thickness}"
                   elastic2d="both" damping="{c.damping}"/>
-    </flexcomp>
-    {body}
-  </worldbody>
-  <equality>{eqs}</equality>
-  <actuator>{acts}</actuator>
-</mujoco>"""
+    </flexcomp>"""
+    option = (f'timestep="{c.timestep}" iterations="{c.iterations}" tolerance="{c.tolerance}" '
+              f'cone="{c.cone}" impratio="{c.impratio}"')
+    return floor_scene_xml(f"cloth{n}", option, max(64, n * n // 2),
+                           f'condim="3" friction="{fr}"', flexcomp,
+                           picker_mjcf(FLEX, ids, picker))
 
 
 def make_cloth(config: ClothConfig = ClothConfig(), picker: PickerConfig = PickerConfig(),

@@ -18,6 +18,31 @@ from dopt.scene import Scene
 from dopt.state import check_states
 from dopt.tasks.picker import CONTROL_SPEC, Picker, PickerConfig, fix_grasp_anchors
 
+def floor_scene_xml(name: str, option: str, memory_mb: int, floor: str, flexcomp: str,
+                    picker_parts: tuple[str, str, str]) -> str:
+    """MJCF shell shared by the rope and cloth: options, a lit floor, one flexcomp, the picker.
+
+    option: extra <option> attributes after the discrete-integrator/CG ones; floor: extra
+    attributes of the floor geom; flexcomp: the <flexcomp> element; picker_parts: (body,
+    equalities, actuators) from ``picker_mjcf``.
+    """
+    body, eqs, acts = picker_parts
+    return f"""
+<mujoco model="{name}">
+  <option integrator="discrete" solver="CG" {option}/>
+  <size memory="{memory_mb}M"/>
+  <visual><global offwidth="640" offheight="480"/></visual>
+  <worldbody>
+    <light pos="0 0 2" dir="0 0 -1" diffuse=".8 .8 .8"/>
+    <geom name="floor" type="plane" size="2 2 .05" {floor} rgba=".85 .85 .8 1"/>
+    {flexcomp}
+    {body}
+  </worldbody>
+  <equality>{eqs}</equality>
+  <actuator>{acts}</actuator>
+</mujoco>"""
+
+
 class DeformableScene:
     """A compiled rope or cloth (one flex) with the picker.
 

@@ -18,7 +18,7 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
-from dopt.tasks.deformable_task import DeformableScene
+from dopt.tasks.deformable_task import DeformableScene, floor_scene_xml
 from dopt.tasks.picker import PickerConfig, check_positive, picker_mjcf
 
 FLEX = "rope"
@@ -67,30 +67,19 @@ def rope_xml(config: RopeConfig = RopeConfig(), picker: PickerConfig = PickerCon
     equality (None: all N)."""
     c = config
     sp = c.length / (c.n - 1)
-    body, eqs, acts = picker_mjcf(FLEX, range(c.n) if pickable is None else pickable, picker)
     fr = f"{c.friction} 0.005 0.0001"
-    return f"""
-<mujoco model="rope{c.n}">
-  <option timestep="{c.timestep}" integrator="discrete" solver="CG" iterations="{c.iterations}"
-          tolerance="{c.tolerance}"/>
-  <size memory="64M"/>
-  <visual><global offwidth="640" offheight="480"/></visual>
-  <worldbody>
-    <light pos="0 0 2" dir="0 0 -1" diffuse=".8 .8 .8"/>
-    <geom name="floor" type="plane" size="2 2 .05" friction="{fr}" rgba=".85 .85 .8 1"/>
-    <flexcomp name="{FLEX}" type="grid" dim="1" count="{c.n} 1 1" spacing="{sp} {sp} {sp}"
+    flexcomp = f"""<flexcomp name="{FLEX}" type="grid" dim="1" count="{c.n} 1 1" spacing="{sp} {sp} {sp}"
               pos="0 0 {c.radius + 1e-4}" radius="{c.radius}" mass="{c.mass}"
               rgba=".2 .3 .8 1">
       <contact selfcollide="{'auto' if c.selfcollide else 'none'}" friction="{fr}"
                solref="0.01 1" solimp="0.95 0.99 0.0001"/>
       <edge equality="true" solref="{c.edge_solref[0]} {c.edge_solref[1]}"/>
       <elasticity young="{c.young}" damping="{c.damping}"/>
-    </flexcomp>
-    {body}
-  </worldbody>
-  <equality>{eqs}</equality>
-  <actuator>{acts}</actuator>
-</mujoco>"""
+    </flexcomp>"""
+    option = f'timestep="{c.timestep}" iterations="{c.iterations}" tolerance="{c.tolerance}"'
+    return floor_scene_xml(f"rope{c.n}", option, 64, f'friction="{fr}"', flexcomp,
+                           picker_mjcf(FLEX, range(c.n) if pickable is None else pickable,
+                                       picker))
 
 
 def make_rope(config: RopeConfig = RopeConfig(), picker: PickerConfig = PickerConfig(),
