@@ -3,8 +3,11 @@
 Both planners stand on this one object. CEM asks it for the final states of a population of
 control sequences in one batched call; iLQR asks it for the nominal trajectory and for the
 perturbed one-step transitions of the active DoFs over the whole horizon in one batched call.
-Every batched call runs in ``mujoco.batch.Batch`` on ``threads`` threads with the GIL released,
-and is bit-identical to a plain ``mj_step`` loop at any thread count.
+Open-loop rollouts run in ``mujoco.batch.Batch`` on ``threads`` threads with the GIL released,
+bit-identical to a plain ``mj_step`` loop at any thread count. Derivatives and feedback rollouts
+run in the C loops of ``dopt.kernels`` when they were built (derivatives skip the stages a
+perturbation leaves unchanged, as ``mjd_transitionFD`` does; feedback needs no Python per step),
+else in the same Batch; both routes give the same numbers (tested).
 """
 
 from __future__ import annotations
@@ -19,6 +22,7 @@ import mujoco
 import numpy as np
 from mujoco.batch import Batch, SimulationError
 
+from dopt import kernels
 from dopt.errors import RolloutError, UnstableRolloutError
 from dopt.scene import Scene
 from dopt.state import check_states
@@ -33,13 +37,18 @@ _WARNINGS = [n for n in mujoco.mjtWarning.__members__ if n != "mjNWARNING"]
 
 @dataclass(frozen=True)
 class RolloutConfig:
-    """threads: simulation threads of the batched calls (0: one per CPU core)."""
+    """threads: simulation threads of the batched calls (0: one per CPU core).
+    c_kernels: run derivatives and feedback rollouts in dopt.kernels' C loops when they were
+    built (False: always mujoco.batch.Batch, the slower reference route)."""
 
     threads: int = 0
+    c_kernels: bool = True
 
     def __post_init__(self):
         if not isinstance(self.threads, int) or self.threads < 0:
             raise ValueError(f"threads must be an int >= 0, got {self.threads!r}")
+        if not isinstance(self.c_kernels, bool):
+            raise TypeError(f"c_kernels must be a bool, got {self.c_kernels!r}")
 
 
 @dataclass(frozen=True)
@@ -104,6 +113,7 @@ class RolloutService:
         self.config = config
         self.threads = config.threads or os.cpu_count() or 1
         self._batch: Batch | None = None
+        self._kernels: kernels.Kernels | None = None
         self._lock = threading.Lock()
         lay = scene.layout
         self._qpos, self._qvel, self._act, self._ctrl = (lay["qpos"], lay["qvel"], lay["act"],
@@ -204,6 +214,13 @@ class RolloutService:
             raise ValueError(f"ref_states must be ({T}, ns) and gains ({T}, {m.nu}, "
                              f"{2 * len(C)}); got {ref.shape} and {K.shape}")
         lo, hi = self._ctrl_bounds()
+        if self.uses_c_kernels:
+            with self._lock:
+                out, applied, bad = self._kernel().feedback(x0, u, ref, K, C, lo, hi)
+            if bad:
+                p, step, names = bad[0]
+                raise UnstableRolloutError(p, step, names[0], "rollout_feedback")
+            return Trajectory(out, applied)
         ref_q, ref_v = ref[:, self._qpos], ref[:, self._qvel][:, C]
         out = np.empty((P, T + 1, self.scene.nstate))
         applied = np.empty((P, T, m.nu))
@@ -223,11 +240,15 @@ class RolloutService:
                     applied[:, t] = ut
                     out[:, t] = rows[:P]
                     batch.step(ids=ids)
+                    bad = batch.warning[:P, :, 1].any(axis=1) | ~np.isfinite(rows[:P]).all(1)
+                    if bad.any():   # lock-step: the first step any rollout went unstable
+                        p = int(np.argmax(bad))
+                        warned = np.nonzero(batch.warning[p, :, 1])[0]
+                        reason = _WARNINGS[warned[0]] if len(warned) else "non-finite state"
+                        raise UnstableRolloutError(p, t, reason, "rollout_feedback")
             except SimulationError as e:
                 raise RolloutError(f"rollout_feedback: {e}") from e
             out[:, T] = rows[:P]
-            times = out[:, 1:, self.scene.layout["time"]][:, :, 0]
-            self._check_stable(batch, P, out[:, T], times, "rollout_feedback")
         return Trajectory(out, applied)
 
     def _ctrl_bounds(self) -> tuple[np.ndarray, np.ndarray]:
@@ -265,6 +286,14 @@ class RolloutService:
                              "mjd_transitionFD)")
         x = check_states(m, states, batched=True, name="states")
         C = self.scene.dofs() if dofs is None else self.scene.as_dofs(dofs)
+        if self.uses_c_kernels:
+            lo, hi = self._ctrl_bounds()
+            with self._lock:
+                A, B, bad = self._kernel().fd(x, C, fd.eps, fd.centered, lo, hi)
+            if bad:
+                t, names = bad[0]
+                raise UnstableRolloutError(t, 0, names[0], f"derivatives t={t}")
+            return Derivatives(A, B, C, fd)
         T, c, nu, eps = x.shape[0], len(C), m.nu, fd.eps
         sides = (1.0, -1.0) if fd.centered else (1.0,)
         ns = len(sides)
@@ -344,6 +373,16 @@ class RolloutService:
                            np.ascontiguousarray(Bt.transpose(0, 2, 1)), C, fd)
 
     # ------------------------------------------------------------------ helpers
+    @property
+    def uses_c_kernels(self) -> bool:
+        """Whether derivatives and feedback rollouts run in dopt.kernels' C loops."""
+        return self.config.c_kernels and kernels.load() is not None
+
+    def _kernel(self) -> kernels.Kernels:
+        if self._kernels is None:
+            self._kernels = kernels.Kernels(self.model, self.scene.layout, self.threads)
+        return self._kernels
+
     def _batch_of(self, n: int) -> tuple[Batch, np.ndarray | None]:
         """A batch with at least n simulations (grown geometrically) and the ids of the first n."""
         if self._batch is None or self._batch.nsim < n:

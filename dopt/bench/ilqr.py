@@ -53,6 +53,7 @@ def bench_ilqr(task: str, methods: list[str], rho: float, theta: int, iterations
         split["other"] = ms - sum(split.values())
         out.append({"bench": "ilqr", "task": task, "method": method, "ms_per_iteration": ms,
                     "n_dofs": float(np.mean(sizes)), "split_ms": split, "threads": svc.threads,
+                    "route": "c-kernels" if svc.uses_c_kernels else "batch",
                     "rho": rho, "theta": theta, "final_cost": step.cost_after})
     base = next((r["ms_per_iteration"] for r in out if r["method"] == "baseline"), None)
     for r in out:

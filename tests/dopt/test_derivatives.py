@@ -4,11 +4,28 @@ import mujoco
 import numpy as np
 import pytest
 
-from dopt.rollout import FDConfig, RolloutService
+from dopt.errors import UnstableRolloutError
+from dopt.rollout import FDConfig, RolloutConfig, RolloutService
 
 # |A_ours - A_mujoco|: both are FD quotients of identical perturbed steps; they differ only in
 # how the quaternion difference of the next states is rounded (1e-16 / eps)
 TOL = 1e-8
+
+
+@pytest.fixture(params=[True, False], ids=["c-kernels", "batch"])
+def c_kernels(request):
+    """Both derivative routes: dopt.kernels' skip-stage C loop and mujoco.batch.Batch."""
+    if request.param:
+        from dopt import kernels
+        if kernels.load() is None:
+            pytest.skip(f"C kernels not built: {kernels.load_error()}")
+    return request.param
+
+
+def service(scene, c_kernels, threads=0):
+    svc = RolloutService(scene, RolloutConfig(threads=threads, c_kernels=c_kernels))
+    assert svc.uses_c_kernels == c_kernels
+    return svc
 
 
 @pytest.fixture(scope="module")
@@ -39,10 +56,10 @@ def reference(scene, states, eps, centered):
 
 
 @pytest.mark.parametrize("centered", [False, True])
-def test_all_dofs_equal_transitionFD(scene, trajectory, centered):
+def test_all_dofs_equal_transitionFD(scene, trajectory, centered, c_kernels):
     states = trajectory.states[:-1]
     fd = FDConfig(eps=1e-6, centered=centered)
-    got = RolloutService(scene).derivatives(states, None, fd)
+    got = service(scene, c_kernels).derivatives(states, None, fd)
     A, B = reference(scene, states, fd.eps, centered)
     assert got.A.shape == A.shape and got.B.shape == B.shape
     assert np.abs(A).max() > 0.5 and np.abs(B).max() > 1e-3  # non-trivial dynamics
@@ -56,10 +73,10 @@ def test_all_dofs_equal_transitionFD(scene, trajectory, centered):
 
 @pytest.mark.parametrize("centered", [False, True])
 @pytest.mark.parametrize("dofs", [[1], ["object:box"], ["robot", "object:ball_obj"], [0, 4, 9]])
-def test_subset_equals_rows_and_columns_of_full(scene, trajectory, centered, dofs):
+def test_subset_equals_rows_and_columns_of_full(scene, trajectory, centered, dofs, c_kernels):
     states = trajectory.states[:-1]
     fd = FDConfig(eps=1e-6, centered=centered)
-    svc = RolloutService(scene)
+    svc = service(scene, c_kernels)
     full = svc.derivatives(states, None, fd)
     sub = svc.derivatives(states, dofs, fd)
     idx = scene.tangent_indices(sub.dofs)
@@ -68,16 +85,44 @@ def test_subset_equals_rows_and_columns_of_full(scene, trajectory, centered, dof
     np.testing.assert_array_equal(sub.B, full.B[:, idx])
 
 
-def test_batch_of_one_timestep_and_two_threads(scene, trajectory):
-    from dopt.rollout import RolloutConfig
+def test_batch_of_one_timestep_and_two_threads(scene, trajectory, c_kernels):
     states = trajectory.states[3:4]
-    one = RolloutService(scene, RolloutConfig(threads=1)).derivatives(states, "robot")
-    two = RolloutService(scene, RolloutConfig(threads=2)).derivatives(states, "robot")
+    one = service(scene, c_kernels, threads=1).derivatives(states, "robot")
+    two = service(scene, c_kernels, threads=2).derivatives(states, "robot")
     np.testing.assert_array_equal(one.A, two.A)
     np.testing.assert_array_equal(one.B, two.B)
     A, B = reference(scene, states, 1e-6, False)
     idx = scene.tangent_indices("robot")
     np.testing.assert_allclose(one.A[0], A[0][idx][:, idx], atol=TOL, rtol=0)
+
+
+def test_routes_agree_on_a_pushing_task():
+    """Clutter (a Panda among cylinders, ~25 contacts): the skip-stage C loop reuses the
+    nominal state's position and velocity stages; the Batch route recomputes them."""
+    from dopt import kernels
+    from dopt.scene import Scene
+    from dopt.tasks import get_task
+    if kernels.load() is None:
+        pytest.skip(f"C kernels not built: {kernels.load_error()}")
+    tm = get_task("clutter")(np.random.default_rng(0))
+    scene = Scene(tm.model)
+    u = np.random.default_rng(1).normal(0, 20, (12, scene.nu))
+    states = service(scene, False).trajectory(tm.initial_state, u).states[:-1]
+    C = np.r_[tm.robot_dofs, 7 + np.arange(12)]
+    for centered in (False, True):
+        fd = FDConfig(eps=1e-3, centered=centered)
+        a = service(scene, True, threads=2).derivatives(states, C, fd)
+        b = service(scene, False, threads=2).derivatives(states, C, fd)
+        assert np.abs(b.A).max() > 1
+        np.testing.assert_allclose(a.A, b.A, rtol=0, atol=1e-9)
+        np.testing.assert_allclose(a.B, b.B, rtol=0, atol=1e-9)
+
+
+def test_unstable_derivatives_name_the_timestep(scene, trajectory, c_kernels):
+    states = trajectory.states[:-1].copy()
+    states[7, scene.layout["qvel"].start + 2] = 1e200   # the hinge spins absurdly at t = 7
+    with pytest.raises(UnstableRolloutError, match="derivatives t=7"):
+        service(scene, c_kernels).derivatives(states, "robot")
 
 
 def test_bad_inputs(scene, trajectory):

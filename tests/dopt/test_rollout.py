@@ -115,3 +115,75 @@ def test_bad_inputs(scene, moving_state):
         RolloutService(scene.model)
     with pytest.raises(ValueError, match="threads"):
         RolloutConfig(threads=-1)
+
+
+@pytest.fixture(params=[True, False], ids=["c-kernels", "batch"])
+def c_kernels(request):
+    """Both feedback routes: dopt.kernels' C loop and Batch lock-step with numpy feedback."""
+    if request.param:
+        from dopt import kernels
+        if kernels.load() is None:
+            pytest.skip(f"C kernels not built: {kernels.load_error()}")
+    return request.param
+
+
+def feedback_loop(scene, x0, ff, ref, K, dofs, lo, hi):
+    """Reference: one MjData, u = clip(ff + K [q_C (-) ref_q_C; v_C - ref_v_C]) per step."""
+    m = scene.model
+    d = mujoco.MjData(m)
+    qpos, qvel = scene.layout["qpos"], scene.layout["qvel"]
+    out = np.empty((len(ff), ff.shape[1] + 1, scene.nstate))
+    for p in range(len(ff)):
+        mujoco.mj_setState(m, d, x0, INTEGRATION)
+        for t in range(ff.shape[1]):
+            dq = np.zeros(m.nv)
+            mujoco.mj_differentiatePos(m, dq, 1.0, ref[t, qpos], d.qpos)
+            dx = np.r_[dq[dofs], d.qvel[dofs] - ref[t, qvel][dofs]]
+            d.ctrl[:] = np.clip(ff[p, t] + K[t] @ dx, lo, hi)
+            out[p, t] = scene.state_of(d)
+            mujoco.mj_step(m, d)
+        out[p, -1] = scene.state_of(d)
+    return out
+
+
+@pytest.mark.parametrize("threads", [1, 2])
+def test_feedback_rollouts_equal_step_loop(scene, moving_state, c_kernels, threads):
+    svc = RolloutService(scene, RolloutConfig(threads=threads, c_kernels=c_kernels))
+    assert svc.uses_c_kernels == c_kernels
+    rng = np.random.default_rng(5)
+    T, dofs = 30, np.array([0, 2, 3, 4, 7, 8])            # slide, ball, box (free) DoFs
+    ref = svc.trajectory(moving_state, rng.uniform(-1, 1, (T, scene.nu))).states[:-1]
+    ff = rng.uniform(-1.5, 1.5, (4, T, scene.nu))
+    ff[:, :, 2] *= 0.05                                   # the light wrist stays sane
+    K = rng.normal(0, 0.3, (T, scene.nu, 2 * len(dofs)))
+    K[:, 2] *= 0.05
+    got = svc.rollout_feedback(moving_state, ff, ref, K, dofs)
+    lo, hi = svc._ctrl_bounds()
+    want = feedback_loop(scene, moving_state, ff, ref, K, dofs, lo, hi)
+    ctrl = scene.layout["ctrl"]
+    assert np.any(np.abs(got.controls[:, :, 1]) == 1.0)    # the hinge motor was clamped
+    np.testing.assert_allclose(got.states, want, rtol=0, atol=1e-10)
+    np.testing.assert_array_equal(got.states[:, :-1, ctrl], got.controls)
+
+
+def test_unstable_feedback_names_rollout(scene, moving_state, c_kernels):
+    svc = RolloutService(scene, RolloutConfig(threads=2, c_kernels=c_kernels))
+    T = 20
+    ref = svc.trajectory(moving_state, np.zeros((T, scene.nu))).states[:-1]
+    ff = np.zeros((3, T, scene.nu))
+    ff[2, 6:, 2] = 1e300   # the unlimited ball motor blows up rollout 2 from step 6
+    with pytest.raises(UnstableRolloutError) as info:
+        svc.rollout_feedback(moving_state, ff, ref, np.zeros((T, scene.nu, 2)), [0])
+    assert info.value.rollout == 2 and 6 <= info.value.step <= 8
+    assert "rollout_feedback" in str(info.value)
+
+
+def test_c_kernels_built_where_a_compiler_is():
+    """The install builds dopt/_rollout_kernels when a C compiler exists; otherwise the
+    Batch route must still serve (tested above) and the reason is known."""
+    import shutil
+    from dopt import kernels
+    if shutil.which("cc") is None and shutil.which("gcc") is None:
+        assert kernels.load() is None and kernels.load_error()
+    else:
+        assert kernels.load() is not None, kernels.load_error()

@@ -1,0 +1,220 @@
+/* C loops behind dopt.RolloutService, where Python per step or a full mj_step per
+ * perturbation would dominate (measured: README, "Why these libraries").
+ *
+ *   dopt_fd:        reduced finite-difference A^C, B^C of a list of timesteps. As
+ *                   mjd_transitionFD restricted to the DoF set C: control nudges skip the
+ *                   position and velocity stages, velocity nudges skip the position stage.
+ *   dopt_feedback:  one closed-loop rollout u_t = u_ff,t + K_t dx_C(x_t, ref_t), clamped.
+ *
+ * Only MuJoCo's public C API is called, through opaque pointers: no struct field is read, so
+ * this file needs no MuJoCo headers and no link step. The symbols resolve against the
+ * libmujoco that the mujoco Python package loaded (dopt/kernels.py makes it global first and
+ * checks that mj_version matches the version these prototypes were written for). Every call
+ * works on the caller's mjData only, so calls on different mjData may run on different threads.
+ */
+#include <math.h>
+#include <string.h>
+
+typedef double mjtNum;
+typedef struct mjModel_ mjModel;
+typedef struct mjData_ mjData;
+
+/* prototypes as in mujoco/mujoco.h of MuJoCo 4.0 */
+void mj_setState(const mjModel* m, mjData* d, const mjtNum* state, int sig);
+void mj_getState(const mjModel* m, const mjData* d, mjtNum* state, int sig);
+void mj_fwdPosition(const mjModel* m, mjData* d);
+void mj_fwdVelocity(const mjModel* m, mjData* d);
+void mj_step2(const mjModel* m, mjData* d);
+void mj_step(const mjModel* m, mjData* d);
+void mj_integratePos(const mjModel* m, mjtNum* qpos, const mjtNum* qvel, mjtNum dt);
+void mj_differentiatePos(const mjModel* m, mjtNum* qvel, mjtNum dt, const mjtNum* qpos1,
+                         const mjtNum* qpos2);
+
+/* sizes and state-row offsets, filled from Python (dopt.kernels.Layout) */
+typedef struct {
+  int nq, nv, nu;
+  int nstate, sig;        /* state row length and its mjtState bits (mjSTATE_INTEGRATION) */
+  int qpos, qvel, ctrl;   /* offsets of qpos, qvel, ctrl in a row */
+  int sig_qposvel;        /* mjSTATE_QPOS | mjSTATE_QVEL: [qpos; qvel] */
+  int sig_ctrl;           /* mjSTATE_CTRL */
+} layout_t;
+
+/* scratch doubles per call */
+int dopt_fd_work(const layout_t* L) { return L->nstate + 3 * (L->nq + L->nv) + 2 * L->nv + L->nq; }
+int dopt_feedback_work(const layout_t* L, int nc) { return L->nv + 2 * nc; }
+
+/* One step from the state loaded in d. skip 0: full step; 1: the position stage of the
+ * loaded state is current, recompute from velocity on; 2: position and velocity stages are
+ * current (only ctrl changed). As mj_step for every integrator but RK4 (Python refuses RK4). */
+static void advance(const mjModel* m, mjData* d, int skip) {
+  if (skip < 1) mj_fwdPosition(m, d);
+  if (skip < 2) mj_fwdVelocity(m, d);
+  mj_step2(m, d);
+}
+
+/* MuJoCo's warning counters of d: warn[i * stride] is warning i's count (nwarn of them) */
+typedef struct {
+  const int* number;
+  int stride, n;
+} warnings_t;
+
+static int warned(const warnings_t* w) {
+  for (int i = 0; i < w->n; i++) {
+    if (w->number[i * w->stride]) return 1;
+  }
+  return 0;
+}
+
+static int finite(const mjtNum* x, int n) {
+  for (int i = 0; i < n; i++) {
+    if (!isfinite(x[i])) return 0;
+  }
+  return 1;
+}
+
+/* next [qpos; qvel] of the state row `row` after `advance(skip)` */
+static int next_state(const mjModel* m, mjData* d, const layout_t* L, const mjtNum* row,
+                      int skip, mjtNum* out) {
+  mj_setState(m, d, row, L->sig);
+  advance(m, d, skip);
+  mj_getState(m, d, out, L->sig_qposvel);
+  return finite(out, L->nq + L->nv);
+}
+
+/* column `col` of M (2c rows, leading dimension ld) = tangent difference (a - b) / h on C */
+static void write_column(const mjModel* m, const layout_t* L, const mjtNum* a, const mjtNum* b,
+                         mjtNum h, const int* dofs, int nc, mjtNum* M, int ld, int col,
+                         mjtNum* dq) {
+  mj_differentiatePos(m, dq, h, b, a);
+  const mjtNum* va = a + L->nq;
+  const mjtNum* vb = b + L->nq;
+  for (int r = 0; r < nc; r++) {
+    M[r * ld + col] = dq[dofs[r]];
+    M[(nc + r) * ld + col] = (va[dofs[r]] - vb[dofs[r]]) / h;
+  }
+}
+
+static void zero_column(mjtNum* M, int rows, int ld, int col) {
+  for (int r = 0; r < rows; r++) M[r * ld + col] = 0;
+}
+
+/* Reduced FD derivatives of the state rows states[t] for t in ts[0..nt).
+ *   A: (T, 2c, 2c) and B: (T, 2c, nu), row-major, written at each listed t; columns of A
+ *   are [dq_C | dv_C]. lo, hi: (nu,) control bounds, +-inf where unlimited.
+ * Order per timestep: nominal (full step) -> controls (skip 2) -> velocities (skip 1) ->
+ * positions (full), so the stages a skipped step reuses are those of the nominal state.
+ * Returns -1, or the first listed t whose steps gave a non-finite state or raised a MuJoCo
+ * warning (the caller resets the counters); later timesteps are then left undone. */
+int dopt_fd(const mjModel* m, mjData* d, const layout_t* L, const warnings_t* warn,
+            const mjtNum* states, const int* ts, int nt, const int* dofs, int nc, mjtNum eps,
+            int centered, const mjtNum* lo, const mjtNum* hi, mjtNum* A, mjtNum* B,
+            mjtNum* work) {
+  const int nq = L->nq, nv = L->nv, nu = L->nu, n2 = 2 * nc, nx = nq + nv;
+  mjtNum* row = work;               /* perturbed state row (nstate) */
+  mjtNum* x0 = row + L->nstate;     /* nominal next [qpos; qvel] */
+  mjtNum* xp = x0 + nx;             /* + side */
+  mjtNum* xm = xp + nx;             /* - side */
+  mjtNum* dq = xm + nx;             /* tangent difference (nv) */
+  mjtNum* unit = dq + nv;           /* unit tangent vector (nv) */
+  mjtNum* qpos = unit + nv;         /* perturbed qpos (nq) */
+  memset(unit, 0, sizeof(mjtNum) * nv);
+
+  for (int i = 0; i < nt; i++) {
+    const int t = ts[i];
+    const mjtNum* nom = states + (size_t)t * L->nstate;
+    mjtNum* At = A + (size_t)t * n2 * n2;
+    mjtNum* Bt = B + (size_t)t * n2 * nu;
+    int ok = next_state(m, d, L, nom, 0, x0);
+    memcpy(row, nom, sizeof(mjtNum) * L->nstate);
+
+    /* controls: one-sided inward differences at ctrlrange limits, as mjd_transitionFD */
+    for (int j = 0; j < nu; j++) {
+      const mjtNum c = nom[L->ctrl + j];
+      const int fwd = c >= lo[j] && c + eps <= hi[j];
+      const int back = (centered || !fwd) && c - eps >= lo[j] && c <= hi[j];
+      if (fwd) {
+        row[L->ctrl + j] = c + eps;
+        ok &= next_state(m, d, L, row, 2, xp);
+      }
+      if (back) {
+        row[L->ctrl + j] = c - eps;
+        ok &= next_state(m, d, L, row, 2, xm);
+      }
+      row[L->ctrl + j] = c;
+      if (fwd && back) write_column(m, L, xp, xm, 2 * eps, dofs, nc, Bt, nu, j, dq);
+      else if (fwd) write_column(m, L, xp, x0, eps, dofs, nc, Bt, nu, j, dq);
+      else if (back) write_column(m, L, x0, xm, eps, dofs, nc, Bt, nu, j, dq);
+      else zero_column(Bt, n2, nu, j);
+    }
+    /* velocities */
+    for (int k = 0; k < nc; k++) {
+      const int v = L->qvel + dofs[k];
+      row[v] = nom[v] + eps;
+      ok &= next_state(m, d, L, row, 1, xp);
+      if (centered) {
+        row[v] = nom[v] - eps;
+        ok &= next_state(m, d, L, row, 1, xm);
+        write_column(m, L, xp, xm, 2 * eps, dofs, nc, At, n2, nc + k, dq);
+      } else {
+        write_column(m, L, xp, x0, eps, dofs, nc, At, n2, nc + k, dq);
+      }
+      row[v] = nom[v];
+    }
+    /* positions, in the tangent space (quaternions through mj_integratePos) */
+    for (int k = 0; k < nc; k++) {
+      unit[dofs[k]] = 1;
+      for (int side = 0; side < 1 + centered; side++) {
+        memcpy(qpos, nom + L->qpos, sizeof(mjtNum) * nq);
+        mj_integratePos(m, qpos, unit, side ? -eps : eps);
+        memcpy(row + L->qpos, qpos, sizeof(mjtNum) * nq);
+        ok &= next_state(m, d, L, row, 0, side ? xm : xp);
+      }
+      unit[dofs[k]] = 0;
+      memcpy(row + L->qpos, nom + L->qpos, sizeof(mjtNum) * nq);
+      if (centered) write_column(m, L, xp, xm, 2 * eps, dofs, nc, At, n2, k, dq);
+      else write_column(m, L, xp, x0, eps, dofs, nc, At, n2, k, dq);
+    }
+    if (!ok || warned(warn)) return t;
+  }
+  return -1;
+}
+
+/* One closed-loop rollout of T steps from the state row x0:
+ *   u_t = clamp(ff_t + K_t [q_C (-) ref_q_C ; v_C - ref_v_C], lo, hi)
+ * ff: (T, nu); ref: (T, nstate); K: (T, nu, 2c); out: (T+1, nstate), row t holding u_t;
+ * applied: (T, nu). Returns -1, or the first step that raised a MuJoCo warning or gave a
+ * non-finite state (the rollout stops there). */
+int dopt_feedback(const mjModel* m, mjData* d, const layout_t* L, const warnings_t* warn,
+                  const mjtNum* x0, int T,
+                  const mjtNum* ff, const mjtNum* ref, const mjtNum* K, const int* dofs, int nc,
+                  const mjtNum* lo, const mjtNum* hi, mjtNum* out, mjtNum* applied,
+                  mjtNum* work) {
+  const int nu = L->nu, n2 = 2 * nc;
+  mjtNum* dq = work;          /* nv */
+  mjtNum* dx = dq + L->nv;    /* 2c */
+  mj_setState(m, d, x0, L->sig);
+  mj_getState(m, d, out, L->sig);
+  for (int t = 0; t < T; t++) {
+    mjtNum* row = out + (size_t)t * L->nstate;
+    const mjtNum* r = ref + (size_t)t * L->nstate;
+    mj_differentiatePos(m, dq, 1, r + L->qpos, row + L->qpos);
+    for (int k = 0; k < nc; k++) {
+      dx[k] = dq[dofs[k]];
+      dx[nc + k] = row[L->qvel + dofs[k]] - r[L->qvel + dofs[k]];
+    }
+    const mjtNum* Kt = K + (size_t)t * nu * n2;
+    for (int j = 0; j < nu; j++) {
+      mjtNum u = ff[(size_t)t * nu + j];
+      for (int k = 0; k < n2; k++) u += Kt[j * n2 + k] * dx[k];
+      if (u < lo[j]) u = lo[j];
+      if (u > hi[j]) u = hi[j];
+      applied[(size_t)t * nu + j] = u;
+      row[L->ctrl + j] = u;
+    }
+    mj_setState(m, d, row + L->ctrl, L->sig_ctrl);
+    mj_step(m, d);
+    mj_getState(m, d, row + L->nstate, L->sig);
+    if (warned(warn) || !finite(row + L->nstate, L->nstate)) return t;
+  }
+  return -1;
+}

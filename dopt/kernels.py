@@ -1,0 +1,205 @@
+"""ctypes front of the C loops in ``_rollout_kernels.c``: reduced FD and feedback rollouts.
+
+The shared library is built at install time (an optional setuptools extension). If it is
+missing (no C compiler at install) or the running MuJoCo is not the version its prototypes
+were written for, ``load()`` returns None, logs why, and ``RolloutService`` falls back to
+``mujoco.batch.Batch`` (same results, slower: README, "Why these libraries").
+
+Work is split over ``threads`` Python threads, each with its own MjData; ctypes releases the
+GIL for the length of every C call.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import glob
+import importlib.machinery
+import logging
+import os
+from concurrent.futures import ThreadPoolExecutor
+
+import mujoco
+import numpy as np
+
+from dopt.state import StateLayout
+
+log = logging.getLogger(__name__)
+
+MUJOCO_VERSION = 4000000          # the prototypes in _rollout_kernels.c are MuJoCo 4.0's
+_HERE = os.path.dirname(os.path.abspath(__file__))
+_lib = None
+_load_error: str | None = None
+
+_p = ctypes.c_void_p
+_dbl = np.ctypeslib.ndpointer(np.float64, flags="C_CONTIGUOUS")
+_int = np.ctypeslib.ndpointer(np.int32, flags="C_CONTIGUOUS")
+
+
+class Layout(ctypes.Structure):
+    """layout_t of the C file: sizes and offsets of qpos, qvel, ctrl in a state row."""
+
+    _fields_ = [(n, ctypes.c_int) for n in ("nq", "nv", "nu", "nstate", "sig", "qpos", "qvel",
+                                             "ctrl", "sig_qposvel", "sig_ctrl")]
+
+    @classmethod
+    def of(cls, model: mujoco.MjModel, layout: StateLayout) -> "Layout":
+        S = mujoco.mjtState
+        return cls(model.nq, model.nv, model.nu, layout.size, layout.spec,
+                   layout["qpos"].start, layout["qvel"].start, layout["ctrl"].start,
+                   int(S.mjSTATE_QPOS) | int(S.mjSTATE_QVEL), int(S.mjSTATE_CTRL))
+
+
+class Warnings(ctypes.Structure):
+    """warnings_t of the C file: an MjData's warning counters, read in place."""
+
+    _fields_ = [("number", ctypes.c_void_p), ("stride", ctypes.c_int), ("n", ctypes.c_int)]
+
+    @classmethod
+    def of(cls, data: mujoco.MjData) -> "Warnings":
+        number = data.warning.number           # a strided view into the mjData
+        stride = number.strides[0] // number.itemsize
+        if number.itemsize != ctypes.sizeof(ctypes.c_int) or number.strides[0] % number.itemsize:
+            raise RuntimeError("unexpected layout of mjData.warning")
+        return cls(number.ctypes.data, stride, len(number))
+
+
+def _library_path() -> str | None:
+    for suffix in importlib.machinery.EXTENSION_SUFFIXES:
+        found = glob.glob(os.path.join(_HERE, "_rollout_kernels" + suffix))
+        if found:
+            return found[0]
+    return None
+
+
+def load():
+    """The kernel library (ctypes.CDLL), or None with the reason logged once."""
+    global _lib, _load_error
+    if _lib is not None or _load_error is not None:
+        return _lib
+    if mujoco.mj_version() != MUJOCO_VERSION:
+        _load_error = (f"MuJoCo {mujoco.mj_version()} is not the {MUJOCO_VERSION} the kernel "
+                       f"prototypes were written for")
+    elif (path := _library_path()) is None:
+        _load_error = "dopt/_rollout_kernels was not built (no C compiler at install?)"
+    else:
+        # make the libmujoco the bindings already loaded global, so the kernel's symbols
+        # resolve against that same instance
+        libmujoco = glob.glob(os.path.join(os.path.dirname(mujoco.__file__), "libmujoco.so*"))
+        try:
+            for lib in libmujoco:
+                ctypes.CDLL(lib, mode=os.RTLD_GLOBAL | getattr(os, "RTLD_NOLOAD", 0))
+            _lib = ctypes.CDLL(path)
+        except OSError as e:
+            _load_error = f"cannot load {path}: {e}"
+    if _lib is None:
+        log.warning("C rollout kernels unavailable (%s); using mujoco.batch.Batch", _load_error)
+        return None
+    L, W = ctypes.POINTER(Layout), ctypes.POINTER(Warnings)
+    _lib.dopt_fd_work.argtypes = [L]
+    _lib.dopt_feedback_work.argtypes = [L, ctypes.c_int]
+    _lib.dopt_fd.argtypes = [_p, _p, L, W, _dbl, _int, ctypes.c_int, _int, ctypes.c_int,
+                             ctypes.c_double, ctypes.c_int, _dbl, _dbl, _dbl, _dbl, _dbl]
+    _lib.dopt_feedback.argtypes = [_p, _p, L, W, _dbl, ctypes.c_int, _dbl, _dbl, _dbl, _int,
+                                   ctypes.c_int, _dbl, _dbl, _dbl, _dbl, _dbl]
+    for f in (_lib.dopt_fd_work, _lib.dopt_feedback_work, _lib.dopt_fd, _lib.dopt_feedback):
+        f.restype = ctypes.c_int
+    return _lib
+
+
+def load_error() -> str | None:
+    """Why ``load()`` returned None (None if it did not, or was not called yet)."""
+    return _load_error
+
+
+class Kernels:
+    """The C loops on one model, over ``threads`` MjData and Python threads.
+
+    Calls report the first step that went unstable (non-finite state or a MuJoCo warning, read
+    from the MjData's counters after every step) so the caller can name it. Not for
+    concurrent use.
+    """
+
+    def __init__(self, model: mujoco.MjModel, layout: StateLayout, threads: int):
+        self.lib = load()
+        if self.lib is None:
+            raise RuntimeError(f"C rollout kernels unavailable: {_load_error}")
+        self.model = model
+        self.layout = Layout.of(model, layout)
+        self.threads = threads
+        self._datas = [mujoco.MjData(model) for _ in range(threads)]
+        self._warnings = [Warnings.of(d) for d in self._datas]
+        self._pool = ThreadPoolExecutor(threads) if threads > 1 else None
+
+    def _map(self, job, n_items: int):
+        """Run job(i, items) on `threads` interleaved shares of range(n_items); share i runs
+        on MjData i."""
+        shares = [np.arange(i, n_items, self.threads, dtype=np.int32)
+                  for i in range(min(self.threads, n_items))]
+        if self._pool is None or len(shares) == 1:
+            return [job(0, shares[0])]
+        return list(self._pool.map(job, range(len(shares)), shares))
+
+    def fd(self, states: np.ndarray, dofs: np.ndarray, eps: float, centered: bool,
+           lo: np.ndarray, hi: np.ndarray):
+        """A (T, 2c, 2c), B (T, 2c, nu) of state rows (T, ns) on the DoF set dofs (c,).
+
+        Returns (A, B, bad): bad lists (t, warning names) of the first timestep per thread
+        whose steps gave a non-finite state or raised MuJoCo warnings (empty if none; A and B
+        are then incomplete)."""
+        T, c, nu = len(states), len(dofs), self.model.nu
+        A = np.empty((T, 2 * c, 2 * c))
+        B = np.empty((T, 2 * c, nu))
+        C = np.ascontiguousarray(dofs, dtype=np.int32)
+        lay = ctypes.byref(self.layout)
+        work_n = self.lib.dopt_fd_work(lay)
+        m = self.model._address
+
+        def job(i, ts):
+            d, work = self._datas[i], np.empty(work_n)
+            d.warning.number[:] = 0
+            t = self.lib.dopt_fd(m, d._address, lay, ctypes.byref(self._warnings[i]), states,
+                                 ts, len(ts), C, c, eps, int(centered), lo, hi, A, B, work)
+            return [] if t < 0 else [(t, _warnings(d) or ["non-finite state"])]
+
+        bad = sorted(b for share in self._map(job, T) for b in share)
+        return A, B, bad
+
+    def feedback(self, x0: np.ndarray, ff: np.ndarray, ref: np.ndarray, K: np.ndarray,
+                 dofs: np.ndarray, lo: np.ndarray, hi: np.ndarray):
+        """P closed-loop rollouts: x0 (ns,), ff (P, T, nu), ref (T, ns), K (T, nu, 2c).
+
+        Returns (states (P, T+1, ns), applied (P, T, nu), bad): bad lists (p, step, warning
+        names) of rollouts that went non-finite or raised MuJoCo warnings at that step (their
+        later rows are then undefined)."""
+        P, T, nu = ff.shape
+        out = np.empty((P, T + 1, self.layout.nstate))
+        applied = np.empty((P, T, nu))
+        C = np.ascontiguousarray(dofs, dtype=np.int32)
+        lay = ctypes.byref(self.layout)
+        work = [np.empty(self.lib.dopt_feedback_work(lay, len(C))) for _ in self._datas]
+        m = self.model._address
+
+        def job(i, ps):
+            d, w, bad = self._datas[i], work[i], []
+            for p in ps:
+                d.warning.number[:] = 0
+                step = self.lib.dopt_feedback(m, d._address, lay, ctypes.byref(self._warnings[i]),
+                                              x0, T, ff[p], ref, K, C, len(C), lo, hi, out[p],
+                                              applied[p], w)
+                if step >= 0:
+                    bad.append((int(p), step, _warnings(d) or ["non-finite state"]))
+            return bad
+
+        bad = sorted(b for share in self._map(job, P) for b in share)
+        return out, applied, bad
+
+    def close(self):
+        if self._pool is not None:
+            self._pool.shutdown(wait=False)
+
+
+_WARNING_NAMES = [n for n in mujoco.mjtWarning.__members__ if n != "mjNWARNING"]
+
+
+def _warnings(d: mujoco.MjData) -> list[str]:
+    return [_WARNING_NAMES[i] for i in np.nonzero(d.warning.number)[0]]
