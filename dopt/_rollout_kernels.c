@@ -99,17 +99,16 @@ static void zero_column(mjtNum* M, int rows, int ld, int col) {
 }
 
 /* Reduced FD derivatives of the state rows states[t] for t in ts[0..nt).
- *   A: (T, 2c, 2c) and B: (T, 2c, nu), row-major, written at each listed t; columns of A
- *   are [dq_C | dv_C]. lo, hi: (nu,) control bounds, +-inf where unlimited.
+ *   F: (T, 2c, 2c + nu) = [A B], row-major, written at each listed t; the columns of A are
+ *   [dq_C | dv_C]. lo, hi: (nu,) control bounds, +-inf where unlimited.
  * Order per timestep: nominal (full step) -> controls (skip 2) -> velocities (skip 1) ->
  * positions (full), so the stages a skipped step reuses are those of the nominal state.
  * Returns -1, or the first listed t whose steps gave a non-finite state or raised a MuJoCo
  * warning (the caller resets the counters); later timesteps are then left undone. */
 int dopt_fd(const mjModel* m, mjData* d, const layout_t* L, const warnings_t* warn,
             const mjtNum* states, const int* ts, int nt, const int* dofs, int nc, mjtNum eps,
-            int centered, const mjtNum* lo, const mjtNum* hi, mjtNum* A, mjtNum* B,
-            mjtNum* work) {
-  const int nq = L->nq, nv = L->nv, nu = L->nu, n2 = 2 * nc, nx = nq + nv;
+            int centered, const mjtNum* lo, const mjtNum* hi, mjtNum* F, mjtNum* work) {
+  const int nq = L->nq, nv = L->nv, nu = L->nu, n2 = 2 * nc, nx = nq + nv, ld = n2 + nu;
   mjtNum* row = work;               /* perturbed state row (nstate) */
   mjtNum* x0 = row + L->nstate;     /* nominal next [qpos; qvel] */
   mjtNum* xp = x0 + nx;             /* + side */
@@ -122,8 +121,8 @@ int dopt_fd(const mjModel* m, mjData* d, const layout_t* L, const warnings_t* wa
   for (int i = 0; i < nt; i++) {
     const int t = ts[i];
     const mjtNum* nom = states + (size_t)t * L->nstate;
-    mjtNum* At = A + (size_t)t * n2 * n2;
-    mjtNum* Bt = B + (size_t)t * n2 * nu;
+    mjtNum* At = F + (size_t)t * n2 * ld;
+    mjtNum* Bt = At + n2;
     int ok = next_state(m, d, L, nom, 0, x0);
     memcpy(row, nom, sizeof(mjtNum) * L->nstate);
 
@@ -141,10 +140,10 @@ int dopt_fd(const mjModel* m, mjData* d, const layout_t* L, const warnings_t* wa
         ok &= next_state(m, d, L, row, 2, xm);
       }
       row[L->ctrl + j] = c;
-      if (fwd && back) write_column(m, L, xp, xm, 2 * eps, dofs, nc, Bt, nu, j, dq);
-      else if (fwd) write_column(m, L, xp, x0, eps, dofs, nc, Bt, nu, j, dq);
-      else if (back) write_column(m, L, x0, xm, eps, dofs, nc, Bt, nu, j, dq);
-      else zero_column(Bt, n2, nu, j);
+      if (fwd && back) write_column(m, L, xp, xm, 2 * eps, dofs, nc, Bt, ld, j, dq);
+      else if (fwd) write_column(m, L, xp, x0, eps, dofs, nc, Bt, ld, j, dq);
+      else if (back) write_column(m, L, x0, xm, eps, dofs, nc, Bt, ld, j, dq);
+      else zero_column(Bt, n2, ld, j);
     }
     /* velocities */
     for (int k = 0; k < nc; k++) {
@@ -154,9 +153,9 @@ int dopt_fd(const mjModel* m, mjData* d, const layout_t* L, const warnings_t* wa
       if (centered) {
         row[v] = nom[v] - eps;
         ok &= next_state(m, d, L, row, 1, xm);
-        write_column(m, L, xp, xm, 2 * eps, dofs, nc, At, n2, nc + k, dq);
+        write_column(m, L, xp, xm, 2 * eps, dofs, nc, At, ld, nc + k, dq);
       } else {
-        write_column(m, L, xp, x0, eps, dofs, nc, At, n2, nc + k, dq);
+        write_column(m, L, xp, x0, eps, dofs, nc, At, ld, nc + k, dq);
       }
       row[v] = nom[v];
     }
@@ -171,8 +170,8 @@ int dopt_fd(const mjModel* m, mjData* d, const layout_t* L, const warnings_t* wa
       }
       unit[dofs[k]] = 0;
       memcpy(row + L->qpos, nom + L->qpos, sizeof(mjtNum) * nq);
-      if (centered) write_column(m, L, xp, xm, 2 * eps, dofs, nc, At, n2, k, dq);
-      else write_column(m, L, xp, x0, eps, dofs, nc, At, n2, k, dq);
+      if (centered) write_column(m, L, xp, xm, 2 * eps, dofs, nc, At, ld, k, dq);
+      else write_column(m, L, xp, x0, eps, dofs, nc, At, ld, k, dq);
     }
     if (!ok || warned(warn)) return t;
   }

@@ -98,7 +98,7 @@ def load():
     _lib.dopt_fd_work.argtypes = [L]
     _lib.dopt_feedback_work.argtypes = [L, ctypes.c_int]
     _lib.dopt_fd.argtypes = [_p, _p, L, W, _dbl, _int, ctypes.c_int, _int, ctypes.c_int,
-                             ctypes.c_double, ctypes.c_int, _dbl, _dbl, _dbl, _dbl, _dbl]
+                             ctypes.c_double, ctypes.c_int, _dbl, _dbl, _dbl, _dbl]
     _lib.dopt_feedback.argtypes = [_p, _p, L, W, _dbl, ctypes.c_int, _dbl, _dbl, _dbl, _int,
                                    ctypes.c_int, _dbl, _dbl, _dbl, _dbl, _dbl]
     for f in (_lib.dopt_fd_work, _lib.dopt_feedback_work, _lib.dopt_fd, _lib.dopt_feedback):
@@ -141,14 +141,13 @@ class Kernels:
 
     def fd(self, states: np.ndarray, dofs: np.ndarray, eps: float, centered: bool,
            lo: np.ndarray, hi: np.ndarray):
-        """A (T, 2c, 2c), B (T, 2c, nu) of state rows (T, ns) on the DoF set dofs (c,).
+        """F = [A B] (T, 2c, 2c + nu) of state rows (T, ns) on the DoF set dofs (c,).
 
-        Returns (A, B, bad): bad lists (t, warning names) of the first timestep per thread
-        whose steps gave a non-finite state or raised MuJoCo warnings (empty if none; A and B
-        are then incomplete)."""
+        Returns (F, bad): bad lists (t, warning names) of the first timestep per thread whose
+        steps gave a non-finite state or raised MuJoCo warnings (empty if none; F is then
+        incomplete)."""
         T, c, nu = len(states), len(dofs), self.model.nu
-        A = np.empty((T, 2 * c, 2 * c))
-        B = np.empty((T, 2 * c, nu))
+        F = np.empty((T, 2 * c, 2 * c + nu))
         C = np.ascontiguousarray(dofs, dtype=np.int32)
         lay = ctypes.byref(self.layout)
         work_n = self.lib.dopt_fd_work(lay)
@@ -158,11 +157,11 @@ class Kernels:
             d, work = self._datas[i], np.empty(work_n)
             d.warning.number[:] = 0
             t = self.lib.dopt_fd(m, d._address, lay, ctypes.byref(self._warnings[i]), states,
-                                 ts, len(ts), C, c, eps, int(centered), lo, hi, A, B, work)
+                                 ts, len(ts), C, c, eps, int(centered), lo, hi, F, work)
             return [] if t < 0 else [(t, _warnings(d) or ["non-finite state"])]
 
         bad = sorted(b for share in self._map(job, T) for b in share)
-        return A, B, bad
+        return F, bad
 
     def feedback(self, x0: np.ndarray, ff: np.ndarray, ref: np.ndarray, K: np.ndarray,
                  dofs: np.ndarray, lo: np.ndarray, hi: np.ndarray):

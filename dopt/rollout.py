@@ -88,14 +88,22 @@ class Derivatives:
 
         dx_C[t+1] = A[t] dx_C[t] + B[t] du[t],   dx_C = [dq_C; dv_C]  (tangent space)
 
-    A: (T, 2|C|, 2|C|), B: (T, 2|C|, nu), dofs: (|C|,) the DoF indices of C (into qvel).
-    With C = all DoFs (and na = 0) these equal ``mujoco.mjd_transitionFD``.
+    F: (T, 2|C|, 2|C| + nu) = [A B], the one buffer A and B view (the backward pass reads F);
+    A: (T, 2|C|, 2|C|), B: (T, 2|C|, nu); dofs: (|C|,) the DoF indices of C (into qvel).
+    With C = all DoFs (and na = 0) A and B equal ``mujoco.mjd_transitionFD``.
     """
 
-    A: np.ndarray
-    B: np.ndarray
+    F: np.ndarray
     dofs: np.ndarray
     fd: FDConfig
+
+    @property
+    def A(self) -> np.ndarray:
+        return self.F[:, :, :2 * len(self.dofs)]
+
+    @property
+    def B(self) -> np.ndarray:
+        return self.F[:, :, 2 * len(self.dofs):]
 
 
 class RolloutService:
@@ -289,11 +297,11 @@ class RolloutService:
         if self.uses_c_kernels:
             lo, hi = self._ctrl_bounds()
             with self._lock:
-                A, B, bad = self._kernel().fd(x, C, fd.eps, fd.centered, lo, hi)
+                F, bad = self._kernel().fd(x, C, fd.eps, fd.centered, lo, hi)
             if bad:
                 t, names = bad[0]
                 raise UnstableRolloutError(t, 0, names[0], f"derivatives t={t}")
-            return Derivatives(A, B, C, fd)
+            return Derivatives(F, C, fd)
         T, c, nu, eps = x.shape[0], len(C), m.nu, fd.eps
         sides = (1.0, -1.0) if fd.centered else (1.0,)
         ns = len(sides)
@@ -368,9 +376,9 @@ class RolloutService:
                 cols.append(dstate(block[c:], block[:c], 2 * eps))
             else:
                 cols.append(dstate(np.zeros(c, int), block, eps))
-        At = np.concatenate([cols[1], cols[0]], axis=1)                # columns: [dq_C, dv_C]
-        return Derivatives(np.ascontiguousarray(At.transpose(0, 2, 1)),
-                           np.ascontiguousarray(Bt.transpose(0, 2, 1)), C, fd)
+        # perturbation blocks (T, k, 2c) -> columns of F = [A B]: [dq_C, dv_C | u]
+        Ft = np.concatenate([cols[1], cols[0], Bt], axis=1)
+        return Derivatives(np.ascontiguousarray(Ft.transpose(0, 2, 1)), C, fd)
 
     # ------------------------------------------------------------------ helpers
     @property

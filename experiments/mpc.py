@@ -101,9 +101,8 @@ def make_trials(args, methods=None, rhos=None, thetas=None):
 
 def _theta(theta: int | None, method: str) -> int:
     """--theta, or the paper's Table 1 value for the method (rand 5, svr 10; unused else)."""
-    if theta is not None:
-        return theta
-    return {"rand": 5, "svr-sum": 10, "svr-svd": 10}.get(method, 0)
+    from planners.svr import paper_theta
+    return paper_theta(method) if theta is None else theta
 
 
 def _default_slowdown(task: str) -> float:

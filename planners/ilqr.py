@@ -120,12 +120,13 @@ class ILQR:
         D = svc.derivatives(X[:-1], C, self.config.fd)
         t1 = time.perf_counter()
         cd = self.cost.derivatives(X, U, C)
-        A, B = torch.from_numpy(D.A), torch.from_numpy(D.B)
-        while True:
-            gains = backward_pass(A, B, cd.lx, cd.lxx, cd.lu, cd.luu, self.mu)
-            if gains is not None or self.mu >= self.config.mu_max:
-                break
-            self.mu = min(self.mu * self.config.mu_factor, self.config.mu_max)
+        F = torch.from_numpy(D.F)
+        with torch.inference_mode():   # no autograd bookkeeping: ~20 % of a small op's cost
+            while True:
+                gains = backward_pass(F, cd.lx, cd.lxx, cd.lu, cd.luu, self.mu)
+                if gains is not None or self.mu >= self.config.mu_max:
+                    break
+                self.mu = min(self.mu * self.config.mu_factor, self.config.mu_max)
         t2 = time.perf_counter()
         if gains is None:
             log.warning("backward pass failed at mu=%g; keeping the nominal", self.mu)
@@ -169,39 +170,39 @@ class ILQR:
         return ILQRResult(U, X, costs, steps)
 
 
-def backward_pass(A: torch.Tensor, B: torch.Tensor, lx: torch.Tensor, lxx: torch.Tensor,
-                  lu: torch.Tensor, luu: torch.Tensor, mu: float):
+def backward_pass(F: torch.Tensor, lx: torch.Tensor, lxx: torch.Tensor, lu: torch.Tensor,
+                  luu: torch.Tensor, mu: float):
     """Riccati recursion (Eq. 8-10) on the reduced state with Q_uu + mu I.
 
-    A (T, n, n), B (T, n, nu), lx (T+1, n), lxx (T+1, n, n), lu (T, nu), luu (T, nu, nu).
-    Returns (K (T, nu, n), k (T, nu)), or None if some Q_uu + mu I is not positive definite.
+    F (T, n, n+nu) = [A B] (``Derivatives.F``), lx (T+1, n), lxx (T+1, n, n), lu (T, nu),
+    luu (T, nu, nu). Returns (K (T, nu, n), k (T, nu)), or None if some Q_uu + mu I is not
+    positive definite.
 
-    Each step forms all Q blocks at once from F = [A B]: Q = blkdiag(lxx, luu) + F^T V' F and
-    q = [lx; lu] + F^T V'_x (l_ux = 0), which keeps the number of small torch calls low.
+    Each step forms all Q blocks at once: Q = blkdiag(lxx, luu) + F^T V' F and
+    q = [lx; lu] + F^T V'_x (l_ux = 0), with F^T as a view (no transposed copy of F), which
+    keeps the number of small torch calls, and the bytes copied, low.
     """
-    T, n, nu = B.shape
-    F = torch.cat([A, B], dim=2)                                   # (T, n, n+nu)
-    Ft = F.transpose(1, 2).contiguous()                            # (T, n+nu, n)
-    L = torch.zeros(T, n + nu, n + nu, dtype=A.dtype)
-    L[:, :n, :n], L[:, n:, n:] = lxx[:T], luu
-    L[:, n:, n:] += mu * torch.eye(nu, dtype=A.dtype)
+    T, n, m = F.shape
+    nu = m - n
+    mu_eye = mu * torch.eye(nu, dtype=F.dtype)
     lvec = torch.cat([lx[:T], lu], dim=1)                          # (T, n+nu)
-    G = torch.empty(T, nu, n + 1, dtype=A.dtype)                   # [k | K] per step
+    G = torch.empty(T, nu, n + 1, dtype=F.dtype)                   # [k | K] per step
     Vx, Vxx = lx[T], lxx[T]
     for t in range(T - 1, -1, -1):
-        FtV = Ft[t] @ Vxx
-        Q = torch.addmm(L[t], FtV, F[t])                           # (n+nu, n+nu), Quu has +mu
-        q = torch.addmv(lvec[t], Ft[t], Vx)
-        chol, info = torch.linalg.cholesky_ex(Q[n:, n:])
+        Ft = F[t].T                                                # (n+nu, n), a view
+        Q = (Ft @ Vxx) @ F[t]                                      # (n+nu, n+nu)
+        Q[:n, :n] += lxx[t]
+        Q[n:, n:] += luu[t]
+        q = torch.addmv(lvec[t], Ft, Vx)
+        Quu, Qux = Q[n:, n:], Q[n:, :n]
+        chol, info = torch.linalg.cholesky_ex(Quu + mu_eye)
         if info.item():
             return None
-        rhs = torch.cat([q[n:, None], Q[n:, :n]], dim=1)           # [Qu | Qux]
-        Gt = torch.cholesky_solve(rhs, chol).neg_()
-        G[t] = Gt
+        rhs = torch.cat([q[n:, None], Qux], dim=1)                 # [Qu | Qux]
+        Gt = torch.cholesky_solve(rhs, chol, out=G[t]).neg_()
         k, K = Gt[:, 0], Gt[:, 1:]
-        Quu = Q[n:, n:] - mu * torch.eye(nu, dtype=A.dtype)        # the unregularised Q_uu
         W = torch.addmm(rhs, Quu, Gt)                              # [Quu k + Qu | Quu K + Qux]
-        Vx = torch.addmv(torch.addmv(q[:n], K.T, W[:, 0]), Q[n:, :n].T, k)
-        Vxx = torch.addmm(torch.addmm(Q[:n, :n], K.T, W[:, 1:]), Q[n:, :n].T, K)
+        Vx = torch.addmv(torch.addmv(q[:n], K.T, W[:, 0]), Qux.T, k)
+        Vxx = torch.addmm(torch.addmm(Q[:n, :n], K.T, W[:, 1:]), Qux.T, K)
         Vxx = 0.5 * (Vxx + Vxx.T)
     return G[:, :, 1:].contiguous(), G[:, :, 0].contiguous()

@@ -43,6 +43,18 @@ def importance_svd(K: torch.Tensor, g: int = 3) -> torch.Tensor:
     return (w[:c] + w[c:]) / K.shape[0]
 
 
+# theta per method in the paper's Table 1 (rand: 5 random DoFs besides the robot; SVR: 10
+# re-introduced per iteration); the experiments and the bench default to these
+PAPER_THETA = {"rand": 5, "svr-sum": 10, "svr-svd": 10}
+
+
+def paper_theta(method: str) -> int:
+    """The paper's theta for ``method`` (0 for methods that draw no random DoFs)."""
+    if method not in METHODS:
+        raise ValueError(f"unknown method {method!r}; choose from {METHODS}")
+    return PAPER_THETA.get(method, 0)
+
+
 @dataclass(frozen=True)
 class SelectionConfig:
     """method: one of METHODS; rho: importance threshold below which SVR removes a DoF;

@@ -11,17 +11,18 @@ from dopt.rollout import RolloutConfig, RolloutService
 from dopt.scene import Scene
 
 
-def bench_ilqr(task: str, methods: list[str], rho: float, theta: int, iterations: int,
+def bench_ilqr(task: str, methods: list[str], rho: float, theta: int | None, iterations: int,
                warmup: int, threads: int, seed: int) -> list[dict]:
     """Mean wall time of an iteration per method, from the same state and warm controls.
 
     Each method first runs ``warmup`` iterations (SVR settles its DoF set there), then
     ``iterations`` timed ones; ``vs_baseline`` is its time over baseline's, same run.
+    theta None: the paper's Table 1 value per method (planners.svr.paper_theta).
     """
     from dopt.tasks import get_task
     from dopt.tasks.push_costs import push_cost
     from planners.ilqr import ILQR
-    from planners.svr import DofSelector, SelectionConfig
+    from planners.svr import DofSelector, SelectionConfig, paper_theta
 
     torch.set_num_threads(1)
     tm = get_task(task)(np.random.default_rng(seed))
@@ -31,10 +32,11 @@ def bench_ilqr(task: str, methods: list[str], rho: float, theta: int, iterations
     U0 = np.zeros((tm.horizon, scene.nu))
     out = []
     for method in methods:
+        th = paper_theta(method) if theta is None else theta
         svc = RolloutService(scene, RolloutConfig(threads=threads))
         ilqr = ILQR(svc, cost)
         sel = DofSelector(scene.nv, tm.robot_dofs, cost.costed_dofs,
-                          SelectionConfig(method, rho=rho, theta=theta),
+                          SelectionConfig(method, rho=rho, theta=th),
                           np.random.default_rng(seed))
         U, walls, splits, sizes = U0, [], [], []
         for i in range(warmup + iterations):
@@ -54,7 +56,7 @@ def bench_ilqr(task: str, methods: list[str], rho: float, theta: int, iterations
         out.append({"bench": "ilqr", "task": task, "method": method, "ms_per_iteration": ms,
                     "n_dofs": float(np.mean(sizes)), "split_ms": split, "threads": svc.threads,
                     "route": "c-kernels" if svc.uses_c_kernels else "batch",
-                    "rho": rho, "theta": theta, "final_cost": step.cost_after})
+                    "rho": rho, "theta": th, "final_cost": step.cost_after})
     base = next((r["ms_per_iteration"] for r in out if r["method"] == "baseline"), None)
     for r in out:
         r["vs_baseline"] = None if base is None else r["ms_per_iteration"] / base

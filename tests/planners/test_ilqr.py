@@ -143,8 +143,8 @@ def test_reduced_gains_match_subset_problem_and_solve_descends():
     full = svc.derivatives(X[:-1], None, ILQRConfig().fd)
     idx = scene.tangent_indices(C)
     cd = cost.derivatives(X, U, C)
-    K, k = backward_pass(torch.from_numpy(full.A[:, idx][:, :, idx]),
-                         torch.from_numpy(full.B[:, idx]), cd.lx, cd.lxx, cd.lu, cd.luu, 0.1)
+    F = np.concatenate([full.A[:, idx][:, :, idx], full.B[:, idx]], axis=2)
+    K, k = backward_pass(torch.from_numpy(F), cd.lx, cd.lxx, cd.lu, cd.luu, 0.1)
     torch.testing.assert_close(step.K, K, rtol=0, atol=0)
     res = ILQR(svc, cost).solve(x0, U, C, max_iterations=6)
     assert res.costs[-1] < res.costs[0]
