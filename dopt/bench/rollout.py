@@ -36,10 +36,16 @@ def bench_rollout(task: str, P: int, T: int, threads: int, repeats: int, seed: i
 
 
 def active_set(scene: Scene, tm, n_objects: int) -> np.ndarray:
-    """The robot plus the goal object and its nearest neighbours: |C| = 7 + 6 * n_objects."""
-    groups = ["robot", f"object:{tm.goal_object}"]
-    others = [f"object:{n}" for n in tm.distractors][: max(0, n_objects - 1)]
-    return scene.dofs(*(groups + others))
+    """The robot plus 6 * n_objects DoFs next to the goal: |C| = 7 + 6 * n_objects.
+
+    Clutter: the goal cylinder and its nearest neighbours (all 6 DoFs each, as the paper's
+    |C| = 19 example); soft tasks: the first 6 * n_objects DoFs of the soft body's vertices."""
+    if tm.soft_body is None:
+        groups = ["robot", f"object:{tm.goal_object}"]
+        others = [f"object:{n}" for n in tm.distractors][: max(0, n_objects - 1)]
+        return scene.dofs(*groups, *others)
+    soft = scene.dofs(f"flex:{tm.soft_body}")[: 6 * n_objects]
+    return np.union1d(scene.dofs("robot"), soft)
 
 
 def bench_derivatives(task: str, n_objects: int, T: int, threads: int, repeats: int,

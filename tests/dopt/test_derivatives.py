@@ -96,17 +96,19 @@ def test_batch_of_one_timestep_and_two_threads(scene, trajectory, c_kernels):
     np.testing.assert_allclose(one.A[0], A[0][idx][:, idx], atol=TOL, rtol=0)
 
 
-def test_routes_agree_on_a_pushing_task():
-    """Clutter (a Panda among cylinders, ~25 contacts): the skip-stage C loop reuses the
-    nominal state's position and velocity stages; the Batch route recomputes them."""
+@pytest.mark.parametrize("task", ["clutter", "soft"])
+def test_routes_agree_on_a_pushing_task(task):
+    """Clutter (a Panda among cylinders, ~25 contacts) and soft (a 3D flex under the discrete
+    integrator): the skip-stage C loop reuses the nominal state's position and velocity
+    stages; the Batch route recomputes them for every perturbation."""
     from dopt import kernels
     from dopt.scene import Scene
     from dopt.tasks import get_task
     if kernels.load() is None:
         pytest.skip(f"C kernels not built: {kernels.load_error()}")
-    tm = get_task("clutter")(np.random.default_rng(0))
+    tm = get_task(task)(np.random.default_rng(0))
     scene = Scene(tm.model)
-    u = np.random.default_rng(1).normal(0, 20, (12, scene.nu))
+    u = np.random.default_rng(1).normal(0, 20, (8, scene.nu))
     states = service(scene, False).trajectory(tm.initial_state, u).states[:-1]
     C = np.r_[tm.robot_dofs, 7 + np.arange(12)]
     for centered in (False, True):
