@@ -30,6 +30,7 @@ from mpc_trial import (OUTLIER_DISTANCE, TRIAL_DEFAULTS, aggregate, run_trial,  
 
 TASKS = ("clutter", "soft", "soft_rigid")
 METHODS = ("baseline", "rand", "naive", "svr-sum", "svr-svd")
+FEEDBACK = {"off": (False,), "on": (True,), "both": (False, True)}
 
 
 def parse_args(argv=None) -> argparse.Namespace:
@@ -49,8 +50,11 @@ def parse_args(argv=None) -> argparse.Namespace:
                     help="agent wall time per step over dt (default: the task's, see README)")
     ap.add_argument("--timeout", type=int, default=None,
                     help="task timeout Y in agent steps (default: the paper's)")
-    ap.add_argument("--feedback", action="store_true",
-                    help="execute u + K (x - x_nom) on the measured state (authors: off)")
+    ap.add_argument("--feedback", nargs="?", const="on", default="off",
+                    choices=["off", "on", "both"],
+                    help="execute u + K (x - x_nom) on the measured state (authors: off); "
+                         "'both' runs every trial open-loop and with feedback back to back, "
+                         "so the pair sees the same machine load (rows 'METHOD +fb')")
     ap.add_argument("--control-noise", type=float, default=0.0,
                     help="Gaussian noise on executed controls, fraction of range (authors: 0.05)")
     ap.add_argument("--workers", type=int, default=1, help="local worker processes")
@@ -91,11 +95,12 @@ def make_trials(args, methods=None, rhos=None, thetas=None):
         for method in methods or args.methods:
             for rho in rhos or [args.rho]:
                 for theta in thetas or [_theta(args.theta, method)]:
-                    p = dict(task=args.task, method=method, rho=rho, theta=theta, seed=seed,
-                             slowdown=args.slowdown or _default_slowdown(args.task),
-                             timeout=args.timeout or 0, threads=args.threads,
-                             feedback=args.feedback, control_noise=args.control_noise)
-                    out.append(Trial(trial_key(p), p))
+                    for feedback in FEEDBACK[args.feedback]:
+                        p = dict(task=args.task, method=method, rho=rho, theta=theta,
+                                 seed=seed, slowdown=args.slowdown or _default_slowdown(args.task),
+                                 timeout=args.timeout or 0, threads=args.threads,
+                                 feedback=feedback, control_noise=args.control_noise)
+                        out.append(Trial(trial_key(p), p))
     return out
 
 
@@ -157,9 +162,11 @@ def main(argv=None) -> int:
     trials = make_trials(args)
     records = run(args, trials)
     wanted = {t.key for t in trials}
-    methods = aggregate([r for k, r in records.items() if k in wanted])
+    methods = aggregate([r for k, r in records.items() if k in wanted],
+                        baseline="baseline +fb" if args.feedback == "on" else "baseline")
     order = {m: i for i, m in enumerate(METHODS)}
-    methods = dict(sorted(methods.items(), key=lambda kv: order.get(kv[0], 99)))
+    methods = dict(sorted(methods.items(),
+                          key=lambda kv: (order.get(kv[0].split()[0], 99), kv[0])))
     summary = {"task": args.task, "rho": args.rho,
                "theta": {m: _theta(args.theta, m) for m in args.methods},
                "slowdown": trials[0].params["slowdown"], "methods": methods}

@@ -84,17 +84,22 @@ def run_trial(params: dict) -> dict:
 OUTLIER_DISTANCE = 0.5
 
 
+def row_label(p: dict) -> str:
+    """Table row of a trial: its method, ' +fb' when it executed the K feedback term."""
+    return p["method"] + (" +fb" if p.get("feedback") else "")
+
+
 def aggregate(records: list[dict], baseline: str = "baseline", level: float = 0.90) -> dict:
-    """Per method: MPC cost normalised by baseline's on the same task instance (seed), mean and
-    CI half-width at ``level`` over the trials that are not outliers, and the median over all;
-    optimisation time, DoFs, success rate, trial and outlier counts.
+    """Per row (``row_label``): MPC cost normalised by the ``baseline`` row's on the same task
+    instance (seed), mean and CI half-width at ``level`` over the trials that are not outliers,
+    and the median over all; optimisation time, DoFs, success rate, trial and outlier counts.
 
     records: {"params", "result"} of finished trials of one task.
     """
     by = {}
     for r in records:
-        p = r["params"]
-        by.setdefault(p["method"], {})[(p["seed"], p["rho"], p["theta"])] = r["result"]
+        by.setdefault(row_label(r["params"]), {})[
+            (r["params"]["seed"], r["params"]["rho"], r["params"]["theta"])] = r["result"]
 
     def outlier(v):
         return v["goal_distance_end"] > OUTLIER_DISTANCE

@@ -35,6 +35,9 @@ def main(argv=None) -> int:
     if any(r < 0 for r in rhos) or any(t < 0 for t in thetas):
         ap.error("rho and theta must be >= 0")
     targs = table1.parse_args(rest + ["--methods", f"baseline,{args.method}"])
+    if targs.feedback == "both":
+        ap.error("--feedback both is for experiments/mpc.py; give on or off here")
+    fb = " +fb" if targs.feedback == "on" else ""
     trials = table1.make_trials(targs, methods=["baseline"]) + table1.make_trials(
         targs, methods=[args.method], rhos=rhos, thetas=thetas)
     records = table1.run(targs, trials)
@@ -48,7 +51,7 @@ def main(argv=None) -> int:
                      and r["params"]["rho"] == rho and r["params"]["theta"] == theta]
             if not group:
                 continue
-            m = aggregate(base + group)[args.method]
+            m = aggregate(base + group, baseline="baseline" + fb)[args.method + fb]
             rows.append(dict(rho=rho, theta=theta, **m))
     out = Path(targs.out)
     (out / "summary.json").write_text(json.dumps(

@@ -6,9 +6,11 @@ Every cost is diagonal-quadratic in the full tangent state plus one end-effector
   block translated onto the goal), running weight ``goal`` and terminal ``goal_f``;
 - each distractor's x, y to where it started ("minimally disturbing"), ``distractor``;
 - the arm's joint velocities, ``arm_velocity``; torques scaled by their limits, ``torque``;
-- the end effector's x, y distance to the object it should push (the goal cylinder in
-  clutter, the soft body's centroid in soft and soft_rigid), ``ee``: without it no gradient
-  reaches the arm before the pusher touches the object.
+- the end effector's x, y distance to the goal object (the goal cylinder in clutter and
+  soft_rigid, the soft body's centroid in soft), ``ee``: without it no gradient reaches the
+  arm before the pusher touches the object. In soft_rigid it pulls the arm through the soft
+  block onto the cylinder behind it, so the cost reads only the robot and the cylinder's x, y:
+  the paper's 9 naive DoFs (a term on the block's centroid made all 94 vertex x, y "costed").
 
 The weights are ours (the paper does not give its W, R, W_f); they are in ``PushWeights``.
 """
@@ -96,12 +98,11 @@ def push_cost(tm: TaskModel, scene: Scene, weights: PushWeights = PushWeights())
     def fk(q):
         return chain.forward_kinematics(q).get_matrix()[:, :3, 3]
 
-    if tm.soft_body is not None:
-        _, t_d = _xy(scene, tm.soft_bodies)
-        M, offset = _centroid_map(m, tm.soft_bodies, len(t_d))
+    if len(goal_d) > 2:   # the soft body is the goal: its centroid
+        M, offset = _centroid_map(m, tm.goal_bodies, len(goal_d))
     else:
-        _, t_d = _xy(scene, tm.goal_bodies)
         M, offset = np.eye(3)[:, :2], np.zeros(3)
+    t_d = goal_d
     term = EEDistanceTerm(scene, fk, arm, t_d, M, offset, axes=(0, 1), weight=W.ee,
                           terminal_weight=W.ee_f)
     return QuadraticCost(scene, q_ref, w, w_f, r, terms=[term])

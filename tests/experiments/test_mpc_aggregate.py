@@ -33,3 +33,29 @@ def test_outlier_baseline_seed_is_not_a_reference():
                rec("naive", 0, 10.0), rec("naive", 1, 80.0)]
     out = aggregate(records)
     assert out["naive"]["mpc_cost_normalised_mean"] == pytest.approx(0.8)
+
+
+def test_feedback_trials_get_their_own_rows_normalised_by_open_loop_baseline():
+    records = [rec("baseline", 0, 100.0), rec("svr-sum", 0, 50.0), rec("svr-sum", 0, 40.0),
+               rec("baseline", 0, 120.0)]
+    records[2]["params"]["feedback"] = True
+    records[3]["params"]["feedback"] = True
+    out = aggregate(records)
+    assert set(out) == {"baseline", "baseline +fb", "svr-sum", "svr-sum +fb"}
+    assert out["svr-sum +fb"]["mpc_cost_normalised_mean"] == pytest.approx(0.4)
+    assert out["baseline +fb"]["mpc_cost_normalised_mean"] == pytest.approx(1.2)
+    on = aggregate(records[2:], baseline="baseline +fb")
+    assert on["svr-sum +fb"]["mpc_cost_normalised_mean"] == pytest.approx(40 / 120)
+
+
+def test_feedback_both_pairs_every_trial_back_to_back():
+    import mpc
+    args = mpc.parse_args(["--task", "clutter", "--methods", "baseline,svr-sum", "--trials", "2",
+                           "--feedback", "both", "--slowdown", "1", "--out", "unused"])
+    trials = mpc.make_trials(args)
+    assert len(trials) == 8 and len({t.key for t in trials}) == 8
+    for a, b in zip(trials[0::2], trials[1::2]):   # open loop, then the same trial with feedback
+        assert (a.params["feedback"], b.params["feedback"]) == (False, True)
+        assert {k: v for k, v in a.params.items() if k != "feedback"} == \
+            {k: v for k, v in b.params.items() if k != "feedback"}
+    assert mpc.parse_args(["--feedback", "--out", "x"]).feedback == "on"

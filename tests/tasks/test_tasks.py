@@ -75,6 +75,17 @@ def test_sizes_and_constants_match_the_paper(task):
     assert task.goal_position.shape == (3,)
 
 
+def test_push_cost_reads_exactly_the_naive_dofs(task):
+    """iLQR-Naive takes the DoFs 'in the cost' (cost.costed_dofs): the robot plus the task's
+    cost DoFs, the paper's counts 23 / 79 / 9 (the end-effector term reads the goal object)."""
+    from dopt.scene import Scene
+    from dopt.tasks.push_costs import push_cost
+    cost = push_cost(task, Scene(task.model))
+    want = np.union1d(task.robot_dofs, task.cost_dofs)
+    np.testing.assert_array_equal(cost.costed_dofs, want)
+    assert len(want) == PAPER[task.name][4]
+
+
 def test_actuators_drive_the_robot_joints_in_order(task):
     model = task.model
     assert task.robot_joints == JOINT_NAMES and task.robot_bodies == BODY_NAMES
