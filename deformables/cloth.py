@@ -57,6 +57,10 @@ class ClothConfig:
             the reflective fold).
         geodesic_radius: key particles closer than this fraction of the rest sheet's extent
             (largest side of its bounding box), along the sheet, are merged.
+        geodesic_spacings: ... but never closer than this many particle spacings: a crease is
+            rounded over about two spacings, and at coarse resolutions QECD puts a vertex on
+            either side of it (16 x 16, reflective fold: two keys 2 spacings = 40 mm apart,
+            more than 0.1 of the extent).
         sample_spacings: sampling step on the simplified surface, in particle spacings.
         max_faces: cap on NS.
         canonical_triangulation: with rest positions, first set every grid-square diagonal to
@@ -69,6 +73,7 @@ class ClothConfig:
     layer_gap: float = CLOTH_LAYER_GAP
     threshold_gaps: float = 0.5
     geodesic_radius: float = 0.1
+    geodesic_spacings: float = 2.5
     sample_spacings: float = 1.0
     max_faces: int = 40
     canonical_triangulation: bool = True
@@ -77,7 +82,7 @@ class ClothConfig:
         if self.backend not in BACKENDS:
             raise ValueError(f"unknown decimation backend {self.backend!r}; choose from {BACKENDS}")
         for name in ("z_scale", "layer_gap", "threshold_gaps", "geodesic_radius",
-                     "sample_spacings"):
+                     "geodesic_spacings", "sample_spacings"):
             check_threshold(getattr(self, name), name)
         if self.max_faces < 2:
             raise ValueError(f"max_faces must be at least 2, got {self.max_faces}")
@@ -181,7 +186,8 @@ def cloth_key_particles(positions, faces, threshold: float | None = None,
 
     reduction = grow_until_below(simplify, error, thr, config.max_faces)
     mesh = reduction.model
-    radius = config.geodesic_radius * float(np.ptp(reference, axis=0).max())
+    radius = max(config.geodesic_radius * float(np.ptp(reference, axis=0).max()),
+                 config.geodesic_spacings * spacing)
     keys = extract_keys(goal, tri, rest, scaled, mesh.vertices, radius)
     result = KeyParticles(
         indices=keys, n_elements=len(mesh.faces), vertices=mesh.vertices / stretch,
