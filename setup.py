@@ -9,4 +9,4 @@ functions it calls, so no MuJoCo headers or libraries are needed at build time.
 from setuptools import Extension, setup
 
 setup(ext_modules=[Extension("dopt._rollout_kernels", ["dopt/_rollout_kernels.c"],
-                             extra_compile_args=["-O2", "-std=c99"], optional=True)])
+                             extra_compile_args=["-O2", "-std=c11"], optional=True)])

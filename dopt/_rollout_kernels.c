@@ -11,8 +11,15 @@
  * libmujoco that the mujoco Python package loaded (dopt/kernels.py makes it global first and
  * checks that mj_version matches the version these prototypes were written for). Every call
  * works on the caller's mjData only, so calls on different mjData may run on different threads.
+ *
+ * MuJoCo errors (mju_error: out of arena memory, ...) would terminate the process from inside
+ * a call. dopt_install_log_handler installs a log handler that, on a thread inside a kernel
+ * call, longjmps back to the call, which returns -2 - t (t: the timestep or step it was on)
+ * with the message in dopt_error_message(); everywhere else it passes every message on to the
+ * handler it replaced, so MuJoCo behaves as before for all other code.
  */
 #include <math.h>
+#include <setjmp.h>
 #include <string.h>
 
 typedef double mjtNum;
@@ -29,6 +36,37 @@ void mj_step(const mjModel* m, mjData* d);
 void mj_integratePos(const mjModel* m, mjtNum* qpos, const mjtNum* qvel, mjtNum dt);
 void mj_differentiatePos(const mjModel* m, mjtNum* qvel, mjtNum dt, const mjtNum* qpos1,
                          const mjtNum* qpos2);
+
+/* the head of mjLogMessage (mujoco/mjtype.h, MuJoCo 4.0) and its handler type */
+typedef struct {
+  int level;              /* mjtLogLevel: mjLOG_ERROR = 3 */
+  int topic;
+  char subject[1024];
+} log_message_t;
+typedef void (*log_handler_t)(const log_message_t*);
+log_handler_t mju_setLogHandler(log_handler_t handler);
+
+enum { LOG_ERROR = 3 };
+static log_handler_t previous_handler = NULL;
+static _Thread_local jmp_buf* recovery = NULL;
+static _Thread_local char error_message[1024];
+
+static void log_handler(const log_message_t* msg) {
+  if (msg->level == LOG_ERROR && recovery) {
+    strncpy(error_message, msg->subject, sizeof(error_message) - 1);
+    error_message[sizeof(error_message) - 1] = 0;
+    longjmp(*recovery, 1);
+  }
+  previous_handler(msg);
+}
+
+/* install once, before the first kernel call */
+void dopt_install_log_handler(void) {
+  if (!previous_handler) previous_handler = mju_setLogHandler(log_handler);
+}
+
+/* the message of this thread's last MuJoCo error inside a kernel call */
+const char* dopt_error_message(void) { return error_message; }
 
 /* sizes and state-row offsets, filled from Python (dopt.kernels.Layout) */
 typedef struct {
@@ -104,7 +142,8 @@ static void zero_column(mjtNum* M, int rows, int ld, int col) {
  * Order per timestep: nominal (full step) -> controls (skip 2) -> velocities (skip 1) ->
  * positions (full), so the stages a skipped step reuses are those of the nominal state.
  * Returns -1, or the first listed t whose steps gave a non-finite state or raised a MuJoCo
- * warning (the caller resets the counters); later timesteps are then left undone. */
+ * warning (the caller resets the counters), or -2 - t if MuJoCo raised an error at t (d is then
+ * unusable); later timesteps are left undone. */
 int dopt_fd(const mjModel* m, mjData* d, const layout_t* L, const warnings_t* warn,
             const mjtNum* states, const int* ts, int nt, const int* dofs, int nc, mjtNum eps,
             int centered, const mjtNum* lo, const mjtNum* hi, mjtNum* F, mjtNum* work) {
@@ -117,9 +156,17 @@ int dopt_fd(const mjModel* m, mjData* d, const layout_t* L, const warnings_t* wa
   mjtNum* unit = dq + nv;           /* unit tangent vector (nv) */
   mjtNum* qpos = unit + nv;         /* perturbed qpos (nq) */
   memset(unit, 0, sizeof(mjtNum) * nv);
+  jmp_buf env;
+  volatile int current = 0;         /* the timestep being differenced, for an error */
+  if (setjmp(env)) {
+    recovery = NULL;
+    return -2 - current;
+  }
+  recovery = &env;
 
   for (int i = 0; i < nt; i++) {
     const int t = ts[i];
+    current = t;
     const mjtNum* nom = states + (size_t)t * L->nstate;
     mjtNum* At = F + (size_t)t * n2 * ld;
     mjtNum* Bt = At + n2;
@@ -173,8 +220,12 @@ int dopt_fd(const mjModel* m, mjData* d, const layout_t* L, const warnings_t* wa
       if (centered) write_column(m, L, xp, xm, 2 * eps, dofs, nc, At, ld, k, dq);
       else write_column(m, L, xp, x0, eps, dofs, nc, At, ld, k, dq);
     }
-    if (!ok || warned(warn)) return t;
+    if (!ok || warned(warn)) {
+      recovery = NULL;
+      return t;
+    }
   }
+  recovery = NULL;
   return -1;
 }
 
@@ -182,7 +233,8 @@ int dopt_fd(const mjModel* m, mjData* d, const layout_t* L, const warnings_t* wa
  *   u_t = clamp(ff_t + K_t [q_C (-) ref_q_C ; v_C - ref_v_C], lo, hi)
  * ff: (T, nu); ref: (T, nstate); K: (T, nu, 2c); out: (T+1, nstate), row t holding u_t;
  * applied: (T, nu). Returns -1, or the first step that raised a MuJoCo warning or gave a
- * non-finite state (the rollout stops there). */
+ * non-finite state (the rollout stops there), or -2 - t if MuJoCo raised an error in step t
+ * (d is then unusable). */
 int dopt_feedback(const mjModel* m, mjData* d, const layout_t* L, const warnings_t* warn,
                   const mjtNum* x0, int T,
                   const mjtNum* ff, const mjtNum* ref, const mjtNum* K, const int* dofs, int nc,
@@ -191,9 +243,17 @@ int dopt_feedback(const mjModel* m, mjData* d, const layout_t* L, const warnings
   const int nu = L->nu, n2 = 2 * nc;
   mjtNum* dq = work;          /* nv */
   mjtNum* dx = dq + L->nv;    /* 2c */
+  jmp_buf env;
+  volatile int current = 0;
+  if (setjmp(env)) {
+    recovery = NULL;
+    return -2 - current;
+  }
+  recovery = &env;
   mj_setState(m, d, x0, L->sig);
   mj_getState(m, d, out, L->sig);
   for (int t = 0; t < T; t++) {
+    current = t;
     mjtNum* row = out + (size_t)t * L->nstate;
     const mjtNum* r = ref + (size_t)t * L->nstate;
     mj_differentiatePos(m, dq, 1, r + L->qpos, row + L->qpos);
@@ -213,7 +273,11 @@ int dopt_feedback(const mjModel* m, mjData* d, const layout_t* L, const warnings
     mj_setState(m, d, row + L->ctrl, L->sig_ctrl);
     mj_step(m, d);
     mj_getState(m, d, row + L->nstate, L->sig);
-    if (warned(warn) || !finite(row + L->nstate, L->nstate)) return t;
+    if (warned(warn) || !finite(row + L->nstate, L->nstate)) {
+      recovery = NULL;
+      return t;
+    }
   }
+  recovery = NULL;
   return -1;
 }

@@ -21,6 +21,7 @@ from concurrent.futures import ThreadPoolExecutor
 import mujoco
 import numpy as np
 
+from dopt.errors import RolloutError
 from dopt.state import StateLayout
 
 log = logging.getLogger(__name__)
@@ -103,6 +104,9 @@ def load():
                                    ctypes.c_int, _dbl, _dbl, _dbl, _dbl, _dbl]
     for f in (_lib.dopt_fd_work, _lib.dopt_feedback_work, _lib.dopt_fd, _lib.dopt_feedback):
         f.restype = ctypes.c_int
+    _lib.dopt_error_message.restype = ctypes.c_char_p
+    _lib.dopt_install_log_handler.restype = None
+    _lib.dopt_install_log_handler()     # MuJoCo errors in a kernel call raise, not exit
     return _lib
 
 
@@ -158,6 +162,8 @@ class Kernels:
             d.warning.number[:] = 0
             t = self.lib.dopt_fd(m, d._address, lay, ctypes.byref(self._warnings[i]), states,
                                  ts, len(ts), C, c, eps, int(centered), lo, hi, F, work)
+            if t <= -2:
+                self._raise_mujoco_error(i, f"derivatives t={-2 - t}")
             return [] if t < 0 else [(t, _warnings(d) or ["non-finite state"])]
 
         bad = sorted(b for share in self._map(job, T) for b in share)
@@ -185,12 +191,22 @@ class Kernels:
                 step = self.lib.dopt_feedback(m, d._address, lay, ctypes.byref(self._warnings[i]),
                                               x0, T, ff[p], ref, K, C, len(C), lo, hi, out[p],
                                               applied[p], w)
+                if step <= -2:
+                    self._raise_mujoco_error(i, f"rollout_feedback: simulation {p} step {-2 - step}")
                 if step >= 0:
                     bad.append((int(p), step, _warnings(d) or ["non-finite state"]))
             return bad
 
         bad = sorted(b for share in self._map(job, P) for b in share)
         return out, applied, bad
+
+    def _raise_mujoco_error(self, i: int, where: str):
+        """MuJoCo raised inside a call on MjData i: replace it (its stack is left mid-call)
+        and raise RolloutError with MuJoCo's message. Runs on the thread of that call."""
+        message = self.lib.dopt_error_message().decode(errors="replace")
+        self._datas[i] = mujoco.MjData(self.model)
+        self._warnings[i] = Warnings.of(self._datas[i])
+        raise RolloutError(f"{where}: MuJoCo error: {message}")
 
     def close(self):
         if self._pool is not None:

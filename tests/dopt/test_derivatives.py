@@ -127,6 +127,31 @@ def test_unstable_derivatives_name_the_timestep(scene, trajectory, c_kernels):
         service(scene, c_kernels).derivatives(states, "robot")
 
 
+# two boxes, one on the floor: their contacts overflow a 3 kB arena (mju_error), in the air
+# there is no contact and the arena suffices
+TINY_ARENA = """<mujoco><size memory="3K"/><worldbody><geom type="plane" size="1 1 .1"/>
+<body pos="0 0 .05"><freejoint/><geom type="box" size=".05 .05 .05"/></body>
+<body pos="0 0 .16"><freejoint/><geom type="box" size=".05 .05 .05"/></body></worldbody></mujoco>"""
+
+
+def test_mujoco_error_raises_and_the_service_recovers(c_kernels):
+    """mju_error (here: arena overflow) inside a call is a RolloutError, not a process exit,
+    and the same service serves the next call."""
+    from dopt.errors import RolloutError
+    from dopt.scene import Scene
+    scene = Scene.from_xml(TINY_ARENA)
+    d = mujoco.MjData(scene.model)
+    on_floor = np.repeat(scene.state_of(d)[None], 3, axis=0)
+    svc = service(scene, c_kernels, threads=2)
+    with pytest.raises(RolloutError, match="out of memory"):
+        svc.derivatives(on_floor)
+    d.qpos[2], d.qpos[9] = 1.0, 2.0                    # both boxes high in the air, apart
+    in_air = np.repeat(scene.state_of(d)[None], 3, axis=0)
+    got = svc.derivatives(in_air)
+    roomy = Scene.from_xml(TINY_ARENA.replace("3K", "1M"))   # transitionFD needs more arena
+    np.testing.assert_allclose(got.A, reference(roomy, in_air, 1e-6, False)[0], atol=TOL, rtol=0)
+
+
 def test_bad_inputs(scene, trajectory):
     svc = RolloutService(scene)
     states = trajectory.states[:-1]

@@ -187,3 +187,17 @@ def test_c_kernels_built_where_a_compiler_is():
         assert kernels.load() is None and kernels.load_error()
     else:
         assert kernels.load() is not None, kernels.load_error()
+
+
+def test_mujoco_error_in_feedback_rollouts_raises(c_kernels):
+    """mju_error (arena overflow, see test_derivatives.TINY_ARENA) is a RolloutError that
+    names the call, not a process exit."""
+    from dopt.errors import RolloutError
+    from test_derivatives import TINY_ARENA
+    scene = Scene.from_xml(TINY_ARENA)
+    svc = RolloutService(scene, RolloutConfig(threads=2, c_kernels=c_kernels))
+    x0 = scene.state_of(mujoco.MjData(scene.model))
+    T = 4
+    with pytest.raises(RolloutError, match="rollout_feedback.*out of memory"):
+        svc.rollout_feedback(x0, np.zeros((3, T, 0)), np.repeat(x0[None], T, 0),
+                             np.zeros((T, 0, 2)), [0])
