@@ -186,7 +186,7 @@ class MPC:
         self._data = mujoco.MjData(m)
         mujoco.mj_setState(m, self._data, x0, INTEGRATION)
         mujoco.mj_forward(m, self._data)
-        self._plan, self._step, self._late = plan, 0, 0
+        self._plan, self._step, self._consumed, self._late = plan, 0, 0, 0
         self._states, self._controls = [x0.copy()], []
         self._succeeded, self._error = False, None
         self._stop = threading.Event()
@@ -203,7 +203,9 @@ class MPC:
         new = self.optimiser.optimise(state, plan)
         seconds = time.perf_counter() - t0
         with self._lock:
-            lag = self._step - start
+            # controls the agent has taken since `start` (it takes one before stepping, so
+            # this can be one ahead of _step): row 0 of the new plan is for step `start`
+            lag = self._consumed - start
             self._plan = new.shifted(lag)
             lg = self._log
             lg["seconds"].append(seconds)
@@ -221,6 +223,7 @@ class MPC:
             if self.config.feedback and plan.K is not None and plan.states is not None:
                 u += plan.K[0] @ self._deviation(plan)
             self._plan = plan.shifted(1)
+            self._consumed += 1
         if self._noise_std.any():
             u += self.rng.normal(0.0, self._noise_std)
         d.ctrl[:] = u
