@@ -25,8 +25,8 @@ from pathlib import Path
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
-from mpc_trial import (OUTLIER_DISTANCE, TRIAL_DEFAULTS, aggregate, run_trial,  # noqa: E402
-                       trial_key)
+from mpc_trial import (OUTLIER_DISTANCE, TRIAL_DEFAULTS, aggregate,  # noqa: E402
+                       feedback_effect, run_trial, trial_key)
 
 TASKS = ("clutter", "soft", "soft_rigid")
 METHODS = ("baseline", "rand", "naive", "svr-sum", "svr-svd")
@@ -131,7 +131,7 @@ def run(args, trials) -> dict:
     return res.records
 
 
-def write_table(out: Path, task: str, methods: dict) -> None:
+def write_table(out: Path, task: str, methods: dict, feedback: dict | None = None) -> None:
     rows = [("method", "MPC cost (normalised) mean", "CI90 +-", "median (all)",
              "opt. time (ms)", "DoFs", "lag (steps)", "success", "goal dist. (m, median)",
              "outliers", "trials")]
@@ -152,6 +152,15 @@ def write_table(out: Path, task: str, methods: dict) -> None:
              f"exclude outliers (goal object > {OUTLIER_DISTANCE} m from the goal).", "",
              "| " + " | ".join(rows[0]) + " |", "|" + "---|" * len(rows[0])]
     lines += ["| " + " | ".join(r) + " |" for r in rows[1:]]
+    if feedback:
+        lines += ["", "Feedback vs open loop, paired by seed (MPC cost ratio, geometric mean and "
+                  "90% CI; pairs where feedback cost less; successes open loop -> feedback):",
+                  "", "| method | cost ratio | CI90 | feedback better | successes |",
+                  "|---|---|---|---|---|"]
+        lines += [f"| {name} | {f['ratio_geomean']:.2f} | {f['ratio_ci90'][0]:.2f}-"
+                  f"{f['ratio_ci90'][1]:.2f} | {f['better']}/{f['pairs']} | "
+                  f"{f['success_open_loop']} -> {f['success_feedback']} |"
+                  for name, f in feedback.items()]
     (out / "table1.md").write_text("\n".join(lines) + "\n")
 
 
@@ -170,8 +179,11 @@ def main(argv=None) -> int:
     summary = {"task": args.task, "rho": args.rho,
                "theta": {m: _theta(args.theta, m) for m in args.methods},
                "slowdown": trials[0].params["slowdown"], "methods": methods}
+    if args.feedback == "both":
+        summary["feedback_effect"] = feedback_effect(
+            [r for k, r in records.items() if k in wanted])
     (out / "summary.json").write_text(json.dumps(summary, indent=2))
-    write_table(out, args.task, methods)
+    write_table(out, args.task, methods, summary.get("feedback_effect"))
     print((out / "table1.md").read_text())
     return 0
 

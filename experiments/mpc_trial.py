@@ -125,3 +125,32 @@ def aggregate(records: list[dict], baseline: str = "baseline", level: float = 0.
             "trials": len(res),
         }
     return out
+
+
+def feedback_effect(records: list[dict], level: float = 0.90) -> dict:
+    """Per method with both variants: MPC cost with feedback over open loop on the same seed.
+
+    Returns {method: {"ratio_geomean", "ratio_ci90": [lo, hi], "better", "pairs",
+    "success_open_loop", "success_feedback"}}: the geometric mean of the paired ratios with a
+    t-interval on their logs (cost ratios are skewed), and how many pairs feedback won.
+    """
+    by = {}
+    for r in records:
+        p = r["params"]
+        by.setdefault(p["method"], {}).setdefault(p["seed"], {})[bool(p.get("feedback"))] = \
+            r["result"]
+    out = {}
+    for method, seeds in by.items():
+        pairs = [v for v in seeds.values() if len(v) == 2]
+        if not pairs:
+            continue
+        logs = [np.log(v[True]["mpc_cost"] / v[False]["mpc_cost"]) for v in pairs]
+        mean, ci = mean_ci(logs, level)
+        out[method] = {
+            "ratio_geomean": float(np.exp(mean)),
+            "ratio_ci90": [float(np.exp(mean - ci)), float(np.exp(mean + ci))],
+            "better": int(sum(x < 0 for x in logs)), "pairs": len(pairs),
+            "success_open_loop": int(sum(v[False]["success"] for v in pairs)),
+            "success_feedback": int(sum(v[True]["success"] for v in pairs)),
+        }
+    return out

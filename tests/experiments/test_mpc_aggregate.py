@@ -59,3 +59,18 @@ def test_feedback_both_pairs_every_trial_back_to_back():
         assert {k: v for k, v in a.params.items() if k != "feedback"} == \
             {k: v for k, v in b.params.items() if k != "feedback"}
     assert mpc.parse_args(["--feedback", "--out", "x"]).feedback == "on"
+
+
+def test_feedback_effect_is_the_paired_ratio():
+    from mpc_trial import feedback_effect
+    records = []
+    for seed, (open_loop, fb) in enumerate([(100.0, 50.0), (100.0, 200.0), (80.0, 40.0)]):
+        records += [rec("rand", seed, open_loop), rec("rand", seed, fb)]
+        records[-1]["params"]["feedback"] = True
+    records.append(rec("naive", 0, 10.0))                  # no pair: no entry
+    out = feedback_effect(records)
+    assert set(out) == {"rand"}
+    r = out["rand"]
+    assert r["ratio_geomean"] == pytest.approx((0.5 * 2.0 * 0.5) ** (1 / 3))
+    assert r["ratio_ci90"][0] < r["ratio_geomean"] < r["ratio_ci90"][1]
+    assert (r["better"], r["pairs"]) == (2, 3)
