@@ -60,6 +60,10 @@ static void log_handler(const log_message_t* msg) {
   previous_handler(msg);
 }
 
+/* the calling convention of this file; dopt/kernels.py refuses a build with another one
+ * (a stale extension after an update that changed a signature) */
+int dopt_abi_version(void) { return 3; }
+
 /* install once, before the first kernel call */
 void dopt_install_log_handler(void) {
   if (!previous_handler) previous_handler = mju_setLogHandler(log_handler);

@@ -27,6 +27,7 @@ from dopt.state import StateLayout
 log = logging.getLogger(__name__)
 
 MUJOCO_VERSION = 4000000          # the prototypes in _rollout_kernels.c are MuJoCo 4.0's
+ABI_VERSION = 3                   # dopt_abi_version() of the C file this front matches
 _HERE = os.path.dirname(os.path.abspath(__file__))
 _lib = None
 _load_error: str | None = None
@@ -89,7 +90,13 @@ def load():
         try:
             for lib in libmujoco:
                 ctypes.CDLL(lib, mode=os.RTLD_GLOBAL | getattr(os, "RTLD_NOLOAD", 0))
-            _lib = ctypes.CDLL(path)
+            lib = ctypes.CDLL(path)
+            abi = lib.dopt_abi_version() if hasattr(lib, "dopt_abi_version") else None
+            if abi != ABI_VERSION:
+                _load_error = (f"{path} is a stale build (ABI {abi}, need {ABI_VERSION}): "
+                               f"reinstall with pip install -e .")
+            else:
+                _lib = lib
         except OSError as e:
             _load_error = f"cannot load {path}: {e}"
     if _lib is None:
