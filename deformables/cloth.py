@@ -57,10 +57,12 @@ class ClothConfig:
             the reflective fold).
         geodesic_radius: key particles closer than this fraction of the rest sheet's extent
             (largest side of its bounding box), along the sheet, are merged.
-        geodesic_spacings: ... but never closer than this many particle spacings: a crease is
+        geodesic_spacings: ... or this many particle spacings if that is more: a crease is
             rounded over about two spacings, and at coarse resolutions QECD puts a vertex on
             either side of it (16 x 16, reflective fold: two keys 2 spacings = 40 mm apart,
-            more than 0.1 of the extent).
+            more than 0.1 of the extent) ...
+        geodesic_cap: ... but never more than this fraction of the extent: at 12 per side a
+            quarter panel is under 3 spacings wide, and its corners must stay apart.
         sample_spacings: sampling step on the simplified surface, in particle spacings.
         max_faces: cap on NS.
         canonical_triangulation: with rest positions, first set every grid-square diagonal to
@@ -74,6 +76,7 @@ class ClothConfig:
     threshold_gaps: float = 0.5
     geodesic_radius: float = 0.1
     geodesic_spacings: float = 2.5
+    geodesic_cap: float = 0.15
     sample_spacings: float = 1.0
     max_faces: int = 40
     canonical_triangulation: bool = True
@@ -82,7 +85,7 @@ class ClothConfig:
         if self.backend not in BACKENDS:
             raise ValueError(f"unknown decimation backend {self.backend!r}; choose from {BACKENDS}")
         for name in ("z_scale", "layer_gap", "threshold_gaps", "geodesic_radius",
-                     "geodesic_spacings", "sample_spacings"):
+                     "geodesic_spacings", "geodesic_cap", "sample_spacings"):
             check_threshold(getattr(self, name), name)
         if self.max_faces < 2:
             raise ValueError(f"max_faces must be at least 2, got {self.max_faces}")
@@ -186,8 +189,9 @@ def cloth_key_particles(positions, faces, threshold: float | None = None,
 
     reduction = grow_until_below(simplify, error, thr, config.max_faces)
     mesh = reduction.model
-    radius = max(config.geodesic_radius * float(np.ptp(reference, axis=0).max()),
-                 config.geodesic_spacings * spacing)
+    extent = float(np.ptp(reference, axis=0).max())
+    radius = max(config.geodesic_radius * extent,
+                 min(config.geodesic_spacings * spacing, config.geodesic_cap * extent))
     keys = extract_keys(goal, tri, rest, scaled, mesh.vertices, radius)
     result = KeyParticles(
         indices=keys, n_elements=len(mesh.faces), vertices=mesh.vertices / stretch,

@@ -60,11 +60,12 @@ def test_side_fold_keys_are_corners_and_crease_ends():
 # Measured exceptions (README "Key particles"): a 9th key on the reflective fold where a
 # simplified vertex lands on the top layer's overhang (40 MuJoCo grid), and a 7th on the side
 # fold at 40 alternating (a vertex mid-crease). (16 and 21 random, two keys on either side of a
-# rounded crease, 2 spacings apart, merge since the geodesic radius has a floor of 2.5 spacings.)
+# rounded crease, 2 spacings apart, merge since the geodesic radius is at least 2.5 spacings, up
+# to 0.15 of the extent, which keeps a quarter panel's corners apart at 12 per side.)
 _KNOWN_DEVIATIONS = {(40, "mujoco"), (40, "alternating")}
 
 
-@pytest.mark.parametrize("n", [16, 21, 25, 28, 40])
+@pytest.mark.parametrize("n", [12, 16, 21, 25, 28, 40])
 @pytest.mark.parametrize("triangulation", TRIANGULATIONS)
 def test_key_counts_do_not_depend_on_resolution_or_triangulation(n, triangulation, request):
     if (n, triangulation) in _KNOWN_DEVIATIONS:
@@ -87,6 +88,9 @@ def test_keys_either_side_of_a_rounded_crease_merge_at_coarse_resolution():
     assert result.n_keys == 8
     _, without_floor = _reduce("cloth_reflective", 16, "random", geodesic_spacings=1e-9)
     assert without_floor.n_keys == 9
+    # uncapped, 2.5 spacings at 12 per side (68 mm) would merge corners 2 spacings apart
+    _, uncapped = _reduce("cloth_reflective", 12, geodesic_cap=1.0)
+    assert uncapped.n_keys < 8
 
 
 def test_default_threshold_is_half_a_layer_gap_at_every_resolution():
