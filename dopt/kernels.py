@@ -139,6 +139,7 @@ class Kernels:
         self.threads = threads
         self._datas = [mujoco.MjData(model) for _ in range(threads)]
         self._warnings = [Warnings.of(d) for d in self._datas]
+        # idle workers exit when the pool is garbage-collected with its service
         self._pool = ThreadPoolExecutor(threads) if threads > 1 else None
 
     def _map(self, job, n_items: int):
@@ -214,10 +215,6 @@ class Kernels:
         self._datas[i] = mujoco.MjData(self.model)
         self._warnings[i] = Warnings.of(self._datas[i])
         raise RolloutError(f"{where}: MuJoCo error: {message}")
-
-    def close(self):
-        if self._pool is not None:
-            self._pool.shutdown(wait=False)
 
 
 _WARNING_NAMES = [n for n in mujoco.mjtWarning.__members__ if n != "mjNWARNING"]
