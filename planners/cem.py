@@ -60,7 +60,9 @@ class CEMConfig:
         smoothing: weight of the previous distribution in each refit (0: plain refit).
         init_std: initial displacement std, as a fraction of the bound.
         min_std: floor of the displacement std, as a fraction of the bound.
-        min_prob: floor of every categorical probability after a refit (keeps exploring).
+        prob_floor: floor of every categorical probability after a refit, as a fraction of the
+            uniform probability 1 / (C + 1), so that it means the same for 4 candidates and for
+            144 (keeps exploring; 0: none).
         keep_best: put the best sequence found so far back into every population.
     """
 
@@ -71,7 +73,7 @@ class CEMConfig:
     smoothing: float = 0.3
     init_std: float = 0.5
     min_std: float = 0.05
-    min_prob: float = 0.0
+    prob_floor: float = 0.0
     keep_best: bool = True
 
     def __post_init__(self):
@@ -86,8 +88,8 @@ class CEMConfig:
         if not (self.init_std > 0 and 0 <= self.min_std <= self.init_std):
             raise ValueError(f"need init_std > 0 and 0 <= min_std <= init_std, got "
                              f"{self.init_std}, {self.min_std}")
-        if not 0.0 <= self.min_prob < 1.0:
-            raise ValueError(f"min_prob must be in [0, 1), got {self.min_prob}")
+        if not 0.0 <= self.prob_floor < 1.0:
+            raise ValueError(f"prob_floor must be in [0, 1), got {self.prob_floor}")
 
 
 @dataclass
@@ -180,8 +182,8 @@ class CEM:
         probs = counts / cfg.elites
         a = cfg.smoothing
         probs = a * dist.probs + (1 - a) * probs
-        if cfg.min_prob:
-            probs = torch.clamp(probs, min=cfg.min_prob)
+        if cfg.prob_floor:
+            probs = torch.clamp(probs, min=cfg.prob_floor / C1)
             probs = probs / probs.sum(-1, keepdim=True)
         d = samples.displacements[elite]                                          # (E, H, 3)
         n = counts.clamp(min=1)[..., None]

@@ -90,9 +90,27 @@ def test_refit_moves_towards_elites():
     assert isinstance(new, Distribution)
 
 
+@pytest.mark.parametrize("n_candidates", [4, 144])
+def test_prob_floor_is_a_fraction_of_uniform(n_candidates):
+    """After every elite picked candidate 0 (no smoothing), the others keep prob_floor of the
+    uniform probability: the same exploration for 4 keys and for 144 particles."""
+    cem = CEM(CEMConfig(population=4, elites=4, horizon=1, smoothing=0.0, prob_floor=0.25))
+    bound = torch.full((3,), 0.1, dtype=torch.float64)
+    dist = cem.initial(n_candidates, bound)
+    choice = torch.zeros((4, 1), dtype=torch.long)
+    s = Samples(choice, choice, torch.zeros((4, 1, 3), dtype=torch.float64))
+    new, _ = cem.refit(dist, s, torch.arange(4.0, dtype=torch.float64), bound)
+    C1 = n_candidates + 1
+    rest = new.probs[0, 1:]
+    floor = 0.25 / C1
+    assert torch.allclose(rest, torch.full_like(rest, floor / (1 + (C1 - 1) * floor)))
+    assert new.probs[0, 0] > 0.5 and torch.isclose(new.probs.sum(), torch.tensor(1.0,
+                                                                                 dtype=torch.float64))
+
+
 @pytest.mark.parametrize("kwargs", [dict(elites=0), dict(elites=40), dict(iterations=0),
                                     dict(smoothing=1.0), dict(init_std=0.0),
-                                    dict(min_std=2.0), dict(horizon=0)])
+                                    dict(min_std=2.0), dict(horizon=0), dict(prob_floor=1.0)])
 def test_bad_config_raises(kwargs):
     with pytest.raises(ValueError):
         CEMConfig(**kwargs)
