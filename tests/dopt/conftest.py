@@ -28,3 +28,14 @@ def moving_state(scene):
         mujoco.mj_step(m, d)
     assert d.ncon > 0
     return scene.state_of(d)
+
+
+@pytest.fixture(params=[True, False], ids=["c-kernels", "batch"])
+def c_kernels(request):
+    """Both routes of RolloutService's derivatives and feedback rollouts: dopt.kernels' C loops
+    (skipped, with the reason, where they were not built) and mujoco.batch.Batch."""
+    if request.param:
+        from dopt import kernels
+        if kernels.load() is None:
+            pytest.skip(f"C kernels not built: {kernels.load_error()}")
+    return request.param

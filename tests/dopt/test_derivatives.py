@@ -12,16 +12,6 @@ from dopt.rollout import FDConfig, RolloutConfig, RolloutService
 TOL = 1e-8
 
 
-@pytest.fixture(params=[True, False], ids=["c-kernels", "batch"])
-def c_kernels(request):
-    """Both derivative routes: dopt.kernels' skip-stage C loop and mujoco.batch.Batch."""
-    if request.param:
-        from dopt import kernels
-        if kernels.load() is None:
-            pytest.skip(f"C kernels not built: {kernels.load_error()}")
-    return request.param
-
-
 def service(scene, c_kernels, threads=0):
     svc = RolloutService(scene, RolloutConfig(threads=threads, c_kernels=c_kernels))
     assert svc.uses_c_kernels == c_kernels

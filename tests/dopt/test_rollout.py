@@ -117,16 +117,6 @@ def test_bad_inputs(scene, moving_state):
         RolloutConfig(threads=-1)
 
 
-@pytest.fixture(params=[True, False], ids=["c-kernels", "batch"])
-def c_kernels(request):
-    """Both feedback routes: dopt.kernels' C loop and Batch lock-step with numpy feedback."""
-    if request.param:
-        from dopt import kernels
-        if kernels.load() is None:
-            pytest.skip(f"C kernels not built: {kernels.load_error()}")
-    return request.param
-
-
 def feedback_loop(scene, x0, ff, ref, K, dofs, lo, hi):
     """Reference: one MjData, u = clip(ff + K [q_C (-) ref_q_C; v_C - ref_v_C]) per step."""
     m = scene.model
