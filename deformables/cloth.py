@@ -32,10 +32,13 @@ from .decimation import BACKENDS, decimate
 from .distance import SurfaceDistance, hausdorff
 from .goals import CLOTH_LAYER_GAP
 from .mesh import canonical_triangulation, edges
+from .panels import project_on_panels
 from .reduction import KeyParticles, grow_until_below
 from .validation import check_faces, check_positions, check_threshold
 
 logger = logging.getLogger(__name__)
+
+PANEL_MODES = ("auto", "on", "off")
 
 
 @dataclass(frozen=True)
@@ -68,6 +71,15 @@ class ClothConfig:
         canonical_triangulation: with rest positions, first set every grid-square diagonal to
             the one the fold compresses least (:func:`deformables.mesh.canonical_triangulation`),
             so the result does not depend on how the grid was split into triangles.
+        panels: with rest positions, project the goal onto its flat panels first
+            (:func:`deformables.panels.project_on_panels`): ``"auto"`` does when the goal's
+            estimated noise exceeds ``panel_noise_floor``, ``"on"`` always, ``"off"`` never.
+            Decimation needs it from about 0.05 mm of goal noise (README, "Key particles").
+        panel_noise_floor: estimated noise (metres, the median residual of local rigid fits,
+            about 1.5 sigma of per-coordinate Gaussian noise) above which ``"auto"`` projects.
+            Measured over 336 goals (12-40 per side x 4 triangulations x 4 folds x 3 seeds):
+            unprojected counts hold on 321 at sigma 0.02 mm and 232 at 0.05 mm, projected on
+            307-314 from 0.02 to 2 mm; the floor sits between (sigma ~0.03 mm).
     """
 
     backend: str = "pymeshlab"
@@ -80,12 +92,16 @@ class ClothConfig:
     sample_spacings: float = 1.0
     max_faces: int = 40
     canonical_triangulation: bool = True
+    panels: str = "auto"
+    panel_noise_floor: float = 5e-5
 
     def __post_init__(self):
         if self.backend not in BACKENDS:
             raise ValueError(f"unknown decimation backend {self.backend!r}; choose from {BACKENDS}")
+        if self.panels not in PANEL_MODES:
+            raise ValueError(f"panels must be one of {PANEL_MODES}, got {self.panels!r}")
         for name in ("z_scale", "layer_gap", "threshold_gaps", "geodesic_radius",
-                     "geodesic_spacings", "geodesic_cap", "sample_spacings"):
+                     "geodesic_spacings", "geodesic_cap", "sample_spacings", "panel_noise_floor"):
             check_threshold(getattr(self, name), name)
         if self.max_faces < 2:
             raise ValueError(f"max_faces must be at least 2, got {self.max_faces}")
@@ -169,6 +185,10 @@ def cloth_key_particles(positions, faces, threshold: float | None = None,
         raise ValueError(f"rest_positions {rest.shape} and positions {goal.shape} differ in shape")
     reference = goal if rest is None else rest
     tri = check_faces(faces, len(goal), reference)
+    if rest is not None and config.panels != "off":
+        fit = project_on_panels(goal, rest, tri, config.layer_gap)
+        if config.panels == "on" or fit.noise > config.panel_noise_floor:
+            goal = fit.positions
     if rest is not None and config.canonical_triangulation:
         tri = canonical_triangulation(goal, tri, rest)
     pairs = edges(tri)

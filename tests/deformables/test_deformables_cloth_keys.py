@@ -108,8 +108,9 @@ def test_reflective_fold_on_the_mujoco_40_grid_converges_with_all_corners():
     assert np.all(gap.min(axis=0) <= 0.3 / 39 * 1.01)
 
 
-# Goal noise the cloth counts tolerate (README "Key particles"): sigma = 0.02 mm. QECD's collapse
-# order on a noisy folded sheet changes from about 0.05 mm on (40 x 40 side fold: 7-8 keys).
+# Goal noise (README "Key particles"). Up to sigma = 0.02 mm the goal is used as given (below
+# the panel projection's noise floor); QECD's collapse order on a noisy folded sheet changes from
+# about 0.05 mm on (40 x 40 side fold: 7-8 keys).
 @pytest.mark.parametrize("n", [16, 25, 40])
 @pytest.mark.parametrize("seed", [0, 1])
 def test_key_counts_under_goal_noise(n, seed):
@@ -117,6 +118,40 @@ def test_key_counts_under_goal_noise(n, seed):
     counts = [_reduce(name, n, triangulation, noise=2e-5, seed=seed)[1].n_keys
               for name in ["cloth_diagonal", "cloth_side", "cloth_underneath"]]
     assert counts == [4, 6, 10]
+
+
+KEYS = {"cloth_diagonal": 4, "cloth_side": 6, "cloth_reflective": 8, "cloth_underneath": 10}
+
+
+def _counts_under_noise(sigma, panels):
+    """Key counts minus the reference counts ``(48,)``, 16/25/40 per side x 4 triangulations x
+    4 folds (seed 0); None where Alg. 1 does not converge."""
+    deltas = []
+    for name, keys in KEYS.items():
+        for n in [16, 25, 40]:
+            for triangulation in TRIANGULATIONS:
+                try:
+                    result = _reduce(name, n, triangulation, noise=sigma, panels=panels)[1]
+                    deltas.append(result.n_keys - keys)
+                except ValueError:
+                    deltas.append(None)
+    return deltas
+
+
+# Millimetre noise, as in a goal taken from a simulator, needs the panel projection: measured over
+# 336 goals (README), counts hold on 91-93 % from 0.02 to 2 mm and the rest are off by 1-2 keys
+# (3-4 on 5 goals at 2 mm); without it Alg. 1 rarely converges at all.
+@pytest.mark.parametrize("sigma", [5e-4, 2e-3])
+def test_key_counts_under_millimetre_noise_with_panel_projection(sigma):
+    deltas = _counts_under_noise(sigma, "auto")
+    assert None not in deltas
+    assert sum(d == 0 for d in deltas) >= 0.85 * len(deltas)
+    assert max(abs(d) for d in deltas) <= 2
+
+
+def test_millimetre_noise_defeats_decimation_without_the_projection():
+    deltas = _counts_under_noise(5e-4, "off")
+    assert sum(d == 0 for d in deltas) <= 0.25 * len(deltas)
 
 
 def test_canonical_triangulation_keeps_the_least_compressed_diagonal_of_every_square():
