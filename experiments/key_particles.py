@@ -4,7 +4,8 @@ For each task: run Alg. 1 on the goal (and on each intermediate goal of a multi-
 write the error-vs-size curve as CSV, a PNG with the curve, the goal and the simplified model
 with its key particles, and DIR/summary.json with counts, indices, errors and times. Unless
 --quick, it also sweeps cloth resolutions x triangulations and goal noise and records the key
-counts (the README's robustness table).
+counts (the README's robustness tables); the noise sweep appends one line per goal to
+DIR/noise.jsonl as it goes, and a rerun resumes it.
 
     python experiments/key_particles.py --task all --out results/key_particles
 """
@@ -34,6 +35,10 @@ PAPER = {"rope_straighten": {"keys": 2}, "rope_fold": {"keys": 4},
          "rope_fold_unequal": {"keys": 4}, "cloth_diagonal": {"triangles": 4, "keys": 4},
          "cloth_side": {"triangles": 6}, "cloth_reflective": {"triangles": 12},
          "cloth_underneath": {"triangles": 16}}
+#: noise-free key counts of the cloth folds at every resolution (4 = the paper's; the others
+#: are ours, README "Key particles"): the reference of the noise sweep
+REFERENCE_KEYS = {"cloth_diagonal": 4, "cloth_side": 6, "cloth_reflective": 8,
+                  "cloth_underneath": 10}
 
 logger = logging.getLogger("key_particles")
 
@@ -95,40 +100,82 @@ def plot_task(path: Path, task: str, goal, result, z_scale: float) -> None:
     plt.close(fig)
 
 
-def robustness(rng: np.random.Generator, rope_config: RopeConfig, cloth_config: ClothConfig,
-               resolutions: list[int], noise_sigmas: list[float], noise_resolutions: list[int],
-               seeds: int) -> dict:
-    """Key counts over cloth resolutions x triangulations, and under Gaussian goal noise (rope at
-    its default size, cloth at each of ``noise_resolutions`` particles per side)."""
-    out = {"cloth_grid": [], "noise": []}
+def resolution_sweep(rng: np.random.Generator, cloth_config: ClothConfig,
+                     resolutions: list[int]) -> list[dict]:
+    """Key counts of the noise-free cloth goals over resolutions x triangulations."""
+    rows = []
     for task in CLOTH_TASKS:
         for n in resolutions:
             for triangulation in TRIANGULATIONS:
                 goal = make_goal(task, n=n, triangulation=triangulation, rng=rng)
                 try:
-                    r = reduce_goal(goal, rope_config, cloth_config)
+                    r = reduce_goal(goal, RopeConfig(), cloth_config)
                     row = {"n_keys": r.n_keys, "n_elements": r.n_elements, "seconds": r.seconds}
                 except ValueError as exc:
                     row = {"n_keys": None, "n_elements": None, "failure": str(exc)}
-                out["cloth_grid"].append({"task": task, "n": n, "triangulation": triangulation,
-                                          **row})
+                rows.append({"task": task, "n": n, "triangulation": triangulation, **row})
                 logger.info("grid %s n=%d %s: %s", task, n, triangulation, row)
-    for task in TASKS:
-        for n in [None] if task in ROPE_TASKS else noise_resolutions:
-            goal = make_goal(task) if n is None else make_goal(task, n=n)
-            for sigma in noise_sigmas:
-                counts = []
-                for _ in range(seeds):
-                    noisy = goal.positions + rng.normal(0.0, sigma, goal.positions.shape)
-                    try:
-                        counts.append(reduce_goal(replace(goal, positions=noisy), rope_config,
-                                                  cloth_config).n_keys)
-                    except ValueError:
-                        counts.append(None)
-                out["noise"].append({"task": task, "n": n or len(goal.positions),
-                                     "sigma_m": sigma, "n_keys": counts})
-                logger.info("noise %s n=%s sigma=%g: %s", task, n, sigma, counts)
-    return out
+    return rows
+
+
+def _noise_key(row: dict) -> tuple:
+    return (row["task"], row["n"], row["triangulation"], row["seed"], row["sigma_m"],
+            row["panels"])
+
+
+def noise_sweep(journal: Path, rope_config: RopeConfig, cloth_config: ClothConfig,
+                sigmas: list[float], resolutions: list[int], seeds: int,
+                panel_modes: list[str]) -> list[dict]:
+    """Key counts under Gaussian goal noise, one JSON line per goal appended to ``journal`` as it
+    is done (a rerun skips those already there). Rope at its default size; cloth at each of
+    ``resolutions`` particles per side x triangulations x ``panel_modes`` (ClothConfig.panels).
+    Goal ``seed`` draws the random triangulation, then the noise."""
+    rows = ([json.loads(line) for line in journal.read_text().splitlines() if line.strip()]
+            if journal.exists() else [])
+    done = {_noise_key(r) for r in rows}
+    reference = {task: reduce_goal(make_goal(task), rope_config, cloth_config).n_keys
+                 for task in ROPE_TASKS}
+    reference.update({task: REFERENCE_KEYS[task] for task in CLOTH_TASKS})
+    with journal.open("a") as handle:
+        for task in TASKS:
+            cloth = task in CLOTH_TASKS
+            for n in resolutions if cloth else [None]:
+                for triangulation in TRIANGULATIONS if cloth else [None]:
+                    for sigma in sigmas:
+                        for seed in range(seeds):
+                            for panels in panel_modes if cloth else ["-"]:
+                                row = {"task": task, "n": n, "triangulation": triangulation,
+                                       "seed": seed, "sigma_m": sigma, "panels": panels}
+                                if _noise_key(row) in done:
+                                    continue
+                                rng = np.random.default_rng(seed)
+                                goal = (make_goal(task, n=n, triangulation=triangulation, rng=rng)
+                                        if cloth else make_goal(task))
+                                noisy = goal.positions + rng.normal(0.0, sigma,
+                                                                    goal.positions.shape)
+                                config = replace(cloth_config, panels=panels) if cloth else None
+                                try:
+                                    keys = reduce_goal(replace(goal, positions=noisy), rope_config,
+                                                       config).n_keys
+                                except ValueError:
+                                    keys = None
+                                row.update(n_keys=keys, held=keys == reference[task])
+                                handle.write(json.dumps(row) + "\n")
+                                handle.flush()
+                                rows.append(row)
+    return rows
+
+
+def noise_table(rows: list[dict]) -> dict:
+    """Goals whose key count equals the reference, per task kind, panel mode and sigma."""
+    table: dict = {}
+    for r in rows:
+        kind = "rope" if r["task"] in ROPE_TASKS else f"cloth, panels {r['panels']}"
+        cell = table.setdefault(kind, {}).setdefault(f"{r['sigma_m'] * 1e3:g} mm", [0, 0])
+        cell[0] += bool(r["held"])
+        cell[1] += 1
+    return {kind: {sigma: f"{held}/{total}" for sigma, (held, total) in cells.items()}
+            for kind, cells in table.items()}
 
 
 def main(argv=None) -> int:
@@ -140,12 +187,18 @@ def main(argv=None) -> int:
     parser.add_argument("--out", type=Path, required=True,
                         help="output folder for summary.json, curve_<task>.csv, <task>.png")
     parser.add_argument("--seed", type=int, default=0,
-                        help="seed of the random triangulations and the goal noise of the "
-                             "robustness sweep")
+                        help="seed of the random triangulations of the resolution sweep (the "
+                             "noise sweep uses goal seeds 0..--noise-seeds-1)")
     parser.add_argument("--quick", action="store_true",
                         help="smoke-sized run: 16 x 16 cloth, no robustness sweep")
     parser.add_argument("--cloth-n", type=int, default=None,
                         help="cloth particles per side (default 25, or 16 with --quick)")
+    parser.add_argument("--noise-n", type=lambda t: [int(v) for v in t.split(",")],
+                        default=[16, 25, 40],
+                        help="cloth particles per side of the goal-noise sweep (comma-separated; "
+                             "the README's table: 12,16,21,25,28,32,40)")
+    parser.add_argument("--noise-seeds", type=int, default=3,
+                        help="goal seeds per noise level (triangulation draw and noise)")
     args = parser.parse_args(argv)
     logging.basicConfig(level=logging.INFO, format="%(levelname)s %(name)s: %(message)s")
 
@@ -173,10 +226,14 @@ def main(argv=None) -> int:
         logger.info("%s: %d elements, %d key particles %s, %.4f s", task, result.n_elements,
                     result.n_keys, result.indices.tolist(), result.seconds)
     if not args.quick:
-        summary["robustness"] = robustness(rng, rope_config, cloth_config,
-                                           resolutions=[16, 21, 25, 28, 32, 40],
-                                           noise_sigmas=[2e-5, 5e-5, 1e-4, 5e-4, 1e-3, 2e-3],
-                                           noise_resolutions=[16, 25, 40], seeds=3)
+        noise = noise_sweep(args.out / "noise.jsonl", rope_config, cloth_config,
+                            sigmas=[2e-5, 5e-5, 1e-4, 3e-4, 5e-4, 1e-3, 2e-3],
+                            resolutions=args.noise_n, seeds=args.noise_seeds,
+                            panel_modes=["auto", "off"])
+        summary["robustness"] = {
+            "cloth_grid": resolution_sweep(rng, cloth_config, [12, 16, 21, 25, 28, 32, 40]),
+            "noise": noise_table(noise)}
+        logger.info("noise: %s", summary["robustness"]["noise"])
     (args.out / "summary.json").write_text(json.dumps(summary, indent=1))
     return 0
 
