@@ -64,8 +64,9 @@ def test_a_clean_goal_is_projected_onto_itself_away_from_the_crease():
     g = goals.cloth_side(n=25)
     fit = project_on_panels(g.positions, g.rest_positions, g.faces, g.layer_gap)
     assert fit.noise < 1e-9
-    away = np.abs(g.rest_positions[:, 0]) > 1.5 * 0.3 / 24       # > 1.5 spacings from x = 0
-    np.testing.assert_allclose(fit.positions[away], g.positions[away], atol=1e-7)
+    # at 25 per side no particle lies on the crease's arc (rest 0 < x < 7.9 mm) and the fitted
+    # line runs between two columns, farther than the blend's reach: the projection is exact
+    np.testing.assert_allclose(fit.positions, g.positions, atol=1e-9)
     x = g.rest_positions[:, 0]
     under, over = fit.labels[x < 0], fit.labels[x > np.pi * g.layer_gap / 2]   # past the arc
     assert len(set(under)) == len(set(over)) == 1 and under[0] != over[0]
