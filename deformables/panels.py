@@ -10,10 +10,14 @@ the panels and replaces every particle a panel explains by the panel's predictio
 noise left is that of one rigid fit over hundreds of particles.
 
 1. Local rigid fits: every particle's ``neighbours`` nearest rest neighbours, goal = R rest + t
-   (Kabsch). The median fit residual estimates the noise.
+   (Kabsch).
 2. Panels: connected components of the mesh edges whose two local rotations agree within
    ``angle_deg``; components too small or too narrow (a crease row) are dropped.
-3. One rigid fit per panel (trimmed: residuals over 3 medians are refitted without).
+3. One rigid fit per panel (trimmed: residuals over 3 medians are refitted without). The
+   median distance of a particle from its best panel's prediction estimates the noise (about
+   1.5 sigma for Gaussian noise of sigma per coordinate; 0 on an exact fold). The local fits'
+   residuals do not: where panels are only a few particles wide (12 x 12 underneath fold) most
+   neighbourhoods straddle a crease, and an exact goal looked 8 mm noisy.
 4. Labels: each particle goes to the panel that predicts it best, then the boundaries between
    panels are made straight lines of the rest sheet by a multinomial logistic regression on the
    rest sheet's coordinates. A fold's crease is a straight line of the rest sheet; per-particle
@@ -53,7 +57,8 @@ class PanelFit:
         labels: ``(N,)`` panel of each projected particle, -1 for the others.
         rotations: ``(P, 3, 3)`` and ``translations`` ``(P, 3)``: panel p maps rest x to
             ``rotations[p] @ x + translations[p]``.
-        noise: the estimated noise, metres (median residual of the local rigid fits).
+        noise: the estimated noise, metres: the median distance of a particle from its best
+            panel's prediction (the median local-fit residual when no panel is found).
         projected: ``(N,)`` bool, the particles moved onto their panel.
     """
 
@@ -208,7 +213,9 @@ def project_on_panels(goal: np.ndarray, rest: np.ndarray, faces: np.ndarray, lay
     rot = np.stack([r for r, _ in fits])
     shift = np.stack([t for _, t in fits])
     predicted = np.einsum("pij,nj->pni", rot, rest) + shift[:, None]           # (P, N, 3)
-    labels = np.linalg.norm(predicted - goal[None], axis=2).argmin(axis=0)
+    miss = np.linalg.norm(predicted - goal[None], axis=2)                      # (P, N)
+    labels = miss.argmin(axis=0)
+    noise = float(np.median(miss.min(axis=0)))
     if len(fits) > 1:
         weights = panel_weights(rest, labels, len(fits), crease_width * spacing)
         labels = weights.argmax(axis=1)

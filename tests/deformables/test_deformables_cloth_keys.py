@@ -75,9 +75,12 @@ def test_key_counts_do_not_depend_on_resolution_or_triangulation(n, triangulatio
     assert counts == [4, 6, 8]
 
 
+# 12 per side: quarter panels 3 particles wide, where an exact goal once read as 8 mm noisy and
+# was projected (11-13 keys; deformables.panels now estimates noise from the panel fits)
+@pytest.mark.parametrize("n", [12, 25])
 @pytest.mark.parametrize("triangulation", TRIANGULATIONS)
-def test_underneath_keys_across_triangulations(triangulation):
-    assert _reduce("cloth_underneath", 25, triangulation)[1].n_keys == 10
+def test_underneath_keys_across_triangulations(n, triangulation):
+    assert _reduce("cloth_underneath", n, triangulation)[1].n_keys == 10
 
 
 def test_keys_either_side_of_a_rounded_crease_merge_at_coarse_resolution():

@@ -72,6 +72,13 @@ def test_a_clean_goal_is_projected_onto_itself_away_from_the_crease():
     assert len(set(under)) == len(set(over)) == 1 and under[0] != over[0]
 
 
+def test_an_exact_fold_with_panels_three_particles_wide_reads_as_noise_free():
+    g = goals.cloth_underneath(n=12)
+    fit = project_on_panels(g.positions, g.rest_positions, g.faces, g.layer_gap)
+    assert fit.n_panels == 4
+    assert fit.noise < 1e-9
+
+
 def test_a_region_no_panel_explains_keeps_its_measured_positions():
     g = goals.cloth_flat(n=25)
     bumped = g.positions.copy()
