@@ -142,8 +142,8 @@ def _counts_under_noise(sigma, panels):
 
 
 # Millimetre noise, as in a goal taken from a simulator, needs the panel projection: measured over
-# 336 goals (README), counts hold on 91-93 % from 0.02 to 2 mm and the rest are off by 1-2 keys
-# (3-4 on 5 goals at 2 mm); without it Alg. 1 rarely converges at all.
+# 336 goals per level (README), counts hold on 96-99 % from 0.05 to 2 mm, the misses mostly +1
+# key; without it Alg. 1 does not converge from about 0.3 mm.
 @pytest.mark.parametrize("sigma", [5e-4, 2e-3])
 def test_key_counts_under_millimetre_noise_with_panel_projection(sigma):
     deltas = _counts_under_noise(sigma, "auto")
