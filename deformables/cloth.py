@@ -75,11 +75,12 @@ class ClothConfig:
             (:func:`deformables.panels.project_on_panels`): ``"auto"`` does when the goal's
             estimated noise exceeds ``panel_noise_floor``, ``"on"`` always, ``"off"`` never.
             Decimation needs it from about 0.05 mm of goal noise (README, "Key particles").
-        panel_noise_floor: estimated noise (metres, the median residual of local rigid fits,
-            about 1.5 sigma of per-coordinate Gaussian noise) above which ``"auto"`` projects.
-            Measured over 336 goals (12-40 per side x 4 triangulations x 4 folds x 3 seeds):
-            unprojected counts hold on 321 at sigma 0.02 mm and 232 at 0.05 mm, projected on
-            307-314 from 0.02 to 2 mm; the floor sits between (sigma ~0.03 mm).
+        panel_noise_floor: estimated noise (metres; :attr:`deformables.panels.PanelFit.noise`,
+            about 1.55 sigma of per-coordinate Gaussian noise, 0 on an exact fold) above which
+            ``"auto"`` projects. Measured over 336 goals per level (12-40 per side x 4
+            triangulations x 4 folds x 3 seeds): unprojected counts hold on 321 at sigma
+            0.02 mm and 232 at 0.05 mm, projected on 323-333 from 0.05 to 2 mm; the floor sits
+            between (sigma ~0.03 mm).
     """
 
     backend: str = "pymeshlab"
@@ -186,9 +187,8 @@ def cloth_key_particles(positions, faces, threshold: float | None = None,
     reference = goal if rest is None else rest
     tri = check_faces(faces, len(goal), reference)
     if rest is not None and config.panels != "off":
-        fit = project_on_panels(goal, rest, tri, config.layer_gap)
-        if config.panels == "on" or fit.noise > config.panel_noise_floor:
-            goal = fit.positions
+        floor = config.panel_noise_floor if config.panels == "auto" else None
+        goal = project_on_panels(goal, rest, tri, config.layer_gap, min_noise=floor).positions
     if rest is not None and config.canonical_triangulation:
         tri = canonical_triangulation(goal, tri, rest)
     pairs = edges(tri)

@@ -29,7 +29,7 @@ noise left is that of one rigid fit over hundreds of particles.
    measured on the README's noise sweep (319 / 326 / 299 of 336 goals at 1 mm; a sigmoid of
    scale 0.1 spacings, whose tails reach the neighbouring rows, 314); 0.25 is the default.
 5. Every particle whose blended prediction lies within ``tolerance`` (default: a layer gap plus
-   3 sqrt(3) noise sigma) moves to it; the others (a wrinkle, a crumpled region) keep their
+   3 sqrt(3) times the noise estimate) moves to it; the others (a wrinkle, a crumpled region) keep their
    measured position.
 """
 from __future__ import annotations
@@ -175,7 +175,8 @@ def panel_weights(rest: np.ndarray, labels: np.ndarray, n_panels: int, width: fl
 def project_on_panels(goal: np.ndarray, rest: np.ndarray, faces: np.ndarray, layer_gap: float,
                       neighbours: int = 9, angle_deg: float = 30.0, min_fraction: float = 0.02,
                       min_width: float = 0.5, crease_width: float = 0.25,
-                      tolerance: float | None = None) -> PanelFit:
+                      tolerance: float | None = None,
+                      min_noise: float | None = None) -> PanelFit:
     """Project the particles of a folded cloth goal onto its flat panels (see module doc).
 
     Args:
@@ -184,7 +185,7 @@ def project_on_panels(goal: np.ndarray, rest: np.ndarray, faces: np.ndarray, lay
         faces: ``(F, 3)`` triangles (their edges decide which particles are neighbours).
         layer_gap: the cloth's layer gap, metres; the default tolerance is one gap (a particle
             on a rounded crease is up to about half a gap from both panels' planes) plus
-            3 sqrt(3) noise sigma.
+            3 sqrt(3) times the noise estimate.
         neighbours: particles per local rigid fit.
         angle_deg: largest rotation between neighbouring local fits of one panel.
         min_fraction: smallest panel, as a fraction of N (and at least ``neighbours``).
@@ -193,9 +194,12 @@ def project_on_panels(goal: np.ndarray, rest: np.ndarray, faces: np.ndarray, lay
         crease_width: half-width of the blend between panels, in particle spacings
             (:func:`panel_weights`).
         tolerance: largest distance moved, metres; None for the default above.
+        min_noise: with an estimated noise at or below this (metres), nothing moves (the
+            boundaries are not fitted); None projects whatever the noise.
 
     Returns:
-        :class:`PanelFit`; with no panel found, ``positions`` is ``goal`` and nothing moves.
+        :class:`PanelFit`; with no panel found, or too little noise, ``positions`` is ``goal``
+        and nothing moves.
     """
     n = len(goal)
     pairs = edges(faces)
@@ -216,6 +220,10 @@ def project_on_panels(goal: np.ndarray, rest: np.ndarray, faces: np.ndarray, lay
     miss = np.linalg.norm(predicted - goal[None], axis=2)                      # (P, N)
     labels = miss.argmin(axis=0)
     noise = float(np.median(miss.min(axis=0)))
+    if min_noise is not None and noise <= min_noise:
+        logger.info("panel projection: noise %.3g mm <= %.3g mm; goal left as measured",
+                    noise * 1e3, min_noise * 1e3)
+        return PanelFit(goal, np.full(n, -1), rot, shift, noise, np.zeros(n, dtype=bool))
     if len(fits) > 1:
         weights = panel_weights(rest, labels, len(fits), crease_width * spacing)
         labels = weights.argmax(axis=1)

@@ -79,6 +79,16 @@ def test_an_exact_fold_with_panels_three_particles_wide_reads_as_noise_free():
     assert fit.noise < 1e-9
 
 
+def test_min_noise_leaves_an_exact_goal_as_given_and_projects_a_noisy_one():
+    g = goals.cloth_diagonal(n=16)
+    exact = project_on_panels(g.positions, g.rest_positions, g.faces, g.layer_gap, min_noise=5e-5)
+    assert not exact.projected.any() and (exact.labels == -1).all()
+    assert exact.positions is g.positions and exact.n_panels == 2
+    noisy = g.positions + np.random.default_rng(3).normal(0.0, 1e-4, g.positions.shape)
+    fit = project_on_panels(noisy, g.rest_positions, g.faces, g.layer_gap, min_noise=5e-5)
+    assert fit.noise > 5e-5 and fit.projected.all()
+
+
 def test_a_region_no_panel_explains_keeps_its_measured_positions():
     g = goals.cloth_flat(n=25)
     bumped = g.positions.copy()
