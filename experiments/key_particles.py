@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import argparse
 import csv
+import itertools
 import json
 import logging
 import sys
@@ -136,33 +137,32 @@ def noise_sweep(journal: Path, rope_config: RopeConfig, cloth_config: ClothConfi
     reference = {task: reduce_goal(make_goal(task), rope_config, cloth_config).n_keys
                  for task in ROPE_TASKS}
     reference.update({task: REFERENCE_KEYS[task] for task in CLOTH_TASKS})
+    cells = [(task, n, triangulation, sigma, seed, panels)
+             for task in TASKS
+             for n, triangulation, modes in (
+                 itertools.product(resolutions, TRIANGULATIONS, [panel_modes])
+                 if task in CLOTH_TASKS else [(None, None, ["-"])])
+             for sigma, seed, panels in itertools.product(sigmas, range(seeds), modes)]
     with journal.open("a") as handle:
-        for task in TASKS:
+        for task, n, triangulation, sigma, seed, panels in cells:
+            row = {"task": task, "n": n, "triangulation": triangulation, "seed": seed,
+                   "sigma_m": sigma, "panels": panels}
+            if _noise_key(row) in done:
+                continue
+            rng = np.random.default_rng(seed)
             cloth = task in CLOTH_TASKS
-            for n in resolutions if cloth else [None]:
-                for triangulation in TRIANGULATIONS if cloth else [None]:
-                    for sigma in sigmas:
-                        for seed in range(seeds):
-                            for panels in panel_modes if cloth else ["-"]:
-                                row = {"task": task, "n": n, "triangulation": triangulation,
-                                       "seed": seed, "sigma_m": sigma, "panels": panels}
-                                if _noise_key(row) in done:
-                                    continue
-                                rng = np.random.default_rng(seed)
-                                goal = (make_goal(task, n=n, triangulation=triangulation, rng=rng)
-                                        if cloth else make_goal(task))
-                                noisy = goal.positions + rng.normal(0.0, sigma,
-                                                                    goal.positions.shape)
-                                config = replace(cloth_config, panels=panels) if cloth else None
-                                try:
-                                    keys = reduce_goal(replace(goal, positions=noisy), rope_config,
-                                                       config).n_keys
-                                except ValueError:
-                                    keys = None
-                                row.update(n_keys=keys, held=keys == reference[task])
-                                handle.write(json.dumps(row) + "\n")
-                                handle.flush()
-                                rows.append(row)
+            goal = (make_goal(task, n=n, triangulation=triangulation, rng=rng) if cloth
+                    else make_goal(task))
+            noisy = goal.positions + rng.normal(0.0, sigma, goal.positions.shape)
+            config = replace(cloth_config, panels=panels) if cloth else None
+            try:
+                keys = reduce_goal(replace(goal, positions=noisy), rope_config, config).n_keys
+            except ValueError:
+                keys = None
+            row.update(n_keys=keys, held=keys == reference[task])
+            handle.write(json.dumps(row) + "\n")
+            handle.flush()
+            rows.append(row)
     return rows
 
 
