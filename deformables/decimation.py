@@ -22,6 +22,10 @@ logger = logging.getLogger(__name__)
 
 BACKENDS = ("pymeshlab", "trimesh")
 
+
+class EmptyDecimationError(ValueError):
+    """The back-end returned no faces (pymeshlab can, from a coarse mesh at 2 faces)."""
+
 # pymeshlab keeps a filter parameter that is not passed from the previous call in the same
 # process, so every call passes all of them.
 _QECD_PARAMETERS = dict(
@@ -70,6 +74,9 @@ def decimate(vertices: np.ndarray, faces: np.ndarray, n_faces: int,
     Returns:
         ``(vertices, faces)`` of the decimated mesh, ``(M, 3)`` and ``(NS, 3)``, without
         unreferenced vertices. NS may differ from ``n_faces`` when the back-end cannot hit it.
+
+    Raises:
+        EmptyDecimationError: the back-end returned no faces.
     """
     if backend not in _IMPLEMENTATIONS:
         raise ValueError(f"unknown decimation backend {backend!r}; choose from {BACKENDS}")
@@ -77,5 +84,6 @@ def decimate(vertices: np.ndarray, faces: np.ndarray, n_faces: int,
     v, f = _IMPLEMENTATIONS[backend](np.array(vertices, dtype=float, order="C"),
                                      np.array(faces, dtype=np.int64, order="C"), n_faces)
     if len(f) == 0:
-        raise ValueError(f"decimation to {n_faces} faces ({backend}) returned an empty mesh")
+        raise EmptyDecimationError(f"decimation to {n_faces} faces ({backend}) returned an "
+                                   f"empty mesh")
     return _compact(v, f)

@@ -112,8 +112,9 @@ class SurfaceDistance:
         closest = trimesh.triangles.closest_point(self.triangles[tris], points[rows])
         return np.linalg.norm(closest - points[rows], axis=1)
 
-    def max_distance(self, points: np.ndarray, chunk: int = 256) -> float:
-        """``max_q dist(points[q], surface)`` for ``points`` ``(Q, 3)``, exact.
+    def max_distance(self, points: np.ndarray, chunk: int = 256,
+                     limit: float = np.inf) -> float:
+        """``max_q dist(points[q], surface)`` for ``points`` ``(Q, 3)``, exact below ``limit``.
 
         Each point's distance lies in ``[u - rho, u]`` (``u``: distance to the nearest cover
         sample, ``rho``: the covering radius). A first exact value ``best`` comes from the
@@ -122,17 +123,26 @@ class SurfaceDistance:
         points are resolved exactly from the largest ``u`` down, in chunks, until no remaining
         ``u`` exceeds the largest value known to be reached: the best exact distance, or the
         best lower bound ``L`` (if the maximum hides among the skipped points it is at most
-        ``L`` and at least ``L``, so it equals ``L``)."""
+        ``L`` and at least ``L``, so it equals ``L``).
+
+        With a finite ``limit`` the search stops as soon as some point is known to be at least
+        ``limit`` away and returns that point's distance (or the lower bound ``L``): a value
+        ``>= limit`` is then a lower bound of the maximum, which is all a threshold test needs.
+        """
         points = np.asarray(points, dtype=float)
         probe = points[::_PROBE_STRIDE]
         upper = self.cover_tree.query(probe)[0]
         best = float(self.distances(probe[np.argsort(-upper)[:_PROBE_EXACT]]).max())
+        if best >= limit:
+            return best
         cut = self.cover_tree.query(points, distance_upper_bound=best)[0]
         candidates = points[~(cut <= best)]                 # cut is inf beyond the bound
         if len(candidates) == 0:
             return best
         upper = self.cover_tree.query(candidates)[0]
         best = max(best, float(upper.max()) - self.cover_radius)
+        if best >= limit:
+            return best
         order = np.argsort(-upper, kind="stable")
         for begin in range(0, len(order), chunk):
             batch = order[begin:begin + chunk]
@@ -140,6 +150,8 @@ class SurfaceDistance:
             if len(batch) == 0:
                 break
             best = max(best, float(self.distances(candidates[batch]).max()))
+            if best >= limit:
+                break
         return best
 
 
@@ -163,7 +175,7 @@ def sample_surface(vertices: np.ndarray, faces: np.ndarray, step: float) -> np.n
 
 
 def hausdorff(original: SurfaceDistance, original_points: np.ndarray, vertices: np.ndarray,
-              faces: np.ndarray, step: float) -> tuple[float, float]:
+              faces: np.ndarray, step: float, limit: float = np.inf) -> tuple[float, float]:
     """The two one-sided Hausdorff distances between an original and a simplified mesh.
 
     Args:
@@ -171,13 +183,18 @@ def hausdorff(original: SurfaceDistance, original_points: np.ndarray, vertices: 
         original_points: ``(N, 3)`` points of the original (its vertices).
         vertices, faces: the simplified mesh ``(V, 3)``, ``(F, 3)``.
         step: sampling step on the simplified surface.
+        limit: stop as soon as either distance is known to reach it (a threshold test).
 
     Returns:
         ``(simplified_to_original, original_to_simplified)``: the largest distance from the
         simplified surface (sampled at ``step``) to the original surface, and from the original
-        points to the simplified surface; both exact for these point sets.
+        points to the simplified surface; both exact for these point sets while below
+        ``limit``. A value ``>= limit`` is a lower bound; once the first one reaches ``limit``
+        the second is not computed and returned as ``nan``.
     """
     samples = sample_surface(vertices, faces, step)
-    to_original = original.max_distance(samples)
+    to_original = original.max_distance(samples, limit=limit)
+    if to_original >= limit:
+        return to_original, float("nan")
     simplified = SurfaceDistance(vertices, faces, cover_step=step, cover=samples)
-    return to_original, simplified.max_distance(original_points)
+    return to_original, simplified.max_distance(original_points, limit=limit)
