@@ -30,8 +30,16 @@ def test_quick_run_writes_summary_curves_and_plots(tmp_path):
 def test_help_explains_every_flag():
     out = subprocess.run([sys.executable, str(ROOT / "experiments" / "key_particles.py"),
                           "--help"], check=True, capture_output=True, text=True).stdout
-    for flag in ["--task", "--out", "--seed", "--quick", "--cloth-n"]:
+    for flag in ["--task", "--out", "--seed", "--quick", "--cloth-n", "--noise-n",
+                 "--noise-seeds", "--noise-panels"]:
         assert flag in out
+
+
+def test_unknown_panel_mode_is_refused_by_name():
+    run = subprocess.run([sys.executable, str(ROOT / "experiments" / "key_particles.py"),
+                          "--out", "unused", "--noise-panels", "auto,maybe"],
+                         capture_output=True, text=True, cwd=ROOT)
+    assert run.returncode == 2 and "maybe" in run.stderr
 
 
 def test_noise_sweep_journals_each_goal_and_a_rerun_resumes(tmp_path):
