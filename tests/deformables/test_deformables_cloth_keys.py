@@ -97,6 +97,25 @@ def test_restarts_find_the_model_one_numbering_misses():
         assert (restarted.n_elements, restarted.n_keys) == (6, 6)
 
 
+def test_renumberings_describe_the_same_surface_and_follow_the_seed():
+    from deformables.cloth import renumberings
+
+    g = goals.cloth_side(n=7)
+    meshes = renumberings(g.positions, g.faces, 3, seed=5)
+
+    def triangles(vertices, faces):           # each triangle as a cyclic-start-free tuple
+        tris = vertices[faces].round(12)
+        return sorted(min(tuple(map(tuple, np.roll(t, k, axis=0))) for k in range(3))
+                      for t in tris)
+
+    assert meshes[0][0] is g.positions and meshes[0][1] is g.faces
+    for vertices, faces in meshes[1:]:
+        assert not np.array_equal(faces, g.faces)
+        assert triangles(vertices, faces) == triangles(g.positions, g.faces)
+    again = renumberings(g.positions, g.faces, 3, seed=5)
+    assert all(np.array_equal(a[1], b[1]) for a, b in zip(meshes, again))
+
+
 def test_threshold_stop_keeps_the_accepted_model_and_bounds_rejected_errors():
     _, fast = _reduce("cloth_reflective", 21, "random")
     _, exact = _reduce("cloth_reflective", 21, "random", exact_errors=True)
