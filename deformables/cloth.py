@@ -94,15 +94,16 @@ class ClothConfig:
             the one the fold compresses least (:func:`deformables.mesh.canonical_triangulation`),
             so the result does not depend on how the grid was split into triangles.
         panels: with rest positions, project the goal onto its flat panels first
-            (:func:`deformables.panels.project_on_panels`): ``"auto"`` does when the goal's
-            estimated noise exceeds ``panel_noise_floor``, ``"on"`` always, ``"off"`` never.
-            Decimation needs it from about 0.05 mm of goal noise (README, "Key particles").
+            (:func:`deformables.panels.project_on_panels`): ``"on"`` (default) always,
+            ``"auto"`` when the goal's estimated noise exceeds ``panel_noise_floor``, ``"off"``
+            never. Decimation alone fails from about 0.05 mm of goal noise; with restarts,
+            projecting exact goals too keeps all 112 noise-free counts and fixes the goals
+            that 0.02 mm of noise, below the floor, throws off under ``"auto"`` (README, "Key
+            particles").
         panel_noise_floor: estimated noise (metres; :attr:`deformables.panels.PanelFit.noise`,
             about 1.55 sigma of per-coordinate Gaussian noise, 0 on an exact fold) above which
-            ``"auto"`` projects. Measured over 336 goals per level (12-40 per side x 4
-            triangulations x 4 folds x 3 seeds): unprojected counts hold on 321 at sigma
-            0.02 mm and 232 at 0.05 mm, projected on 323-333 from 0.05 to 2 mm; the floor sits
-            between (sigma ~0.03 mm).
+            ``"auto"`` projects (sigma ~0.03 mm): it skips the projection's boundary fit on
+            exact goals.
     """
 
     backend: str = "pymeshlab"
@@ -119,7 +120,7 @@ class ClothConfig:
     coarse_faces: int = 200
     exact_errors: bool = False
     canonical_triangulation: bool = True
-    panels: str = "auto"
+    panels: str = "on"
     panel_noise_floor: float = 5e-5
 
     def __post_init__(self):

@@ -156,16 +156,24 @@ def test_reflective_fold_on_the_mujoco_40_grid_converges_with_all_corners():
     assert np.all(gap.min(axis=0) <= 0.3 / 39 * 1.01)
 
 
-# Goal noise (README "Key particles"). Up to sigma = 0.02 mm the goal is used as given (below
-# the panel projection's noise floor); QECD's collapse order on a noisy folded sheet changes from
-# about 0.05 mm on (40 x 40 side fold: 7-8 keys).
+# Goal noise (README "Key particles"). Even 0.02 mm, below the noise floor where panels="auto"
+# uses the goal as given, changes QECD's collapse order on some goals; the default projects.
 @pytest.mark.parametrize("n", [16, 25, 40])
 @pytest.mark.parametrize("seed", [0, 1])
 def test_key_counts_under_goal_noise(n, seed):
     triangulation = ["mujoco", "alternating"][seed]
     counts = [_reduce(name, n, triangulation, noise=2e-5, seed=seed)[1].n_keys
-              for name in ["cloth_diagonal", "cloth_side", "cloth_underneath"]]
-    assert counts == [4, 6, 10]
+              for name in ["cloth_diagonal", "cloth_side", "cloth_reflective", "cloth_underneath"]]
+    assert counts == [4, 6, 8, 10]
+
+
+def test_projection_of_a_barely_noisy_goal_restores_its_count():
+    """32 x 32 reflective fold, 0.02 mm noise (seed 2): as given, QECD stops at 12 faces with a
+    9th key; projected on its panels, 10 faces and 8 keys."""
+    _, given = _reduce("cloth_reflective", 32, "mujoco", noise=2e-5, seed=2, panels="auto")
+    _, projected = _reduce("cloth_reflective", 32, "mujoco", noise=2e-5, seed=2)
+    assert (given.n_elements, given.n_keys) == (12, 9)
+    assert (projected.n_elements, projected.n_keys) == (10, 8)
 
 
 KEYS = {"cloth_diagonal": 4, "cloth_side": 6, "cloth_reflective": 8, "cloth_underneath": 10}
@@ -187,14 +195,11 @@ def _counts_under_noise(sigma, panels):
 
 
 # Millimetre noise, as in a goal taken from a simulator, needs the panel projection: measured over
-# 336 goals per level (README), counts hold on 96-99 % from 0.05 to 2 mm, the misses mostly +1
-# key; without it Alg. 1 does not converge from about 0.3 mm.
+# 336 goals per level (README), counts hold on all of them from 0.05 to 2 mm; without it Alg. 1
+# does not converge from about 0.3 mm.
 @pytest.mark.parametrize("sigma", [5e-4, 2e-3])
 def test_key_counts_under_millimetre_noise_with_panel_projection(sigma):
-    deltas = _counts_under_noise(sigma, "auto")
-    assert None not in deltas
-    assert sum(d == 0 for d in deltas) >= 0.85 * len(deltas)
-    assert max(abs(d) for d in deltas) <= 2
+    assert _counts_under_noise(sigma, "on") == [0] * 48
 
 
 def test_millimetre_noise_defeats_decimation_without_the_projection():
