@@ -88,13 +88,13 @@ def test_keys_are_the_ends_of_the_panel_boundaries(name, n, triangulation):
 
 
 def test_restarts_find_the_model_one_numbering_misses():
-    """QECD breaks ties by the mesh numbering: one numbering of the 12 x 12 alternating side fold
-    stops at a 7-face model with a 7th key mid-crease; the restarts reach the 6-face model."""
-    _, single = _reduce("cloth_side", 12, "alternating", restarts=1)
-    assert (single.n_elements, single.n_keys) == (7, 7)
+    """QECD breaks ties by the mesh numbering: one numbering of the 32 x 32 alternating diagonal
+    fold stops at an 8-face model with 6 keys; the restarts reach the 4-face model."""
+    _, single = _reduce("cloth_diagonal", 32, "alternating", restarts=1)
+    assert (single.n_elements, single.n_keys) == (8, 6)
     for seed in range(3):
-        _, restarted = _reduce("cloth_side", 12, "alternating", restart_seed=seed)
-        assert (restarted.n_elements, restarted.n_keys) == (6, 6)
+        _, restarted = _reduce("cloth_diagonal", 32, "alternating", restart_seed=seed)
+        assert (restarted.n_elements, restarted.n_keys) == (4, 4)
 
 
 def test_renumberings_describe_the_same_surface_and_follow_the_seed():
@@ -127,15 +127,26 @@ def test_threshold_stop_keeps_the_accepted_model_and_bounds_rejected_errors():
     assert np.all(fast.errors[rejected] <= exact.errors[rejected] + 1e-12)
 
 
-def test_keys_either_side_of_a_rounded_crease_merge_at_coarse_resolution():
-    """21 x 21 random grid, side fold: QECD puts vertices 2 spacings apart on either side of the
-    rounded crease; 0.1 of the extent (30 mm) is not more than 2 spacings (30 mm), the
-    2.5-spacing floor is."""
-    g, result = _reduce("cloth_side", 21, "random")
-    assert result.n_keys == 6
-    _, without_floor = _reduce("cloth_side", 21, "random", geodesic_spacings=1e-9)
-    assert without_floor.n_keys == 7
-    # uncapped, 2.5 spacings at 12 per side (68 mm) merge the ends of crease lines a quarter apart
+@pytest.mark.parametrize("n", [12, 40])
+def test_geodesic_merge_joins_the_two_layers_at_a_crease_end_and_no_more(n):
+    """Underneath fold: 14 faces, 16 vertices (2 corners + 2 per crease strip on each free edge);
+    the merge leaves one key per crease end. Twice the radius also merges crease ends a quarter
+    of the side apart at 12 per side."""
+    _, unmerged = _reduce("cloth_underneath", n, geodesic_radius=1e-9, geodesic_spacings=1e-9)
+    _, merged = _reduce("cloth_underneath", n)
+    assert len(merged.vertices) == unmerged.n_keys == 16
+    assert merged.n_keys == 10
+    if n == 12:
+        assert _reduce("cloth_underneath", n, geodesic_radius=0.2)[1].n_keys < 10
+
+
+def test_merge_radius_floor_and_cap_at_coarse_resolutions():
+    """At 8 per side the two layers' vertices at a crease end are a spacing (43 mm) apart, more
+    than 0.1 of the extent: the 2.5-spacing floor merges them. Uncapped, that floor (68 mm at 12
+    per side) would merge crease ends a quarter of the side apart."""
+    _, floored = _reduce("cloth_side", 8)
+    _, without_floor = _reduce("cloth_side", 8, geodesic_spacings=1e-9)
+    assert (floored.n_keys, without_floor.n_keys) == (6, 8)
     _, uncapped = _reduce("cloth_underneath", 12, geodesic_cap=1.0)
     assert uncapped.n_keys < 10
 
@@ -306,7 +317,9 @@ def test_trimesh_backend_erodes_flat_panels():
 
 def test_without_rest_positions_geodesics_come_from_the_goal_mesh():
     g = goals.cloth_diagonal(n=21, triangulation="anti")      # already crease-aligned
-    with_rest = cloth_key_particles(g.positions, g.faces, rest_positions=g.rest_positions)
+    # without its panel projection, the one other thing rest positions bring
+    with_rest = cloth_key_particles(g.positions, g.faces, rest_positions=g.rest_positions,
+                                    config=ClothConfig(panels="off"))
     without = cloth_key_particles(g.positions, g.faces)
     np.testing.assert_array_equal(with_rest.indices, without.indices)
 
