@@ -73,12 +73,12 @@ class ClothConfig:
             vertices and faces: the given one, then ``restarts - 1`` permutations drawn from
             ``numpy.random.default_rng(restart_seed)``. QECD is greedy and breaks ties between
             equal-cost collapses (every collapse inside a flat panel costs nothing) by that
-            numbering, so one numbering can miss the small model another finds (40 x 40 side
-            fold, alternating diagonals: 11 faces and a 7th key mid-crease). The first model
-            under the threshold is taken; a size's error is the least over its restarts.
-            Measured on 112 noise-free goals (12-40 per side x 4 triangulations x 4 folds,
-            README "Key particles"): key counts hold on 105 with 1 restart, on all with 4
-            (restart seeds 0, 1 and 2 alike).
+            numbering, so one numbering can miss the small model another finds (32 x 32
+            diagonal fold, alternating diagonals: 8 faces and 6 keys with 1 restart, 4 and 4
+            with 4). The first model under the threshold is taken; a size's error is the least
+            over its restarts. Measured on 112 noise-free goals (12-40 per side x 4
+            triangulations x 4 folds, README "Key particles"): key counts hold on 108 with 1
+            restart, on all with 4 (restart seeds 0, 1 and 2 alike).
         restart_seed: seed of the permutations.
         coarse_faces: each numbering is decimated once to this many faces, and every size
             from there: the collapses inside flat panels, nearly all of QECD's work (16 ms of

@@ -262,7 +262,7 @@ def test_surface_distance_is_exact():
                                atol=1e-12)
 
 
-def test_max_distance_equals_the_largest_exact_distance():
+def test_max_distance_is_exact_and_a_lower_bound_once_it_reaches_a_limit():
     rng = np.random.default_rng(2)
     g = goals.cloth_underneath(n=13)
     scaled = g.positions * np.array([1.0, 1.0, 10.0])
@@ -270,20 +270,10 @@ def test_max_distance_equals_the_largest_exact_distance():
     near = scaled[rng.integers(0, len(scaled), 500)] + rng.normal(0.0, 0.004, (500, 3))
     far = rng.uniform(scaled.min(axis=0) - 0.05, scaled.max(axis=0) + 0.05, (20, 3))
     for points in (near, far, np.concatenate([near, far])):
-        assert surface.max_distance(points) == pytest.approx(surface.distances(points).max(),
-                                                             abs=1e-12)
-
-
-def test_max_distance_with_a_limit_is_exact_below_it_and_a_lower_bound_above():
-    rng = np.random.default_rng(4)
-    g = goals.cloth_side(n=15)
-    scaled = g.positions * np.array([1.0, 1.0, 10.0])
-    surface = SurfaceDistance(scaled, g.faces)
-    points = scaled[rng.integers(0, len(scaled), 400)] + rng.normal(0.0, 0.01, (400, 3))
-    exact = surface.distances(points).max()
-    assert surface.max_distance(points, limit=exact * 1.01) == pytest.approx(exact, abs=1e-12)
-    bound = surface.max_distance(points, limit=exact * 0.5)
-    assert exact * 0.5 <= bound <= exact + 1e-12
+        exact = surface.distances(points).max()
+        assert surface.max_distance(points) == pytest.approx(exact, abs=1e-12)
+        assert surface.max_distance(points, limit=exact * 1.01) == pytest.approx(exact, abs=1e-12)
+        assert exact * 0.5 <= surface.max_distance(points, limit=exact * 0.5) <= exact + 1e-12
 
 
 def test_surface_samples_cover_every_triangle_within_step_over_sqrt3():
