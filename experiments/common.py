@@ -36,6 +36,7 @@ from dopt.sweep import Trial, run_sweep
 from dopt.tasks.deformable_task import DeformableScene, PickPlaceTask
 from planners.cem import CEM, CEMConfig
 from planners.scripted import ScriptedConfig, scripted
+from cli_args import choices_list
 from stats import mean_ci
 
 log = logging.getLogger(__name__)
@@ -69,15 +70,6 @@ class Problem:
 
 
 SCRIPTED = {"lift": 0.02, "tolerance": 0.01, "per_particle": 3, "max_actions": 12}
-
-
-def parse_methods(text: str) -> list[str]:
-    """Comma-separated method names -> list, ValueError on an unknown one."""
-    methods = [m.strip() for m in text.split(",") if m.strip()]
-    bad = [m for m in methods if m not in METHODS]
-    if bad or not methods:
-        raise ValueError(f"unknown methods {bad}; choose from {', '.join(METHODS)}")
-    return methods
 
 
 def experiment_parser(doc: str, goals: Sequence[str], kind: str, help_: dict,
@@ -120,7 +112,7 @@ def parse_experiment_args(ap: argparse.ArgumentParser, argv, min_n: int) -> argp
     if not args.bound > 0:
         ap.error("--bound must be > 0")
     try:
-        args.methods = parse_methods(args.methods)
+        args.methods = choices_list(args.methods, METHODS, "methods")
     except ValueError as e:
         ap.error(str(e))
     return args

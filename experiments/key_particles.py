@@ -29,6 +29,9 @@ from deformables import (ClothConfig, RopeConfig, cloth_key_particles, goal_sequ
 from deformables.cloth import PANEL_MODES  # noqa: E402
 from deformables.goals import TRIANGULATIONS  # noqa: E402
 
+# experiments/ is on the path: it is the script's folder (tests import it from there)
+from cli_args import choices_list  # noqa: E402
+
 ROPE_TASKS = ["rope_straighten", "rope_fold", "rope_fold_unequal"]
 CLOTH_TASKS = ["cloth_diagonal", "cloth_side", "cloth_reflective", "cloth_underneath"]
 TASKS = ROPE_TASKS + CLOTH_TASKS
@@ -180,11 +183,10 @@ def noise_table(rows: list[dict]) -> dict:
 
 
 def _panel_modes(text: str) -> list[str]:
-    modes = [m.strip() for m in text.split(",") if m.strip()]
-    bad = [m for m in modes if m not in PANEL_MODES]
-    if bad or not modes:
-        raise argparse.ArgumentTypeError(f"unknown panel modes {bad}; choose from {PANEL_MODES}")
-    return modes
+    try:
+        return choices_list(text, PANEL_MODES, "panel modes")
+    except ValueError as e:       # argparse shows an ArgumentTypeError's own message
+        raise argparse.ArgumentTypeError(str(e)) from e
 
 
 def main(argv=None) -> int:

@@ -25,6 +25,7 @@ from pathlib import Path
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
+from cli_args import choices_list  # noqa: E402
 from mpc_trial import (OUTLIER_DISTANCE, TRIAL_DEFAULTS, aggregate,  # noqa: E402
                        feedback_effect, run_trial, trial_key)
 
@@ -68,11 +69,10 @@ def parse_args(argv=None) -> argparse.Namespace:
     args = ap.parse_args(argv)
     if args.task not in TASKS:
         ap.error(f"unknown task {args.task!r}; choose from {TASKS}")
-    methods = [m for m in args.methods.split(",") if m]
-    bad = [m for m in methods if m not in METHODS]
-    if bad or not methods:
-        ap.error(f"unknown method(s) {bad}; choose from {METHODS}")
-    args.methods = methods
+    try:
+        args.methods = choices_list(args.methods, METHODS, "method(s)")
+    except ValueError as e:
+        ap.error(str(e))
     if args.rho < 0:
         ap.error("--rho must be >= 0")
     if args.theta is not None and args.theta < 0:
