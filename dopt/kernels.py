@@ -2,8 +2,9 @@
 
 The shared library is built at install time (an optional setuptools extension). If it is
 missing (no C compiler at install) or the running MuJoCo is not the version its prototypes
-were written for, ``load()`` returns None, logs why, and ``RolloutService`` falls back to
-``mujoco.batch.Batch`` (same results, slower: README, "Why these libraries").
+were written for, ``load()`` returns None, logs why, and ``RolloutService`` takes the
+``mujoco.batch.Batch`` route (same results, slower: README, "Why these libraries"). The
+service's C route, ``dopt.rollout_c``, is the one user of ``Kernels``.
 
 Work is split over ``threads`` Python threads, each with its own MjData; ctypes releases the
 GIL for the length of every C call.
@@ -139,8 +140,15 @@ class Kernels:
         self.threads = threads
         self._datas = [mujoco.MjData(model) for _ in range(threads)]
         self._warnings = [Warnings.of(d) for d in self._datas]
-        # idle workers exit when the pool is garbage-collected with its service
+        # close() shuts the workers down (else they exit when the pool is garbage-collected)
         self._pool = ThreadPoolExecutor(threads) if threads > 1 else None
+
+    def close(self) -> None:
+        """Shut the thread pool down and drop the MjData; idempotent. No call may follow."""
+        if self._pool is not None:
+            self._pool.shutdown(wait=True)
+            self._pool = None
+        self._datas, self._warnings = [], []
 
     def _map(self, job, n_items: int):
         """Run job(i, items) on `threads` interleaved shares of range(n_items); share i runs
@@ -220,5 +228,10 @@ class Kernels:
 _WARNING_NAMES = [n for n in mujoco.mjtWarning.__members__ if n != "mjNWARNING"]
 
 
+def warning_names(counts: np.ndarray) -> list[str]:
+    """Names of the MuJoCo warnings whose counters (nwarning,) are non-zero, in enum order."""
+    return [_WARNING_NAMES[i] for i in np.nonzero(counts)[0]]
+
+
 def _warnings(d: mujoco.MjData) -> list[str]:
-    return [_WARNING_NAMES[i] for i in np.nonzero(d.warning.number)[0]]
+    return warning_names(d.warning.number)

@@ -3,16 +3,22 @@
 Both planners stand on this one object. CEM asks it for the final states of a population of
 control sequences in one batched call; iLQR asks it for the nominal trajectory and for the
 perturbed one-step transitions of the active DoFs over the whole horizon in one batched call.
-Open-loop rollouts run in ``mujoco.batch.Batch`` on ``threads`` threads with the GIL released,
-bit-identical to a plain ``mj_step`` loop at any thread count. Derivatives and feedback rollouts
-run in the C loops of ``dopt.kernels`` when they were built (derivatives skip the stages a
-perturbation leaves unchanged, as ``mjd_transitionFD`` does; feedback needs no Python per step),
-else in the same Batch; both routes give the same numbers (tested).
+
+This module holds the public face: configs, result types and the ``RolloutService`` facade,
+which validates inputs and delegates to one of two routes, chosen once at construction:
+
+- ``dopt.rollout_c.CRoute`` (the default where ``dopt.kernels`` was built): derivatives and
+  feedback rollouts in C loops (derivatives skip the stages a perturbation leaves unchanged,
+  as ``mjd_transitionFD`` does; feedback needs no Python per step);
+- ``dopt.rollout_batch.BatchRoute``: everything in ``mujoco.batch.Batch``.
+
+Open-loop rollouts run in ``mujoco.batch.Batch`` on both routes, on ``threads`` threads with
+the GIL released, bit-identical to a plain ``mj_step`` loop at any thread count. Both routes
+give the same numbers (tested).
 """
 
 from __future__ import annotations
 
-import logging
 import os
 import threading
 from collections.abc import Sequence
@@ -20,19 +26,15 @@ from dataclasses import dataclass
 
 import mujoco
 import numpy as np
-from mujoco.batch import Batch, SimulationError
 
 from dopt import kernels
-from dopt.errors import RolloutError, UnstableRolloutError
+from dopt.rollout_batch import BatchRoute
+from dopt.rollout_c import CRoute
 from dopt.scene import Scene
 from dopt.state import check_states
 
-log = logging.getLogger(__name__)
-
 CTRL = int(mujoco.mjtState.mjSTATE_CTRL)
 USER = int(mujoco.mjtState.mjSTATE_USER)
-_TIME = int(mujoco.mjtState.mjSTATE_TIME)
-_WARNINGS = [n for n in mujoco.mjtWarning.__members__ if n != "mjNWARNING"]
 
 
 @dataclass(frozen=True)
@@ -53,9 +55,18 @@ class RolloutConfig:
 
 @dataclass(frozen=True)
 class FDConfig:
-    """Finite differences: step ``eps`` (in each DoF's own unit), forward or centred."""
+    """Finite differences: step ``eps`` (in each DoF's own unit), forward or centred.
 
-    eps: float = 1e-6
+    The default, forward with eps 1e-3, is what the planners use. The authors used centred
+    differences with eps 1e-6, but at 1e-6 the tilt DoFs of cylinders standing on a table give
+    A entries ~1/eps (contact switching), which swamp iLQR's gains K and put untouched
+    distractors at the top of the importance ranking (measured on clutter: |A|max 6e5 at
+    1e-6, 2e3 at 1e-3; pinned by tests/planners/test_importance_clutter.py). Forward also
+    takes half the steps. Comparisons against ``mujoco.mjd_transitionFD`` pass their eps
+    (1e-6) explicitly.
+    """
+
+    eps: float = 1e-3
     centered: bool = False
 
     def __post_init__(self):
@@ -109,8 +120,11 @@ class Derivatives:
 class RolloutService:
     """Batched rollouts and FD derivatives on one scene.
 
-    Not for concurrent use from several Python threads (calls are serialised by a lock); give
-    each thread its own service.
+    The route (C kernels or Batch, see the module docstring) is chosen once, here. Not for
+    concurrent use from several Python threads (calls are serialised by a lock); give each
+    thread its own service. ``close()`` (or leaving a ``with RolloutService(scene) as svc:``
+    block) shuts the C kernels' thread pool down and drops the Batch; later calls raise
+    RuntimeError.
     """
 
     def __init__(self, scene: Scene, config: RolloutConfig = RolloutConfig()):
@@ -120,12 +134,41 @@ class RolloutService:
         self.model = scene.model
         self.config = config
         self.threads = config.threads or os.cpu_count() or 1
-        self._batch: Batch | None = None
-        self._kernels: kernels.Kernels | None = None
+        self._uses_c_kernels = config.c_kernels and kernels.load() is not None
+        route = CRoute if self._uses_c_kernels else BatchRoute
+        self._route: BatchRoute | None = route(scene, self.threads)
         self._lock = threading.Lock()
-        lay = scene.layout
-        self._qpos, self._qvel, self._act, self._ctrl = (lay["qpos"], lay["qvel"], lay["act"],
-                                                         lay["ctrl"])
+
+    @property
+    def uses_c_kernels(self) -> bool:
+        """Whether derivatives and feedback rollouts run in dopt.kernels' C loops."""
+        return self._uses_c_kernels
+
+    # ------------------------------------------------------------------ lifetime
+    def close(self) -> None:
+        """Shut the C kernels' thread pool down and drop the Batch; idempotent. Any later
+        call raises RuntimeError."""
+        with self._lock:
+            route, self._route = self._route, None
+            if route is not None:
+                route.close()
+
+    @property
+    def closed(self) -> bool:
+        """Whether ``close()`` was called."""
+        return self._route is None
+
+    def __enter__(self) -> "RolloutService":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    def _open_route(self) -> BatchRoute:
+        """The route, for a call holding the lock; RuntimeError once closed."""
+        if self._route is None:
+            raise RuntimeError("RolloutService is closed")
+        return self._route
 
     # ------------------------------------------------------------------ rollouts
     def rollout(self, initial_states, controls, *, record: Sequence = (),
@@ -144,6 +187,7 @@ class RolloutService:
             ValueError: bad shapes or dtypes, NaN/inf inputs.
             UnstableRolloutError: a rollout produced NaN or a MuJoCo warning (names which
                 rollout and at which step).
+            RuntimeError: the service is closed.
         """
         if control_spec & ~USER or not control_spec:
             raise ValueError(f"control_spec must be a non-empty subset of mjSTATE_USER "
@@ -161,22 +205,10 @@ class RolloutService:
             raise ValueError(f"initial_states has {n_x0} rollouts but controls has "
                              f"{u.shape[0]}; give one of them for all or P of each")
         P = max(u.shape[0], n_x0)
-        T = u.shape[1]
-        items = [_TIME] + [r for r in record if r != _TIME]
+        u = np.broadcast_to(u, (P, u.shape[1], ncontrol))
         with self._lock:
-            batch, ids = self._batch_of(P)
-            batch.state[:P] = x0
-            batch.warning[:P] = 0
-            try:
-                rec = batch.rollout(T, control=np.broadcast_to(u, (P, T, ncontrol)),
-                                    control_spec=control_spec, record=items, ids=ids)
-            except SimulationError as e:
-                raise RolloutError(f"rollout: {e}") from e
-            final = batch.state[:P].copy()
-            self._check_stable(batch, P, final, rec[_TIME][:, :, 0], "rollout")
-        if _TIME not in record:
-            rec.pop(_TIME)
-        return RolloutResult(final, rec)
+            final, records = self._open_route().rollout(x0, u, control_spec, record)
+        return RolloutResult(final, records)
 
     def trajectory(self, initial_state, controls) -> Trajectory:
         """One open-loop rollout that keeps every state row: (ns,), (T, nu) -> Trajectory."""
@@ -187,8 +219,9 @@ class RolloutService:
         spec = self.scene.layout.spec
         res = self.rollout(x0, u[None], record=(spec,))
         states = np.concatenate([x0[None], res.records[spec][0]], axis=0)
-        states[0, self._ctrl] = u[0]
-        states[1:-1, self._ctrl] = u[1:]
+        ctrl = self.scene.layout["ctrl"]
+        states[0, ctrl] = u[0]
+        states[1:-1, ctrl] = u[1:]
         return Trajectory(states, np.array(u))
 
     def rollout_feedback(self, initial_state, controls, ref_states, gains, dofs) -> Trajectory:
@@ -215,56 +248,15 @@ class RolloutService:
         ref = check_states(m, ref_states, batched=True, name="ref_states")
         K = _as_float(gains, "gains")
         C = self.scene.as_dofs(dofs)
-        P, T = u.shape[:2] if u.ndim == 3 else (0, 0)
+        T = u.shape[1] if u.ndim == 3 else 0
         if u.ndim != 3 or u.shape[2] != m.nu or T == 0:
             raise ValueError(f"controls must have shape (P, T, {m.nu}), got {u.shape}")
         if ref.shape[0] != T or K.shape != (T, m.nu, 2 * len(C)):
             raise ValueError(f"ref_states must be ({T}, ns) and gains ({T}, {m.nu}, "
                              f"{2 * len(C)}); got {ref.shape} and {K.shape}")
-        lo, hi = self._ctrl_bounds()
-        if self.uses_c_kernels:
-            with self._lock:
-                out, applied, bad = self._kernel().feedback(x0, u, ref, K, C, lo, hi)
-            if bad:
-                p, step, names = bad[0]
-                raise UnstableRolloutError(p, step, names[0], "rollout_feedback")
-            return Trajectory(out, applied)
-        ref_q, ref_v = ref[:, self._qpos], ref[:, self._qvel][:, C]
-        out = np.empty((P, T + 1, self.scene.nstate))
-        applied = np.empty((P, T, m.nu))
-        diff = self.scene.tangent.difference
         with self._lock:
-            batch, ids = self._batch_of(P)
-            rows = batch.state
-            rows[:P] = x0
-            batch.warning[:P] = 0
-            try:
-                for t in range(T):
-                    x = rows[:P]
-                    dx = np.concatenate([diff(ref_q[t], x[:, self._qpos], 1.0, C),
-                                         x[:, self._qvel][:, C] - ref_v[t]], axis=1)
-                    ut = np.clip(u[:, t] + dx @ K[t].T, lo, hi)
-                    rows[:P, self._ctrl] = ut
-                    applied[:, t] = ut
-                    out[:, t] = rows[:P]
-                    batch.step(ids=ids)
-                    bad = batch.warning[:P, :, 1].any(axis=1) | ~np.isfinite(rows[:P]).all(1)
-                    if bad.any():   # lock-step: the first step any rollout went unstable
-                        p = int(np.argmax(bad))
-                        warned = np.nonzero(batch.warning[p, :, 1])[0]
-                        reason = _WARNINGS[warned[0]] if len(warned) else "non-finite state"
-                        raise UnstableRolloutError(p, t, reason, "rollout_feedback")
-            except SimulationError as e:
-                raise RolloutError(f"rollout_feedback: {e}") from e
-            out[:, T] = rows[:P]
-        return Trajectory(out, applied)
-
-    def _ctrl_bounds(self) -> tuple[np.ndarray, np.ndarray]:
-        """(nu,) lower and upper control bounds (+-inf where not limited)."""
-        m = self.model
-        limited = m.actuator_ctrllimited.astype(bool)
-        return (np.where(limited, m.actuator_ctrlrange[:, 0], -np.inf),
-                np.where(limited, m.actuator_ctrlrange[:, 1], np.inf))
+            states, applied = self._open_route().feedback(x0, u, ref, K, C)
+        return Trajectory(states, applied)
 
     # --------------------------------------------------------------- derivatives
     def derivatives(self, states, dofs=None, fd: FDConfig = FDConfig()) -> Derivatives:
@@ -294,129 +286,9 @@ class RolloutService:
                              "mjd_transitionFD)")
         x = check_states(m, states, batched=True, name="states")
         C = self.scene.dofs() if dofs is None else self.scene.as_dofs(dofs)
-        if self.uses_c_kernels:
-            lo, hi = self._ctrl_bounds()
-            with self._lock:
-                F, bad = self._kernel().fd(x, C, fd.eps, fd.centered, lo, hi)
-            if bad:
-                t, names = bad[0]
-                raise UnstableRolloutError(t, 0, names[0], f"derivatives t={t}")
-            return Derivatives(F, C, fd)
-        T, c, nu, eps = x.shape[0], len(C), m.nu, fd.eps
-        sides = (1.0, -1.0) if fd.centered else (1.0,)
-        ns = len(sides)
-        # row blocks per timestep: nominal | ctrl (ns*nu) | vel (ns*c) | pos (ns*c)
-        K = 1 + ns * (nu + 2 * c)
-        rows = np.repeat(x[:, None, :], K, axis=1)                    # (T, K, nstate)
-        ctrl = x[:, self._ctrl]                                        # (T, nu)
-        # controls: which one-sided nudges stay inside ctrlrange (as mjd_transitionFD)
-        limited = m.actuator_ctrllimited.astype(bool)
-        lo, hi = m.actuator_ctrlrange[:, 0], m.actuator_ctrlrange[:, 1]
-
-        def inside(a, b):
-            return ~limited | ((a >= lo) & (a <= hi) & (b >= lo) & (b <= hi))
-
-        fwd_ok = inside(ctrl, ctrl + eps)                              # (T, nu)
-        back_ok = (fd.centered | ~fwd_ok) & inside(ctrl - eps, ctrl)
-        col = self._ctrl.start + np.arange(nu)
-        r = 1
-        if fd.centered:
-            rows[:, r + np.arange(nu), col] += eps
-            rows[:, r + nu + np.arange(nu), col] -= eps
-        else:  # one row per control: forward if allowed, else backward, else unused
-            rows[:, r + np.arange(nu), col] += np.where(fwd_ok, eps, np.where(back_ok, -eps, 0))
-        r += ns * nu
-        vel_rows = r + np.arange(ns * c)
-        vcol = self._qvel.start + np.tile(C, ns)
-        rows[:, vel_rows, vcol] += np.repeat(np.array(sides) * eps, c)
-        r += ns * c
-        pos_rows = r + np.arange(ns * c)
-        for k, side in enumerate(sides):
-            block = rows[:, pos_rows[k * c:(k + 1) * c], self._qpos]   # (T, c, nq)
-            flat = self.scene.tangent.perturb(block.reshape(-1, m.nq), np.tile(C, T), side * eps)
-            rows[:, pos_rows[k * c:(k + 1) * c], self._qpos] = flat.reshape(T, c, m.nq)
-
         with self._lock:
-            batch, ids = self._batch_of(T * K)
-            n = T * K
-            batch.state[:n] = rows.reshape(n, -1)
-            batch.warning[:n] = 0
-            try:
-                batch.step(ids=ids)
-            except SimulationError as e:
-                raise RolloutError(f"derivatives: {e}") from e
-            nxt = batch.state[:n].reshape(T, K, -1).copy()
-            self._check_stable(batch, n, nxt.reshape(n, -1), None, "derivatives",
-                               rows_per_t=K)
-
-        qpos, qvel = nxt[..., self._qpos], nxt[..., self._qvel]       # (T, K, nq|nv)
-        diff = self.scene.tangent.difference
-
-        def dstate(a, b, h):
-            """(T, k, .) next states a -> b, tangent difference on C: (T, k, 2c)."""
-            dq = diff(qpos[:, a], qpos[:, b], h, C)
-            dv = (1.0 / h) * (qvel[:, b][..., C] - qvel[:, a][..., C])
-            return np.concatenate([dq, dv], axis=-1)
-
-        nom = np.zeros(nu, int)
-        if fd.centered:
-            plus, minus = 1 + np.arange(nu), 1 + nu + np.arange(nu)
-            both = dstate(minus, plus, 2 * eps)
-            fwd_only = dstate(nom, plus, eps)
-            back_only = dstate(minus, nom, eps)
-            f, b_ = fwd_ok[..., None], back_ok[..., None]
-            Bt = np.where(f & b_, both, np.where(f, fwd_only, np.where(b_, back_only, 0.0)))
-        else:
-            pert = 1 + np.arange(nu)
-            Bt = np.where(fwd_ok[..., None], dstate(nom, pert, eps),
-                          np.where(back_ok[..., None], dstate(pert, nom, eps), 0.0))
-        cols = []
-        for block in (vel_rows, pos_rows):
-            if fd.centered:
-                cols.append(dstate(block[c:], block[:c], 2 * eps))
-            else:
-                cols.append(dstate(np.zeros(c, int), block, eps))
-        # perturbation blocks (T, k, 2c) -> columns of F = [A B]: [dq_C, dv_C | u]
-        Ft = np.concatenate([cols[1], cols[0], Bt], axis=1)
-        return Derivatives(np.ascontiguousarray(Ft.transpose(0, 2, 1)), C, fd)
-
-    # ------------------------------------------------------------------ helpers
-    @property
-    def uses_c_kernels(self) -> bool:
-        """Whether derivatives and feedback rollouts run in dopt.kernels' C loops."""
-        return self.config.c_kernels and kernels.load() is not None
-
-    def _kernel(self) -> kernels.Kernels:
-        if self._kernels is None:
-            self._kernels = kernels.Kernels(self.model, self.scene.layout, self.threads)
-        return self._kernels
-
-    def _batch_of(self, n: int) -> tuple[Batch, np.ndarray | None]:
-        """A batch with at least n simulations (grown geometrically) and the ids of the first n."""
-        if self._batch is None or self._batch.nsim < n:
-            size = n if self._batch is None else max(n, 2 * self._batch.nsim)
-            log.debug("allocating a batch of %d simulations on %d threads", size, self.threads)
-            self._batch = Batch(self.model, size, nthread=self.threads)
-        ids = None if self._batch.nsim == n else np.arange(n, dtype=np.int32)
-        return self._batch, ids
-
-    def _check_stable(self, batch: Batch, n: int, final: np.ndarray, times, what: str,
-                      rows_per_t: int | None = None) -> None:
-        warned = batch.warning[:n, :, 1] > 0                             # (n, nwarning)
-        bad = warned.any(axis=1) | ~np.isfinite(final).all(axis=1)
-        if not bad.any():
-            return
-        i = int(np.argmax(bad))
-        reason = (_WARNINGS[int(np.argmax(warned[i]))] if warned[i].any()
-                  else "non-finite state")
-        if rows_per_t is not None:  # derivatives: row i is timestep i // K, perturbation i % K
-            what = f"derivatives t={i // rows_per_t} perturbation={i % rows_per_t}"
-            step = 0
-        else:
-            t = times[i]
-            stalled = np.nonzero(np.diff(t) <= 0)[0]
-            step = int(stalled[0] + 1) if len(stalled) else len(t) - 1
-        raise UnstableRolloutError(i, step, reason, what)
+            F = self._open_route().derivatives(x, C, fd.eps, fd.centered)
+        return Derivatives(F, C, fd)
 
 
 def _as_float(x, name: str) -> np.ndarray:

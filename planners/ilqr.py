@@ -31,15 +31,12 @@ def _default_alphas() -> tuple[float, ...]:
 
 @dataclass(frozen=True)
 class ILQRConfig:
-    """fd: finite differences of the dynamics. The authors used centred differences with eps
-    1e-6; we default to forward differences (half the steps) with eps 1e-3: at 1e-6 the tilt
-    DoFs of cylinders standing on a table give A entries ~1/eps (contact switching), which swamp
-    K and put untouched distractors at the top of the importance ranking (measured on clutter:
-    |A|max 6e5 at 1e-6, 2e3 at 1e-3; see tests/planners/test_importance_clutter.py).
+    """fd: finite differences of the dynamics (default: FDConfig's forward eps 1e-3, where its
+    docstring says why not the authors' centred 1e-6).
     mu_init/mu_min/mu_max/mu_factor: Levenberg-Marquardt regularisation of Q_uu (authors:
     0.1, 1e-4..10, x10). alphas: line-search step sizes tried in parallel."""
 
-    fd: FDConfig = FDConfig(eps=1e-3, centered=False)
+    fd: FDConfig = FDConfig()
     mu_init: float = 0.1
     mu_min: float = 1e-4
     mu_max: float = 10.0

@@ -77,8 +77,9 @@ def test_subset_equals_rows_and_columns_of_full(scene, trajectory, centered, dof
 
 def test_batch_of_one_timestep_and_two_threads(scene, trajectory, c_kernels):
     states = trajectory.states[3:4]
-    one = service(scene, c_kernels, threads=1).derivatives(states, "robot")
-    two = service(scene, c_kernels, threads=2).derivatives(states, "robot")
+    fd = FDConfig(eps=1e-6)
+    one = service(scene, c_kernels, threads=1).derivatives(states, "robot", fd)
+    two = service(scene, c_kernels, threads=2).derivatives(states, "robot", fd)
     np.testing.assert_array_equal(one.A, two.A)
     np.testing.assert_array_equal(one.B, two.B)
     A, B = reference(scene, states, 1e-6, False)
@@ -137,7 +138,7 @@ def test_mujoco_error_raises_and_the_service_recovers(c_kernels):
         svc.derivatives(on_floor)
     d.qpos[2], d.qpos[9] = 1.0, 2.0                    # both boxes high in the air, apart
     in_air = np.repeat(scene.state_of(d)[None], 3, axis=0)
-    got = svc.derivatives(in_air)
+    got = svc.derivatives(in_air, None, FDConfig(eps=1e-6))
     roomy = Scene.from_xml(TINY_ARENA.replace("3K", "1M"))   # transitionFD needs more arena
     np.testing.assert_allclose(got.A, reference(roomy, in_air, 1e-6, False)[0], atol=TOL, rtol=0)
 

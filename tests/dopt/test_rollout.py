@@ -6,6 +6,7 @@ import pytest
 
 from dopt.errors import UnstableRolloutError
 from dopt.rollout import RolloutConfig, RolloutService
+from dopt.rollout_batch import ctrl_bounds
 from dopt.scene import Scene
 from dopt.state import INTEGRATION
 
@@ -148,7 +149,7 @@ def test_feedback_rollouts_equal_step_loop(scene, moving_state, c_kernels, threa
     K = rng.normal(0, 0.3, (T, scene.nu, 2 * len(dofs)))
     K[:, 2] *= 0.05
     got = svc.rollout_feedback(moving_state, ff, ref, K, dofs)
-    lo, hi = svc._ctrl_bounds()
+    lo, hi = ctrl_bounds(scene.model)
     want = feedback_loop(scene, moving_state, ff, ref, K, dofs, lo, hi)
     ctrl = scene.layout["ctrl"]
     assert np.any(np.abs(got.controls[:, :, 1]) == 1.0)    # the hinge motor was clamped
@@ -191,3 +192,53 @@ def test_mujoco_error_in_feedback_rollouts_raises(c_kernels):
     with pytest.raises(RolloutError, match="rollout_feedback.*out of memory"):
         svc.rollout_feedback(x0, np.zeros((3, T, 0)), np.repeat(x0[None], T, 0),
                              np.zeros((T, 0, 2)), [0])
+
+
+def _use_every_call(svc, scene, x0):
+    """One call of each public method (makes the Batch and, on the C route, the kernels)."""
+    T = 5
+    ref = svc.trajectory(x0, np.zeros((T, scene.nu))).states
+    svc.rollout(x0, np.zeros((2, T, scene.nu)))
+    svc.rollout_feedback(x0, np.zeros((3, T, scene.nu)), ref[:-1],
+                         np.zeros((T, scene.nu, 2)), [0])
+    svc.derivatives(ref[:-1], "robot")
+    return ref
+
+
+def _assert_closed(svc, scene, x0, ref):
+    T = len(ref) - 1
+    calls = [lambda: svc.rollout(x0, np.zeros((2, T, scene.nu))),
+             lambda: svc.trajectory(x0, np.zeros((T, scene.nu))),
+             lambda: svc.rollout_feedback(x0, np.zeros((3, T, scene.nu)), ref[:-1],
+                                          np.zeros((T, scene.nu, 2)), [0]),
+             lambda: svc.derivatives(ref[:-1], "robot")]
+    for call in calls:
+        with pytest.raises(RuntimeError, match="RolloutService is closed"):
+            call()
+
+
+def test_closed_service_raises_and_close_is_idempotent(scene, moving_state, c_kernels):
+    svc = RolloutService(scene, RolloutConfig(threads=2, c_kernels=c_kernels))
+    ref = _use_every_call(svc, scene, moving_state)
+    pool = svc._route._kernels._pool if c_kernels else None
+    workers = list(pool._threads) if pool else []
+    assert not svc.closed and (not c_kernels or workers)
+    svc.close()
+    assert svc.closed and svc.uses_c_kernels == c_kernels
+    assert not any(w.is_alive() for w in workers)     # the C kernels' pool is shut down
+    _assert_closed(svc, scene, moving_state, ref)
+    svc.close()                                        # idempotent
+    _assert_closed(svc, scene, moving_state, ref)
+
+
+def test_context_manager_closes(scene, moving_state, c_kernels):
+    with RolloutService(scene, RolloutConfig(threads=2, c_kernels=c_kernels)) as svc:
+        ref = _use_every_call(svc, scene, moving_state)
+    _assert_closed(svc, scene, moving_state, ref)
+    # an exception leaving the block closes the service too, and propagates
+    with pytest.raises(KeyError):
+        with RolloutService(scene, RolloutConfig(threads=2, c_kernels=c_kernels)) as svc:
+            raise KeyError("boom")
+    assert svc.closed
+    # closing an unused service (nothing allocated yet) is fine
+    RolloutService(scene, RolloutConfig(c_kernels=c_kernels)).close()
