@@ -43,7 +43,7 @@ class Scene:
             self.groups[name] = self._checked_dofs(np.asarray(list(dofs)), name)
 
     @classmethod
-    def from_xml(cls, xml: str, groups: Mapping[str, Iterable[int]] | None = None) -> "Scene":
+    def from_xml(cls, xml: str, groups: Mapping[str, Iterable[int]] | None = None) -> Scene:
         """Compile an MJCF string."""
         return cls(mujoco.MjModel.from_xml_string(xml), groups)
 
@@ -85,10 +85,6 @@ class Scene:
         if arr.dtype.kind in "UO":
             return self.dofs(*[str(n) for n in arr.ravel()])
         return self._checked_dofs(arr, "dofs")
-
-    def qvel_indices(self, dofs) -> np.ndarray:
-        """Indices of the DoF set in qvel (identical to the DoF indices)."""
-        return self.as_dofs(dofs)
 
     def tangent_indices(self, dofs) -> np.ndarray:
         """Indices of the DoF set in the 2*nv tangent state [dq; dv]: (2|C|,)."""

@@ -16,15 +16,17 @@ import torch
 
 from dopt.bench.timing import best_wall
 from dopt.rollout import RolloutConfig, RolloutService
-from dopt.tasks.deformable_task import PickPlaceTask
-from dopt.tasks.picker import CONTROL_SPEC, PickerConfig
+from dopt.tasks.pick.cloth_scene import ClothSceneConfig, make_cloth
+from dopt.tasks.pick.picker import CONTROL_SPEC, PickerConfig
+from dopt.tasks.pick.rope_scene import RopeSceneConfig, make_rope
+from dopt.tasks.pick.scene import PickPlaceTask
+from planners.cem import CEM, CEMConfig
 
 
 def _cloth_task(n: int, bound: float):
     from deformables.goals import cloth_diagonal
-    from dopt.tasks.cloth import ClothConfig, make_cloth
 
-    scene = make_cloth(ClothConfig(n=n), PickerConfig(bound=(bound,) * 3))
+    scene = make_cloth(ClothSceneConfig(n=n), PickerConfig(bound=(bound,) * 3))
     goal = cloth_diagonal(n=n).positions + np.array([0.0, 0.0, scene.radius])
     N = n * n
     return scene, goal, [0, n - 1, N - n, N - 1]
@@ -32,9 +34,8 @@ def _cloth_task(n: int, bound: float):
 
 def _rope_task(n: int, bound: float):
     from deformables.goals import rope_crossed_triangle
-    from dopt.tasks.rope import RopeConfig, make_rope
 
-    scene = make_rope(RopeConfig(n=n), PickerConfig(bound=(bound,) * 3))
+    scene = make_rope(RopeSceneConfig(n=n), PickerConfig(bound=(bound,) * 3))
     goal = rope_crossed_triangle(n).positions
     return scene, goal, [0, n // 3, 2 * n // 3, n - 1]
 
@@ -42,8 +43,6 @@ def _rope_task(n: int, bound: float):
 def bench_cem(task: str, n: int | None, P: int, H: int, bound: float | None, threads: int,
               repeats: int, seed: int) -> dict:
     """Seconds per CEM iteration against P*H*K mj_step / threads, same run."""
-    from planners.cem import CEM, CEMConfig
-
     if task == "cloth":
         n, bound = n or 12, bound or 0.3
         scene, goal, cand = _cloth_task(n, bound)

@@ -7,8 +7,9 @@ import time
 import numpy as np
 import torch
 
-from dopt.rollout import RolloutConfig, RolloutService
-from dopt.scene import Scene
+from dopt.tasks import get_task
+from planners.svr import SelectionConfig, paper_theta
+from planners.svr_mpc import build_controller
 
 
 def bench_ilqr(task: str, methods: list[str], rho: float, theta: int | None, iterations: int,
@@ -19,25 +20,16 @@ def bench_ilqr(task: str, methods: list[str], rho: float, theta: int | None, ite
     ``iterations`` timed ones; ``vs_baseline`` is its time over baseline's, same run.
     theta None: the paper's Table 1 value per method (planners.svr.paper_theta).
     """
-    from dopt.tasks import get_task
-    from dopt.tasks.push_costs import push_cost
-    from planners.ilqr import ILQR
-    from planners.svr import DofSelector, SelectionConfig, paper_theta
-
     torch.set_num_threads(1)
     tm = get_task(task)(np.random.default_rng(seed))
-    scene = Scene(tm.model)
-    cost = push_cost(tm, scene)
     x0 = tm.initial_state
-    U0 = np.zeros((tm.horizon, scene.nu))
+    U0 = np.zeros((tm.horizon, tm.model.nu))
     out = []
     for method in methods:
         th = paper_theta(method) if theta is None else theta
-        svc = RolloutService(scene, RolloutConfig(threads=threads))
-        ilqr = ILQR(svc, cost)
-        sel = DofSelector(scene.nv, tm.robot_dofs, cost.costed_dofs,
-                          SelectionConfig(method, rho=rho, theta=th),
-                          np.random.default_rng(seed))
+        ctl = build_controller(tm, SelectionConfig(method, rho=rho, theta=th),
+                               np.random.default_rng(seed), threads)
+        svc, ilqr, sel = ctl.service, ctl.ilqr, ctl.selector
         U, walls, splits, sizes = U0, [], [], []
         for i in range(warmup + iterations):
             C = sel.before()
@@ -57,6 +49,7 @@ def bench_ilqr(task: str, methods: list[str], rho: float, theta: int | None, ite
                     "n_dofs": float(np.mean(sizes)), "split_ms": split, "threads": svc.threads,
                     "route": "c-kernels" if svc.uses_c_kernels else "batch",
                     "rho": rho, "theta": th, "final_cost": step.cost_after})
+        svc.close()
     base = next((r["ms_per_iteration"] for r in out if r["method"] == "baseline"), None)
     for r in out:
         r["vs_baseline"] = None if base is None else r["ms_per_iteration"] / base

@@ -14,16 +14,15 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import mujoco
-import numpy as np
 
-from dopt.tasks.deformable_task import DeformableScene, floor_scene_xml
-from dopt.tasks.picker import PickerConfig, check_positive, picker_mjcf
+from dopt.tasks.pick.picker import PickerConfig, check_positive, picker_mjcf
+from dopt.tasks.pick.scene import DeformableScene, floor_scene_xml
 
 FLEX = "cloth"
 
 
 @dataclass(frozen=True)
-class ClothConfig:
+class ClothSceneConfig:
     """Cloth, material and solver settings.
 
     Attributes:
@@ -77,15 +76,16 @@ class ClothConfig:
         return min(0.004, self.spacing / 4) if self.radius is None else float(self.radius)
 
 
-def cloth_xml(config: ClothConfig = ClothConfig(), picker: PickerConfig = PickerConfig(),
-              pickable: Sequence[int] | None = None) -> str:
+def cloth_xml(config: ClothSceneConfig = ClothSceneConfig(),
+              picker: PickerConfig = PickerConfig(), pickable: Sequence[int] | None = None) -> str:
     """MJCF of the cloth on a floor with the picker; ``pickable`` particles get a grasp
     equality (None: all N)."""
     c = config
     n, sp, r = c.n, c.spacing, c.particle_radius
     ids = range(n * n) if pickable is None else pickable
     fr = f"{c.friction} 0.005 0.0001"
-    flexcomp = f"""<flexcomp name="{FLEX}" type="grid" dim="2" count="{n} {n} 1" spacing="{sp} {sp} {sp}"
+    flexcomp = f"""<flexcomp name="{FLEX}" type="grid" dim="2" count="{n} {n} 1"
+              spacing="{sp} {sp} {sp}"
               pos="0 0 {r + 1e-4}" radius="{r}" mass="{c.mass}" rgba=".8 .3 .2 1">
       <contact selfcollide="{'auto' if c.selfcollide else 'none'}" condim="3" friction="{fr}"
                solref="0.01 1" solimp="0.95 0.99 0.0001"/>
@@ -99,14 +99,9 @@ def cloth_xml(config: ClothConfig = ClothConfig(), picker: PickerConfig = Picker
                            picker_mjcf(FLEX, ids, picker))
 
 
-def make_cloth(config: ClothConfig = ClothConfig(), picker: PickerConfig = PickerConfig(),
+def make_cloth(config: ClothSceneConfig = ClothSceneConfig(),
+               picker: PickerConfig = PickerConfig(),
                pickable: Sequence[int] | None = None) -> DeformableScene:
     """The flat cloth at rest on the floor, with the picker above it."""
     model = mujoco.MjModel.from_xml_string(cloth_xml(config, picker, pickable))
     return DeformableScene(model, FLEX, picker, settle=config.settle)
-
-
-def cloth_task(rng: np.random.Generator | None = None, **overrides) -> DeformableScene:
-    """Registry factory: the default cloth (``ClothConfig(**overrides)``), every particle
-    pickable. ``rng`` is unused (the flat start is deterministic)."""
-    return make_cloth(ClothConfig(**overrides))

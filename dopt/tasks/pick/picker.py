@@ -92,7 +92,7 @@ def picker_mjcf(flex_name: str, particles: Iterable[int],
     x, y, z = config.start
     body = (f'<body name="picker" pos="{x} {y} {z}" gravcomp="1">'
             + "".join(f'<joint name="picker_{a}" type="slide" axis="{axis}"/>'
-                      for a, axis in zip(_AXES, ("1 0 0", "0 1 0", "0 0 1")))
+                      for a, axis in zip(_AXES, ("1 0 0", "0 1 0", "0 0 1"), strict=True))
             + f'<geom name="picker" type="sphere" size="0.006" mass="{config.mass}" '
               f'contype="0" conaffinity="0" rgba="0.1 0.8 0.1 1"/></body>')
     ref = f"{config.solref[0]} {config.solref[1]}"

@@ -18,14 +18,14 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
-from dopt.tasks.deformable_task import DeformableScene, floor_scene_xml
-from dopt.tasks.picker import PickerConfig, check_positive, picker_mjcf
+from dopt.tasks.pick.picker import PickerConfig, check_positive, picker_mjcf
+from dopt.tasks.pick.scene import DeformableScene, floor_scene_xml
 
 FLEX = "rope"
 
 
 @dataclass(frozen=True)
-class RopeConfig:
+class RopeSceneConfig:
     """Rope, material and solver settings.
 
     Attributes:
@@ -61,14 +61,15 @@ class RopeConfig:
         check_positive(self, "length", "mass", "radius", "young", "timestep")
 
 
-def rope_xml(config: RopeConfig = RopeConfig(), picker: PickerConfig = PickerConfig(),
-             pickable: Sequence[int] | None = None) -> str:
+def rope_xml(config: RopeSceneConfig = RopeSceneConfig(),
+             picker: PickerConfig = PickerConfig(), pickable: Sequence[int] | None = None) -> str:
     """MJCF of the straight rope on a floor with the picker; ``pickable`` particles get a grasp
     equality (None: all N)."""
     c = config
     sp = c.length / (c.n - 1)
     fr = f"{c.friction} 0.005 0.0001"
-    flexcomp = f"""<flexcomp name="{FLEX}" type="grid" dim="1" count="{c.n} 1 1" spacing="{sp} {sp} {sp}"
+    flexcomp = f"""<flexcomp name="{FLEX}" type="grid" dim="1" count="{c.n} 1 1"
+              spacing="{sp} {sp} {sp}"
               pos="0 0 {c.radius + 1e-4}" radius="{c.radius}" mass="{c.mass}"
               rgba=".2 .3 .8 1">
       <contact selfcollide="{'auto' if c.selfcollide else 'none'}" friction="{fr}"
@@ -82,16 +83,10 @@ def rope_xml(config: RopeConfig = RopeConfig(), picker: PickerConfig = PickerCon
                                        picker))
 
 
-def make_rope(config: RopeConfig = RopeConfig(), picker: PickerConfig = PickerConfig(),
-              pickable: Sequence[int] | None = None,
+def make_rope(config: RopeSceneConfig = RopeSceneConfig(),
+              picker: PickerConfig = PickerConfig(), pickable: Sequence[int] | None = None,
               positions: np.ndarray | None = None) -> DeformableScene:
     """The rope at rest on the floor: straight, or placed at ``positions`` (N, 3) first (e.g.
     a crumpled shape from ``deformables.goals.rope_crumpled``) and settled."""
     model = mujoco.MjModel.from_xml_string(rope_xml(config, picker, pickable))
     return DeformableScene(model, FLEX, picker, settle=config.settle, positions=positions)
-
-
-def rope_task(rng: np.random.Generator | None = None, **overrides) -> DeformableScene:
-    """Registry factory: the default straight rope (``RopeConfig(**overrides)``), every particle
-    pickable. ``rng`` is unused."""
-    return make_rope(RopeConfig(**overrides))

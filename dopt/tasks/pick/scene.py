@@ -1,9 +1,10 @@
 """Rope and cloth scenes with the picker, and the pick-and-place task that CEM evaluates.
 
-``DeformableScene`` is a compiled flex object plus the picker (built by ``dopt.tasks.rope`` and
-``dopt.tasks.cloth``). ``PickPlaceTask`` holds a scene, a start state and a goal shape, and turns
-a population of pick-and-place action sequences into costs with one batched rollout: the
-paper's objective (Eq. 2), the mean distance of the particles to their goal positions.
+``DeformableScene`` is a compiled flex object plus the picker (built by ``rope_scene`` and
+``cloth_scene`` next to this module). ``PickPlaceTask`` holds a scene, a start state and a goal
+shape, and turns a population of pick-and-place action sequences into costs with one batched
+rollout: the paper's objective (Eq. 2), the mean distance of the particles to their goal
+positions.
 
 Shapes: P population, H actions per sequence, K steps per action, N particles, ns state size.
 """
@@ -16,7 +17,8 @@ import numpy as np
 from dopt.rollout import RolloutConfig, RolloutService
 from dopt.scene import Scene
 from dopt.state import check_states
-from dopt.tasks.picker import CONTROL_SPEC, Picker, PickerConfig, fix_grasp_anchors
+from dopt.tasks.pick.picker import CONTROL_SPEC, Picker, PickerConfig, fix_grasp_anchors
+
 
 def floor_scene_xml(name: str, option: str, memory_mb: int, floor: str, flexcomp: str,
                     picker_parts: tuple[str, str, str]) -> str:
@@ -166,14 +168,6 @@ class PickPlaceTask:
     def bound(self) -> np.ndarray:
         """(3,) largest displacement per axis (m)."""
         return self.picker.bound
-
-    def with_start(self, state: np.ndarray) -> "PickPlaceTask":
-        """The same task from another start state (ns,)."""
-        return PickPlaceTask(self.scene, self.goal, state, self.service)
-
-    def with_goal(self, goal: np.ndarray) -> "PickPlaceTask":
-        """The same start state with another goal (N, 3)."""
-        return PickPlaceTask(self.scene, goal, self.start_state, self.service)
 
     def rollout(self, particles, displacements, start: np.ndarray | None = None) -> np.ndarray:
         """Final states of a population of action sequences: (P, H), (P, H, 3) -> (P, ns),

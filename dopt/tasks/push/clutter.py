@@ -19,8 +19,8 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
-from dopt.tasks.base import TaskModel, require_generator
-from dopt.tasks.panda import TOOL_RADIUS, ik_pointing_down, rest_state, table_scene_spec
+from dopt.tasks.push.panda import TOOL_RADIUS, ik_pointing_down, rest_state, table_scene_spec
+from dopt.tasks.push.task_model import TaskModel, require_generator
 
 log = logging.getLogger(__name__)
 
@@ -88,7 +88,8 @@ def sample_layout(rng: np.random.Generator) -> ClutterLayout:
     occupied = [(goal_cylinder, CYLINDER_RADIUS), (goal, CYLINDER_RADIUS), (tip, TOOL_RADIUS)]
     distractors = []
     for _ in range(_MAX_DRAWS):
-        xy = goal_cylinder + rng.uniform(-0.1, distance + 0.15) * along + rng.uniform(-0.2, 0.2) * across
+        xy = (goal_cylinder + rng.uniform(-0.1, distance + 0.15) * along
+              + rng.uniform(-0.2, 0.2) * across)
         if all(np.linalg.norm(xy - c) >= CYLINDER_RADIUS + r + MIN_GAP for c, r in occupied):
             distractors.append(xy)
             occupied.append((xy, CYLINDER_RADIUS))
@@ -100,7 +101,10 @@ def sample_layout(rng: np.random.Generator) -> ClutterLayout:
 
 
 def add_cylinder(spec: mujoco.MjSpec, name: str, xy: np.ndarray, rgba: tuple[float, ...]) -> None:
-    """Add a free upright cylinder standing on the table at ``xy`` (body, joint and geom ``name``)."""
+    """Add a free upright cylinder standing on the table at ``xy``.
+
+    The body, its joint and its geom are all called ``name``.
+    """
     body = spec.worldbody.add_body(name=name, pos=[xy[0], xy[1], CYLINDER_HALF_HEIGHT])
     body.add_freejoint(name=name)
     body.add_geom(
@@ -114,7 +118,8 @@ def add_cylinder(spec: mujoco.MjSpec, name: str, xy: np.ndarray, rgba: tuple[flo
     )
 
 
-def add_goal_marker(spec: mujoco.MjSpec, xy: np.ndarray, radius: float, height: float) -> np.ndarray:
+def add_goal_marker(spec: mujoco.MjSpec, xy: np.ndarray, radius: float,
+                    height: float) -> np.ndarray:
     """Add the goal region, a translucent green cylinder site standing on the table.
 
     It has no physics (sites do not collide). Returns its (3,) centre at table height.
@@ -138,7 +143,7 @@ def build_clutter(rng: np.random.Generator) -> TaskModel:
     layout = sample_layout(rng)
     spec = table_scene_spec(DT, mujoco.mjtIntegrator.mjINT_EULER)
     add_cylinder(spec, GOAL_CYLINDER, layout.goal_cylinder, GOAL_RGBA)
-    for name, xy in zip(DISTRACTORS, layout.distractors):
+    for name, xy in zip(DISTRACTORS, layout.distractors, strict=True):
         add_cylinder(spec, name, xy, DISTRACTOR_RGBA)
     goal = add_goal_marker(spec, layout.goal, CYLINDER_RADIUS, 2 * CYLINDER_HALF_HEIGHT)
     model = spec.compile()

@@ -25,8 +25,8 @@ import numpy as np
 
 from dopt.costs import EEDistanceTerm, QuadraticCost
 from dopt.scene import Scene
-from dopt.tasks.base import TaskModel, planar_dofs
-from dopt.tasks.panda import TAU_MAX
+from dopt.tasks.push.panda import TAU_MAX
+from dopt.tasks.push.task_model import TaskModel, planar_dofs
 
 
 @dataclass(frozen=True)
@@ -92,7 +92,7 @@ def push_cost(tm: TaskModel, scene: Scene, weights: PushWeights = PushWeights())
     w[nv + arm], w_f[nv + arm] = W.arm_velocity, W.arm_velocity_f
     r = W.torque / TAU_MAX ** 2
 
-    from dopt.tasks.panda import ee_chain
+    from dopt.tasks.push.panda import ee_chain
     chain = ee_chain()
 
     def fk(q):

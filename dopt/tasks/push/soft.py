@@ -24,8 +24,7 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
-from dopt.tasks.base import TaskModel, require_generator
-from dopt.tasks.clutter import (
+from dopt.tasks.push.clutter import (
     CYLINDER_HALF_HEIGHT,
     CYLINDER_RADIUS,
     EE_HEIGHT,
@@ -36,7 +35,8 @@ from dopt.tasks.clutter import (
     add_goal_marker,
     draw_heading,
 )
-from dopt.tasks.panda import TOOL_RADIUS, ik_pointing_down, rest_state, table_scene_spec
+from dopt.tasks.push.panda import TOOL_RADIUS, ik_pointing_down, rest_state, table_scene_spec
+from dopt.tasks.push.task_model import TaskModel, require_generator
 
 log = logging.getLogger(__name__)
 
@@ -53,7 +53,8 @@ SOFT_RGBA = (0.85, 0.15, 0.15, 1.0)
 SETTLE_STEPS = 100  # steps of zero control before the initial state is taken
 
 
-def block_mesh(counts: tuple[int, int, int], spacing: float, notch: bool = False) -> tuple[np.ndarray, np.ndarray]:
+def block_mesh(counts: tuple[int, int, int], spacing: float,
+               notch: bool = False) -> tuple[np.ndarray, np.ndarray]:
     """Tetrahedral mesh of a block of grid vertices.
 
     The block has ``counts`` = (along, across, up) vertices, ``spacing`` apart, centred on x = y
@@ -92,7 +93,8 @@ def block_mesh(counts: tuple[int, int, int], spacing: float, notch: bool = False
     return points, np.array(tets, dtype=int)
 
 
-def add_soft_block(spec: mujoco.MjSpec, points: np.ndarray, tets: np.ndarray, xy: np.ndarray, heading: float) -> None:
+def add_soft_block(spec: mujoco.MjSpec, points: np.ndarray, tets: np.ndarray, xy: np.ndarray,
+                   heading: float) -> None:
     """Add the soft body ``SOFT_BODY``: a flex with one 3-DoF body per point (``dof="full"``).
 
     ``points`` (N, 3) and ``tets`` (E, 4) as from ``block_mesh``; the block is turned by
@@ -141,8 +143,8 @@ class _Block:
     tip: np.ndarray
 
 
-def _draw_block(rng: np.random.Generator, counts: tuple[int, int, int], notch: bool, x: float, half_x: float,
-                half_y: float) -> _Block:
+def _draw_block(rng: np.random.Generator, counts: tuple[int, int, int], notch: bool, x: float,
+                half_x: float, half_y: float) -> _Block:
     """Draw a block centred in [x +- half_x] x [+- half_y] (m), pushed along a heading within 30
     degrees of +x, with the pusher tip ``STANDOFF`` behind its back face."""
     centre = np.array([rng.uniform(x - half_x, x + half_x), rng.uniform(-half_y, half_y)])
@@ -157,8 +159,8 @@ def _half_depth(points: np.ndarray) -> float:
     return float(points[:, 0].max()) + VERTEX_RADIUS
 
 
-def _finish(name: str, spec: mujoco.MjSpec, block: _Block, goal: np.ndarray, goal_object: str, horizon: int,
-            slowdown: int) -> TaskModel:
+def _finish(name: str, spec: mujoco.MjSpec, block: _Block, goal: np.ndarray, goal_object: str,
+            horizon: int, slowdown: int) -> TaskModel:
     """Compile the scene, settle it with the pusher tip at ``block.tip``, and describe the task."""
     model = spec.compile()
     state = rest_state(model, ik_pointing_down(np.array([*block.tip, EE_HEIGHT])), SETTLE_STEPS)
@@ -184,7 +186,8 @@ def build_soft(rng: np.random.Generator) -> TaskModel:
     Raises:
         TypeError: ``rng`` is not a ``numpy.random.Generator``.
     """
-    block = _draw_block(require_generator(rng), (3, 4, 3), notch=False, x=0.5, half_x=0.05, half_y=0.1)
+    block = _draw_block(require_generator(rng), (3, 4, 3), notch=False, x=0.5, half_x=0.05,
+                        half_y=0.1)
     goal_xy = block.centre + rng.uniform(0.15, 0.25) * block.along
     spec = table_scene_spec(DT, mujoco.mjtIntegrator.mjINT_DISCRETE)
     add_soft_block(spec, block.points, block.tets, block.centre, block.heading)
@@ -199,7 +202,8 @@ def build_soft_rigid(rng: np.random.Generator) -> TaskModel:
     Raises:
         TypeError: ``rng`` is not a ``numpy.random.Generator``.
     """
-    block = _draw_block(require_generator(rng), (4, 4, 3), notch=True, x=0.45, half_x=0.03, half_y=0.08)
+    block = _draw_block(require_generator(rng), (4, 4, 3), notch=True, x=0.45, half_x=0.03,
+                        half_y=0.08)
     cylinder_xy = block.centre + (_half_depth(block.points) + 0.01 + CYLINDER_RADIUS) * block.along
     goal_xy = cylinder_xy + rng.uniform(0.12, 0.2) * block.along
     spec = table_scene_spec(DT, mujoco.mjtIntegrator.mjINT_DISCRETE)

@@ -8,7 +8,7 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
-from dopt.tasks.panda import BODY_NAMES, EE_SITE, JOINT_NAMES
+from dopt.tasks.push.panda import BODY_NAMES, EE_SITE, JOINT_NAMES
 
 
 @dataclass(frozen=True, eq=False)
@@ -16,7 +16,7 @@ class TaskModel:
     """One instance of a task: what to simulate, from where, and what the cost looks at.
 
     Attributes:
-        name: the task's CLI name (a key of ``TASKS``).
+        name: the task's CLI name (a key of ``dopt.tasks.PUSH_TASKS``).
         model: the compiled model, fresh for each build (mutable: changes to its options
             reach everything that holds this TaskModel).
         initial_state: (ns,) ``mjSTATE_INTEGRATION`` state to start every episode from (written
@@ -65,11 +65,6 @@ class TaskModel:
         return self._bodies_of(self.goal_object)
 
     @property
-    def soft_bodies(self) -> list[int]:
-        """Vertex body ids of ``soft_body`` (empty without one)."""
-        return [] if self.soft_body is None else self._bodies_of(self.soft_body)
-
-    @property
     def cost_dofs(self) -> np.ndarray:
         """(k,) indices into qvel of the object DoFs the cost reads directly.
 
@@ -93,7 +88,8 @@ def require_generator(rng: object) -> np.random.Generator:
     """Return ``rng`` if it is a ``numpy.random.Generator``; raise TypeError otherwise."""
     if not isinstance(rng, np.random.Generator):
         raise TypeError(
-            f"rng must be a numpy.random.Generator (e.g. numpy.random.default_rng(seed)), got {type(rng).__name__}"
+            "rng must be a numpy.random.Generator (e.g. numpy.random.default_rng(seed)), "
+            f"got {type(rng).__name__}"
         )
     return rng
 
@@ -115,6 +111,7 @@ def planar_dofs(model: mujoco.MjModel, body_ids: Iterable[int]) -> np.ndarray:
             axis = np.abs(model.jnt_axis[joint])
             if kind == mujoco.mjtJoint.mjJNT_FREE:
                 dofs += [adr, adr + 1]
-            elif kind == mujoco.mjtJoint.mjJNT_SLIDE and np.isclose(axis[2], 0.0) and np.isclose(axis.max(), 1.0):
+            elif (kind == mujoco.mjtJoint.mjJNT_SLIDE and np.isclose(axis[2], 0.0)
+                  and np.isclose(axis.max(), 1.0)):
                 dofs.append(adr)
     return np.array(dofs, dtype=int)

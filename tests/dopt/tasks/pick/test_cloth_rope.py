@@ -8,10 +8,10 @@ import pytest
 from deformables.goals import cloth_diagonal, cloth_rest
 from dopt.errors import UnstableRolloutError
 from dopt.rollout import RolloutConfig, RolloutService
-from dopt.tasks.cloth import ClothConfig, make_cloth
-from dopt.tasks.deformable_task import PickPlaceTask, end_to_end, mean_distance
-from dopt.tasks.picker import CONTROL_SPEC, NONE, PickerConfig
-from dopt.tasks.rope import RopeConfig, make_rope
+from dopt.tasks.pick.cloth_scene import ClothSceneConfig, make_cloth
+from dopt.tasks.pick.picker import CONTROL_SPEC, NONE, PickerConfig
+from dopt.tasks.pick.rope_scene import RopeSceneConfig, make_rope
+from dopt.tasks.pick.scene import PickPlaceTask, end_to_end, mean_distance
 from planners.scripted import scripted
 
 N_SIDE = 8
@@ -19,12 +19,12 @@ N_SIDE = 8
 
 @pytest.fixture(scope="module")
 def cloth():
-    return make_cloth(ClothConfig(n=N_SIDE))
+    return make_cloth(ClothSceneConfig(n=N_SIDE))
 
 
 @pytest.fixture(scope="module")
 def rope():
-    return make_rope(RopeConfig(n=12, length=0.2))
+    return make_rope(RopeSceneConfig(n=12, length=0.2))
 
 
 def _task(scene, goal=None):
@@ -101,7 +101,7 @@ def test_bad_actions_raise(cloth, particles, disp, match):
 
 
 def test_unpickable_particle_raises():
-    scene = make_cloth(ClothConfig(n=4), pickable=[0, 15])
+    scene = make_cloth(ClothSceneConfig(n=4), pickable=[0, 15])
     assert scene.picker.pickable.tolist() == [0, 15]
     with pytest.raises(ValueError, match="no grasp equality"):
         scene.picker.encode([[5]], np.zeros((1, 1, 3)))
@@ -149,7 +149,7 @@ def test_task_costs_eq2(cloth):
 
 def test_unstable_rollout_raises_service_error():
     """An absurd gravity blows the simulation up: the rollout service's error, not NaN costs."""
-    scene = make_rope(RopeConfig(n=6, length=0.1))
+    scene = make_rope(RopeSceneConfig(n=6, length=0.1))
     scene.model.opt.gravity[:] = (0.0, 0.0, -1e12)
     task = _task(scene)
     with pytest.raises(UnstableRolloutError):
@@ -160,7 +160,7 @@ def test_scripted_diagonal_fold_reaches_goal():
     """Scripted fold (far corner above its goal, release) on a 10x10 cloth at dt 0.02: the mean
     particle distance to the ideal fold drops from 70 mm to below 25 mm."""
     n = 10
-    scene = make_cloth(ClothConfig(n=n), PickerConfig(bound=(0.3, 0.3, 0.3)))
+    scene = make_cloth(ClothSceneConfig(n=n), PickerConfig(bound=(0.3, 0.3, 0.3)))
     goal = cloth_diagonal(n=n).positions + np.array([0.0, 0.0, scene.radius])
     task = _task(scene, goal)
     assert task.cost(scene.initial_state) > 0.06

@@ -1,11 +1,12 @@
-"""The shipped Panda: datasheet numbers, kinematics against the DH-generated URDF, IK, holding still."""
+"""The shipped Panda: datasheet numbers, kinematics against the DH-generated URDF, IK, holding
+still."""
 
 import mujoco
 import numpy as np
 import pytest
 import torch
 
-from dopt.tasks import panda
+from dopt.tasks.push import panda
 
 
 @pytest.fixture(scope="module")
@@ -29,7 +30,8 @@ def test_actuators_are_torque_motors_with_datasheet_limits(arm):
     model, _ = arm
     assert tuple(model.actuator(i).name for i in range(model.nu)) == panda.ACTUATOR_NAMES
     np.testing.assert_array_equal(model.actuator_trnid[:, 0], np.arange(7))
-    np.testing.assert_array_equal(model.actuator_ctrlrange, np.stack([-panda.TAU_MAX, panda.TAU_MAX], axis=1))
+    np.testing.assert_array_equal(model.actuator_ctrlrange,
+                                  np.stack([-panda.TAU_MAX, panda.TAU_MAX], axis=1))
     assert model.actuator_ctrllimited.all()
     np.testing.assert_array_equal(model.actuator_gainprm[:, 0], 1.0)
     assert (model.actuator_biastype == mujoco.mjtBias.mjBIAS_NONE).all()
@@ -50,7 +52,8 @@ def test_zero_pose_matches_published_flange_height(arm):
     data.qpos[:] = 0.0
     mujoco.mj_kinematics(model, data)
     np.testing.assert_allclose(data.body("panda_pusher").xpos, [0.088, 0.0, 0.926], atol=1e-12)
-    np.testing.assert_allclose(data.site(panda.EE_SITE).xpos, [0.088, 0.0, 0.926 - panda.TOOL_LENGTH], atol=1e-12)
+    np.testing.assert_allclose(data.site(panda.EE_SITE).xpos,
+                               [0.088, 0.0, 0.926 - panda.TOOL_LENGTH], atol=1e-12)
 
 
 def test_shipped_urdf_is_generated_from_the_dh_table():
@@ -73,7 +76,8 @@ def test_torch_fk_agrees_with_mujoco(arm, batch):
             np.testing.assert_allclose(pose[:3, :3], data.body(link).xmat.reshape(3, 3), atol=1e-6)
         ee = frames[panda.EE_LINK].get_matrix()[b].numpy()
         np.testing.assert_allclose(ee[:3, 3], data.site(panda.EE_SITE).xpos, atol=1e-6)
-        np.testing.assert_allclose(ee[:3, :3], data.site(panda.EE_SITE).xmat.reshape(3, 3), atol=1e-6)
+        np.testing.assert_allclose(ee[:3, :3], data.site(panda.EE_SITE).xmat.reshape(3, 3),
+                                   atol=1e-6)
 
 
 def test_ee_chain_honours_dtype():
@@ -82,7 +86,8 @@ def test_ee_chain_honours_dtype():
     assert pose.dtype == torch.float32 and pose.shape == (3, 4, 4)
 
 
-@pytest.mark.parametrize("target", [(0.35, 0.0, 0.04), (0.45, -0.25, 0.04), (0.7, 0.2, 0.04), (0.5, 0.1, 0.3)])
+@pytest.mark.parametrize("target", [(0.35, 0.0, 0.04), (0.45, -0.25, 0.04), (0.7, 0.2, 0.04),
+                                    (0.5, 0.1, 0.3)])
 def test_ik_reaches_target_with_tool_down_inside_limits(arm, target):
     model, data = arm
     q = panda.ik_pointing_down(np.array(target))
@@ -90,7 +95,8 @@ def test_ik_reaches_target_with_tool_down_inside_limits(arm, target):
     data.qpos[:] = q
     mujoco.mj_forward(model, data)
     np.testing.assert_allclose(data.site(panda.EE_SITE).xpos, target, atol=1e-5)
-    np.testing.assert_allclose(data.site(panda.EE_SITE).xmat.reshape(3, 3)[:, 2], [0, 0, -1], atol=1e-5)
+    np.testing.assert_allclose(data.site(panda.EE_SITE).xmat.reshape(3, 3)[:, 2], [0, 0, -1],
+                               atol=1e-5)
     assert data.ncon == 0  # no self-collision in the pushing poses
 
 

@@ -6,8 +6,16 @@ import mujoco
 import numpy as np
 import pytest
 
-from dopt.tasks.panda import table_scene_spec
-from dopt.tasks.soft import DENSITY, SOFT_BODY, SPACING, VERTEX_RADIUS, add_soft_block, block_mesh, build_soft_rigid
+from dopt.tasks.push.panda import table_scene_spec
+from dopt.tasks.push.soft import (
+    DENSITY,
+    SOFT_BODY,
+    SPACING,
+    VERTEX_RADIUS,
+    add_soft_block,
+    block_mesh,
+    build_soft_rigid,
+)
 
 
 def tet_volumes(points: np.ndarray, tets: np.ndarray) -> np.ndarray:
@@ -37,7 +45,8 @@ def test_notch_removes_a_top_corner_only():
     np.testing.assert_allclose(missing, [[0.06, 0.06, 0.08]])
 
 
-@pytest.mark.parametrize(("counts", "spacing"), [((1, 3, 3), 0.04), ((3, 3), 0.04), ((3, 3, 3), 0.0)])
+@pytest.mark.parametrize(("counts", "spacing"),
+                         [((1, 3, 3), 0.04), ((3, 3), 0.04), ((3, 3, 3), 0.0)])
 def test_block_mesh_rejects_bad_sizes(counts, spacing):
     with pytest.raises(ValueError, match="counts"):
         block_mesh(counts, spacing)
@@ -56,7 +65,8 @@ def test_soft_block_is_placed_turned_and_weighed_as_asked():
     expected = points @ np.array([[c, s, 0], [-s, c, 0], [0, 0, 1]]) + [xy[0], xy[1], VERTEX_RADIUS]
     np.testing.assert_allclose(data.flexvert_xpos, expected, atol=1e-12)
     flex = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_FLEX, SOFT_BODY)
-    bodies = model.flex_vertbodyid[model.flex_vertadr[flex] : model.flex_vertadr[flex] + model.flex_vertnum[flex]]
+    first = model.flex_vertadr[flex]
+    bodies = model.flex_vertbodyid[first : first + model.flex_vertnum[flex]]
     volume = np.abs(tet_volumes(points, tets)).sum()
     assert model.body_mass[bodies].sum() == pytest.approx(DENSITY * volume)
 
@@ -71,5 +81,6 @@ def test_soft_rigid_puts_the_soft_body_between_pusher_and_cylinder():
     cylinder = data.body(task.goal_object).xpos[:2]
     assert 0 < np.dot(soft - tip, cylinder - tip) / np.linalg.norm(cylinder - tip) ** 2 < 1
     cylinder_geom = task.model.geom(task.goal_object).id
-    touching = [c for c in data.contact[: data.ncon] if cylinder_geom in c.geom and c.flex.max() >= 0]
+    touching = [c for c in data.contact[: data.ncon]
+                if cylinder_geom in c.geom and c.flex.max() >= 0]
     assert not touching, "the soft body touches the cylinder at the start"

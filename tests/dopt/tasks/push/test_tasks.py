@@ -1,12 +1,12 @@
-"""Every registered task: the paper's sizes and constants, a clean start, stability, determinism,
-and that pushing with the arm actually moves the goal object toward the goal."""
+"""Every registered push task: the paper's sizes and constants, a clean start, stability,
+determinism, and that pushing with the arm actually moves the goal object toward the goal."""
 
 import mujoco
 import numpy as np
 import pytest
 
-from dopt.tasks import TASKS, TaskModel, get_task
-from dopt.tasks.panda import BODY_NAMES, JOINT_NAMES, TAU_MAX
+from dopt.tasks import PUSH_TASKS, TaskModel
+from dopt.tasks.push.panda import BODY_NAMES, JOINT_NAMES, TAU_MAX
 
 # nv, T, Y, slowdown, iLQR-Naive DoFs (paper Sec. 5.1 and Table 1); nu = 7 and dt = 0.004 for all
 PAPER = {
@@ -24,7 +24,7 @@ INTEGRATION = mujoco.mjtState.mjSTATE_INTEGRATION
 
 @pytest.fixture(scope="module", params=sorted(PAPER))
 def task(request) -> TaskModel:
-    return TASKS[request.param](np.random.default_rng(0))
+    return PUSH_TASKS[request.param](np.random.default_rng(0))
 
 
 def start_data(task: TaskModel) -> mujoco.MjData:
@@ -49,18 +49,11 @@ def assert_healthy(task: TaskModel, data: mujoco.MjData, steps: int) -> None:
     assert data.time == pytest.approx(steps * task.dt)
 
 
-def test_registry_and_unknown_names():
-    assert sorted(TASKS) == ["clutter", "soft", "soft_rigid"]
-    assert get_task("soft") is TASKS["soft"]
-    with pytest.raises(ValueError, match="known tasks: clutter, soft, soft_rigid"):
-        get_task("cloth")
-
-
 @pytest.mark.parametrize("name", sorted(PAPER))
 @pytest.mark.parametrize("rng", [0, None, np.random.RandomState(0)])
 def test_builders_demand_a_generator(name, rng):
     with pytest.raises(TypeError, match="numpy.random.Generator"):
-        TASKS[name](rng)
+        PUSH_TASKS[name](rng)
 
 
 def test_sizes_and_constants_match_the_paper(task):
@@ -79,7 +72,7 @@ def test_push_cost_reads_exactly_the_naive_dofs(task):
     """iLQR-Naive takes the DoFs 'in the cost' (cost.costed_dofs): the robot plus the task's
     cost DoFs, the paper's counts 23 / 79 / 9 (the end-effector term reads the goal object)."""
     from dopt.scene import Scene
-    from dopt.tasks.push_costs import push_cost
+    from dopt.tasks.push.costs import push_cost
     cost = push_cost(task, Scene(task.model))
     want = np.union1d(task.robot_dofs, task.cost_dofs)
     np.testing.assert_array_equal(cost.costed_dofs, want)
@@ -99,7 +92,8 @@ def test_actuators_drive_the_robot_joints_in_order(task):
 def test_cost_dofs_are_world_xy_translations_of_the_cost_objects(task):
     """Moving along one cost DoF moves exactly one cost body, along world x or y only."""
     model, data = task.model, start_data(task)
-    cost_bodies = {model.body(n).id for n in (task.goal_object, *task.distractors) if n != task.soft_body}
+    cost_bodies = {model.body(n).id for n in (task.goal_object, *task.distractors)
+                   if n != task.soft_body}
     if task.goal_object == task.soft_body:
         flex = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_FLEX, task.soft_body)
         start = model.flex_vertadr[flex]
@@ -185,7 +179,7 @@ def test_pushing_moves_the_goal_object_toward_the_goal(task):
 
 @pytest.mark.parametrize("name", sorted(PAPER))
 def test_same_seed_same_instance_other_seed_other_instance(name):
-    first, again, other = (TASKS[name](np.random.default_rng(seed)) for seed in (7, 7, 8))
+    first, again, other = (PUSH_TASKS[name](np.random.default_rng(seed)) for seed in (7, 7, 8))
     np.testing.assert_array_equal(first.initial_state, again.initial_state)
     np.testing.assert_array_equal(first.goal_position, again.goal_position)
     assert not np.allclose(first.goal_position, other.goal_position)

@@ -1,0 +1,10 @@
+"""The pick-and-place wing of ``dopt.tasks``: a one-point picker moves a rope or a cloth.
+
+    picker.py       the picker (slide joints, grasp equalities), actions <-> control rows
+    scene.py        floor_scene_xml, DeformableScene (particles <-> state rows), PickPlaceTask
+                    (Eq. 2 of a population of action sequences in one rollout call),
+                    mean_distance, end_to_end
+    cloth_scene.py  ClothSceneConfig, make_cloth; rope_scene.py: RopeSceneConfig, make_rope
+
+The scene builders are registered by name in ``dopt.tasks.PICK_SCENES``.
+"""

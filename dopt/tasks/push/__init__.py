@@ -1,0 +1,10 @@
+"""The pushing wing of ``dopt.tasks``: the Franka Panda pushes rigid cylinders and soft bodies.
+
+    panda.py       the arm (shipped MJCF in assets/, DH table, torch FK chain, IK, table scene)
+    task_model.py  TaskModel (one built task: model, initial state, what the cost looks at),
+                   planar_dofs, require_generator
+    clutter.py     build_clutter; soft.py: build_soft, build_soft_rigid
+    costs.py       push_cost (Eq. 2-3), PushWeights, goal_distance (imports torch)
+
+The builders are registered by CLI name in ``dopt.tasks.PUSH_TASKS``.
+"""

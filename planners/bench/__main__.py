@@ -1,0 +1,49 @@
+"""python -m planners.bench {ilqr,cem} [options]: print timings as JSON."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+from dopt.bench.cli import add_common_args, print_json
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(prog="python -m planners.bench", description=__doc__)
+    sub = ap.add_subparsers(dest="bench", required=True)
+
+    p = sub.add_parser("ilqr", help="one iLQR(-SVR) iteration per DoF-selection method")
+    add_common_args(p)
+    p.add_argument("--methods", default="baseline,rand,naive,svr-sum,svr-svd",
+                   help="comma-separated methods (default %(default)s)")
+    p.add_argument("--rho", type=float, default=1.0, help="SVR importance threshold")
+    p.add_argument("--theta", type=int, default=None,
+                   help="random DoFs re-added per iteration (rand: DoFs besides the robot); "
+                        "default: the paper's Table 1 value per method (rand 5, svr 10)")
+    p.add_argument("--iterations", type=int, default=5, help="timed iterations per method")
+    p.add_argument("--warmup", type=int, default=3, help="untimed iterations per method first")
+
+    p = sub.add_parser("cem", help="one CEM iteration of the cloth or rope pick-and-place task")
+    add_common_args(p, task="cloth")
+    p.add_argument("--n", type=int, default=None,
+                   help="cloth particles per side (default 12) or rope particles (default 40)")
+    p.add_argument("--P", type=int, default=32, help="CEM population")
+    p.add_argument("--H", type=int, default=2, help="actions per sequence")
+    p.add_argument("--bound", type=float, default=None,
+                   help="picker displacement bound per axis, m (default: cloth 0.3, rope 0.1)")
+
+    args = ap.parse_args(argv)
+    if args.bench == "ilqr":
+        from planners.bench.ilqr import bench_ilqr
+        out = bench_ilqr(args.task, args.methods.split(","), args.rho, args.theta,
+                         args.iterations, args.warmup, args.threads, args.seed)
+    elif args.bench == "cem":
+        from planners.bench.cem import bench_cem
+        out = bench_cem(args.task, args.n, args.P, args.H, args.bound, args.threads,
+                        args.repeats, args.seed)
+    print_json(out)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
