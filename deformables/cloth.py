@@ -55,9 +55,10 @@ class ClothConfig:
             error is measured in the stretched space). A model that misses a layer is off by
             at least ``layer_gap * z_scale``; one that draws a crease joining two layers as a
             single edge by just under half of it; one with every layer and crease only by
-            in-plane errors, which do not shrink with the particle spacing. Over 112 noise-free
-            goals (README) accepted models are at most 5.7 mm off and the best model one size
-            smaller at least 23 mm; 0.35 gaps (17.5 mm) sits between at every resolution.
+            in-plane errors, which do not shrink with the particle spacing. Over the 112
+            noise-free goals of the resolution sweep in ``experiments/key_particles.py``
+            (``exact_errors=True``), accepted models are at most 11.8 mm off and the model one
+            size smaller at least 23.0 mm; 0.35 gaps (17.5 mm) sits between at every resolution.
         geodesic_radius: key particles closer than this fraction of the rest sheet's extent
             (largest side of its bounding box), along the sheet, are merged: the vertices of
             both layers at a crease end become one key, the ends of creases a quarter of the
@@ -76,9 +77,10 @@ class ClothConfig:
             numbering, so one numbering can miss the small model another finds (32 x 32
             diagonal fold, alternating diagonals: 8 faces and 6 keys with 1 restart, 4 and 4
             with 4). The first model under the threshold is taken; a size's error is the least
-            over its restarts. Measured on 112 noise-free goals (12-40 per side x 4
-            triangulations x 4 folds, README "Key particles"): key counts hold on 108 with 1
-            restart, on all with 4 (restart seeds 0, 1 and 2 alike).
+            over its restarts. Measured on the 112 noise-free goals of the resolution sweep in
+            ``experiments/key_particles.py`` (12-40 per side x 4 triangulations x 4 folds):
+            key counts hold on 107 with 1 restart, on all with 4 (restart seeds 0, 1 and 2
+            alike).
         restart_seed: seed of the permutations.
         coarse_faces: each numbering is decimated once to this many faces, and every size
             from there: the collapses inside flat panels, nearly all of QECD's work (16 ms of
@@ -98,8 +100,8 @@ class ClothConfig:
             ``"auto"`` when the goal's estimated noise exceeds ``panel_noise_floor``, ``"off"``
             never. Decimation alone fails from about 0.05 mm of goal noise; with restarts,
             projecting exact goals too keeps all 112 noise-free counts and fixes the goals
-            that 0.02 mm of noise, below the floor, throws off under ``"auto"`` (README, "Key
-            particles").
+            that 0.02 mm of noise, below the floor, throws off under ``"auto"``
+            (docs/DESIGN-NOTES.md, "Key particles").
         panel_noise_floor: estimated noise (metres; :attr:`deformables.panels.PanelFit.noise`,
             about 1.55 sigma of per-coordinate Gaussian noise, 0 on an exact fold) above which
             ``"auto"`` projects (sigma ~0.03 mm): it skips the projection's boundary fit on

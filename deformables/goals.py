@@ -10,13 +10,14 @@ half-circle crease of radius ``gap / 2`` so that stacked layers sit exactly ``ga
 edge away from the crease changes length.
 
 Cloth vertex numbering follows MuJoCo's ``flexcomp type="grid" dim="2"``: vertex
-``i = ix * n + iy`` (y fastest) at ``x = -side / 2 + ix * spacing``, ``y = -side / 2 + iy * spacing``.
+``i = ix * n + iy`` (y fastest) at ``x = -side / 2 + ix * spacing``,
+``y = -side / 2 + iy * spacing``.
 """
 from __future__ import annotations
 
 import logging
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Callable
 
 import numpy as np
 

@@ -5,9 +5,9 @@ Shape letters: N particles, F faces, P panels, k neighbours.
 A folded cloth is piecewise rigid: each flat panel of the goal is its region of the flat rest
 sheet moved by one rotation and translation, and creases join the panels. Quadric edge-collapse
 decimation cannot see that through noise: at 0.05 mm per coordinate its collapse order already
-changes, and from 0.5 mm Alg. 1 does not converge (README, "Key particles"). This module recovers
-the panels and replaces every particle a panel explains by the panel's prediction, so that the
-noise left is that of one rigid fit over hundreds of particles.
+changes, and from 0.5 mm Alg. 1 does not converge (docs/DESIGN-NOTES.md, "Key particles").
+This module recovers the panels and replaces every particle a panel explains by the panel's
+prediction, so that the noise left is that of one rigid fit over hundreds of particles.
 
 1. Local rigid fits: every particle's ``neighbours`` nearest rest neighbours, goal = R rest + t
    (Kabsch).
@@ -17,7 +17,7 @@ noise left is that of one rigid fit over hundreds of particles.
    median distance of a particle from its best panel's prediction estimates the noise (about
    1.5 sigma for Gaussian noise of sigma per coordinate; 0 on an exact fold). The local fits'
    residuals do not: where panels are only a few particles wide (12 x 12 underneath fold) most
-   neighbourhoods straddle a crease, and an exact goal looked 8 mm noisy.
+   neighbourhoods straddle a crease, and they make an exact goal look 8 mm noisy.
 4. Labels: each particle goes to the panel that predicts it best, then the boundaries between
    panels are made straight lines of the rest sheet by a multinomial logistic regression on the
    rest sheet's coordinates. A fold's crease is a straight line of the rest sheet; per-particle
@@ -25,12 +25,13 @@ noise left is that of one rigid fit over hundreds of particles.
    for each, and the resulting saw-tooth crease costs decimation extra vertices. Particles
    within ``crease_width`` spacings of a line get a linear blend of the two panels' predictions
    (a crease through a row of particles would otherwise still be split by the fit's noise);
-   beyond it the projection is exact. Ramp half-widths of 0.1 / 0.25 / 0.4 spacings were
-   measured on the README's noise sweep (319 / 326 / 299 of 336 goals at 1 mm; a sigmoid of
-   scale 0.1 spacings, whose tails reach the neighbouring rows, 314); 0.25 is the default.
+   beyond it the projection is exact. On the noise sweep of ``experiments/key_particles.py``
+   (``--noise-n 12,16,21,25,28,32,40``), ramp half-widths of 0.1 / 0.25 / 0.4 spacings keep the
+   key count of 319 / 326 / 299 of 336 goals at 1 mm, a sigmoid of scale 0.1 spacings (whose
+   tails reach the neighbouring rows) 314; 0.25 is the default.
 5. Every particle whose blended prediction lies within ``tolerance`` (default: a layer gap plus
-   3 sqrt(3) times the noise estimate) moves to it; the others (a wrinkle, a crumpled region) keep their
-   measured position.
+   3 sqrt(3) times the noise estimate) moves to it; the others (a wrinkle, a crumpled region)
+   keep their measured position.
 """
 from __future__ import annotations
 

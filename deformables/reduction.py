@@ -6,8 +6,9 @@ triangles) of the simplified model, K key particles, S model sizes tried.
 from __future__ import annotations
 
 import logging
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Callable, Generic, TypeVar
+from typing import Generic, TypeVar
 
 import numpy as np
 

@@ -172,7 +172,7 @@ def _nearest_in_window(positions: np.ndarray, arc: np.ndarray, vertices: np.ndar
     lo = np.concatenate([[knots[0]], knots[:-1]])
     hi = np.concatenate([knots[1:], [knots[-1]]])
     keys = []
-    for vertex, a, b in zip(vertices, lo, hi):
+    for vertex, a, b in zip(vertices, lo, hi, strict=True):
         window = np.flatnonzero((arc >= a - 1e-12) & (arc <= b + 1e-12))
         if len(window) == 0:     # knots between two particles: the nearest along the rope
             window = np.array([int(np.argmin(np.abs(arc - 0.5 * (a + b))))])

@@ -11,8 +11,14 @@ Glossary of shape letters used in every docstring:
 """
 
 from dopt.errors import RolloutError, UnstableRolloutError
-from dopt.rollout import (Derivatives, FDConfig, RolloutConfig, RolloutResult, RolloutService,
-                          Trajectory)
+from dopt.rollout import (
+                          Derivatives,
+                          FDConfig,
+                          RolloutConfig,
+                          RolloutResult,
+                          RolloutService,
+                          Trajectory,
+)
 from dopt.scene import Scene
 from dopt.state import INTEGRATION, StateLayout, get_state, set_state
 

@@ -56,7 +56,6 @@ class EEDistanceTerm:
 
     def __init__(self, scene: Scene, fk, arm_dofs, target_dofs, target_map, offset,
                  axes=(0, 1, 2), weight: float = 1.0, terminal_weight: float = 1.0):
-        m = scene.model
         self.arm_dofs = np.asarray(arm_dofs, dtype=int)
         self.target_dofs = np.asarray(target_dofs, dtype=int)
         dofs = np.concatenate([self.arm_dofs, self.target_dofs])

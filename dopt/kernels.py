@@ -3,8 +3,8 @@
 The shared library is built at install time (an optional setuptools extension). If it is
 missing (no C compiler at install) or the running MuJoCo is not the version its prototypes
 were written for, ``load()`` returns None, logs why, and ``RolloutService`` takes the
-``mujoco.batch.Batch`` route (same results, slower: README, "Why these libraries"). The
-service's C route, ``dopt.rollout_c``, is the one user of ``Kernels``.
+``mujoco.batch.Batch`` route (same results, slower: docs/DESIGN-NOTES.md, "States and the
+rollout service"). The service's C route, ``dopt.rollout_c``, is the one user of ``Kernels``.
 
 Work is split over ``threads`` Python threads, each with its own MjData; ctypes releases the
 GIL for the length of every C call.
@@ -45,7 +45,7 @@ class Layout(ctypes.Structure):
                                              "ctrl", "sig_qposvel", "sig_ctrl")]
 
     @classmethod
-    def of(cls, model: mujoco.MjModel, layout: StateLayout) -> "Layout":
+    def of(cls, model: mujoco.MjModel, layout: StateLayout) -> Layout:
         S = mujoco.mjtState
         return cls(model.nq, model.nv, model.nu, layout.size, layout.spec,
                    layout["qpos"].start, layout["qvel"].start, layout["ctrl"].start,
@@ -58,7 +58,7 @@ class Warnings(ctypes.Structure):
     _fields_ = [("number", ctypes.c_void_p), ("stride", ctypes.c_int), ("n", ctypes.c_int)]
 
     @classmethod
-    def of(cls, data: mujoco.MjData) -> "Warnings":
+    def of(cls, data: mujoco.MjData) -> Warnings:
         number = data.warning.number           # a strided view into the mjData
         stride = number.strides[0] // number.itemsize
         if number.itemsize != ctypes.sizeof(ctypes.c_int) or number.strides[0] % number.itemsize:
@@ -208,7 +208,8 @@ class Kernels:
                                               x0, T, ff[p], ref, K, C, len(C), lo, hi, out[p],
                                               applied[p], w)
                 if step <= -2:
-                    self._raise_mujoco_error(i, f"rollout_feedback: simulation {p} step {-2 - step}")
+                    self._raise_mujoco_error(
+                        i, f"rollout_feedback: simulation {p} step {-2 - step}")
                 if step >= 0:
                     bad.append((int(p), step, _warnings(d) or ["non-finite state"]))
             return bad

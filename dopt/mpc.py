@@ -50,7 +50,7 @@ class Plan:
     dofs: np.ndarray | None = None
     info: dict = field(default_factory=dict)
 
-    def shifted(self, steps: int) -> "Plan":
+    def shifted(self, steps: int) -> Plan:
         """Drop the first ``steps`` controls and pad with the last one (gains pad with 0)."""
         if steps <= 0:
             return self

@@ -158,7 +158,7 @@ class RolloutService:
         """Whether ``close()`` was called."""
         return self._route is None
 
-    def __enter__(self) -> "RolloutService":
+    def __enter__(self) -> RolloutService:
         return self
 
     def __exit__(self, *exc) -> None:

@@ -38,7 +38,7 @@ class StateLayout:
     slices: dict[str, slice]
 
     @classmethod
-    def of(cls, model: mujoco.MjModel, spec: int = INTEGRATION) -> "StateLayout":
+    def of(cls, model: mujoco.MjModel, spec: int = INTEGRATION) -> StateLayout:
         slices, offset = {}, 0
         for name, bit in _COMPONENTS:
             if spec & bit:
@@ -164,7 +164,7 @@ class Tangent:
         Exactly ``mj_integratePos(model, qpos[b], e_dofs[b], eps)``, as mjd_transitionFD does.
         """
         out = np.array(qpos, dtype=np.float64, copy=True)
-        for row, dof in zip(out, dofs):
+        for row, dof in zip(out, dofs, strict=True):
             mujoco.mj_integratePos(self.model, row, self._unit[dof], eps)
         return out
 

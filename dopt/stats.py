@@ -1,4 +1,4 @@
-"""Summary statistics for the experiment scripts."""
+"""Summary statistics of trial results (mean and Student-t interval)."""
 
 from __future__ import annotations
 

@@ -2,9 +2,10 @@
 
 For each task: run Alg. 1 on the goal (and on each intermediate goal of a multi-step task),
 write the error-vs-size curve as CSV, a PNG with the curve, the goal and the simplified model
-with its key particles, and DIR/summary.json with counts, indices, errors and times. Unless
+with its key particles, and DIR/summary.json with counts, indices, errors and times (and the
+provenance: command, git commit, versions; --record PATH writes a copy to PATH). Unless
 --quick, it also sweeps cloth resolutions x triangulations and goal noise and records the key
-counts (the README's robustness tables); the noise sweep appends one line per goal to
+counts (the robustness tables of docs/RESULTS.md); the noise sweep appends one line per goal to
 DIR/noise.jsonl as it goes, and a rerun resumes it.
 
     python experiments/key_particles.py --task all --out results/key_particles
@@ -22,15 +23,20 @@ from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+# experiments/ is on the path: it is the script's folder (pytest: pythonpath in pyproject)
+from cli_args import choices_list
 
-from deformables import (ClothConfig, RopeConfig, cloth_key_particles, goal_sequence,  # noqa: E402
-                         make_goal, rope_key_particles)
-from deformables.cloth import PANEL_MODES  # noqa: E402
-from deformables.goals import TRIANGULATIONS  # noqa: E402
-
-# experiments/ is on the path: it is the script's folder (tests import it from there)
-from cli_args import choices_list  # noqa: E402
+from deformables import (
+    ClothConfig,
+    RopeConfig,
+    cloth_key_particles,
+    goal_sequence,
+    make_goal,
+    rope_key_particles,
+)
+from deformables.cloth import PANEL_MODES
+from deformables.goals import TRIANGULATIONS
+from dopt.provenance import provenance
 
 ROPE_TASKS = ["rope_straighten", "rope_fold", "rope_fold_unequal"]
 CLOTH_TASKS = ["cloth_diagonal", "cloth_side", "cloth_reflective", "cloth_underneath"]
@@ -41,7 +47,7 @@ PAPER = {"rope_straighten": {"keys": 2}, "rope_fold": {"keys": 4},
          "cloth_side": {"triangles": 6}, "cloth_reflective": {"triangles": 12},
          "cloth_underneath": {"triangles": 16}}
 #: noise-free key counts of the cloth folds at every resolution (4 = the paper's; the others
-#: are ours, README "Key particles"): the reference of the noise sweep
+#: are ours, docs/DESIGN-NOTES.md "Key particles"): the reference of the noise sweep
 REFERENCE_KEYS = {"cloth_diagonal": 4, "cloth_side": 6, "cloth_reflective": 8,
                   "cloth_underneath": 10}
 
@@ -67,7 +73,7 @@ def write_curve(path: Path, result) -> None:
     with path.open("w", newline="") as handle:
         writer = csv.writer(handle)
         writer.writerow(["size", "error", "threshold", "accepted"])
-        for size, error in zip(result.sizes, result.errors):
+        for size, error in zip(result.sizes, result.errors, strict=True):
             writer.writerow([int(size), float(error), result.threshold,
                              int(size == result.sizes[-1])])
 
@@ -197,6 +203,9 @@ def main(argv=None) -> int:
                              "legs 1 : 1.3 : 1.6); 'all' runs every task")
     parser.add_argument("--out", type=Path, required=True,
                         help="output folder for summary.json, curve_<task>.csv, <task>.png")
+    parser.add_argument("--record", type=Path, default=None, metavar="PATH",
+                        help="also write the summary to PATH (the committed result files under "
+                             "docs/results/ that docs/RESULTS.md is generated from)")
     parser.add_argument("--seed", type=int, default=0,
                         help="seed of the random triangulations of the resolution sweep (the "
                              "noise sweep uses goal seeds 0..--noise-seeds-1)")
@@ -207,7 +216,7 @@ def main(argv=None) -> int:
     parser.add_argument("--noise-n", type=lambda t: [int(v) for v in t.split(",")],
                         default=[16, 25, 40],
                         help="cloth particles per side of the goal-noise sweep (comma-separated; "
-                             "the README's table: 12,16,21,25,28,32,40)")
+                             "docs/DESIGN-NOTES.md uses 12,16,21,25,28,32,40)")
     parser.add_argument("--noise-seeds", type=int, default=3,
                         help="goal seeds per noise level (triangulation draw and noise)")
     parser.add_argument("--noise-panels", type=_panel_modes, default=["on", "off"],
@@ -225,7 +234,8 @@ def main(argv=None) -> int:
     curve_config = replace(cloth_config, exact_errors=True)
     tasks = TASKS if args.task == "all" else [args.task]
     args.out.mkdir(parents=True, exist_ok=True)
-    summary = {"seed": args.seed, "quick": args.quick, "cloth_particles_per_side": cloth_n,
+    summary = {"experiment": "key_particles", "seed": args.seed, "quick": args.quick,
+               "cloth_particles_per_side": cloth_n,
                "rope_config": vars(rope_config),
                "cloth_config": vars(curve_config), "paper": PAPER, "tasks": {}}
     for task in tasks:
@@ -236,8 +246,9 @@ def main(argv=None) -> int:
         entry = record(result)
         entry["particles"] = len(goal.positions)
         if len(sequence) > 1:
-            entry["intermediate_goals"] = [{"goal": g.name, **record(r)}
-                                           for g, r in zip(sequence[:-1], results[:-1])]
+            entry["intermediate_goals"] = [
+                {"goal": g.name, **record(r)}
+                for g, r in zip(sequence[:-1], results[:-1], strict=True)]
         summary["tasks"][task] = entry
         write_curve(args.out / f"curve_{task}.csv", result)
         plot_task(args.out / f"{task}.png", task, goal, result, cloth_config.z_scale)
@@ -252,7 +263,13 @@ def main(argv=None) -> int:
             "cloth_grid": resolution_sweep(rng, cloth_config, [12, 16, 21, 25, 28, 32, 40]),
             "noise": noise_table(noise)}
         logger.info("noise: %s", summary["robustness"]["noise"])
-    (args.out / "summary.json").write_text(json.dumps(summary, indent=1))
+    summary["provenance"] = provenance(["experiments/key_particles.py",
+                                        *(sys.argv[1:] if argv is None else argv)])
+    text = json.dumps(summary, indent=1)
+    (args.out / "summary.json").write_text(text)
+    if args.record:
+        args.record.parent.mkdir(parents=True, exist_ok=True)
+        args.record.write_text(text)
     return 0
 
 

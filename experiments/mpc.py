@@ -1,14 +1,18 @@
 """Table 1 of the state-vector-reduction paper: asynchronous MPC with iLQR-SVR and baselines.
 
-Each trial is one real-time MPC episode of one method on one task instance (seed); every
-finished trial is written to OUT/trials/<key>.json at once and a rerun skips it. Trials run
-inline (--workers 1, the default: on a 2-core machine parallel real-time trials would steal
-each other's cores and distort the very timing the paper measures), on a local process pool
-(--workers N), or on Ray (--ray [ADDRESS]; a local instance without ADDRESS).
+Each trial is one real-time MPC episode of one method on one task instance (seed), run by
+``planners.svr_mpc.run_svr_mpc``; every finished trial is written to OUT/trials/<key>.json at
+once and a rerun skips it. Trials run inline (--workers 1, the default: on a 2-core machine
+parallel real-time trials would steal each other's cores and distort the very timing the paper
+measures), on a local process pool (--workers N), or on Ray (--ray [ADDRESS]; a local
+instance without ADDRESS).
 
 Writes OUT/summary.json ({"task", "methods": {name: {"mpc_cost_normalised_mean",
-"mpc_cost_normalised_ci90", "opt_ms_mean", "dofs_mean", "trials", ...}}}), OUT/table1.md
-and OUT/table1.csv.
+"mpc_cost_normalised_ci90", "opt_ms_mean", "dofs_mean", "trials", ...}}, "failed",
+"provenance"}), OUT/table1.md and OUT/table1.csv, and the plots of the first seed of each
+method: OUT/mpc_dofs.png (|C| per optimisation over the episode), OUT/mpc_goal_distance.png
+(the goal object's distance to the goal per step) and OUT/final_<method>.png (the final
+scene; MUJOCO_GL=egl, skipped with --no-render). Exits 1 if a trial failed.
 
     python experiments/mpc.py --task clutter --trials 20 --out results/mpc_clutter
 """
@@ -23,64 +27,82 @@ import os
 import sys
 from pathlib import Path
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import numpy as np
 
-from cli_args import choices_list  # noqa: E402
-from mpc_trial import (OUTLIER_DISTANCE, TRIAL_DEFAULTS, aggregate,  # noqa: E402
-                       feedback_effect, run_trial, trial_key)
+os.environ.setdefault("MUJOCO_GL", "egl")   # offscreen renders; read when mujoco is imported
 
-TASKS = ("clutter", "soft", "soft_rigid")
-METHODS = ("baseline", "rand", "naive", "svr-sum", "svr-svd")
+from cli_args import choices_list, nonneg_float, nonneg_int, positive_float, positive_int
+from dopt.provenance import provenance
+from dopt.sweep import Trial, run_sweep
+from dopt.tasks import PUSH_TASKS
+from planners.svr import METHODS, paper_theta
+from planners.svr_mpc import (OUTLIER_DISTANCE, feedback_effect, row_label, run_trial,
+                              summarize, trial_key)
+
+log = logging.getLogger(__name__)
 FEEDBACK = {"off": (False,), "on": (True,), "both": (False, True)}
 
 
-def parse_args(argv=None) -> argparse.Namespace:
+def parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(description=__doc__,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--task", default="clutter", help=f"one of {TASKS} (default %(default)s)")
     ap.add_argument("--methods", default=",".join(METHODS),
                     help="comma-separated DoF-selection methods (default: all five)")
-    ap.add_argument("--rho", type=float, default=TRIAL_DEFAULTS["rho"],
-                    help="SVR importance threshold: DoFs below it leave the active set")
-    ap.add_argument("--theta", type=int, default=None,
+    ap.add_argument("--rho", type=nonneg_float, default=1.0,
+                    help="SVR importance threshold: DoFs below it leave the active set "
+                         "(default %(default)s, the paper's)")
+    ap.add_argument("--theta", type=nonneg_int, default=None,
                     help="random DoFs re-added per iteration (svr) / used besides the robot "
                          "(rand); default: the paper's Table 1, rand 5, svr 10")
-    ap.add_argument("--trials", type=int, default=20, help="task instances (seeds) per method")
-    ap.add_argument("--seed", type=int, default=0, help="first seed; trials use seed..seed+N-1")
-    ap.add_argument("--slowdown", type=float, default=None,
-                    help="agent wall time per step over dt (default: the task's, see README)")
-    ap.add_argument("--timeout", type=int, default=None,
-                    help="task timeout Y in agent steps (default: the paper's)")
+    add_run_arguments(ap)
+    ap.add_argument("--no-render", action="store_true",
+                    help="skip the renders of the final scenes (final_<method>.png)")
+    return ap
+
+
+def add_run_arguments(ap: argparse.ArgumentParser) -> None:
+    """The flags of any MPC sweep (this script's and rho_sweep.py's): task, trials, seeds,
+    timing, feedback, workers, output."""
+    ap.add_argument("--task", default="clutter", choices=list(PUSH_TASKS),
+                    help="the pushing task (default %(default)s)")
+    ap.add_argument("--trials", type=positive_int, default=20,
+                    help="task instances (seeds) per method (default %(default)s)")
+    ap.add_argument("--seed", type=nonneg_int, default=0,
+                    help="first seed; trials use seed..seed+N-1 (default %(default)s)")
+    ap.add_argument("--slowdown", type=positive_float, default=None,
+                    help="agent wall time per step over dt (default: the task's, the paper's)")
+    ap.add_argument("--timeout", type=positive_int, default=None,
+                    help="task timeout Y in agent steps (default: the task's, the paper's)")
     ap.add_argument("--feedback", nargs="?", const="on", default="off",
                     choices=["off", "on", "both"],
                     help="execute u + K (x - x_nom) on the measured state (authors: off); "
                          "'both' runs every trial open-loop and with feedback back to back, "
                          "so the pair sees the same machine load (rows 'METHOD +fb')")
-    ap.add_argument("--control-noise", type=float, default=0.0,
+    ap.add_argument("--control-noise", type=nonneg_float, default=0.0,
                     help="Gaussian noise on executed controls, fraction of range (authors: 0.05)")
-    ap.add_argument("--workers", type=int, default=1, help="local worker processes")
+    ap.add_argument("--workers", type=positive_int, default=1,
+                    help="local worker processes (default %(default)s)")
     ap.add_argument("--ray", nargs="?", const="local", default=None, metavar="ADDRESS",
                     help="run the trials on Ray (local instance if no ADDRESS)")
-    ap.add_argument("--threads", type=int, default=None,
+    ap.add_argument("--threads", type=nonneg_int, default=None,
                     help="simulation threads per trial (default: all cores, 1 with workers>1)")
     ap.add_argument("--quick", action="store_true",
                     help="smoke run: 1 trial per method, Y = 100 steps")
-    ap.add_argument("--out", required=True, help="output folder")
+    ap.add_argument("--out", type=Path, required=True, help="output folder")
+    ap.add_argument("--record", type=Path, default=None, metavar="PATH",
+                    help="also write the summary to PATH (docs/results/...)")
+
+
+def parse_args(argv=None, ap: argparse.ArgumentParser | None = None) -> argparse.Namespace:
+    ap = ap or parser()
     args = ap.parse_args(argv)
-    if args.task not in TASKS:
-        ap.error(f"unknown task {args.task!r}; choose from {TASKS}")
-    try:
-        args.methods = choices_list(args.methods, METHODS, "method(s)")
-    except ValueError as e:
-        ap.error(str(e))
-    if args.rho < 0:
-        ap.error("--rho must be >= 0")
-    if args.theta is not None and args.theta < 0:
-        ap.error("--theta must be >= 0")
-    if args.trials < 1:
-        ap.error("--trials must be >= 1")
-    if args.workers < 1:
-        ap.error("--workers must be >= 1")
+    if hasattr(args, "methods"):
+        try:
+            args.methods = choices_list(args.methods, METHODS, "method(s)")
+        except ValueError as e:
+            ap.error(str(e))
+    if args.out.exists() and not args.out.is_dir():
+        ap.error(f"--out {args.out} exists and is not a folder")
     if args.quick:
         args.trials, args.timeout = 1, args.timeout or 100
     if args.threads is None:
@@ -88,8 +110,9 @@ def parse_args(argv=None) -> argparse.Namespace:
     return args
 
 
-def make_trials(args, methods=None, rhos=None, thetas=None):
-    from dopt.sweep import Trial
+def make_trials(args, methods=None, rhos=None, thetas=None) -> list[Trial]:
+    """Every (seed, method, rho, theta, feedback) trial of the flags."""
+    slowdown = args.slowdown or _task_slowdown(args.task)
     out = []
     for seed in range(args.seed, args.seed + args.trials):
         for method in methods or args.methods:
@@ -97,44 +120,43 @@ def make_trials(args, methods=None, rhos=None, thetas=None):
                 for theta in thetas or [_theta(args.theta, method)]:
                     for feedback in FEEDBACK[args.feedback]:
                         p = dict(task=args.task, method=method, rho=rho, theta=theta,
-                                 seed=seed, slowdown=args.slowdown or _default_slowdown(args.task),
-                                 timeout=args.timeout or 0, threads=args.threads,
-                                 feedback=feedback, control_noise=args.control_noise)
+                                 seed=seed, slowdown=slowdown, timeout=args.timeout or 0,
+                                 threads=args.threads, feedback=feedback,
+                                 control_noise=args.control_noise)
                         out.append(Trial(trial_key(p), p))
     return out
 
 
 def _theta(theta: int | None, method: str) -> int:
     """--theta, or the paper's Table 1 value for the method (rand 5, svr 10; unused else)."""
-    from planners.svr import paper_theta
     return paper_theta(method) if theta is None else theta
 
 
-def _default_slowdown(task: str) -> float:
-    from dopt.tasks import get_task
+def _task_slowdown(task: str) -> float:
     import numpy as np
-    return float(get_task(task)(np.random.default_rng(0)).slowdown)
+    return float(PUSH_TASKS[task](np.random.default_rng(0)).slowdown)
 
 
-def run(args, trials) -> dict:
+def run(args, trials) -> tuple[list, dict]:
+    """Run (or resume) the trials; returns their records and {key: error} of the failed."""
     from tqdm import tqdm
 
-    from dopt.sweep import run_sweep
     bar = tqdm(total=len(trials), desc=f"{args.task} trials", unit="trial")
     res = run_sweep(run_trial, trials, args.out, workers=args.workers, ray_address=args.ray,
                     progress=lambda key, rec: bar.update(1))
     bar.update(len(res.skipped))
     bar.close()
-    if res.failed:
-        for key, err in res.failed.items():
-            print(f"FAILED {key}: {err}", file=sys.stderr)
-    return res.records
+    for key, err in res.failed.items():
+        print(f"FAILED {key}: {err}", file=sys.stderr)
+    wanted = {t.key for t in trials}
+    return [r for k, r in res.records.items() if k in wanted], res.failed
 
 
 def write_table(out: Path, task: str, methods: dict, feedback: dict | None = None) -> None:
     rows = [("method", "MPC cost (normalised) mean", "CI90 +-", "median (all)",
              "opt. time (ms)", "DoFs", "lag (steps)", "success", "goal dist. (m, median)",
              "outliers", "trials")]
+
     def num(x, digits=2):
         """A number to the table, or n/a when there is none (no baseline for the pairing)."""
         return "n/a" if x is None or x != x else f"{x:.{digits}f}"
@@ -164,28 +186,198 @@ def write_table(out: Path, task: str, methods: dict, feedback: dict | None = Non
     (out / "table1.md").write_text("\n".join(lines) + "\n")
 
 
+def write_summary(args, summary: dict, argv, script: str = "experiments/mpc.py") -> None:
+    """summary.json under --out (and --record), with the provenance of this run."""
+    summary["provenance"] = provenance([script, *(sys.argv[1:] if argv is None else argv)])
+    text = json.dumps(summary, indent=2)
+    (args.out / "summary.json").write_text(text)
+    if args.record:
+        args.record.parent.mkdir(parents=True, exist_ok=True)
+        args.record.write_text(text)
+
+
+# ---------------------------------------------------------------------------------- plots
+
+def first_seed(records: list[dict], rows) -> dict:
+    """{row label: result of its lowest seed} for each row (``row_label``) in ``rows``."""
+    out = {}
+    for r in sorted(records, key=lambda r: r["params"]["seed"]):
+        label = row_label(r["params"])
+        if label in rows and label not in out:
+            out[label] = {**r["result"], "seed": r["params"]["seed"]}
+    return {k: out[k] for k in rows if k in out}
+
+
+def write_plots(out: Path, task: str, records: list[dict], rows, render: bool = True) -> None:
+    """mpc_dofs.png, mpc_goal_distance.png and (``render``) final_<row>.png of the first seed
+    of each row. Trial files written before a result held the goal distance per step or the
+    final state are left out of those pictures; a failed render is logged, not raised."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from dopt.tasks.push.costs import PushWeights
+
+    first = first_seed(records, rows)
+    if not first:
+        return
+    # colours and, as rows often overlap (every method starts alike), dashes and widths
+    style = {row: dict(color=plt.get_cmap("tab10")(i % 10), lw=2.6 - 0.4 * (i % 4),
+                       ls=("-", "--", "-.", ":")[i % 4]) for i, row in enumerate(first)}
+    fig, ax = plt.subplots(figsize=(7, 4))
+    for row, r in first.items():
+        if not r["n_dofs"]:
+            continue
+        # each |C| holds from its optimisation's start to the next one's (the last: to the end)
+        x = list(r["opt_step"]) + [max(r["steps"], r["opt_step"][-1] if r["opt_step"] else 0)]
+        y = list(r["n_dofs"]) + list(r["n_dofs"][-1:])
+        ax.step(x, y, where="post", **style[row],
+                label=f"{row} (mean {r['dofs_mean']:.1f}, {len(r['n_dofs'])} optimisations)")
+    ax.set_xlabel("agent step at which the optimisation started")
+    ax.set_ylabel("active DoFs |C|")
+    ax.set_title(f"{task}: DoFs optimised over the episode (first seed of each method)")
+    ax.set_ylim(bottom=0)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=9)
+    fig.tight_layout()
+    fig.savefig(out / "mpc_dofs.png", dpi=110)
+    plt.close(fig)
+
+    fig, ax = plt.subplots(figsize=(7, 4))
+    for row, r in first.items():
+        d = r.get("goal_distance") or []
+        if d:
+            ax.plot(np.arange(len(d)), d, **style[row],
+                    label=f"{row}: {'success' if r['success'] else 'no success'}, "
+                          f"end {d[-1]:.3f} m")
+    ax.axhline(PushWeights().success_radius, color="k", ls="--", lw=1,
+               label="success radius")
+    ax.set_xlabel("executed agent step")
+    ax.set_ylabel("goal object's distance to the goal (m)")
+    ax.set_title(f"{task}: goal distance over the episode (first seed of each method)")
+    ax.set_ylim(bottom=0)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=9)
+    fig.tight_layout()
+    fig.savefig(out / "mpc_goal_distance.png", dpi=110)
+    plt.close(fig)
+
+    if not render:
+        return
+    try:
+        for row, r in first.items():
+            if r.get("final_state"):
+                write_final(out / f"final_{row.replace(' +', '_')}.png", task, row, r)
+    except Exception as e:                # the numbers are written; a missing GL only loses images
+        log.warning("rendering failed (%s: %s); set MUJOCO_GL=egl", type(e).__name__, e)
+
+
+def final_panels(task: str, seed: int, final_state, size=(640, 480)):
+    """(close-up from above, oblique) images (2, H, W, 3) of a push task's final state: the
+    close-up frames the objects, the goal and the pusher, leaves the arm out and marks where
+    each object (a soft body: its mean vertex) started (white rings; the goal object's black)
+    with a line to where it ended, and the goal (x); the oblique view shows the whole scene."""
+    import mujoco
+
+    from dopt import render
+    from dopt.scene import Scene
+    from dopt.tasks import get_task
+
+    tm = get_task(task)(np.random.default_rng(seed))
+    m = tm.model
+    spec = Scene(m).layout.spec
+    fovy, (w, h) = m.vis.global_.fovy, size
+    data = mujoco.MjData(m)
+
+    def body_xpos(state):
+        mujoco.mj_setState(m, data, np.asarray(state, dtype=float), spec)
+        mujoco.mj_forward(m, data)
+        return data.xpos.copy(), data.site(tm.ee_site).xpos.copy()
+
+    # the objects: the goal object, a soft body that is not it, the distractors; each a list
+    # of bodies (a soft body's vertices) whose mean is marked
+    objects = [tm.goal_bodies]
+    if tm.soft_body and tm.soft_body != tm.goal_object:
+        f = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_FLEX, tm.soft_body)
+        objects.append([int(b) for b in m.flex_vertbodyid[
+            m.flex_vertadr[f]:m.flex_vertadr[f] + m.flex_vertnum[f]]])
+    objects += [[m.body(name).id] for name in tm.distractors]
+    (x0, _), (x1, ee) = body_xpos(tm.initial_state), body_xpos(final_state)
+    start = np.array([x0[b].mean(axis=0) for b in objects])
+    end = np.array([x1[b].mean(axis=0) for b in objects])
+    goal = np.asarray(tm.goal_position, dtype=float)
+    # frame every object whole: each body +- its geoms' bounding radius along every axis
+    bodies = np.concatenate(objects)
+    radius = np.array([m.geom_rbound[m.geom_bodyid == b].max(initial=0.0) for b in bodies])
+    box = (np.concatenate([x0[bodies], x1[bodies]])[:, None, :]
+           + np.tile(radius, 2)[:, None, None] * np.concatenate([np.eye(3), -np.eye(3)]))
+    # and the goal region (its marker, about a cylinder's size)
+    region = goal + np.array([[x, y, z] for x in (-.06, .06) for y in (-.06, .06)
+                              for z in (0.0, 0.12)])
+    close = render.fit_camera(np.concatenate([box.reshape(-1, 3), region, [ee]]), *render.TOP,
+                              fovy=fovy, aspect=w / h, fill=0.85, min_extent=0.3)
+    arm = np.flatnonzero(np.isin(m.geom_bodyid, [m.body(b).id for b in tm.robot_bodies[:-1]]))
+    top = render.render(m, final_state, spec, close, w, h, hide_geoms=arm)
+    a, b = render.project(start, close, w, h, fovy), render.project(end, close, w, h, fovy)
+    top = render.draw_segments(top, a, b, (20, 20, 20), 2.0)
+    top = render.draw_markers(top, a[1:], (255, 255, 255), 7, "ring")
+    top = render.draw_markers(top, a[:1], (20, 20, 20), 9, "ring", outline=(255, 255, 255))
+    top = render.draw_markers(top, render.project(goal[None], close, w, h, fovy), (20, 20, 20),
+                              7, "cross", outline=(255, 255, 255))
+    whole = render.fit_camera(np.concatenate([x1[1:], [goal]]), *render.OBLIQUE, fovy=fovy,
+                              aspect=w / h)
+    return np.stack([top, render.render(m, final_state, spec, whole, w, h)])
+
+
+def write_final(path: Path, task: str, row: str, r: dict) -> None:
+    """final_<row>.png: ``final_panels`` side by side, titled with the method, seed, MPC cost,
+    success and the final goal distance."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    panels = final_panels(task, r["seed"], r["final_state"])
+    n, h, w = panels.shape[:3]
+    top, gap, bottom = 56, 6, 30
+    W, H = n * w + (n - 1) * gap, top + h + bottom
+    fig = plt.figure(figsize=(W / 100, H / 100), dpi=100)
+    for i, title in enumerate(("objects from above (arm hidden)", "whole scene")):
+        ax = fig.add_axes((i * (w + gap) / W, bottom / H, w / W, h / H))
+        ax.imshow(panels[i], interpolation="none")
+        ax.set_xticks([])
+        ax.set_yticks([])
+        ax.set_title(title, fontsize=11, pad=3)
+    fig.suptitle(f"{task}: {row}, seed {r['seed']}, MPC cost {r['mpc_cost']:.3g}, "
+                 f"{'success' if r['success'] else 'no success'}, goal distance "
+                 f"{r['goal_distance_start']:.3f} -> {r['goal_distance_end']:.3f} m "
+                 f"({r['steps']} steps)", y=1 - 6 / H, fontsize=12, fontweight="bold")
+    fig.text(0.25, 6 / H, "ring: start of each object (black: the goal object), line: to its "
+             "end; x: the goal", ha="center", fontsize=10)
+    fig.savefig(path, dpi=100)
+    plt.close(fig)
+
+
 def main(argv=None) -> int:
     logging.basicConfig(level=logging.WARNING)
     args = parse_args(argv)
-    out = Path(args.out)
     trials = make_trials(args)
-    records = run(args, trials)
-    wanted = {t.key for t in trials}
-    methods = aggregate([r for k, r in records.items() if k in wanted],
-                        baseline="baseline +fb" if args.feedback == "on" else "baseline")
+    records, failed = run(args, trials)
+    methods = summarize(records, baseline="baseline +fb" if args.feedback == "on"
+                        else "baseline")
     order = {m: i for i, m in enumerate(METHODS)}
     methods = dict(sorted(methods.items(),
                           key=lambda kv: (order.get(kv[0].split()[0], 99), kv[0])))
-    summary = {"task": args.task, "rho": args.rho,
+    summary = {"experiment": "table1", "task": args.task, "rho": args.rho,
                "theta": {m: _theta(args.theta, m) for m in args.methods},
-               "slowdown": trials[0].params["slowdown"], "methods": methods}
+               "slowdown": trials[0].params["slowdown"], "methods": methods,
+               "failed": failed}
     if args.feedback == "both":
-        summary["feedback_effect"] = feedback_effect(
-            [r for k, r in records.items() if k in wanted])
-    (out / "summary.json").write_text(json.dumps(summary, indent=2))
-    write_table(out, args.task, methods, summary.get("feedback_effect"))
-    print((out / "table1.md").read_text())
-    return 0
+        summary["feedback_effect"] = feedback_effect(records)
+    write_summary(args, summary, argv)
+    write_table(args.out, args.task, methods, summary.get("feedback_effect"))
+    write_plots(args.out, args.task, records, list(methods), render=not args.no_render)
+    print((args.out / "table1.md").read_text())
+    return 1 if failed else 0
 
 
 if __name__ == "__main__":

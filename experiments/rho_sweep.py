@@ -1,67 +1,82 @@
 """Fig. 4 of the state-vector-reduction paper: MPC cost and mean DoFs against rho, per theta.
 
 Runs svr-sum (or --method svr-svd) for every (rho, theta) and baseline once per seed for the
-normalisation, all as resumable trials under OUT/trials. Writes OUT/summary.json, OUT/rho_sweep.csv
-and OUT/rho_sweep.png (normalised MPC cost and mean |C| vs rho, one line per theta).
+normalisation, all as resumable trials under OUT/trials (the MPC flags are experiments/mpc.py's).
+Writes OUT/summary.json, OUT/rho_sweep.csv and OUT/rho_sweep.png (normalised MPC cost and mean
+|C| vs rho, one line per theta). Exits 1 if a trial failed.
 
-    python experiments/rho_sweep.py --task clutter --rhos 0.1,1,10,100 --thetas 0,4,12 --trials 5 --out results/rho
+    python experiments/rho_sweep.py --task clutter --rhos 0.1,1,10,100 --thetas 0,5,10 \\
+        --trials 5 --out results/rho
 """
 
 from __future__ import annotations
 
 import argparse
 import csv
-import json
-import os
 import sys
-from pathlib import Path
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import mpc as table1
 
-import mpc as table1  # noqa: E402
-from mpc_trial import aggregate  # noqa: E402
+from planners.svr_mpc import summarize
+
+
+def _values(kind, what: str):
+    def parse(text: str) -> list:
+        try:
+            vals = [kind(v) for v in text.split(",") if v.strip()]
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{what} must be comma-separated "
+                                             f"{kind.__name__}s, got {text!r}") from None
+        if not vals or any(not v >= 0 for v in vals) or any(v != v for v in vals):
+            raise argparse.ArgumentTypeError(f"{what} must be one or more numbers >= 0, "
+                                             f"got {text!r}")
+        return vals
+    return parse
+
+
+def parser() -> argparse.ArgumentParser:
+    ap = argparse.ArgumentParser(description=__doc__,
+                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--rhos", type=_values(float, "--rhos"), default="0.1,1,10,100",
+                    help="comma-separated rho values (default %(default)s)")
+    ap.add_argument("--thetas", type=_values(int, "--thetas"), default="0,5,10",
+                    help="comma-separated theta values (default %(default)s)")
+    ap.add_argument("--method", default="svr-sum", choices=["svr-sum", "svr-svd"],
+                    help="SVR importance method (default %(default)s)")
+    table1.add_run_arguments(ap)
+    return ap
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__,
-                                 formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--rhos", default="0.1,1,10,100", help="comma-separated rho values")
-    ap.add_argument("--thetas", default="0,4,12", help="comma-separated theta values")
-    ap.add_argument("--method", default="svr-sum", choices=["svr-sum", "svr-svd"],
-                    help="SVR importance method")
-    args, rest = ap.parse_known_args(argv)
-    rhos = [float(r) for r in args.rhos.split(",")]
-    thetas = [int(t) for t in args.thetas.split(",")]
-    if any(r < 0 for r in rhos) or any(t < 0 for t in thetas):
-        ap.error("rho and theta must be >= 0")
-    targs = table1.parse_args(rest + ["--methods", f"baseline,{args.method}"])
-    if targs.feedback == "both":
+    ap = parser()
+    args = table1.parse_args(argv, ap)
+    if args.feedback == "both":
         ap.error("--feedback both is for experiments/mpc.py; give on or off here")
-    fb = " +fb" if targs.feedback == "on" else ""
-    trials = table1.make_trials(targs, methods=["baseline"]) + table1.make_trials(
-        targs, methods=[args.method], rhos=rhos, thetas=thetas)
-    records = table1.run(targs, trials)
-    wanted = {t.key for t in trials}
-    recs = [r for k, r in records.items() if k in wanted]
+    args.rho, args.theta = 1.0, None          # make_trials' defaults; the grid overrides them
+    fb = " +fb" if args.feedback == "on" else ""
+    trials = table1.make_trials(args, methods=["baseline"]) + table1.make_trials(
+        args, methods=[args.method], rhos=args.rhos, thetas=args.thetas)
+    recs, failed = table1.run(args, trials)
     base = [r for r in recs if r["params"]["method"] == "baseline"]
     rows = []
-    for theta in thetas:
-        for rho in rhos:
+    for theta in args.thetas:
+        for rho in args.rhos:
             group = [r for r in recs if r["params"]["method"] == args.method
                      and r["params"]["rho"] == rho and r["params"]["theta"] == theta]
-            if not group:
-                continue
-            m = aggregate(base + group, baseline="baseline" + fb)[args.method + fb]
-            rows.append(dict(rho=rho, theta=theta, **m))
-    out = Path(targs.out)
-    (out / "summary.json").write_text(json.dumps(
-        {"task": targs.task, "method": args.method, "points": rows}, indent=2))
-    with open(out / "rho_sweep.csv", "w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=list(rows[0]))
-        w.writeheader()
-        w.writerows(rows)
-    plot(rows, thetas, out / "rho_sweep.png", targs.task, args.method)
-    return 0
+            if group:
+                rows.append(dict(rho=rho, theta=theta,
+                                 **summarize(base + group, baseline="baseline" + fb)[
+                                     args.method + fb]))
+    table1.write_summary(args, {"experiment": "fig4", "task": args.task,
+                                "method": args.method, "points": rows, "failed": failed},
+                         argv, "experiments/rho_sweep.py")
+    if rows:
+        with open(args.out / "rho_sweep.csv", "w", newline="") as f:
+            w = csv.DictWriter(f, fieldnames=list(rows[0]))
+            w.writeheader()
+            w.writerows(rows)
+        plot(rows, args.thetas, args.out / "rho_sweep.png", args.task, args.method)
+    return 1 if failed else 0
 
 
 def plot(rows, thetas, path, task, method) -> None:
@@ -85,6 +100,7 @@ def plot(rows, thetas, path, task, method) -> None:
     fig.suptitle(f"{task}: {method}")
     fig.tight_layout()
     fig.savefig(path, dpi=120)
+    plt.close(fig)
 
 
 if __name__ == "__main__":

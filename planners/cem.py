@@ -14,7 +14,7 @@ Gaussian moves towards its elites' mean and std by the share of elites that chos
 a plain smoothed refit; one: a small step, since one sample tells nothing of a spread).
 
 The planner knows nothing of ropes or cloth: it talks to a ``PickTask`` (anything with
-``bound`` and ``evaluate``; ``dopt.tasks.deformable_task.PickPlaceTask`` is one), and every
+``bound`` and ``evaluate``; ``dopt.tasks.pick.scene.PickPlaceTask`` is one), and every
 random draw goes through the caller's ``torch.Generator``.
 
 Shapes: P population, E elites, H horizon (actions per sequence), C candidates (+1: None).
@@ -50,7 +50,8 @@ class PickTask(Protocol):
 
 @dataclass(frozen=True)
 class CEMConfig:
-    """CEM settings.
+    """CEM settings. The defaults are what the experiments run (``paper()`` adds the paper's
+    iteration count); the paper gives no population, elites or distribution parameters.
 
     Attributes:
         population: P, sequences sampled per iteration.
@@ -58,25 +59,37 @@ class CEMConfig:
         iterations: refits.
         horizon: H, actions per sequence.
         smoothing: weight of the previous distribution in each refit (0: plain refit).
-        init_std: initial displacement std, as a fraction of the bound.
+        init_std: initial displacement std, as a fraction of the bound (1: the whole bound,
+            so the first population spans the workspace).
         min_std: floor of the displacement std, as a fraction of the bound.
         prob_floor: floor of every categorical probability after a refit, as a fraction of the
             uniform probability 1 / (C + 1), so that it means the same for 4 candidates and for
-            144 (keeps exploring; 0: none).
+            144 (keeps exploring; 0: none). 0.25 is a safeguard against the categorical
+            collapsing on a wrong key early (docs/DESIGN-NOTES.md).
         keep_best: put the best sequence found so far back into every population.
     """
 
     population: int = 32
-    elites: int = 4
+    elites: int = 6
     iterations: int = 15
     horizon: int = 3
     smoothing: float = 0.3
-    init_std: float = 0.5
+    init_std: float = 1.0
     min_std: float = 0.05
-    prob_floor: float = 0.0
+    prob_floor: float = 0.25
     keep_best: bool = True
 
+    @classmethod
+    def paper(cls, horizon: int, **overrides) -> CEMConfig:
+        """The key-particle paper's budget: 30 CEM iterations per plan (Sec. IV-C: "We run
+        each CEM planner for 30 iterations"), H actions, the defaults otherwise."""
+        return cls(**{"iterations": 30, "horizon": horizon, **overrides})
+
     def __post_init__(self):
+        for name in ("population", "elites", "iterations", "horizon"):
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, (int, np.integer)):
+                raise TypeError(f"{name} must be an int, got {v!r}")
         if not (1 <= self.elites <= self.population):
             raise ValueError(f"need 1 <= elites <= population, got elites={self.elites}, "
                              f"population={self.population}")

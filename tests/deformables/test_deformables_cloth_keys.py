@@ -23,7 +23,8 @@ def _reduce(name, n=25, triangulation="mujoco", noise=0.0, seed=0, **config):
 
 # The paper reports 4 / 6 / 12 / 16 triangles. Our decimation settles on 2 triangles per flat
 # panel and 2 per crease strip (a triangular panel of the diagonal fold takes 1): 4 / 6 / 10
-# (3 panels, 2 creases) / 14 (4 panels, 3 creases) at every resolution, see README "Key particles".
+# (3 panels, 2 creases) / 14 (4 panels, 3 creases) at every resolution, see docs/DESIGN-NOTES.md,
+# "Key particles".
 @pytest.mark.parametrize("name, faces, keys", [
     ("cloth_diagonal", 4, 4), ("cloth_side", 6, 6), ("cloth_reflective", 10, 8),
     ("cloth_underneath", 14, 10)])
@@ -57,7 +58,8 @@ def test_side_fold_keys_are_corners_and_crease_ends():
     np.testing.assert_allclose(xs, [-0.15, -0.15, 0.0, 0.0, 0.15, 0.15], atol=0.0126)
 
 
-# Before the QECD restarts (ClothConfig.restarts) 3 of these 112 goals had a key too many.
+# 96 of the 112 goals of the resolution sweep in experiments/key_particles.py. The QECD restarts
+# (ClothConfig.restarts) matter here: with one numbering (restarts=1) counts hold on 107 of 112.
 @pytest.mark.parametrize("n", [12, 16, 21, 25, 28, 40])
 @pytest.mark.parametrize("triangulation", TRIANGULATIONS)
 def test_key_counts_do_not_depend_on_resolution_or_triangulation(n, triangulation):
@@ -113,7 +115,7 @@ def test_renumberings_describe_the_same_surface_and_follow_the_seed():
         assert not np.array_equal(faces, g.faces)
         assert triangles(vertices, faces) == triangles(g.positions, g.faces)
     again = renumberings(g.positions, g.faces, 3, seed=5)
-    assert all(np.array_equal(a[1], b[1]) for a, b in zip(meshes, again))
+    assert all(np.array_equal(a[1], b[1]) for a, b in zip(meshes, again, strict=True))
 
 
 def test_threshold_stop_keeps_the_accepted_model_and_bounds_rejected_errors():
@@ -157,8 +159,8 @@ def test_default_threshold_is_035_layer_gaps_at_every_resolution():
 
 
 def test_reflective_fold_on_the_mujoco_40_grid_converges_with_all_corners():
-    # decimated from the goal under MuJoCo's numbering alone, QECD kept a vertex on the top
-    # layer's overhang for every size from 20 to 40 faces (error 15.7 mm, a 9th key)
+    # decimated from the goal at every size under MuJoCo's numbering alone (restarts=1,
+    # coarse_faces=4000), QECD first gets under the threshold at 17 faces (error 15.7 mm)
     g, result = _reduce("cloth_reflective", 40)
     assert result.error < result.threshold
     assert (result.n_elements, result.n_keys) == (10, 8)
@@ -167,8 +169,9 @@ def test_reflective_fold_on_the_mujoco_40_grid_converges_with_all_corners():
     assert np.all(gap.min(axis=0) <= 0.3 / 39 * 1.01)
 
 
-# Goal noise (README "Key particles"). Even 0.02 mm, below the noise floor where panels="auto"
-# uses the goal as given, changes QECD's collapse order on some goals; the default projects.
+# Goal noise (docs/DESIGN-NOTES.md, "Key particles"). Even 0.02 mm, below the noise floor where
+# panels="auto" uses the goal as given, changes QECD's collapse order on some goals; the default
+# projects.
 @pytest.mark.parametrize("n", [16, 25, 40])
 @pytest.mark.parametrize("seed", [0, 1])
 def test_key_counts_under_goal_noise(n, seed):
@@ -205,9 +208,9 @@ def _counts_under_noise(sigma, panels):
     return deltas
 
 
-# Millimetre noise, as in a goal taken from a simulator, needs the panel projection: measured over
-# 336 goals per level (README), counts hold on all of them from 0.05 to 2 mm; without it Alg. 1
-# does not converge from about 0.3 mm.
+# Millimetre noise, as in a goal taken from a simulator, needs the panel projection: on the noise
+# sweep of experiments/key_particles.py (336 goals per level), counts hold on all of them from
+# 0.05 to 2 mm; without it Alg. 1 does not converge from about 0.3 mm.
 @pytest.mark.parametrize("sigma", [5e-4, 2e-3])
 def test_key_counts_under_millimetre_noise_with_panel_projection(sigma):
     assert _counts_under_noise(sigma, "on") == [0] * 48
@@ -220,6 +223,11 @@ def test_millimetre_noise_defeats_decimation_without_the_projection():
 
 def test_canonical_triangulation_keeps_the_least_compressed_diagonal_of_every_square():
     n = 13
+
+    def ratio(g, u, v):                      # stretch of the edges u-v in goal g
+        return (np.linalg.norm(g.positions[u] - g.positions[v], axis=1)
+                / np.linalg.norm(g.rest_positions[u] - g.rest_positions[v], axis=1))
+
     for triangulation in ["mujoco", "anti", "alternating", "random"]:
         g = goals.cloth_diagonal(n=n, triangulation=triangulation, rng=np.random.default_rng(1))
         faces = canonical_triangulation(g.positions, g.faces, g.rest_positions)
@@ -230,13 +238,8 @@ def test_canonical_triangulation_keeps_the_least_compressed_diagonal_of_every_sq
         # the other diagonal of the same square
         c = np.where(iy[diagonal, 1] > iy[diagonal, 0], a + 1, a - 1)
         d = np.where(iy[diagonal, 1] > iy[diagonal, 0], b - 1, b + 1)
-
-        def ratio(u, v):
-            return (np.linalg.norm(g.positions[u] - g.positions[v], axis=1)
-                    / np.linalg.norm(g.rest_positions[u] - g.rest_positions[v], axis=1))
-
         assert len(a) == (n - 1) ** 2
-        assert np.all(ratio(a, b) >= ratio(c, d) - 1e-9)
+        assert np.all(ratio(g, a, b) >= ratio(g, c, d) - 1e-9)
         if triangulation == "mujoco":      # its diagonals cut the crease x + y = 0
             assert not np.array_equal(faces, g.faces)
 

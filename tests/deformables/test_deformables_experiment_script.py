@@ -45,12 +45,13 @@ def test_unknown_panel_mode_is_refused_by_name():
 def test_noise_sweep_journals_each_goal_and_a_rerun_resumes(tmp_path):
     sys.path.insert(0, str(ROOT / "experiments"))
     import key_particles
+
     from deformables import ClothConfig, RopeConfig
 
     journal = tmp_path / "noise.jsonl"
     args = (RopeConfig(), ClothConfig(), [1e-3], [12], 1, ["auto", "off"])
     rows = key_particles.noise_sweep(journal, *args)
-    assert len(rows) == 3 + 4 * 4 * 2                    # rope tasks + folds x triangulations x modes
+    assert len(rows) == 3 + 4 * 4 * 2        # rope tasks + folds x triangulations x modes
     lines = journal.read_text().splitlines()
     assert len(lines) == len(rows)
     journal.write_text("\n".join(lines[:-5]) + "\n")    # a sweep killed 5 goals before the end

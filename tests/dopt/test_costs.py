@@ -52,7 +52,6 @@ def problem():
 
 def test_total_by_hand(problem):
     scene, cost, term, X, U = problem
-    m = scene.model
     lay = scene.layout
     want = 0.0
     for t in range(len(X)):
@@ -74,17 +73,19 @@ def test_gradient_matches_finite_differences(problem):
     D = cost.derivatives(X, U, C)
     assert D.lx.shape == (7, 10) and D.lxx.shape == (7, 10, 10)
     lay, eps = scene.layout, 1e-6
+
+    def row_cost(t, dof, delta):             # the total with state t moved by delta along dof
+        Y = X.copy()
+        q = Y[t, lay["qpos"]]
+        dv = np.zeros(scene.nv)
+        dv[dof] = delta
+        mujoco.mj_integratePos(scene.model, q, dv, 1.0)
+        Y[t, lay["qpos"]] = q
+        return float(cost.total(Y, U))
+
     for t in (0, 3, 6):
         for i, dof in enumerate(C):
-            def row_cost(delta):
-                Y = X.copy()
-                q = Y[t, lay["qpos"]]
-                dv = np.zeros(scene.nv)
-                dv[dof] = delta
-                mujoco.mj_integratePos(scene.model, q, dv, 1.0)
-                Y[t, lay["qpos"]] = q
-                return float(cost.total(Y, U))
-            fd = (row_cost(eps) - row_cost(-eps)) / (2 * eps)
+            fd = (row_cost(t, dof, eps) - row_cost(t, dof, -eps)) / (2 * eps)
             assert D.lx[t, i].item() == pytest.approx(fd, rel=1e-5, abs=1e-7)
     # Gauss-Newton Hessian of the term: symmetric, positive semi-definite
     assert torch.allclose(D.lxx, D.lxx.transpose(1, 2))

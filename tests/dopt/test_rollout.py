@@ -173,6 +173,7 @@ def test_c_kernels_built_where_a_compiler_is():
     """The install builds dopt/_rollout_kernels when a C compiler exists; otherwise the
     Batch route must still serve (tested above) and the reason is known."""
     import shutil
+
     from dopt import kernels
     if shutil.which("cc") is None and shutil.which("gcc") is None:
         assert kernels.load() is None and kernels.load_error()
@@ -183,8 +184,9 @@ def test_c_kernels_built_where_a_compiler_is():
 def test_mujoco_error_in_feedback_rollouts_raises(c_kernels):
     """mju_error (arena overflow, see test_derivatives.TINY_ARENA) is a RolloutError that
     names the call, not a process exit."""
-    from dopt.errors import RolloutError
     from test_derivatives import TINY_ARENA
+
+    from dopt.errors import RolloutError
     scene = Scene.from_xml(TINY_ARENA)
     svc = RolloutService(scene, RolloutConfig(threads=2, c_kernels=c_kernels))
     x0 = scene.state_of(mujoco.MjData(scene.model))

@@ -9,9 +9,9 @@ import time
 from pathlib import Path
 
 import pytest
+from sweep_trials import square
 
 from dopt.sweep import Trial, load_finished, run_sweep
-from sweep_trials import square
 
 HERE = Path(__file__).parent
 

@@ -1,5 +1,6 @@
-"""Smoke runs of the cloth-fold and rope experiments (--quick): every output is written, the
-summary has the documented fields, and a rerun resumes from the per-trial files."""
+"""Smoke runs of the cloth-fold and rope experiments (--quick): every output is written (the
+renders need offscreen OpenGL: MUJOCO_GL=egl), the summary has the documented fields, and a
+rerun resumes from the per-trial files."""
 
 import json
 import os
@@ -7,13 +8,14 @@ import subprocess
 import sys
 from pathlib import Path
 
+import imageio.v3 as iio
+import numpy as np
 import pytest
 
-ROOT = Path(__file__).resolve().parents[2]
-sys.path.insert(0, str(ROOT / "experiments"))
+import cloth_fold
+import rope
 
-import cloth_fold  # noqa: E402
-import rope  # noqa: E402
+ROOT = Path(__file__).resolve().parents[2]
 
 
 def _check_summary(out: Path, goal: str, extra=()):
@@ -40,8 +42,17 @@ def test_cloth_fold_quick_writes_everything_and_resumes(tmp_path):
     assert cloth_fold.main(["--quick", "--goal", "diagonal", "--out", str(out)]) == 0
     first = _check_summary(out, "diagonal")
     for m in ("simple", "original", "random", "scripted"):
-        assert (out / f"final_{m}.png").stat().st_size > 0
-    assert (out / "goal.png").stat().st_size > 0
+        # goal | result, from above and obliquely, 640 x 480 per view
+        figure = iio.imread(out / f"goal_vs_{m}.png")
+        assert figure.shape[0] >= 2 * 480 and figure.shape[1] >= 2 * 640
+        assert figure[..., :3].std() > 10                        # not a blank canvas
+        # the executed plan, animated and small
+        gif = out / f"plan_{m}.gif"
+        frames = iio.imread(gif, index=None)
+        assert frames.ndim == 4 and 1 < len(frames) <= 150
+        assert np.any(frames[0] != frames[len(frames) // 2])   # something moves
+        assert gif.stat().st_size <= 2_000_000
+    assert not (out / "goal.png").exists()
     stamps = {p.name: p.stat().st_mtime_ns for p in (out / "trials").glob("*.json")}
     assert cloth_fold.main(["--quick", "--goal", "diagonal", "--out", str(out),
                             "--no-render"]) == 0
@@ -54,6 +65,7 @@ def test_rope_straighten_quick(tmp_path):
     out = tmp_path / "rope"
     assert rope.main(["--quick", "--goal", "straighten", "--out", str(out), "--no-render"]) == 0
     summary = _check_summary(out, "straighten", extra=("end_to_end_ratio_mean",))
+    assert not list(out.glob("goal_vs_*.png")) and not list(out.glob("*.gif"))  # --no-render
     assert summary["methods"]["simple"]["n_candidates"] == 2            # the two ends
 
 

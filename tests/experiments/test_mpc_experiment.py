@@ -32,8 +32,16 @@ def test_quick_run_writes_table_and_resumes(tmp_path):
     assert base["dofs_mean"] == 55.0 and base["opt_ms_mean"] > 0
     assert "| svr-sum |" in (out / "table1.md").read_text()
     assert (out / "table1.csv").exists()
+    for name in ("mpc_dofs.png", "mpc_goal_distance.png", "final_baseline.png",
+                 "final_svr-sum.png"):
+        assert (out / name).stat().st_size > 10_000, name
     files = sorted((out / "trials").glob("*.json"))
     assert len(files) == 2
+    result = json.loads(files[0].read_text())["result"]
+    assert len(result["goal_distance"]) == result["steps"] + 1
+    assert result["goal_distance"][0] == pytest.approx(result["goal_distance_start"], abs=1e-6)
+    assert result["goal_distance"][-1] == pytest.approx(result["goal_distance_end"], abs=1e-6)
+    assert len(result["final_state"]) > 0
     stamps = [f.stat().st_mtime_ns for f in files]
     run("--quick", "--methods", "baseline,svr-sum", "--out", str(out))
     assert [f.stat().st_mtime_ns for f in files] == stamps     # nothing was redone
@@ -42,19 +50,22 @@ def test_quick_run_writes_table_and_resumes(tmp_path):
 def test_ray_path(tmp_path):
     pytest.importorskip("ray")
     out = tmp_path / "ray"
-    run("--quick", "--methods", "naive", "--ray", "--out", str(out))
+    run("--quick", "--methods", "naive", "--ray", "--out", str(out), "--no-render")
     summary = json.loads((out / "summary.json").read_text())
     assert summary["methods"]["naive"]["trials"] == 1
     # no baseline in this sweep: nothing to normalise by, said so in the table
     assert "| naive | n/a |" in (out / "table1.md").read_text()
+    assert (out / "mpc_dofs.png").exists() and not list(out.glob("final_*.png"))
 
 
 @pytest.mark.parametrize("args, message", [
-    (["--task", "nope"], "unknown task"),
+    (["--task", "nope"], "argument --task: invalid choice: 'nope'"),
     (["--methods", "baseline,svr"], "unknown method"),
-    (["--rho", "-1"], "--rho must be >= 0"),
-    (["--theta", "-2"], "--theta must be >= 0"),
-    (["--trials", "0"], "--trials must be >= 1"),
+    (["--rho", "-1"], "argument --rho: must be >= 0, got -1"),
+    (["--rho", "nan"], "argument --rho: must be >= 0, got nan"),
+    (["--theta", "-2"], "argument --theta: must be >= 0, got -2"),
+    (["--trials", "0"], "argument --trials: must be >= 1, got 0"),
+    (["--trials", "1.5"], "argument --trials: '1.5' is not an integer"),
 ])
 def test_bad_arguments(tmp_path, args, message):
     proc = run(*args, "--out", str(tmp_path), check=False)

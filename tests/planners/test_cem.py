@@ -126,10 +126,10 @@ def test_bad_candidates_raise(cand, match):
 def test_cloth_iteration_is_reproducible():
     """One CEM iteration on a 6x6 cloth with a fixed generator: same seed, same costs."""
     from dopt.rollout import RolloutConfig, RolloutService
-    from dopt.tasks.cloth import ClothConfig, make_cloth
-    from dopt.tasks.deformable_task import PickPlaceTask
+    from dopt.tasks.pick.cloth_scene import ClothSceneConfig, make_cloth
+    from dopt.tasks.pick.scene import PickPlaceTask
 
-    scene = make_cloth(ClothConfig(n=6), )
+    scene = make_cloth(ClothSceneConfig(n=6), )
     goal = scene.positions(scene.initial_state)[::-1].copy()
     task = PickPlaceTask(scene, goal, rollout=RolloutService(scene.scene, RolloutConfig(threads=2)))
     cfg = CEMConfig(population=4, elites=2, iterations=1, horizon=1)

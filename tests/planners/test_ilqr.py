@@ -148,7 +148,7 @@ def test_reduced_gains_match_subset_problem_and_solve_descends():
     torch.testing.assert_close(step.K, K, rtol=0, atol=0)
     res = ILQR(svc, cost).solve(x0, U, C, max_iterations=6)
     assert res.costs[-1] < res.costs[0]
-    assert all(b >= a for a, b in zip(res.costs[1:], res.costs[:-1]))
+    assert all(b >= a for a, b in zip(res.costs[1:], res.costs[:-1], strict=True))
 
 
 def test_bad_config():

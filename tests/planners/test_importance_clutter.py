@@ -8,7 +8,7 @@ import torch
 from dopt import RolloutConfig, RolloutService, Scene
 from dopt.rollout import FDConfig
 from dopt.tasks import get_task
-from dopt.tasks.push_costs import push_cost
+from dopt.tasks.push.costs import push_cost
 from planners.ilqr import ILQR, ILQRConfig
 from planners.svr import importance_sum, importance_svd
 

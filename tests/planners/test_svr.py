@@ -8,7 +8,7 @@ import torch
 from dopt import RolloutService, Scene
 from dopt.costs import QuadraticCost
 from planners.ilqr import ILQR
-from planners.svr import (DofSelector, SelectionConfig, importance_sum, importance_svd)
+from planners.svr import DofSelector, SelectionConfig, importance_sum, importance_svd
 
 # the actuated slider pushes a puck along x (contact); a second puck sits far away on its own
 # rail and cannot be reached: it cannot influence the cost

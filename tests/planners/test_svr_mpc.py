@@ -1,12 +1,10 @@
-"""Table 1 aggregation: pairing with baseline by seed, outliers, CI."""
-
-import sys
-from pathlib import Path
+"""planners.svr_mpc: Table 1 aggregation (pairing with baseline by seed, outliers, CI) and
+one synchronous MPC episode from Python."""
 
 import pytest
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "experiments"))
-from mpc_trial import aggregate  # noqa: E402
+from planners.svr_mpc import SVRMPCSettings, feedback_effect, run_svr_mpc
+from planners.svr_mpc import summarize as aggregate
 
 
 def rec(method, seed, cost, dist=0.01):
@@ -54,7 +52,8 @@ def test_feedback_both_pairs_every_trial_back_to_back():
                            "--feedback", "both", "--slowdown", "1", "--out", "unused"])
     trials = mpc.make_trials(args)
     assert len(trials) == 8 and len({t.key for t in trials}) == 8
-    for a, b in zip(trials[0::2], trials[1::2]):   # open loop, then the same trial with feedback
+    # open loop, then the same trial with feedback
+    for a, b in zip(trials[0::2], trials[1::2], strict=True):
         assert (a.params["feedback"], b.params["feedback"]) == (False, True)
         assert {k: v for k, v in a.params.items() if k != "feedback"} == \
             {k: v for k, v in b.params.items() if k != "feedback"}
@@ -62,7 +61,6 @@ def test_feedback_both_pairs_every_trial_back_to_back():
 
 
 def test_feedback_effect_is_the_paired_ratio():
-    from mpc_trial import feedback_effect
     records = []
     for seed, (open_loop, fb) in enumerate([(100.0, 50.0), (100.0, 200.0), (80.0, 40.0)]):
         records += [rec("rand", seed, open_loop), rec("rand", seed, fb)]
@@ -74,3 +72,21 @@ def test_feedback_effect_is_the_paired_ratio():
     assert r["ratio_geomean"] == pytest.approx((0.5 * 2.0 * 0.5) ** (1 / 3))
     assert r["ratio_ci90"][0] < r["ratio_geomean"] < r["ratio_ci90"][1]
     assert (r["better"], r["pairs"]) == (2, 3)
+
+
+def test_one_synchronous_episode_from_python_is_deterministic():
+    """run_svr_mpc wires task, cost, iLQR and selector in one call; the synchronous mode
+    gives the same MPC cost twice, and the reduced method holds fewer DoFs than nv."""
+    settings = SVRMPCSettings(task="clutter", method="svr-sum", synchronous=True, timeout=4,
+                              threads=1)
+    a, b = run_svr_mpc(settings, seed=3), run_svr_mpc(settings, seed=3)
+    assert a.mpc_cost == b.mpc_cost and a.steps == 4
+    assert a.goal_distance_start > 0 and a.n_dofs[0] == 55
+    assert min(a.n_dofs) < 55            # SVR dropped DoFs after the first optimisation
+
+
+def test_settings_reject_unknown_names():
+    with pytest.raises(ValueError, match="unknown task"):
+        SVRMPCSettings(task="nope")
+    with pytest.raises(ValueError, match="unknown method"):
+        SVRMPCSettings(method="svr")

@@ -1,0 +1,71 @@
+"""Where a result came from: the command line, the git commit, the package versions.
+
+Every experiment stores ``provenance()`` in its summary, so a number in the docs can be traced
+to the code and libraries that produced it; ``code_version()`` is the short form a resumable
+sweep stores with each trial, so that a rerun with other code does not reuse its results
+silently.
+"""
+
+from __future__ import annotations
+
+import datetime
+import functools
+import importlib.metadata
+import platform
+import shlex
+import subprocess
+import sys
+from pathlib import Path
+
+#: the packages whose versions a result records
+PACKAGES = ("dopt", "mujoco", "torch", "numpy", "scipy", "cvxpy", "pymeshlab", "trimesh")
+_ROOT = Path(__file__).resolve().parents[1]
+
+
+@functools.lru_cache(maxsize=1)
+def git_commit() -> str | None:
+    """The checkout's HEAD commit, with "-dirty" when tracked files differ from it; None
+    outside a git checkout (an installed wheel) or without git."""
+    try:
+        head = subprocess.run(["git", "rev-parse", "HEAD"], cwd=_ROOT, capture_output=True,
+                              text=True, timeout=10)
+        if head.returncode != 0:
+            return None
+        dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"],
+                               cwd=_ROOT, capture_output=True, text=True, timeout=10)
+    except (OSError, subprocess.SubprocessError):
+        return None
+    return head.stdout.strip() + ("-dirty" if dirty.stdout.strip() else "")
+
+
+def versions() -> dict:
+    """{package: version or None} of ``PACKAGES`` and Python."""
+    out = {"python": platform.python_version()}
+    for name in PACKAGES:
+        try:
+            out[name] = importlib.metadata.version(name)
+        except importlib.metadata.PackageNotFoundError:
+            out[name] = None
+    return out
+
+
+def code_version() -> str:
+    """dopt's version and commit in one string (e.g. ``0.1.0+3f2a...``): what a trial file
+    records so that a rerun can tell results of other code apart."""
+    return f"{versions()['dopt']}+{git_commit() or 'unknown'}"
+
+
+def provenance(argv: list[str] | None = None) -> dict:
+    """{"command", "git_commit", "versions", "date", "machine"} of this process; ``argv``
+    defaults to ``sys.argv``."""
+    argv = sys.argv if argv is None else argv
+    return {"command": shlex.join(["python", *argv]),
+            "git_commit": git_commit(),
+            "versions": versions(),
+            "date": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
+            "machine": {"platform": platform.platform(), "cpus": _cpus()}}
+
+
+def _cpus() -> int:
+    import os
+    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()

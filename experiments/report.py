@@ -1,0 +1,615 @@
+"""Generate docs/RESULTS.md and README.md's headline table from the result files.
+
+Every number in the docs comes from a result file ``docs/results/*.json`` that an experiment
+wrote itself (``--record PATH``; each file holds a "provenance": command, git commit, package
+versions, date, machine). This script reads them all and writes
+
+- ``docs/RESULTS.md``: every table behind the papers' figures, each naming its source file,
+  the file's commit and the command that produced it (generated: never edit it by hand);
+- the block between ``<!-- results:begin -->`` and ``<!-- results:end -->`` in README.md:
+  the headline table, paper figure / table -> script -> headline numbers (README.md is left
+  alone, with a note, when it has no such markers).
+
+Result kinds (the file's "experiment" field): "fig7" (experiments/cloth_fold.py, rope.py),
+"table1" (experiments/mpc.py), "fig4" (experiments/rho_sweep.py), "key_particles"
+(experiments/key_particles.py). Files of other kinds are listed by name.
+
+    python experiments/report.py            # regenerate both files
+    python experiments/report.py --check    # exit 1 if either file is not what it would write
+
+Standard library only, so it runs anywhere (no torch, no MuJoCo).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import os
+import sys
+from dataclasses import dataclass, field
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+BEGIN, END = "<!-- results:begin -->", "<!-- results:end -->"
+REGENERATE = "python experiments/report.py"
+
+#: method labels of the key-particle experiments (planners.pick_place.LABELS; copied here so
+#: that this script needs no torch), in the order of the paper's figures
+FIG7_LABELS = {"simple": "CEM(Simple)", "original": "CEM(Original)",
+               "random": "CEM(Random)", "scripted": "Scripted"}
+#: Fig. 7 panel of each (task, goal) of the key-particle paper
+FIG7_PANELS = {("rope", "straighten"): "(a) rope straightening",
+               ("rope", "fold"): "(b) rope folding",
+               ("cloth", "diagonal"): "(c) cloth diagonal fold",
+               ("cloth", "side"): "(d) cloth side fold",
+               ("cloth", "reflective"): "(e) cloth reflective fold",
+               ("cloth", "underneath"): "(f) cloth underneath fold"}
+KP = "key particles"
+SVR = "state-vector reduction"
+
+
+@dataclass(frozen=True)
+class Entry:
+    """One row of the README's headline table: a paper's figure or table, the command that
+    reproduces it, and which result files hold its numbers (``match(result)``)."""
+
+    paper: str
+    item: str
+    command: str
+    kind: str
+    where: dict = field(default_factory=dict)
+
+    def match(self, r: Result) -> bool:
+        return r.kind == self.kind and all(r.data.get(k) == v for k, v in self.where.items())
+
+
+#: what the papers report and the scripts that reproduce it (the README's headline rows)
+CATALOGUE = (
+    [Entry(KP, "Fig. 4, Sec. IV-C.1: key particles of each goal",
+           "python experiments/key_particles.py --task all", "key_particles")]
+    + [Entry(KP, f"Fig. 7 {panel}",
+             f"python experiments/{'cloth_fold' if task == 'cloth' else 'rope'}.py "
+             f"--goal {goal}", "fig7", {"task": task, "goal": goal})
+       for (task, goal), panel in FIG7_PANELS.items()]
+    + [Entry(SVR, f"Table 1: {task}", f"python experiments/mpc.py --task {task}", "table1",
+             {"task": task}) for task in ("clutter", "soft", "soft_rigid")]
+    + [Entry(SVR, "Fig. 4: rho, theta sweep",
+             "python experiments/rho_sweep.py --task clutter --rhos 0.1,0.3,1,3,10,30,100,300,"
+             "1000 --thetas 0,5,10,20 --trials 5", "fig4")])
+
+
+# ------------------------------------------------------------------------------ loading
+@dataclass(frozen=True)
+class Result:
+    """A result file: its path, its "experiment" kind and its contents."""
+
+    path: Path
+    data: dict
+
+    @property
+    def kind(self) -> str:
+        return str(self.data.get("experiment", "(none)"))
+
+    @property
+    def name(self) -> str:
+        return self.path.name
+
+    @property
+    def provenance(self) -> dict:
+        p = self.data.get("provenance")
+        return p if isinstance(p, dict) else {}
+
+    @property
+    def command(self) -> str:
+        return str(self.provenance.get("command") or "(no provenance: command unknown)")
+
+    @property
+    def commit(self) -> str:
+        """The short commit ("-dirty" kept: the run had uncommitted changes)."""
+        c = self.provenance.get("git_commit")
+        if not c:
+            return "unknown commit"
+        head, dirty = (c[:-6], "-dirty") if c.endswith("-dirty") else (c, "")
+        return head[:8] + dirty
+
+    @property
+    def date(self) -> str:
+        return str(self.provenance.get("date") or "unknown date")
+
+    @property
+    def quick(self) -> bool:
+        """A smoke-sized run (--quick): its numbers are not the paper's settings."""
+        return bool(self.data.get("quick")) or "--quick" in self.command.split()
+
+
+class ReportError(Exception):
+    """A result file that cannot be read or rendered."""
+
+
+def load_results(results_dir: Path) -> list[Result]:
+    """Every ``*.json`` under ``results_dir`` (not recursive), sorted by name; a missing folder
+    is no results."""
+    out = []
+    for path in sorted(Path(results_dir).glob("*.json")):
+        try:
+            data = json.loads(path.read_text())
+        except (OSError, ValueError) as e:
+            raise ReportError(f"{path}: not a readable JSON file ({e})") from e
+        if not isinstance(data, dict):
+            raise ReportError(f"{path}: expected a JSON object, got {type(data).__name__}")
+        out.append(Result(path, data))
+    return out
+
+
+# ---------------------------------------------------------------------------- formatting
+def _finite(x) -> bool:
+    return isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x)
+
+
+def num(x, digits: int = 2, scale: float = 1.0) -> str:
+    """x * scale with ``digits`` decimals; "n/a" for None, NaN or a non-number."""
+    return f"{x * scale:.{digits}f}" if _finite(x) else "n/a"
+
+
+def mm(x, digits: int = 1) -> str:
+    """Metres as millimetres, one decimal."""
+    return num(x, digits, 1e3)
+
+
+def pm(mean: str, ci: str) -> str:
+    """"mean ± ci", or the mean alone when there is no interval."""
+    return mean if ci == "n/a" or mean == "n/a" else f"{mean} ± {ci}"
+
+
+def cell(text) -> str:
+    """Text safe inside a Markdown table cell."""
+    return str(text).replace("|", "\\|").replace("\n", " ")
+
+
+def table(header: list[str], rows: list[list]) -> list[str]:
+    lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
+    return lines + ["| " + " | ".join(cell(c) for c in row) + " |" for row in rows]
+
+
+def link(r: Result, page: Path) -> str:
+    """A Markdown link to the result file, relative to the page that shows it."""
+    rel = Path(os.path.relpath(r.path, Path(page).parent)).as_posix()
+    return f"[{r.name}]({rel})"
+
+
+def source(r: Result, page: Path) -> str:
+    """'file (commit)' of a result, as the tables cite it."""
+    return f"{link(r, page)} ({r.commit})"
+
+
+def source_lines(results: list[Result], page: Path) -> list[str]:
+    """The source files of a table, each with its commit, date and command line."""
+    lines = []
+    for r in results:
+        lines.append(f"Source: {link(r, page)}, commit `{r.commit}`, {r.date}"
+                     + (", **quick (smoke-sized) run**" if r.quick else "") + ":  ")
+        lines.append(f"`{r.command}`")
+    return lines
+
+
+def failed_lines(r: Result) -> list[str]:
+    failed = r.data.get("failed") or {}
+    if not failed:
+        return []
+    return ["", f"**{len(failed)} failed trial(s)** (not in the numbers above):", ""] + [
+        f"- `{k}`: {cell(v)}" for k, v in sorted(failed.items())]
+
+
+def _label(method: str) -> str:
+    return FIG7_LABELS.get(method, method)
+
+
+def _methods_in_order(results: list[Result]) -> list[str]:
+    seen = [m for r in results for m in r.data["methods"]]
+    known = [m for m in FIG7_LABELS if m in seen]
+    return known + sorted(set(seen) - set(known))
+
+
+def _panel(r: Result) -> str:
+    return FIG7_PANELS.get((r.data.get("task"), r.data.get("goal")),
+                           f"{r.data.get('task')} {r.data.get('goal')}")
+
+
+# --------------------------------------------------------------------------- fig7 (KP)
+def fig7_cell(e: dict | None) -> str:
+    if not e:
+        return "-"
+    return pm(mm(e.get("final_cost_mean")), mm(e.get("final_cost_ci95")))
+
+
+def fig7_section(results: list[Result], page: Path) -> list[str]:
+    results = sorted(results, key=lambda r: (list(FIG7_PANELS).index(
+        (r.data.get("task"), r.data.get("goal")))
+        if (r.data.get("task"), r.data.get("goal")) in FIG7_PANELS else 99, r.name))
+    methods = _methods_in_order(results)
+    lines = ["## Key particles, Fig. 7: final cost of pick-and-place", "",
+             "Mean particle distance to the goal after the whole plan (Eq. 2), in mm: mean ± "
+             "95 % CI half-width over the seeds (no interval with one seed). Candidates: the "
+             "particles each planner may pick (last stage).", ""]
+    header = ["Fig. 7", *[_label(m) for m in methods], "seeds", "candidates", "source"]
+    # seeds and candidates: one per method present, in the columns' order
+    rows = []
+    for r in results:
+        ms = r.data["methods"]
+        seeds = [str(ms[m].get("n", "?")) for m in methods if m in ms]
+        rows.append([_panel(r) + (" (quick)" if r.quick else ""),
+                     *[fig7_cell(ms.get(m)) for m in methods],
+                     seeds[0] if len(set(seeds)) == 1 else " / ".join(seeds),
+                     " / ".join(str(ms[m].get("n_candidates", "?")) for m in methods
+                                if m in ms),
+                     source(r, page)])
+    lines += table(header, rows)
+    for r in results:
+        lines += ["", *fig7_detail(r, page)]
+    return lines
+
+
+def fig7_detail(r: Result, page: Path) -> list[str]:
+    d = r.data
+    s = d.get("settings") or {}
+    cem = s.get("cem") or {}
+    lines = [f"### Fig. 7 {_panel(r)}: `{r.name}`", ""]
+    if s:
+        lines += [f"Settings: {s.get('task')} {s.get('goal')}, n {s.get('n')}, bound "
+                  f"{s.get('bound')} m, self-collision {'on' if s.get('selfcollide') else 'off'};"
+                  f" CEM population {cem.get('population')}, elites {cem.get('elites')}, "
+                  f"{cem.get('iterations')} iterations per stage, horizon {cem.get('horizon')}."
+                  + (f" Wall time {num(d.get('wall_s'), 0)} s." if "wall_s" in d else ""), ""]
+    rope_ratio = any("end_to_end_ratio_mean" in e for e in d["methods"].values())
+    header = ["method", "final cost (mm)", "per seed (mm)", "seeds", "candidates",
+              "s / CEM iteration"] + (["end-to-end / length"] if rope_ratio else [])
+    rows = []
+    for m, e in d["methods"].items():
+        row = [_label(m), fig7_cell(e),
+               ", ".join(mm(c) for c in e.get("final_costs", [])),
+               ", ".join(str(x) for x in e.get("seeds", [])) + f" (n = {e.get('n')})",
+               str(e.get("n_candidates", "?")), num(e.get("s_per_iteration"), 2)]
+        if rope_ratio:
+            row.append(pm(num(e.get("end_to_end_ratio_mean")),
+                          num(e.get("end_to_end_ratio_ci95"))))
+        rows.append(row)
+    lines += table(header, rows)
+    return lines + [""] + source_lines([r], page) + failed_lines(r)
+
+
+def fig7_headline(r: Result) -> str:
+    ms = r.data["methods"]
+    parts = []
+    for i, m in enumerate(_methods_in_order([r])):
+        e = ms[m]
+        text = (f"{_label(m)} {fig7_cell(e)} mm" if i == 0
+                else f"{_label(m).replace('CEM(', '').rstrip(')')} {mm(e.get('final_cost_mean'))}")
+        if "end_to_end_ratio_mean" in e and i == 0:
+            text += f", end-to-end {num(e['end_to_end_ratio_mean'])} L"
+        parts.append(text)
+    seeds = max((e.get("n") or 0) for e in ms.values()) if ms else 0
+    return ", ".join(parts) + f" ({seeds} seed{'s' if seeds != 1 else ''})"
+
+
+# ------------------------------------------------------------------------- table1 (SVR)
+MPC_HEADER = ["MPC cost / baseline (mean ± CI90)", "median (all)", "opt. time (ms)", "DoFs",
+              "lag (steps)", "success", "goal distance (m, median)", "outliers", "trials"]
+
+
+def mpc_cells(m: dict) -> list[str]:
+    return [pm(num(m.get("mpc_cost_normalised_mean")), num(m.get("mpc_cost_normalised_ci90"))),
+            num(m.get("mpc_cost_normalised_median")), num(m.get("opt_ms_mean"), 0),
+            num(m.get("dofs_mean"), 1), num(m.get("lag_steps_mean"), 1),
+            num(m.get("success_rate")), num(m.get("goal_distance_end_median"), 3),
+            str(m.get("outliers", "?")), str(m.get("trials", "?"))]
+
+
+def table1_section(results: list[Result], page: Path) -> list[str]:
+    lines = ["## State-vector reduction, Table 1: iLQR-SVR in asynchronous MPC", "",
+             "MPC cost normalised by the baseline's on the same task instance; mean and 90 % CI "
+             "over the trials that are not outliers (goal object too far from the goal at the "
+             "end), median over all.", ""]
+    for r in sorted(results, key=lambda r: (str(r.data.get("task")), r.name)):
+        d = r.data
+        theta = d.get("theta")
+        theta_text = (", ".join(f"{k} {v}" for k, v in theta.items())
+                      if isinstance(theta, dict) else str(theta))
+        lines += [f"### Table 1, {d.get('task')}: `{r.name}`"
+                  + (" (quick)" if r.quick else ""), "",
+                  f"rho {d.get('rho')}; theta: {theta_text}; slowdown {d.get('slowdown')}.", ""]
+        lines += table(["method", *MPC_HEADER],
+                       [[name, *mpc_cells(m)] for name, m in d["methods"].items()])
+        fb = d.get("feedback_effect")
+        if fb:
+            lines += ["", "Feedback vs open loop, paired by seed (MPC cost ratio: geometric mean "
+                      "and 90 % CI; pairs where feedback cost less; successes open loop -> "
+                      "feedback):", ""]
+            lines += table(["method", "cost ratio", "CI90", "feedback better", "successes"],
+                           [[name, num(f.get("ratio_geomean")),
+                             "-".join(num(x) for x in f.get("ratio_ci90", [])),
+                             f"{f.get('better')}/{f.get('pairs')}",
+                             f"{f.get('success_open_loop')} -> {f.get('success_feedback')}"]
+                            for name, f in fb.items()])
+        lines += ["", *source_lines([r], page), *failed_lines(r), ""]
+    return lines[:-1]
+
+
+def table1_headline(r: Result) -> str:
+    parts = []
+    trials = 0
+    for name, m in r.data["methods"].items():
+        trials = max(trials, m.get("trials") or 0)
+        cost = pm(num(m.get("mpc_cost_normalised_mean")), num(m.get("mpc_cost_normalised_ci90")))
+        parts.append(f"{name} {cost} ({num(m.get('opt_ms_mean'), 0)} ms, "
+                     f"{num(m.get('dofs_mean'), 1)} DoFs)")
+    return ("MPC cost / baseline (opt. time, DoFs): " + "; ".join(parts)
+            + f" ({trials} trial{'s' if trials != 1 else ''} each)")
+
+
+# --------------------------------------------------------------------------- fig4 (SVR)
+def fig4_section(results: list[Result], page: Path) -> list[str]:
+    lines = ["## State-vector reduction, Fig. 4: importance threshold rho and random DoFs "
+             "theta", ""]
+    for r in sorted(results, key=lambda r: (str(r.data.get("task")), r.name)):
+        d = r.data
+        points = sorted(d.get("points") or [], key=lambda p: (p.get("theta"), p.get("rho")))
+        lines += [f"### Fig. 4, {d.get('task')}, {d.get('method')}: `{r.name}`"
+                  + (" (quick)" if r.quick else ""), ""]
+        if points:
+            lines += table(["rho", "theta", *MPC_HEADER],
+                           [[str(p.get("rho")), str(p.get("theta")), *mpc_cells(p)]
+                            for p in points])
+        else:
+            lines += ["No points (every trial failed?)."]
+        lines += ["", *source_lines([r], page), *failed_lines(r), ""]
+    return lines[:-1]
+
+
+def fig4_headline(r: Result) -> str:
+    points = [p for p in r.data.get("points") or []
+              if _finite(p.get("mpc_cost_normalised_mean"))]
+    if not points:
+        return f"{r.data.get('method')}: no finite point"
+    best = min(points, key=lambda p: p["mpc_cost_normalised_mean"])
+    trials = sum(p.get("trials") or 0 for p in r.data.get("points") or [])
+    cost = pm(num(best["mpc_cost_normalised_mean"]), num(best.get("mpc_cost_normalised_ci90")))
+    return (f"{r.data.get('method')}, {len(r.data.get('points'))} (rho, theta) points, "
+            f"{trials} trials; lowest MPC cost / baseline {cost} at rho {best.get('rho')}, "
+            f"theta {best.get('theta')} ({num(best.get('dofs_mean'), 1)} DoFs)")
+
+
+# ---------------------------------------------------------------------- key particles
+def _short_task(task: str) -> str:
+    return task.replace("_", " ")
+
+
+def kp_section(results: list[Result], page: Path) -> list[str]:
+    lines = ["## Key particles, Fig. 4 and Sec. IV-C.1: key particles of each goal", "",
+             "Alg. 1 on each goal: the simplified model's elements (rope: segments; cloth: "
+             "triangles), its key particles, its error and threshold (cloth: in the z-stretched "
+             "space) and the wall time; paper: the counts the paper reports.", ""]
+    for r in results:
+        d = r.data
+        paper = d.get("paper") or {}
+        lines += [f"### Key particles: `{r.name}`" + (" (quick)" if r.quick else ""), "",
+                  f"Cloth {d.get('cloth_particles_per_side')} x "
+                  f"{d.get('cloth_particles_per_side')} particles; seed {d.get('seed')}.", ""]
+        rows = []
+        for task, e in (d.get("tasks") or {}).items():
+            p = paper.get(task, {})
+            inter = "; ".join(f"{_short_task(g.get('goal', '?'))}: {g.get('n_keys')} keys, "
+                              f"{g.get('n_elements')} el." for g in e.get("intermediate_goals", []))
+            rows.append([_short_task(task), str(e.get("particles", "?")), str(e.get("n_keys")),
+                         str(p.get("keys", "-")), str(e.get("n_elements")),
+                         str(p.get("triangles", "-")),
+                         f"{mm(e.get('error'))} / {mm(e.get('threshold'))}",
+                         num(e.get("seconds"), 2), " ".join(str(i) for i in e.get("indices", [])),
+                         inter or "-"])
+        lines += table(["goal", "particles", "key particles", "paper", "elements",
+                        "paper triangles", "error / threshold (mm)", "s", "indices",
+                        "intermediate goals"], rows)
+        rob = d.get("robustness") or {}
+        if rob.get("cloth_grid"):
+            lines += ["", *kp_grid(rob["cloth_grid"])]
+        if rob.get("noise"):
+            lines += ["", *kp_noise(rob["noise"])]
+        lines += ["", *source_lines([r], page), ""]
+    return lines[:-1]
+
+
+def kp_grid(rows: list[dict]) -> list[str]:
+    """Key counts of the noise-free cloth goals: goal x resolution, one count per
+    triangulation."""
+    tris = list(dict.fromkeys(r.get("triangulation") for r in rows))
+    cells: dict = {}
+    for r in rows:
+        k = "fail" if r.get("n_keys") is None else str(r["n_keys"])
+        cells.setdefault((r.get("task"), r.get("n")), {})[r.get("triangulation")] = k
+    out = ["Cloth key counts by resolution (particles per side), one per triangulation ("
+           + " / ".join(map(str, tris)) + "):", ""]
+    ns = sorted({r.get("n") for r in rows}, key=lambda n: (n is None, n))
+    tasks = list(dict.fromkeys(r.get("task") for r in rows))
+    return out + table(["goal", *[str(n) for n in ns]],
+                       [[_short_task(t), *[" / ".join(cells.get((t, n), {}).get(x, "-")
+                                                      for x in tris) for n in ns]]
+                        for t in tasks])
+
+
+def kp_noise(noise: dict) -> list[str]:
+    """Goals whose key count equals the noise-free one, per kind and noise level."""
+    sigmas = list(dict.fromkeys(s for cells in noise.values() for s in cells))
+    return (["Goals whose key count held under Gaussian goal noise (sigma):", ""]
+            + table(["goals", *sigmas],
+                    [[kind, *[cells.get(s, "-") for s in sigmas]]
+                     for kind, cells in noise.items()]))
+
+
+def kp_headline(r: Result) -> str:
+    tasks = r.data.get("tasks") or {}
+    paper = r.data.get("paper") or {}
+    parts = []
+    for task, e in tasks.items():
+        p = paper.get(task, {})
+        cloth = task.startswith("cloth")
+        text = f"{_short_task(task)} {e.get('n_keys')}" + (
+            f" keys / {e.get('n_elements')} triangles" if cloth else "")
+        ref = p.get("triangles") if cloth else p.get("keys")
+        if ref is not None:
+            text += f" (paper {ref}{' triangles' if cloth else ''})"
+        parts.append(text)
+    return "; ".join(parts)
+
+
+# ----------------------------------------------------------------------------- pages
+SECTIONS = {"key_particles": kp_section, "fig7": fig7_section, "table1": table1_section,
+            "fig4": fig4_section}
+HEADLINES = {"key_particles": kp_headline, "fig7": fig7_headline, "table1": table1_headline,
+             "fig4": fig4_headline}
+
+
+def _display(path: Path) -> str:
+    try:
+        return Path(path).resolve().relative_to(ROOT).as_posix()
+    except ValueError:
+        return Path(path).as_posix()
+
+
+def _rendered(r: Result, fn, *args):
+    try:
+        return fn(*args)
+    except (KeyError, TypeError, AttributeError, ValueError) as e:
+        raise ReportError(f"{r.path}: malformed {r.kind!r} result ({type(e).__name__}: {e})") \
+            from e
+
+
+def results_md(results: list[Result], results_dir: Path, page: Path) -> str:
+    """The text of RESULTS.md for ``results`` (from ``results_dir``), to be written at
+    ``page`` (links are relative to it)."""
+    where = _display(results_dir)
+    lines = ["# Results", "",
+             f"*Generated by `experiments/report.py` from `{where}/*.json`: do not edit by hand. "
+             f"Regenerate with `{REGENERATE}` (`--check` tells whether this page is current).*",
+             "",
+             "Each number below is read from a result file that an experiment wrote itself "
+             "(`--record PATH`); each table names its file, the git commit the run was made at "
+             "(`-dirty`: with uncommitted changes) and its command line.", ""]
+    if not results:
+        return "\n".join(lines + [f"No results yet: `{where}/` holds no result file. Run an "
+                                  "experiment with `--record "
+                                  f"{where}/<name>.json`, then `{REGENERATE}`.", ""])
+    lines += ["## Result files", ""]
+    lines += table(["file", "experiment", "paper figure / table", "commit", "date"],
+                   [[link(r, page), r.kind, _items(r), r.commit, r.date] for r in results])
+    for kind, section in SECTIONS.items():
+        chosen = [r for r in results if r.kind == kind]
+        if chosen:
+            for r in chosen:                # a malformed file: an error that names it
+                _rendered(r, section, [r], page)
+            lines += ["", *section(chosen, page)]
+    other = [r for r in results if r.kind not in SECTIONS]
+    if other:
+        lines += ["", "## Other result files", "",
+                  "Files of a kind this script does not render (field \"experiment\"):", ""]
+        lines += [f"- {link(r, page)}: experiment `{r.kind}`, commit `{r.commit}`, "
+                  f"`{r.command}`" for r in other]
+    return "\n".join(lines) + "\n"
+
+
+def _items(r: Result) -> str:
+    names = [f"{e.paper}: {e.item}" for e in CATALOGUE if e.match(r)]
+    return "; ".join(names) or "-"
+
+
+def readme_block(results: list[Result], readme: Path, results_md_path: Path) -> str:
+    """The README's headline table (between the markers, markers excluded)."""
+    rows = []
+    for e in CATALOGUE:
+        matched = [r for r in results if e.match(r)]
+        if not matched:
+            rows.append([e.paper, e.item, f"`{e.command}`", "not recorded yet"])
+        for r in matched:
+            headline = _rendered(r, HEADLINES[r.kind], r)
+            rows.append([e.paper, e.item + (" (quick run)" if r.quick else ""),
+                         f"`{r.command}`", f"{headline}; {source(r, readme)}"])
+    for r in results:                  # a known kind the catalogue has no row for
+        if r.kind in HEADLINES and not any(e.match(r) for e in CATALOGUE):
+            rows.append(["-", f"{r.kind}: {r.data.get('task', '')} {r.data.get('goal', '')}"
+                         .strip(), f"`{r.command}`",
+                         f"{_rendered(r, HEADLINES[r.kind], r)}; {source(r, readme)}"])
+    rel = Path(os.path.relpath(results_md_path, Path(readme).parent)).as_posix()
+    lines = [f"<!-- generated by experiments/report.py from the result files; edit those, "
+             f"then run `{REGENERATE}` -->",
+             *table(["paper", "figure / table", "command", "headline numbers (source file, "
+                     "commit)"], rows), "",
+             f"Every table, per-seed number and setting: [{rel}]({rel}), generated like this "
+             f"table from the result files by `{REGENERATE}`."]
+    return "\n".join(lines)
+
+
+def replace_block(text: str, block: str) -> str | None:
+    """``text`` with the block between the markers replaced; None without both markers."""
+    start, end = text.find(BEGIN), text.find(END)
+    if start < 0 or end < start:
+        return None
+    return text[:start + len(BEGIN)] + "\n" + block + "\n" + text[end:]
+
+
+# ------------------------------------------------------------------------------- main
+def generate(results_dir: Path, results_md_path: Path, readme: Path) -> dict:
+    """{path: wanted text} of both outputs (README only when it has the markers); a note
+    about a README without markers under key "note"."""
+    results = load_results(results_dir)
+    out = {Path(results_md_path): results_md(results, results_dir, results_md_path)}
+    note = None
+    if Path(readme).exists():
+        new = replace_block(Path(readme).read_text(),
+                            readme_block(results, readme, results_md_path))
+        if new is None:
+            note = (f"{readme} has no {BEGIN} ... {END} markers: left alone (put them where "
+                    "the headline table belongs)")
+        else:
+            out[Path(readme)] = new
+    else:
+        note = f"{readme} does not exist: left alone"
+    return {"files": out, "note": note}
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__,
+                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--check", action="store_true",
+                    help="write nothing; exit 1 if RESULTS.md or the README block differs "
+                         "from what this script would generate")
+    ap.add_argument("--results-dir", type=Path, default=ROOT / "docs" / "results",
+                    help="folder of the result files (default docs/results)")
+    ap.add_argument("--results-md", type=Path, default=ROOT / "docs" / "RESULTS.md",
+                    help="the generated page (default docs/RESULTS.md)")
+    ap.add_argument("--readme", type=Path, default=ROOT / "README.md",
+                    help="the README whose results block is rewritten (default README.md)")
+    args = ap.parse_args(argv)
+    try:
+        gen = generate(args.results_dir, args.results_md, args.readme)
+    except ReportError as e:
+        print(f"error: {e}", file=sys.stderr)
+        return 2
+    if gen["note"]:
+        print(f"note: {gen['note']}", file=sys.stderr)
+    stale = [p for p, text in gen["files"].items()
+             if not p.exists() or p.read_text() != text]
+    if args.check:
+        for p in stale:
+            print(f"{_display(p)} differs from what experiments/report.py generates from "
+                  f"{_display(args.results_dir)}; run `{REGENERATE}`", file=sys.stderr)
+        if not stale:
+            print("up to date: " + ", ".join(_display(p) for p in gen["files"]))
+        return 1 if stale else 0
+    for p in stale:
+        p.parent.mkdir(parents=True, exist_ok=True)
+        p.write_text(gen["files"][p])
+    print("wrote " + (", ".join(_display(p) for p in stale) or "nothing (up to date)"))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

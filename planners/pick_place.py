@@ -1,0 +1,442 @@
+"""Pick-and-place on rope and cloth: the key-particle paper's pipeline as one library call.
+
+A *problem* is a scene (rope or cloth with the picker), a start state and one or more *stages*:
+the goal shape and, for the multi-step folds, its intermediate goals in turn (Sec. III-D), each
+with the key particles of its goal (``deformables``). A *planner* plans one stage from the
+current state; the plan is executed and the next stage starts from where it left the object.
+
+Planners (the paper's Sec. IV-C.2), one interface (``PickPlanner``), built by name with
+``make_planner``:
+
+    simple    CEM over the key particles of each stage's goal (CEM(Simple))
+    original  CEM over all particles (CEM(Original))
+    random    CEM over a random subset as large as the key set (CEM(Random))
+    scripted  pick each key particle, move it above its goal, release
+
+One call runs a whole trial::
+
+    from planners.pick_place import PickPlaceSettings, solve
+    result = solve(PickPlaceSettings.preset("cloth", "diagonal"), method="simple", seed=0)
+    result.metrics["final_cost"]          # mean particle distance to the goal (m)
+
+Shapes: N particles, K key particles, H actions per plan, ns state row.
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import asdict, dataclass, field, replace
+from typing import Protocol
+
+import numpy as np
+import torch
+
+from dopt.rollout import RolloutConfig, RolloutService
+from dopt.stats import mean_ci
+from dopt.tasks.pick.cloth_scene import ClothSceneConfig, make_cloth
+from dopt.tasks.pick.picker import PickerConfig
+from dopt.tasks.pick.rope_scene import RopeSceneConfig, make_rope
+from dopt.tasks.pick.scene import DeformableScene, PickPlaceTask, end_to_end, mean_distance
+from planners.cem import CEM, CEMConfig
+from planners.scripted import ScriptedConfig, scripted
+
+log = logging.getLogger(__name__)
+
+#: the goals of each object, by the names the experiments take
+GOALS = {"cloth": ("diagonal", "side", "reflective", "underneath"),
+         "rope": ("straighten", "fold")}
+#: planner names (the paper's methods), in the order of its figures
+METHODS = ("simple", "original", "random", "scripted")
+LABELS = {"simple": "CEM(Simple)", "original": "CEM(Original)", "random": "CEM(Random)",
+          "scripted": "Scripted"}
+#: how far a crumpled rope's start turns per particle (rad; deformables.goals.rope_crumpled)
+CRUMPLE_TURN = 0.8
+
+
+# ------------------------------------------------------------------------------ settings
+@dataclass(frozen=True)
+class PickPlaceSettings:
+    """Everything that defines a pick-and-place trial except the method and the seed.
+
+    Attributes:
+        task: "cloth" or "rope".
+        goal: one of ``GOALS[task]``.
+        n: particles per side (cloth, N = n * n) or along the rope (N = n).
+        bound: largest picker displacement per axis of one action (m).
+        cem: the CEM settings of every stage (``horizon`` is H).
+        scripted: the scripted policy's settings.
+        selfcollide: cloth self-collision (the multi-layer folds need it).
+        side: cloth edge length (m); length: rope length (m).
+        threads: simulation threads (0: one per core); not part of a trial's identity.
+    """
+
+    task: str
+    goal: str
+    n: int
+    bound: float
+    cem: CEMConfig
+    scripted: ScriptedConfig = ScriptedConfig()
+    selfcollide: bool = False
+    side: float = 0.3
+    length: float = 0.5
+    threads: int = 0
+
+    def __post_init__(self):
+        if self.task not in GOALS:
+            raise ValueError(f"unknown task {self.task!r}; choose from {', '.join(GOALS)}")
+        if self.goal not in GOALS[self.task]:
+            raise ValueError(f"unknown {self.task} goal {self.goal!r}; choose from "
+                             f"{', '.join(GOALS[self.task])}")
+        if isinstance(self.n, bool) or not isinstance(self.n, (int, np.integer)) or self.n < 3:
+            raise ValueError(f"n must be an int >= 3, got {self.n!r}")
+        if not (np.isfinite(self.bound) and self.bound > 0):
+            raise ValueError(f"bound must be a positive number of metres, got {self.bound!r}")
+        if isinstance(self.threads, bool) or not isinstance(self.threads, (int, np.integer)) \
+                or self.threads < 0:
+            raise ValueError(f"threads must be an int >= 0 (0: one per core), got {self.threads!r}")
+
+    @classmethod
+    def preset(cls, task: str, goal: str, quick: bool = False) -> PickPlaceSettings:
+        """The settings the experiments run by default (``PRESETS``); ``quick`` shrinks them
+        to a smoke run (8 x 8 cloth or 20-particle rope, population 8, 2 iterations)."""
+        if task not in GOALS or goal not in GOALS[task]:
+            raise ValueError(f"no preset for {task!r} / {goal!r}; choose from {GOALS}")
+        p = PRESETS[task, goal]
+        cem = CEMConfig(horizon=p.horizon, iterations=p.iterations, population=p.population,
+                        elites=p.elites)
+        n = p.n
+        if quick:
+            cem = replace(cem, population=8, elites=2, iterations=2,
+                          horizon=2 if task == "rope" else cem.horizon)
+            n = 8 if task == "cloth" else 20
+        return cls(task, goal, n, p.bound, cem, ScriptedConfig(), p.selfcollide)
+
+    def to_dict(self) -> dict:
+        """JSON-able form (nested configs as dicts); ``from_dict`` inverts it."""
+        return asdict(self)
+
+    @classmethod
+    def from_dict(cls, d: dict) -> PickPlaceSettings:
+        d = dict(d)
+        d["cem"] = CEMConfig(**d["cem"])
+        d["scripted"] = ScriptedConfig(**d["scripted"])
+        return cls(**d)
+
+
+@dataclass(frozen=True)
+class Preset:
+    """A goal's default budget: n, bound (m), horizon H, CEM iterations per stage, population,
+    elites, self-collision."""
+
+    n: int
+    bound: float
+    horizon: int
+    iterations: int
+    population: int
+    elites: int
+    selfcollide: bool = False
+
+
+#: The experiments' defaults, chosen so that all four methods x 3 seeds of one goal finish in
+#: minutes on 2 cores. The multi-layer folds need self-collision (a layered 12 x 12 step costs
+#: ~6 ms instead of ~1 ms), so they run a smaller population and fewer iterations per stage.
+#: A cloth action may carry a corner across the 0.3 m sheet; a rope action moves 0.1 m at most.
+PRESETS = {
+    ("cloth", "diagonal"): Preset(12, 0.3, 2, 15, 32, 6),
+    ("cloth", "side"): Preset(12, 0.3, 3, 15, 32, 6),
+    ("cloth", "reflective"): Preset(12, 0.3, 2, 8, 16, 4, selfcollide=True),
+    ("cloth", "underneath"): Preset(12, 0.3, 2, 5, 16, 4, selfcollide=True),
+    ("rope", "straighten"): Preset(40, 0.1, 6, 20, 32, 6),
+    ("rope", "fold"): Preset(40, 0.1, 6, 20, 32, 6),
+}
+
+
+# ------------------------------------------------------------------------------- problem
+@dataclass(frozen=True)
+class Stage:
+    """One (intermediate) goal: goal (N, 3) particle positions in the scene's frame, keys (K,)
+    its key particles, name for the logs."""
+
+    name: str
+    goal: np.ndarray
+    keys: np.ndarray
+
+
+@dataclass(frozen=True)
+class Problem:
+    """What a trial plans on: the scene, the start state (ns,), the stages in order; the last
+    stage's goal is what ``metrics`` measures against."""
+
+    settings: PickPlaceSettings
+    scene: DeformableScene
+    start_state: np.ndarray
+    stages: Sequence[Stage]
+
+    @property
+    def final_goal(self) -> np.ndarray:
+        """(N, 3) the last stage's goal."""
+        return self.stages[-1].goal
+
+    @property
+    def metric_names(self) -> tuple[str, ...]:
+        """The keys of ``metrics``: final_cost, and end_to_end_ratio for rope straightening."""
+        s = self.settings
+        return ("final_cost",) + (("end_to_end_ratio",) if s.goal == "straighten" else ())
+
+    def metrics(self, state: np.ndarray) -> dict:
+        """Metrics of a final state (ns,): ``final_cost`` the mean particle distance to the
+        final goal (m, Eq. 2); rope straightening also ``end_to_end_ratio`` (Sec. IV-B)."""
+        p = self.scene.positions(state)
+        out = {"final_cost": float(mean_distance(p, self.final_goal))}
+        if "end_to_end_ratio" in self.metric_names:
+            out["end_to_end_ratio"] = float(end_to_end(p) / self.settings.length)
+        return out
+
+
+def make_problem(settings: PickPlaceSettings, seed: int = 0) -> Problem:
+    """The scene, start and stages of a task (the seed picks the crumpled start of rope
+    straightening; every other start is deterministic)."""
+    if settings.task == "cloth":
+        return _cloth_problem(settings)
+    return _rope_problem(settings, seed)
+
+
+def _cloth_problem(s: PickPlaceSettings) -> Problem:
+    from deformables.cloth import cloth_key_particles
+    from deformables.goals import goal_sequence
+
+    scene = make_cloth(ClothSceneConfig(n=s.n, side=s.side, selfcollide=s.selfcollide),
+                       PickerConfig(bound=(s.bound,) * 3))
+    lift = np.array([0.0, 0.0, scene.radius])          # the cloth rests at z = radius
+    stages = []
+    for goal in goal_sequence(f"cloth_{s.goal}", n=s.n, side=s.side):
+        keys = cloth_key_particles(goal.positions, goal.faces,
+                                   rest_positions=goal.rest_positions).indices
+        stages.append(Stage(goal.name, goal.positions + lift, np.asarray(keys, dtype=int)))
+    return Problem(s, scene, scene.initial_state, stages)
+
+
+def _rope_problem(s: PickPlaceSettings, seed: int) -> Problem:
+    """Straighten: a crumpled start (one per seed), the straight rope along the line through
+    its ends, centred between them. Fold: the straight rope to the crossed triangle."""
+    from deformables.goals import rope_crossed_triangle, rope_crumpled, rope_straight
+    from deformables.rope import rope_key_particles
+
+    config = RopeSceneConfig(n=s.n, length=s.length)
+    picker = PickerConfig(bound=(s.bound,) * 3)
+    if s.goal == "straighten":
+        start = rope_crumpled(np.random.default_rng(seed), s.n, s.length,
+                              turn=CRUMPLE_TURN).positions.copy()
+        start[:, 2] = config.radius + 1e-4
+        scene = make_rope(config, picker, positions=start)
+        p0 = scene.positions(scene.initial_state)
+        direction = p0[-1] - p0[0]
+        goal = rope_straight(s.n, s.length, float(np.arctan2(direction[1], direction[0])))
+        goal = replace(goal, positions=goal.positions + [*(0.5 * (p0[0] + p0[-1]))[:2], 0.0])
+    else:
+        scene = make_rope(config, picker)
+        goal = rope_crossed_triangle(s.n, s.length)
+    keys = np.asarray(rope_key_particles(goal.positions).indices, dtype=int)
+    positions = goal.positions.copy()
+    positions[:, 2] = config.radius                     # the goal rests on the floor
+    return Problem(s, scene, scene.initial_state, [Stage(goal.name, positions, keys)])
+
+
+# ------------------------------------------------------------------------------ planners
+@dataclass(frozen=True)
+class StagePlan:
+    """A planner's answer for one stage: the actions particles (H,) / displacements (H, 3),
+    the state (ns,) after executing them, its cost (m), the best cost after each iteration
+    (one entry for the scripted policy), the candidates planned over and the seconds of
+    each CEM iteration (empty for the scripted policy)."""
+
+    particles: np.ndarray
+    displacements: np.ndarray
+    final_state: np.ndarray
+    cost: float
+    cost_history: list
+    n_candidates: int
+    seconds_per_iteration: list = field(default_factory=list)
+
+
+class PickPlanner(Protocol):
+    """Plans one stage: ``plan(task, keys, on_iteration)``, where ``task`` holds the start
+    state and the stage's goal and ``keys`` (K,) are its key particles."""
+
+    def plan(self, task: PickPlaceTask, keys: np.ndarray,
+             on_iteration: Callable[[int, float], None] | None = None) -> StagePlan: ...
+
+
+class CEMPlanner:
+    """CEM over a candidate set: the keys ("keys", CEM(Simple)), every particle ("all",
+    CEM(Original)) or as many random particles as keys ("random", CEM(Random), sorted).
+
+    Args:
+        config: the CEM settings.
+        candidates: "keys", "all" or "random".
+        seed: seeds the torch generator of CEM and the numpy generator of random candidates.
+    """
+
+    CANDIDATES = ("keys", "all", "random")
+
+    def __init__(self, config: CEMConfig, candidates: str, seed: int):
+        if candidates not in self.CANDIDATES:
+            raise ValueError(f"candidates must be one of {self.CANDIDATES}, got {candidates!r}")
+        self.cem, self.candidates = CEM(config), candidates
+        self.generator = torch.Generator().manual_seed(int(seed))
+        self.rng = np.random.default_rng(int(seed))
+
+    def candidate_particles(self, keys: np.ndarray, n_particles: int) -> np.ndarray:
+        """(C,) particle indices CEM may pick for a stage with key particles ``keys`` (K,)."""
+        keys = np.asarray(keys, dtype=int)
+        if self.candidates == "keys":
+            return keys
+        if self.candidates == "all":
+            return np.arange(n_particles)
+        return np.sort(self.rng.choice(n_particles, size=len(keys), replace=False))
+
+    def plan(self, task, keys, on_iteration=None) -> StagePlan:
+        cand = self.candidate_particles(keys, task.n_particles)
+        res = self.cem.plan(task, cand, self.generator, on_iteration)
+        state = task.execute(res.particles, res.displacements)
+        return StagePlan(res.particles, res.displacements, state, float(res.cost),
+                         res.cost_history.tolist(), len(cand),
+                         res.seconds_per_iteration.tolist())
+
+
+class ScriptedPlanner:
+    """The paper's scripted policy over the key particles (deterministic: no seed)."""
+
+    def __init__(self, config: ScriptedConfig = ScriptedConfig()):
+        self.config = config
+
+    def plan(self, task, keys, on_iteration=None) -> StagePlan:
+        res = scripted(task, keys, self.config)
+        return StagePlan(res.particles, res.displacements, res.final_state, float(res.cost),
+                         [float(res.cost)], len(np.asarray(keys).reshape(-1)))
+
+
+def make_planner(method: str, settings: PickPlaceSettings, seed: int = 0) -> PickPlanner:
+    """The planner of a method name (``METHODS``) with the settings' configs."""
+    if method == "scripted":
+        return ScriptedPlanner(settings.scripted)
+    kinds = {"simple": "keys", "original": "all", "random": "random"}
+    if method not in kinds:
+        raise ValueError(f"unknown method {method!r}; choose from {', '.join(METHODS)}")
+    return CEMPlanner(settings.cem, kinds[method], seed)
+
+
+# ------------------------------------------------------------------------------- running
+@dataclass(frozen=True)
+class PickPlaceResult:
+    """One trial: ``metrics`` of the final state (``Problem.metrics``), the best cost after
+    every iteration of every stage (``cost_history``, with ``stage_of_iteration``), each
+    stage's cost, candidates and actions, seconds per CEM iteration (None when scripted), the
+    final state (ns,) and the wall time (s)."""
+
+    method: str
+    seed: int
+    metrics: dict
+    cost_history: list
+    stage_of_iteration: list
+    stage_costs: list
+    n_candidates: list
+    s_per_iteration: float | None
+    actions: list
+    final_state: np.ndarray
+    wall_s: float
+
+    def to_dict(self) -> dict:
+        """JSON-able form: the metrics at the top level, the final state as a list."""
+        d = asdict(self)
+        metrics = d.pop("metrics")
+        d["final_state"] = self.final_state.tolist()
+        return {"method": d.pop("method"), "seed": d.pop("seed"), **metrics, **d}
+
+
+def run_problem(problem: Problem, planner: PickPlanner, *, method: str = "", seed: int = 0,
+                service: RolloutService | None = None,
+                on_iteration: Callable[[int, float], None] | None = None) -> PickPlaceResult:
+    """Plan and execute every stage of ``problem`` in turn with ``planner``.
+
+    ``service`` defaults to a new one with the settings' threads (closed at the end);
+    ``method`` and ``seed`` only label the result.
+    """
+    start = time.perf_counter()
+    own = service is None
+    svc = service or RolloutService(problem.scene.scene,
+                                    RolloutConfig(threads=problem.settings.threads))
+    try:
+        state = problem.start_state
+        history, stage_of, n_cand, seconds, actions, stage_costs = [], [], [], [], [], []
+        for k, stage in enumerate(problem.stages):
+            task = PickPlaceTask(problem.scene, stage.goal, state, svc)
+            plan = planner.plan(task, stage.keys, on_iteration)
+            state = plan.final_state
+            history += plan.cost_history
+            stage_of += [k] * len(plan.cost_history)
+            seconds += plan.seconds_per_iteration
+            n_cand.append(plan.n_candidates)
+            stage_costs.append(plan.cost)
+            # full precision: a cloth amplifies a micrometre of rounding into centimetres, and
+            # the recorded actions must replay to the recorded final state
+            actions.append({"stage": stage.name, "particles": plan.particles.tolist(),
+                            "displacements": np.asarray(plan.displacements, float).tolist()})
+            log.info("%s seed %d stage %s: cost %.1f mm", method, seed, stage.name,
+                     plan.cost * 1e3)
+    finally:
+        if own and hasattr(svc, "close"):
+            svc.close()
+    return PickPlaceResult(method, int(seed), problem.metrics(state), history, stage_of,
+                           stage_costs, n_cand, float(np.mean(seconds)) if seconds else None,
+                           actions, np.asarray(state), time.perf_counter() - start)
+
+
+def solve(settings: PickPlaceSettings, method: str = "simple", seed: int = 0,
+          on_iteration: Callable[[int, float], None] | None = None) -> PickPlaceResult:
+    """One trial in one call: build the problem, plan every stage with ``method``, execute,
+    measure. The same settings, method and seed give the same result."""
+    problem = make_problem(settings, seed)
+    return run_problem(problem, make_planner(method, settings, seed), method=method,
+                       seed=seed, on_iteration=on_iteration)
+
+
+def run_trial(params: dict, on_iteration: Callable[[int, float], None] | None = None) -> dict:
+    """``solve`` for ``dopt.sweep``: params {"settings": PickPlaceSettings.to_dict(),
+    "method", "seed"} -> ``PickPlaceResult.to_dict()``."""
+    settings = PickPlaceSettings.from_dict(params["settings"])
+    return solve(settings, params["method"], int(params["seed"]), on_iteration).to_dict()
+
+
+def summarize(results: Sequence[dict], methods: Sequence[str],
+              metric_names: Sequence[str]) -> dict:
+    """Per method (in ``methods`` order, those with results): the mean, 95 % CI half-width
+    (None with one seed) and per-seed values of each metric, the candidates (last stage and
+    per stage), the mean seconds per CEM iteration (None when scripted) and the seeds.
+
+    results: ``PickPlaceResult.to_dict()`` of finished trials.
+    """
+    out = {}
+    for m in methods:
+        runs = sorted((r for r in results if r["method"] == m), key=lambda r: r["seed"])
+        if not runs:
+            continue
+        entry: dict = {}
+        for name in metric_names:
+            mean, ci = mean_ci([r[name] for r in runs])
+            entry[f"{name}_mean"], entry[f"{name}_ci95"] = _finite(mean), _finite(ci)
+            entry[f"{name}s"] = [r[name] for r in runs]
+        entry["n_candidates"] = int(runs[0]["n_candidates"][-1])
+        entry["n_candidates_per_stage"] = runs[0]["n_candidates"]
+        secs = [r["s_per_iteration"] for r in runs if r["s_per_iteration"] is not None]
+        entry["s_per_iteration"] = float(np.mean(secs)) if secs else None
+        entry["seeds"] = [r["seed"] for r in runs]
+        entry["n"] = len(runs)
+        out[m] = entry
+    return out
+
+
+def _finite(x: float | None) -> float | None:
+    return None if x is None or not np.isfinite(x) else float(x)
