@@ -1,6 +1,6 @@
 # One virtual environment for everything; created and filled on first use.
 #   make demo   -> the main job: diagonal cloth fold (small by default)
-#   make test   -> the test suite
+#   make test   -> ruff, then the test suite
 PYTHON ?= python3
 VENV   ?= .venv
 PY     := $(VENV)/bin/python
@@ -23,6 +23,7 @@ demo: $(STAMP)
 	MUJOCO_GL=egl $(PY) experiments/cloth_fold.py --goal diagonal --out results/cloth_diagonal
 
 test: $(STAMP)
+	$(VENV)/bin/ruff check .
 	MUJOCO_GL=egl OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 $(PY) -m pytest -q tests
 
 clean:
