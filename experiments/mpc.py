@@ -32,12 +32,19 @@ import numpy as np
 os.environ.setdefault("MUJOCO_GL", "egl")   # offscreen renders; read when mujoco is imported
 
 from cli_args import choices_list, nonneg_float, nonneg_int, positive_float, positive_int
+
 from dopt.provenance import provenance
 from dopt.sweep import Trial, run_sweep
 from dopt.tasks import PUSH_TASKS
 from planners.svr import METHODS, paper_theta
-from planners.svr_mpc import (OUTLIER_DISTANCE, feedback_effect, row_label, run_trial,
-                              summarize, trial_key)
+from planners.svr_mpc import (
+    OUTLIER_DISTANCE,
+    feedback_effect,
+    row_label,
+    run_trial,
+    summarize,
+    trial_key,
+)
 
 log = logging.getLogger(__name__)
 FEEDBACK = {"off": (False,), "on": (True,), "both": (False, True)}

@@ -24,13 +24,20 @@ from functools import partial
 from pathlib import Path
 
 import numpy as np
-
 from cli_args import choices_list, nonneg_int, positive_float, positive_int
+
 from dopt.provenance import provenance
 from dopt.stats import mean_ci
 from dopt.sweep import Trial, run_sweep
-from planners.pick_place import (GOALS, LABELS, METHODS, PickPlaceSettings, make_problem,
-                                 run_trial, summarize)
+from planners.pick_place import (
+    GOALS,
+    LABELS,
+    METHODS,
+    PickPlaceSettings,
+    make_problem,
+    run_trial,
+    summarize,
+)
 
 log = logging.getLogger(__name__)
 COLOURS = {"simple": "tab:blue", "original": "tab:red", "random": "tab:green",
@@ -100,7 +107,8 @@ def trial_key(method: str, seed: int, settings: PickPlaceSettings) -> str:
 
 def main(task: str, script: str, doc: str, help_: dict, argv=None) -> int:
     """The whole experiment ``script`` (its path, for the provenance): every trial (resuming),
-    the report, a printed table. Returns the exit code (1 when a trial failed; the failures are listed in summary.json)."""
+    the report, a printed table. Returns the exit code (1 when a trial failed; the failures
+    are listed in summary.json)."""
     ap = parser(task, doc, help_)
     args, settings = parse(ap, task, argv)
     logging.basicConfig(level=logging.INFO if args.verbose else logging.WARNING,
@@ -171,7 +179,8 @@ def write_curves(path: Path, results: list) -> None:
         w = csv.writer(f)
         w.writerow(["method", "seed", "iteration", "stage", "best_cost_m"])
         for r in sorted(results, key=lambda r: (r["method"], r["seed"])):
-            for i, (c, s) in enumerate(zip(r["cost_history"], r["stage_of_iteration"])):
+            rows = zip(r["cost_history"], r["stage_of_iteration"], strict=True)
+            for i, (c, s) in enumerate(rows):
                 w.writerow([r["method"], r["seed"], i + 1, s, f"{c:.6g}"])
 
 

@@ -43,8 +43,7 @@ def test_unknown_panel_mode_is_refused_by_name():
 
 
 def test_noise_sweep_journals_each_goal_and_a_rerun_resumes(tmp_path):
-    sys.path.insert(0, str(ROOT / "experiments"))
-    import key_particles
+    import key_particles  # experiments/ is on the path (pytest's pythonpath)
 
     from deformables import ClothConfig, RopeConfig
 

@@ -1,14 +1,9 @@
-import os
-import sys
-
 import mujoco
 import numpy as np
 import pytest
 
-sys.path.insert(0, os.path.dirname(__file__))
-from models import MIXED_JOINTS  # noqa: E402
-
-from dopt.scene import Scene  # noqa: E402
+from dopt.scene import Scene
+from tests.dopt.models import MIXED_JOINTS
 
 
 @pytest.fixture(scope="module")

@@ -35,3 +35,9 @@ MIXED_JOINTS = """
   </actuator>
 </mujoco>
 """
+
+# two boxes stacked on the floor in a 3 KB arena: their contacts overflow it (mju_error,
+# "out of memory"); lifted apart, they fit
+TINY_ARENA = """<mujoco><size memory="3K"/><worldbody><geom type="plane" size="1 1 .1"/>
+<body pos="0 0 .05"><freejoint/><geom type="box" size=".05 .05 .05"/></body>
+<body pos="0 0 .16"><freejoint/><geom type="box" size=".05 .05 .05"/></body></worldbody></mujoco>"""

@@ -6,6 +6,7 @@ import pytest
 
 from dopt.errors import UnstableRolloutError
 from dopt.rollout import FDConfig, RolloutConfig, RolloutService
+from tests.dopt.models import TINY_ARENA
 
 # |A_ours - A_mujoco|: both are FD quotients of identical perturbed steps; they differ only in
 # how the quaternion difference of the next states is rounded (1e-16 / eps)
@@ -120,11 +121,6 @@ def test_unstable_derivatives_name_the_timestep(scene, trajectory, c_kernels):
 
 # two boxes, one on the floor: their contacts overflow a 3 kB arena (mju_error), in the air
 # there is no contact and the arena suffices
-TINY_ARENA = """<mujoco><size memory="3K"/><worldbody><geom type="plane" size="1 1 .1"/>
-<body pos="0 0 .05"><freejoint/><geom type="box" size=".05 .05 .05"/></body>
-<body pos="0 0 .16"><freejoint/><geom type="box" size=".05 .05 .05"/></body></worldbody></mujoco>"""
-
-
 def test_mujoco_error_raises_and_the_service_recovers(c_kernels):
     """mju_error (here: arena overflow) inside a call is a RolloutError, not a process exit,
     and the same service serves the next call."""

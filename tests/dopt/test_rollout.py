@@ -9,6 +9,7 @@ from dopt.rollout import RolloutConfig, RolloutService
 from dopt.rollout_batch import ctrl_bounds
 from dopt.scene import Scene
 from dopt.state import INTEGRATION
+from tests.dopt.models import TINY_ARENA
 
 
 def step_loop(scene, x0, u):
@@ -182,10 +183,8 @@ def test_c_kernels_built_where_a_compiler_is():
 
 
 def test_mujoco_error_in_feedback_rollouts_raises(c_kernels):
-    """mju_error (arena overflow, see test_derivatives.TINY_ARENA) is a RolloutError that
-    names the call, not a process exit."""
-    from test_derivatives import TINY_ARENA
-
+    """mju_error (arena overflow, see models.TINY_ARENA) is a RolloutError that names the call,
+    not a process exit."""
     from dopt.errors import RolloutError
     scene = Scene.from_xml(TINY_ARENA)
     svc = RolloutService(scene, RolloutConfig(threads=2, c_kernels=c_kernels))

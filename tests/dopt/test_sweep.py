@@ -9,9 +9,9 @@ import time
 from pathlib import Path
 
 import pytest
-from sweep_trials import square
 
 from dopt.sweep import Trial, load_finished, run_sweep
+from tests.dopt.sweep_trials import square
 
 HERE = Path(__file__).parent
 
@@ -42,13 +42,15 @@ def test_killed_sweep_resumes_without_redoing_finished_trials(tmp_path):
     calls.mkdir()
     out = tmp_path / "out"
     script = textwrap.dedent(f"""
-        import sys; sys.path.insert(0, {str(HERE)!r})
         from dopt.sweep import Trial, run_sweep
         from sweep_trials import square
         run_sweep(square, [Trial(f"x{{x}}", dict(x=x, calls={str(calls)!r}, sleep=0.4))
                            for x in range(6)], {str(out)!r})
     """)
-    proc = subprocess.Popen([sys.executable, "-c", script])
+    # sweep_trials is imported from its folder, given to the child on its PYTHONPATH
+    env = {**os.environ,
+           "PYTHONPATH": os.pathsep.join(filter(None, [str(HERE), os.environ.get("PYTHONPATH")]))}
+    proc = subprocess.Popen([sys.executable, "-c", script], env=env)
     deadline = time.time() + 60
     while len(list((out / "trials").glob("x*.json"))) < 2 and time.time() < deadline:
         time.sleep(0.05)

@@ -8,11 +8,10 @@ import subprocess
 import sys
 from pathlib import Path
 
+import cloth_fold
 import imageio.v3 as iio
 import numpy as np
 import pytest
-
-import cloth_fold
 import rope
 
 ROOT = Path(__file__).resolve().parents[2]

@@ -1,21 +1,16 @@
 """Reduced iLQR against independent references: cvxpy on an LQ problem, and a plain numpy
 iLQR iteration built on mujoco.mjd_transitionFD."""
 
-import os
-import sys
-
 import cvxpy as cp
 import mujoco
 import numpy as np
 import pytest
 import torch
 
-sys.path.insert(0, os.path.join(os.path.dirname(__file__), "..", "dopt"))
-from models import MIXED_JOINTS  # noqa: E402
-
-from dopt import FDConfig, RolloutService, Scene  # noqa: E402
-from dopt.costs import QuadraticCost  # noqa: E402
-from planners.ilqr import ILQR, ILQRConfig, backward_pass  # noqa: E402
+from dopt import FDConfig, RolloutService, Scene
+from dopt.costs import QuadraticCost
+from planners.ilqr import ILQR, ILQRConfig, backward_pass
+from tests.dopt.models import MIXED_JOINTS
 
 # two damped point masses on slides, no gravity, no contacts: linear dynamics under Euler
 LINEAR = """<mujoco><option timestep="0.02" gravity="0 0 0"/><worldbody>
