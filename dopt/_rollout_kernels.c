@@ -6,6 +6,12 @@
  *                   position and velocity stages, velocity nudges skip the position stage.
  *   dopt_feedback:  one closed-loop rollout u_t = u_ff,t + K_t dx_C(x_t, ref_t), clamped.
  *
+ * Both stop at the first step that fails and name it: step t (the step from state row t with
+ * control t) fails when MuJoCo warns during it (mj_checkPos / mj_checkVel of its start state,
+ * as mj_step and mjd_transitionFD run them, mj_checkAcc, a bad control, ...) or when the state
+ * it leaves behind has a |qpos| or |qvel| entry > mjMAXVAL or NaN (which MuJoCo would only
+ * reject at the next step) or any non-finite entry.
+ *
  * Only MuJoCo's public C API is called, through opaque pointers: no struct field is read, so
  * this file needs no MuJoCo headers and no link step. The symbols resolve against the
  * libmujoco that the mujoco Python package loaded (dopt/kernels.py makes it global first and
@@ -33,6 +39,8 @@ void mj_fwdPosition(const mjModel* m, mjData* d);
 void mj_fwdVelocity(const mjModel* m, mjData* d);
 void mj_step2(const mjModel* m, mjData* d);
 void mj_step(const mjModel* m, mjData* d);
+void mj_checkPos(const mjModel* m, mjData* d);
+void mj_checkVel(const mjModel* m, mjData* d);
 void mj_integratePos(const mjModel* m, mjtNum* qpos, const mjtNum* qvel, mjtNum dt);
 void mj_differentiatePos(const mjModel* m, mjtNum* qvel, mjtNum dt, const mjtNum* qpos1,
                          const mjtNum* qpos2);
@@ -62,7 +70,7 @@ static void log_handler(const log_message_t* msg) {
 
 /* the calling convention of this file; dopt/kernels.py refuses a build with another one
  * (a stale extension after an update that changed a signature) */
-int dopt_abi_version(void) { return 3; }
+int dopt_abi_version(void) { return 4; }
 
 /* install once, before the first kernel call */
 void dopt_install_log_handler(void) {
@@ -87,12 +95,20 @@ int dopt_feedback_work(const layout_t* L, int nc) { return L->nv + 2 * nc; }
 
 /* One step from the state loaded in d. skip 0: full step; 1: the position stage of the
  * loaded state is current, recompute from velocity on; 2: position and velocity stages are
- * current (only ctrl changed). As mj_step for every integrator but RK4 (Python refuses RK4). */
+ * current (only ctrl changed). As mj_step for every integrator but RK4 (Python refuses RK4),
+ * without its mj_checkPos / mj_checkVel: next_state runs those first. */
 static void advance(const mjModel* m, mjData* d, int skip) {
   if (skip < 1) mj_fwdPosition(m, d);
   if (skip < 2) mj_fwdVelocity(m, d);
   mj_step2(m, d);
 }
+
+/* why a step failed (dopt/kernels.py names them): MuJoCo warned (read its counters), or the
+ * state it left has a bad qpos, a bad qvel (|x| > mjMAXVAL or NaN), another non-finite entry */
+enum { FAULT_NONE = -1, FAULT_WARNING = 0, FAULT_QPOS = 1, FAULT_QVEL = 2, FAULT_NONFINITE = 3 };
+#define MAXVAL 1e10   /* mjMAXVAL of mujoco/mjtype.h: the bound of mj_checkPos/Vel/Acc */
+
+static int bad_value(mjtNum x) { return x != x || x > MAXVAL || x < -MAXVAL; }
 
 /* MuJoCo's warning counters of d: warn[i * stride] is warning i's count (nwarn of them) */
 typedef struct {
@@ -114,13 +130,29 @@ static int finite(const mjtNum* x, int n) {
   return 1;
 }
 
-/* next [qpos; qvel] of the state row `row` after `advance(skip)` */
-static int next_state(const mjModel* m, mjData* d, const layout_t* L, const mjtNum* row,
-                      int skip, mjtNum* out) {
+/* FAULT_QPOS / FAULT_QVEL if qpos (nq) / qvel (nv) hold a value MuJoCo's checks reject */
+static int fault_of(const layout_t* L, const mjtNum* qpos, const mjtNum* qvel) {
+  for (int i = 0; i < L->nq; i++) {
+    if (bad_value(qpos[i])) return FAULT_QPOS;
+  }
+  for (int i = 0; i < L->nv; i++) {
+    if (bad_value(qvel[i])) return FAULT_QVEL;
+  }
+  return FAULT_NONE;
+}
+
+/* next [qpos; qvel] of the state row `row` after `advance(skip)`: FAULT_NONE, or why the step
+ * failed (it is not taken when MuJoCo's checks reject the start state, as mj_step resets) */
+static int next_state(const mjModel* m, mjData* d, const layout_t* L, const warnings_t* warn,
+                      const mjtNum* row, int skip, mjtNum* out) {
   mj_setState(m, d, row, L->sig);
+  mj_checkPos(m, d);
+  mj_checkVel(m, d);
+  if (warned(warn)) return FAULT_WARNING;
   advance(m, d, skip);
+  if (warned(warn)) return FAULT_WARNING;
   mj_getState(m, d, out, L->sig_qposvel);
-  return finite(out, L->nq + L->nv);
+  return fault_of(L, out, out + L->nq);
 }
 
 /* column `col` of M (2c rows, leading dimension ld) = tangent difference (a - b) / h on C */
@@ -145,13 +177,18 @@ static void zero_column(mjtNum* M, int rows, int ld, int col) {
  *   [dq_C | dv_C]. lo, hi: (nu,) control bounds, +-inf where unlimited.
  * Order per timestep: nominal (full step) -> controls (skip 2) -> velocities (skip 1) ->
  * positions (full), so the stages a skipped step reuses are those of the nominal state.
- * Returns -1, or the first listed t whose steps gave a non-finite state or raised a MuJoCo
- * warning (the caller resets the counters), or -2 - t if MuJoCo raised an error at t (d is then
- * unusable); later timesteps are left undone. */
+ * Returns -1, or the first listed t one of whose steps failed (see the top of this file; the
+ * caller resets the warning counters), with info[0] = that step's perturbation index in the
+ * row order of dopt.rollout_batch (0 nominal, then control, velocity, position nudges; the +
+ * block before the - block when centred) and info[1] = its FAULT_*; or -2 - t if MuJoCo raised
+ * an error at t (d is then unusable). Later timesteps are left undone. */
 int dopt_fd(const mjModel* m, mjData* d, const layout_t* L, const warnings_t* warn,
             const mjtNum* states, const int* ts, int nt, const int* dofs, int nc, mjtNum eps,
-            int centered, const mjtNum* lo, const mjtNum* hi, mjtNum* F, mjtNum* work) {
+            int centered, const mjtNum* lo, const mjtNum* hi, mjtNum* F, mjtNum* work,
+            int* info) {
   const int nq = L->nq, nv = L->nv, nu = L->nu, n2 = 2 * nc, nx = nq + nv, ld = n2 + nu;
+  const int sides = 1 + centered;
+  const int vel0 = 1 + sides * nu, pos0 = vel0 + sides * nc;  /* first velocity, position row */
   mjtNum* row = work;               /* perturbed state row (nstate) */
   mjtNum* x0 = row + L->nstate;     /* nominal next [qpos; qvel] */
   mjtNum* xp = x0 + nx;             /* + side */
@@ -168,13 +205,26 @@ int dopt_fd(const mjModel* m, mjData* d, const layout_t* L, const warnings_t* wa
   }
   recovery = &env;
 
+  int t = 0;
+/* one step of timestep t, perturbation row k: on a failure, report it and stop */
+#define STEP(state, skip, out, k)                             \
+  do {                                                        \
+    const int fault = next_state(m, d, L, warn, state, skip, out); \
+    if (fault != FAULT_NONE) {                                \
+      info[0] = (k);                                          \
+      info[1] = fault;                                        \
+      recovery = NULL;                                        \
+      return t;                                               \
+    }                                                         \
+  } while (0)
+
   for (int i = 0; i < nt; i++) {
-    const int t = ts[i];
+    t = ts[i];
     current = t;
     const mjtNum* nom = states + (size_t)t * L->nstate;
     mjtNum* At = F + (size_t)t * n2 * ld;
     mjtNum* Bt = At + n2;
-    int ok = next_state(m, d, L, nom, 0, x0);
+    STEP(nom, 0, x0, 0);
     memcpy(row, nom, sizeof(mjtNum) * L->nstate);
 
     /* controls: one-sided inward differences at ctrlrange limits, as mjd_transitionFD */
@@ -184,11 +234,11 @@ int dopt_fd(const mjModel* m, mjData* d, const layout_t* L, const warnings_t* wa
       const int back = (centered || !fwd) && c - eps >= lo[j] && c <= hi[j];
       if (fwd) {
         row[L->ctrl + j] = c + eps;
-        ok &= next_state(m, d, L, row, 2, xp);
+        STEP(row, 2, xp, 1 + j);
       }
       if (back) {
         row[L->ctrl + j] = c - eps;
-        ok &= next_state(m, d, L, row, 2, xm);
+        STEP(row, 2, xm, 1 + (centered ? nu : 0) + j);
       }
       row[L->ctrl + j] = c;
       if (fwd && back) write_column(m, L, xp, xm, 2 * eps, dofs, nc, Bt, ld, j, dq);
@@ -200,10 +250,10 @@ int dopt_fd(const mjModel* m, mjData* d, const layout_t* L, const warnings_t* wa
     for (int k = 0; k < nc; k++) {
       const int v = L->qvel + dofs[k];
       row[v] = nom[v] + eps;
-      ok &= next_state(m, d, L, row, 1, xp);
+      STEP(row, 1, xp, vel0 + k);
       if (centered) {
         row[v] = nom[v] - eps;
-        ok &= next_state(m, d, L, row, 1, xm);
+        STEP(row, 1, xm, vel0 + nc + k);
         write_column(m, L, xp, xm, 2 * eps, dofs, nc, At, ld, nc + k, dq);
       } else {
         write_column(m, L, xp, x0, eps, dofs, nc, At, ld, nc + k, dq);
@@ -217,18 +267,15 @@ int dopt_fd(const mjModel* m, mjData* d, const layout_t* L, const warnings_t* wa
         memcpy(qpos, nom + L->qpos, sizeof(mjtNum) * nq);
         mj_integratePos(m, qpos, unit, side ? -eps : eps);
         memcpy(row + L->qpos, qpos, sizeof(mjtNum) * nq);
-        ok &= next_state(m, d, L, row, 0, side ? xm : xp);
+        STEP(row, 0, side ? xm : xp, pos0 + side * nc + k);
       }
       unit[dofs[k]] = 0;
       memcpy(row + L->qpos, nom + L->qpos, sizeof(mjtNum) * nq);
       if (centered) write_column(m, L, xp, xm, 2 * eps, dofs, nc, At, ld, k, dq);
       else write_column(m, L, xp, x0, eps, dofs, nc, At, ld, k, dq);
     }
-    if (!ok || warned(warn)) {
-      recovery = NULL;
-      return t;
-    }
   }
+#undef STEP
   recovery = NULL;
   return -1;
 }
@@ -236,14 +283,14 @@ int dopt_fd(const mjModel* m, mjData* d, const layout_t* L, const warnings_t* wa
 /* One closed-loop rollout of T steps from the state row x0:
  *   u_t = clamp(ff_t + K_t [q_C (-) ref_q_C ; v_C - ref_v_C], lo, hi)
  * ff: (T, nu); ref: (T, nstate); K: (T, nu, 2c); out: (T+1, nstate), row t holding u_t;
- * applied: (T, nu). Returns -1, or the first step that raised a MuJoCo warning or gave a
- * non-finite state (the rollout stops there), or -2 - t if MuJoCo raised an error in step t
+ * applied: (T, nu). Returns -1, or the first step that failed (see the top of this file; the
+ * rollout stops there) with info[0] its FAULT_*, or -2 - t if MuJoCo raised an error in step t
  * (d is then unusable). */
 int dopt_feedback(const mjModel* m, mjData* d, const layout_t* L, const warnings_t* warn,
                   const mjtNum* x0, int T,
                   const mjtNum* ff, const mjtNum* ref, const mjtNum* K, const int* dofs, int nc,
                   const mjtNum* lo, const mjtNum* hi, mjtNum* out, mjtNum* applied,
-                  mjtNum* work) {
+                  mjtNum* work, int* info) {
   const int nu = L->nu, n2 = 2 * nc;
   mjtNum* dq = work;          /* nv */
   mjtNum* dx = dq + L->nv;    /* 2c */
@@ -276,8 +323,12 @@ int dopt_feedback(const mjModel* m, mjData* d, const layout_t* L, const warnings
     }
     mj_setState(m, d, row + L->ctrl, L->sig_ctrl);
     mj_step(m, d);
-    mj_getState(m, d, row + L->nstate, L->sig);
-    if (warned(warn) || !finite(row + L->nstate, L->nstate)) {
+    mjtNum* next = row + L->nstate;
+    mj_getState(m, d, next, L->sig);
+    int fault = warned(warn) ? FAULT_WARNING : fault_of(L, next + L->qpos, next + L->qvel);
+    if (fault == FAULT_NONE && !finite(next, L->nstate)) fault = FAULT_NONFINITE;
+    if (fault != FAULT_NONE) {
+      info[0] = fault;
       recovery = NULL;
       return t;
     }

@@ -22,6 +22,7 @@ import numpy as np
 import torch
 
 from dopt.scene import Scene
+from dopt.validation import check_real, float_array, index_array
 
 
 @dataclass(frozen=True)
@@ -56,17 +57,24 @@ class EEDistanceTerm:
 
     def __init__(self, scene: Scene, fk, arm_dofs, target_dofs, target_map, offset,
                  axes=(0, 1, 2), weight: float = 1.0, terminal_weight: float = 1.0):
-        self.arm_dofs = np.asarray(arm_dofs, dtype=int)
-        self.target_dofs = np.asarray(target_dofs, dtype=int)
+        if not isinstance(scene, Scene):
+            raise TypeError(f"scene must be a dopt.Scene, got {type(scene).__name__}")
+        if not callable(fk):
+            raise TypeError(f"fk must be callable (B, a) -> (B, 3), got {type(fk).__name__}")
+        self.arm_dofs = index_array(arm_dofs, "arm_dofs", scene.nv)
+        self.target_dofs = index_array(target_dofs, "target_dofs", scene.nv, allow_empty=True)
         dofs = np.concatenate([self.arm_dofs, self.target_dofs])
         self._qadr = scene.linear_qpos_indices(dofs)
         self.fk = fk
-        self.M = torch.as_tensor(np.asarray(target_map, dtype=float).reshape(3, -1))
-        if self.M.shape[1] != len(self.target_dofs):
-            raise ValueError(f"target_map must be (3, {len(self.target_dofs)})")
+        k = len(self.target_dofs)
+        self.M = torch.as_tensor(float_array(target_map, "target_map", (3, k)))
         self.offset = torch.as_tensor(_vector(offset, 3, "offset"))
-        self.axes = list(axes)
-        self.weight, self.terminal_weight = float(weight), float(terminal_weight)
+        axes = index_array(axes, "axes", 3)
+        if len(np.unique(axes)) != len(axes):
+            raise ValueError(f"axes must not repeat, got {axes.tolist()}")
+        self.axes = axes.tolist()
+        self.weight = check_real(weight, "weight", minimum=0)
+        self.terminal_weight = check_real(terminal_weight, "terminal_weight", minimum=0)
         self.dofs = dofs
         self.column = {int(d): i for i, d in enumerate(dofs)}   # DoF -> Jacobian column
         if len(self.column) != len(dofs):
@@ -100,6 +108,8 @@ class QuadraticCost:
     """
 
     def __init__(self, scene: Scene, q_ref, w, w_f, r, v_ref=None, terms=()):
+        if not isinstance(scene, Scene):
+            raise TypeError(f"scene must be a dopt.Scene, got {type(scene).__name__}")
         m = scene.model
         self.scene = scene
         self.q_ref = _vector(q_ref, m.nq, "q_ref")
@@ -108,6 +118,10 @@ class QuadraticCost:
         self.w_f = torch.as_tensor(_vector(w_f, 2 * m.nv, "w_f", nonneg=True))
         self.r = torch.as_tensor(_vector(r, m.nu, "r", nonneg=True))
         self.terms = tuple(terms)
+        for term in self.terms:
+            if not all(hasattr(term, a) for a in ("residual", "weights", "dofs", "column")):
+                raise TypeError(f"terms must be residual terms (EEDistanceTerm), got "
+                                f"{type(term).__name__}")
         self._qpos, self._qvel = scene.layout["qpos"], scene.layout["qvel"]
 
     @property
@@ -120,13 +134,17 @@ class QuadraticCost:
 
     def errors(self, states: np.ndarray) -> torch.Tensor:
         """Tangent error of state rows: (..., ns) -> (..., 2nv)."""
+        return self._errors(self._states(states))
+
+    def _errors(self, states: np.ndarray) -> torch.Tensor:
         q, v = states[..., self._qpos], states[..., self._qvel]
         dq = self.scene.tangent.difference(self.q_ref, q)
         return torch.from_numpy(np.concatenate([dq, v - self.v_ref], axis=-1))
 
     def total(self, states: np.ndarray, controls: np.ndarray) -> torch.Tensor:
         """J of trajectories: states (..., T+1, ns), controls (..., T, nu) -> (...)."""
-        e = self.errors(states)
+        states, controls = self._trajectories(states, controls)
+        e = self._errors(states)
         u = torch.as_tensor(controls)
         running = (e[..., :-1, :] ** 2 * self.w).sum(-1) + (u ** 2 * self.r).sum(-1)
         total = running.sum(-1) + (e[..., -1, :] ** 2 * self.w_f).sum(-1)
@@ -142,13 +160,17 @@ class QuadraticCost:
                     dofs: np.ndarray) -> CostDerivatives:
         """Derivatives along one trajectory, on the active set: states (T+1, ns), controls
         (T, nu), dofs (c,) -> CostDerivatives. Gauss-Newton in the tangent space."""
+        states, controls = self._trajectories(states, controls)
+        if states.ndim != 2:
+            raise ValueError(f"states must have shape (T+1, {self.scene.nstate}) (one "
+                             f"trajectory), got {states.shape}")
         idx = torch.as_tensor(self.scene.tangent_indices(dofs))
-        e = self.errors(states)[:, idx]                                   # (T+1, 2c)
+        e = self._errors(states)[:, idx]                                   # (T+1, 2c)
         w = torch.cat([self.w[idx].expand(len(e) - 1, -1), self.w_f[idx][None]], 0)
         u = torch.as_tensor(controls)
         lx, lxx = 2 * w * e, torch.diag_embed(2 * w)
         if self.terms:
-            C = np.asarray(dofs)
+            C = self.scene.as_dofs(dofs)
             qpos = torch.from_numpy(np.ascontiguousarray(states[:, self._qpos]))
             for term in self.terms:
                 at = np.nonzero(np.isin(C, term.dofs))[0]       # positions of C in the term
@@ -164,6 +186,30 @@ class QuadraticCost:
                     torch.einsum("tad,tae->tde", J, J)
         return CostDerivatives(lx=lx, lxx=lxx, lu=2 * self.r * u,
                                luu=torch.diag_embed(2 * self.r).expand(len(u), -1, -1))
+
+
+    def _states(self, states) -> np.ndarray:
+        """State rows (..., ns) as float64, finite; ValueError naming ``states``."""
+        x = float_array(states, "states")
+        if x.shape[-1:] != (self.scene.nstate,):
+            raise ValueError(f"states must have shape (..., {self.scene.nstate}), got {x.shape}")
+        return x
+
+    def _trajectories(self, states, controls) -> tuple[np.ndarray, np.ndarray]:
+        """states (..., T+1, ns), controls (..., T, nu), checked against each other."""
+        x, u, nu = self._states(states), float_array(controls, "controls"), self.scene.nu
+        if x.ndim < 2:
+            raise ValueError(f"states must have shape (..., T+1, {self.scene.nstate}), got "
+                             f"{x.shape}")
+        if u.ndim < 2 or u.shape[-1] != nu or u.shape[-2] != x.shape[-2] - 1:
+            raise ValueError(f"controls must have shape (..., {x.shape[-2] - 1}, {nu}) (T, nu "
+                             f"for the T+1 state rows), got {u.shape}")
+        try:
+            np.broadcast_shapes(x.shape[:-2], u.shape[:-2])
+        except ValueError:
+            raise ValueError(f"states {x.shape} and controls {u.shape} have leading "
+                             f"dimensions that do not broadcast") from None
+        return x, u
 
 
 def _residual_jacobian(term: EEDistanceTerm, qpos: torch.Tensor):
@@ -183,11 +229,4 @@ def _residual_jacobian(term: EEDistanceTerm, qpos: torch.Tensor):
 
 
 def _vector(x, n: int, name: str, nonneg: bool = False) -> np.ndarray:
-    arr = np.asarray(x, dtype=np.float64)
-    if arr.shape != (n,):
-        raise ValueError(f"{name} must have shape ({n},), got {arr.shape}")
-    if not np.all(np.isfinite(arr)):
-        raise ValueError(f"{name} contains NaN/inf")
-    if nonneg and np.any(arr < 0):
-        raise ValueError(f"{name} must be non-negative")
-    return arr
+    return float_array(x, name, (n,), nonnegative=nonneg)

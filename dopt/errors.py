@@ -8,14 +8,24 @@ class RolloutError(RuntimeError):
 
 
 class UnstableRolloutError(RolloutError):
-    """A simulation went unstable: NaN/inf state or a MuJoCo warning (bad qpos/qvel/qacc, ...).
+    """A simulation went unstable: MuJoCo warned during a step (bad qpos/qvel/qacc/ctrl,
+    ...), or a step left a state MuJoCo would reject (a qpos or qvel entry NaN or beyond
+    +-mjMAXVAL = 1e10) or a non-finite one. Every route and call reports the same step.
 
     Attributes:
-        rollout: index of the offending rollout in the batch (for derivatives: the row of the
-            perturbed batch, see ``what``).
-        step: index of the step (0-based) during which it went unstable.
-        reason: MuJoCo's warning name or "non-finite state".
-        what: which call ran it ("rollout", or "derivatives t=.. perturbation=..").
+        step: step t, the step that started from state row t with control t and produced the
+            bad state (or warned). For a rollout from x_0 with controls u_0..u_{T-1}, the step
+            that applied u_t to x_t; an invalid start state fails at step 0. For derivatives,
+            the timestep t: the steps from ``states[t]`` (the nominal one and its nudges).
+        rollout: index of the offending rollout in the batch; for derivatives, the perturbation
+            row of timestep ``step``: 0 the nominal step, then the control, velocity and
+            position nudges in ``RolloutService.derivatives``' order (the + block before the -
+            block when centred).
+        reason: MuJoCo's warning name (e.g. "mjWARN_BADQVEL"; "mjWARN_BADQPOS" or
+            "mjWARN_BADQVEL" also for a step that left a state MuJoCo's next step would reject
+            with that warning), or "non-finite state".
+        what: which call ran it ("rollout", "rollout_feedback", "mpc agent", or
+            "derivatives t=.. perturbation=..").
     """
 
     def __init__(self, rollout: int, step: int, reason: str, what: str = "rollout"):

@@ -28,7 +28,7 @@ from dopt.state import StateLayout
 log = logging.getLogger(__name__)
 
 MUJOCO_VERSION = 4000000          # the prototypes in _rollout_kernels.c are MuJoCo 4.0's
-ABI_VERSION = 3                   # dopt_abi_version() of the C file this front matches
+ABI_VERSION = 4                   # dopt_abi_version() of the C file this front matches
 _HERE = os.path.dirname(os.path.abspath(__file__))
 _lib = None
 _load_error: str | None = None
@@ -107,9 +107,9 @@ def load():
     _lib.dopt_fd_work.argtypes = [L]
     _lib.dopt_feedback_work.argtypes = [L, ctypes.c_int]
     _lib.dopt_fd.argtypes = [_p, _p, L, W, _dbl, _int, ctypes.c_int, _int, ctypes.c_int,
-                             ctypes.c_double, ctypes.c_int, _dbl, _dbl, _dbl, _dbl]
+                             ctypes.c_double, ctypes.c_int, _dbl, _dbl, _dbl, _dbl, _int]
     _lib.dopt_feedback.argtypes = [_p, _p, L, W, _dbl, ctypes.c_int, _dbl, _dbl, _dbl, _int,
-                                   ctypes.c_int, _dbl, _dbl, _dbl, _dbl, _dbl]
+                                   ctypes.c_int, _dbl, _dbl, _dbl, _dbl, _dbl, _int]
     for f in (_lib.dopt_fd_work, _lib.dopt_feedback_work, _lib.dopt_fd, _lib.dopt_feedback):
         f.restype = ctypes.c_int
     _lib.dopt_error_message.restype = ctypes.c_char_p
@@ -126,8 +126,9 @@ def load_error() -> str | None:
 class Kernels:
     """The C loops on one model, over ``threads`` MjData and Python threads.
 
-    Calls report the first step that went unstable (non-finite state or a MuJoCo warning, read
-    from the MjData's counters after every step) so the caller can name it. Not for
+    Calls report the first step that failed, as ``dopt.errors.UnstableRolloutError`` defines
+    it (MuJoCo warned during the step, read from the MjData's counters, or the state it left
+    is one MuJoCo's checks reject or non-finite), so the caller can name it. Not for
     concurrent use.
     """
 
@@ -163,9 +164,10 @@ class Kernels:
            lo: np.ndarray, hi: np.ndarray):
         """F = [A B] (T, 2c, 2c + nu) of state rows (T, ns) on the DoF set dofs (c,).
 
-        Returns (F, bad): bad lists (t, warning names) of the first timestep per thread whose
-        steps gave a non-finite state or raised MuJoCo warnings (empty if none; F is then
-        incomplete)."""
+        Returns (F, bad): bad lists (t, perturbation, reasons) of the first timestep per thread
+        one of whose steps failed, with the perturbation row (numbered as in
+        ``dopt.rollout_batch``) of that step and the reasons (warning names); empty if none,
+        else F is incomplete."""
         T, c, nu = len(states), len(dofs), self.model.nu
         F = np.empty((T, 2 * c, 2 * c + nu))
         C = np.ascontiguousarray(dofs, dtype=np.int32)
@@ -174,13 +176,13 @@ class Kernels:
         m = self.model._address
 
         def job(i, ts):
-            d, work = self._datas[i], np.empty(work_n)
+            d, work, info = self._datas[i], np.empty(work_n), np.zeros(2, np.int32)
             d.warning.number[:] = 0
             t = self.lib.dopt_fd(m, d._address, lay, ctypes.byref(self._warnings[i]), states,
-                                 ts, len(ts), C, c, eps, int(centered), lo, hi, F, work)
+                                 ts, len(ts), C, c, eps, int(centered), lo, hi, F, work, info)
             if t <= -2:
                 self._raise_mujoco_error(i, f"derivatives t={-2 - t}")
-            return [] if t < 0 else [(t, _warnings(d) or ["non-finite state"])]
+            return [] if t < 0 else [(t, int(info[0]), _reasons(d, int(info[1])))]
 
         bad = sorted(b for share in self._map(job, T) for b in share)
         return F, bad
@@ -189,9 +191,9 @@ class Kernels:
                  dofs: np.ndarray, lo: np.ndarray, hi: np.ndarray):
         """P closed-loop rollouts: x0 (ns,), ff (P, T, nu), ref (T, ns), K (T, nu, 2c).
 
-        Returns (states (P, T+1, ns), applied (P, T, nu), bad): bad lists (p, step, warning
-        names) of rollouts that went non-finite or raised MuJoCo warnings at that step (their
-        later rows are then undefined)."""
+        Returns (states (P, T+1, ns), applied (P, T, nu), bad): bad lists (step, p, reasons)
+        of the rollouts that failed, sorted, with the step that failed and the reasons (warning
+        names); their later rows are undefined."""
         P, T, nu = ff.shape
         out = np.empty((P, T + 1, self.layout.nstate))
         applied = np.empty((P, T, nu))
@@ -201,17 +203,17 @@ class Kernels:
         m = self.model._address
 
         def job(i, ps):
-            d, w, bad = self._datas[i], work[i], []
+            d, w, bad, info = self._datas[i], work[i], [], np.zeros(1, np.int32)
             for p in ps:
                 d.warning.number[:] = 0
                 step = self.lib.dopt_feedback(m, d._address, lay, ctypes.byref(self._warnings[i]),
                                               x0, T, ff[p], ref, K, C, len(C), lo, hi, out[p],
-                                              applied[p], w)
+                                              applied[p], w, info)
                 if step <= -2:
                     self._raise_mujoco_error(
                         i, f"rollout_feedback: simulation {p} step {-2 - step}")
                 if step >= 0:
-                    bad.append((int(p), step, _warnings(d) or ["non-finite state"]))
+                    bad.append((step, int(p), _reasons(d, int(info[0]))))
             return bad
 
         bad = sorted(b for share in self._map(job, P) for b in share)
@@ -236,3 +238,12 @@ def warning_names(counts: np.ndarray) -> list[str]:
 
 def _warnings(d: mujoco.MjData) -> list[str]:
     return warning_names(d.warning.number)
+
+
+# the FAULT_* codes of the C file, past FAULT_WARNING: the warning MuJoCo's next step would give
+_FAULTS = {1: "mjWARN_BADQPOS", 2: "mjWARN_BADQVEL", 3: "non-finite state"}
+
+
+def _reasons(d: mujoco.MjData, fault: int) -> list[str]:
+    """Why a step of a kernel call on d failed: MuJoCo's warnings, else the C file's fault."""
+    return _warnings(d) or [_FAULTS.get(fault, "non-finite state")]

@@ -29,11 +29,12 @@ import numpy as np
 
 from dopt.errors import UnstableRolloutError
 from dopt.scene import Scene
-from dopt.state import INTEGRATION, check_states
+from dopt.state import INTEGRATION, check_states, fault
+from dopt.validation import check_config, check_int, float_array, index_array
 
 log = logging.getLogger(__name__)
-_BAD = (mujoco.mjtWarning.mjWARN_BADQACC, mujoco.mjtWarning.mjWARN_BADQVEL,
-        mujoco.mjtWarning.mjWARN_BADQPOS)
+_BAD = (mujoco.mjtWarning.mjWARN_BADQPOS, mujoco.mjtWarning.mjWARN_BADQVEL,
+        mujoco.mjtWarning.mjWARN_BADQACC, mujoco.mjtWarning.mjWARN_BADCTRL)
 
 
 @dataclass(frozen=True)
@@ -52,6 +53,7 @@ class Plan:
 
     def shifted(self, steps: int) -> Plan:
         """Drop the first ``steps`` controls and pad with the last one (gains pad with 0)."""
+        steps = check_int(steps, "steps")
         if steps <= 0:
             return self
         T = len(self.controls)
@@ -64,6 +66,35 @@ class Plan:
         if self.K is not None:
             out = replace(out, K=np.concatenate([self.K[s:], np.zeros_like(self.K[:s])]))
         return out
+
+
+def check_plan(plan, scene: Scene, name: str = "plan") -> Plan:
+    """A Plan that fits ``scene``: controls (T, nu) finite with T >= 1; states (T+1, ns), K
+    (T, nu, 2c) and dofs (c,) valid DoF indices where given (K needs dofs, or covers all
+    DoFs). TypeError / ValueError naming ``plan.<field>`` otherwise."""
+    if not isinstance(plan, Plan):
+        raise TypeError(f"{name} must be a dopt.mpc.Plan, got {type(plan).__name__}")
+    nu = scene.nu
+    u = float_array(plan.controls, f"{name}.controls")
+    if u.ndim != 2 or u.shape[1] != nu or not len(u):
+        raise ValueError(f"{name}.controls must have shape (T, {nu}) with T >= 1, got "
+                         f"{u.shape}")
+    T = len(u)
+    if plan.states is not None:
+        check_states(scene.model, plan.states, batched=True, name=f"{name}.states")
+        if np.shape(plan.states)[0] != T + 1:
+            raise ValueError(f"{name}.states must have shape ({T + 1}, {scene.nstate}) (T+1 "
+                             f"rows), got {np.shape(plan.states)}")
+    if plan.K is not None:
+        c = scene.nv if plan.dofs is None else len(index_array(plan.dofs, f"{name}.dofs",
+                                                              scene.nv))
+        K = float_array(plan.K, f"{name}.K")
+        if K.shape != (T, nu, 2 * c):
+            raise ValueError(f"{name}.K must have shape ({T}, {nu}, {2 * c}) (T, nu, 2|C|), "
+                             f"got {K.shape}")
+    elif plan.dofs is not None:
+        index_array(plan.dofs, f"{name}.dofs", scene.nv)
+    return plan
 
 
 class Optimiser(Protocol):
@@ -89,16 +120,9 @@ class MPCConfig:
     warmup: int = 0
 
     def __post_init__(self):
-        if self.timeout < 1:
-            raise ValueError(f"timeout must be >= 1 step, got {self.timeout}")
-        if not self.slowdown > 0:
-            raise ValueError(f"slowdown must be > 0, got {self.slowdown}")
-        if self.steps_per_plan < 1:
-            raise ValueError("steps_per_plan must be >= 1")
-        if self.control_noise < 0:
-            raise ValueError("control_noise must be >= 0")
-        if self.warmup < 0:
-            raise ValueError("warmup must be >= 0")
+        check_config(self, positive=("slowdown",),
+                     minimum={"timeout": 1, "steps_per_plan": 1, "control_noise": 0,
+                              "warmup": 0})
 
 
 @dataclass(frozen=True)
@@ -134,8 +158,17 @@ class MPC:
 
     def __init__(self, scene: Scene, optimiser: Optimiser, config: MPCConfig,
                  rng: np.random.Generator, success: Callable[[np.ndarray], bool] | None = None):
+        if not isinstance(scene, Scene):
+            raise TypeError(f"scene must be a dopt.Scene, got {type(scene).__name__}")
+        if not callable(getattr(optimiser, "optimise", None)):
+            raise TypeError(f"optimiser must have an optimise(state, plan) method, got "
+                            f"{type(optimiser).__name__}")
+        if not isinstance(config, MPCConfig):
+            raise TypeError(f"config must be a dopt.mpc.MPCConfig, got {type(config).__name__}")
         if not isinstance(rng, np.random.Generator):
             raise TypeError("rng must be a numpy.random.Generator")
+        if success is not None and not callable(success):
+            raise TypeError(f"success must be callable, got {type(success).__name__}")
         self.scene, self.optimiser, self.config = scene, optimiser, config
         self.rng, self.success = rng, success
         m = scene.model
@@ -147,10 +180,7 @@ class MPC:
     def run(self, initial_state: np.ndarray, plan: Plan) -> MPCResult:
         """Run until the timeout or success from the state row (ns,) and an initial plan."""
         x0 = check_states(self.scene.model, initial_state, batched=False, name="initial_state")
-        if plan.controls.ndim != 2 or plan.controls.shape[1] != self.scene.nu:
-            raise ValueError(f"plan.controls must be (T, {self.scene.nu}), "
-                             f"got {plan.controls.shape}")
-        self._reset(x0, plan)
+        self._reset(x0, check_plan(plan, self.scene))
         for _ in range(self.config.warmup):
             self._optimise_once()
         if self.config.synchronous:
@@ -200,7 +230,8 @@ class MPC:
         with self._lock:
             state, plan, start = self._states[-1].copy(), self._plan, self._step
         t0 = time.perf_counter()
-        new = self.optimiser.optimise(state, plan)
+        new = check_plan(self.optimiser.optimise(state, plan), self.scene,
+                         "plan returned by the optimiser: plan")
         seconds = time.perf_counter() - t0
         with self._lock:
             # controls the agent has taken since `start` (it takes one before stepping, so
@@ -230,10 +261,9 @@ class MPC:
         row = self.scene.state_of(d)             # the row holds the control executed now
         mujoco.mj_step(m, d)
         bad = [w for w in _BAD if d.warning[w].number]
-        if bad or not np.isfinite(d.qpos).all():
-            reason = bad[0].name if bad else "non-finite state"
-            raise UnstableRolloutError(0, self._step, reason, "mpc agent")
         nxt = self.scene.state_of(d)
+        if reason := bad[0].name if bad else fault(self.scene.layout, nxt):
+            raise UnstableRolloutError(0, self._step, reason, "mpc agent")
         with self._lock:
             self._states[-1] = row
             self._controls.append(u)
@@ -244,7 +274,8 @@ class MPC:
 
     def _deviation(self, plan: Plan) -> np.ndarray:
         """[q_C (-) q_nom_C ; v_C - v_nom_C] of the agent's state against plan row 0: (2c,)."""
-        lay, C = self.scene.layout, plan.dofs
+        lay = self.scene.layout
+        C = np.arange(self.scene.nv) if plan.dofs is None else np.asarray(plan.dofs)
         x, ref = self._states[-1], plan.states[0]
         dq = self.scene.tangent.difference(ref[lay["qpos"]], x[lay["qpos"]], 1.0, C)
         return np.concatenate([dq, x[lay["qvel"]][C] - ref[lay["qvel"]][C]])

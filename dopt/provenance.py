@@ -1,9 +1,9 @@
 """Where a result came from: the command line, the git commit, the package versions.
 
 Every experiment stores ``provenance()`` in its summary, so a number in the docs can be traced
-to the code and libraries that produced it; ``code_version()`` is the short form a resumable
-sweep stores with each trial, so that a rerun with other code does not reuse its results
-silently.
+to the code and libraries that produced it; ``code_version()`` (dopt's version and the git
+commit) is the short form a resumable sweep stores with each trial, so that a rerun with other
+code does not reuse its results silently.
 """
 
 from __future__ import annotations
@@ -49,10 +49,16 @@ def versions() -> dict:
     return out
 
 
-def code_version() -> str:
-    """dopt's version and commit in one string (e.g. ``0.1.0+3f2a...``): what a trial file
-    records so that a rerun can tell results of other code apart."""
-    return f"{versions()['dopt']}+{git_commit() or 'unknown'}"
+def code_version() -> dict:
+    """{"version": dopt's version, "commit": ``git_commit()`` or "unknown"}: what a trial file
+    records. A resumed sweep recomputes a trial written by another dopt *version* (a version
+    bump marks a result-changing release) and reuses, but counts, one written by another
+    *commit* of the same version (``dopt.sweep.SweepResult.commits``)."""
+    try:
+        version = importlib.metadata.version("dopt")
+    except importlib.metadata.PackageNotFoundError:
+        version = None
+    return {"version": version, "commit": git_commit() or "unknown"}
 
 
 def provenance(argv: list[str] | None = None) -> dict:

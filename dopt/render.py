@@ -23,6 +23,9 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
+from dopt.state import check_model, check_spec, check_states
+from dopt.validation import check_int, check_real, float_array, index_array
+
 #: (azimuth, elevation) in degrees of the standard views: straight down (x right, y up in the
 #: image) and an oblique view from the front left
 TOP = (90.0, -90.0)
@@ -54,11 +57,15 @@ def fit_camera(points: np.ndarray, azimuth: float = TOP[0], elevation: float = T
         min_extent: the points are framed as if they spanned at least this (m), so that a
             single point does not fill the image.
     """
-    p = np.asarray(points, dtype=float).reshape(-1, 3)
-    if not len(p) or not np.all(np.isfinite(p)):
-        raise ValueError("points must be a non-empty finite (N, 3) array")
-    if not 0 < fill <= 1:
+    p = float_array(points, "points")
+    if p.shape[-1:] != (3,) or not p.size:
+        raise ValueError(f"points must be a non-empty (N, 3) array, got shape {p.shape}")
+    p = p.reshape(-1, 3)
+    azimuth, elevation = check_real(azimuth, "azimuth"), check_real(elevation, "elevation")
+    fovy, aspect = _fovy(fovy), check_real(aspect, "aspect", positive=True)
+    if not 0 < check_real(fill, "fill") <= 1:
         raise ValueError(f"fill must be in (0, 1], got {fill}")
+    min_extent = check_real(min_extent, "min_extent", minimum=0)
     lo, hi = p.min(axis=0), p.max(axis=0)
     centre = 0.5 * (lo + hi)
     pad = np.maximum(min_extent - (hi - lo), 0.0) / 2
@@ -89,8 +96,14 @@ def project(points: np.ndarray, camera: mujoco.MjvCamera, width: int, height: in
             fovy: float = 45.0) -> np.ndarray:
     """Pixel coordinates (column, row; row 0 at the top, as ``Renderer.render`` returns the
     image; pixel i covers [i, i + 1)) of world points (..., 3) -> (..., 2) seen by a free
-    camera; points behind the camera come out NaN."""
-    p = np.asarray(points, dtype=float)
+    camera; points behind the camera (or NaN) come out NaN."""
+    p = float_array(points, "points", finite=False)
+    if p.shape[-1:] != (3,):
+        raise ValueError(f"points must have shape (..., 3), got {p.shape}")
+    if not isinstance(camera, mujoco.MjvCamera):
+        raise TypeError(f"camera must be a mujoco.MjvCamera, got {type(camera).__name__}")
+    width, height = check_int(width, "width", 1), check_int(height, "height", 1)
+    fovy = _fovy(fovy)
     forward, up, right = camera_frame(camera.azimuth, camera.elevation)
     eye = np.asarray(camera.lookat) - camera.distance * forward
     rel = p - eye
@@ -101,12 +114,20 @@ def project(points: np.ndarray, camera: mujoco.MjvCamera, width: int, height: in
         col = 0.5 * width * (1 + x / (z * tan_h))
         row = 0.5 * height * (1 - y / (z * tan_v))
     out = np.stack([col, row], axis=-1)
-    out[z <= 0] = np.nan
+    out[~(z > 0)] = np.nan
     return out
+
+
+def _fovy(fovy) -> float:
+    fovy = check_real(fovy, "fovy")
+    if not 0 < fovy < 180:
+        raise ValueError(f"fovy must be in (0, 180) degrees, got {fovy}")
+    return fovy
 
 
 # ---------------------------------------------------------------------------- rendering
 def _size(model: mujoco.MjModel, width: int, height: int) -> tuple[int, int]:
+    width, height = check_int(width, "width", 1), check_int(height, "height", 1)
     g = model.vis.global_
     if width > g.offwidth or height > g.offheight:
         raise ValueError(f"{width} x {height} is larger than the model's offscreen buffer "
@@ -134,12 +155,28 @@ def render_states(model: mujoco.MjModel, states: np.ndarray, spec: int,
     model's, usually 4096, which a software OpenGL renders several times slower than 1024).
     None of these options changes the model.
     """
+    check_model(model)
+    spec = check_spec(spec)
     width, height = _size(model, width, height)
     single = isinstance(cameras, mujoco.MjvCamera)
-    cams = [cameras] if single else list(cameras)
-    states = np.atleast_2d(np.asarray(states, dtype=float))
-    hide = {int(g) for g in hide_geoms}
-    alpha = {int(g): float(a) for g, a in (geom_alpha or {}).items()}
+    cams = [cameras] if single else list(cameras) if isinstance(cameras, Sequence) else None
+    if not cams or not all(isinstance(c, mujoco.MjvCamera) for c in cams):
+        raise TypeError(f"cameras must be a mujoco.MjvCamera or a non-empty sequence of them, "
+                        f"got {cameras!r}")
+    states = np.atleast_2d(check_states(model, states, spec, name="states"))
+    hide = set(index_array(hide_geoms, "hide_geoms", model.ngeom, allow_empty=True).tolist())
+    if geom_alpha is not None and not isinstance(geom_alpha, Mapping):
+        raise TypeError(f"geom_alpha must be a mapping geom id -> opacity, got {geom_alpha!r}")
+    alpha = {}
+    for g, a in (geom_alpha or {}).items():
+        g = int(index_array(g, "geom_alpha: geom id", model.ngeom)[0])
+        if not 0 <= check_real(a, f"geom_alpha[{g}]") <= 1:
+            raise ValueError(f"geom_alpha[{g}] must be an opacity in [0, 1], got {a}")
+        alpha[g] = float(a)
+    if specular is not None:
+        specular = check_real(specular, "specular", minimum=0)
+    if shadow_size is not None:
+        shadow_size = check_int(shadow_size, "shadow_size", 1)
     data = mujoco.MjData(model)
     out = np.empty((len(states), len(cams), height, width, 2 if segmentation else 3),
                    dtype=np.int32 if segmentation else np.uint8)
@@ -187,8 +224,11 @@ def render(model: mujoco.MjModel, state: np.ndarray, spec: int, camera: mujoco.M
            width: int = 640, height: int = 480, **options) -> np.ndarray:
     """One image (H, W, 3) uint8 of a state row (ns,) from a free camera (``options``: those
     of ``render_states``)."""
-    return render_states(model, np.asarray(state)[None], spec, camera, width, height,
-                         **options)[0]
+    check_model(model)
+    state = check_states(model, state, check_spec(spec), batched=False, name="state")
+    if not isinstance(camera, mujoco.MjvCamera):
+        raise TypeError(f"camera must be a mujoco.MjvCamera, got {type(camera).__name__}")
+    return render_states(model, state[None], spec, camera, width, height, **options)[0]
 
 
 def object_mask(segmentation: np.ndarray, objtype: int = mujoco.mjtObj.mjOBJ_FLEX,
@@ -197,6 +237,8 @@ def object_mask(segmentation: np.ndarray, objtype: int = mujoco.mjtObj.mjOBJ_FLE
     objects of ``objtype`` (a flex by default; ``objid`` None: any of them) -> (..., H, W)
     bool."""
     seg = np.asarray(segmentation)
+    if seg.ndim < 3 or seg.shape[-1] != 2:
+        raise ValueError(f"segmentation must have shape (..., H, W, 2), got {seg.shape}")
     mask = seg[..., 1] == int(objtype)
     return mask if objid is None else mask & (seg[..., 0] == int(objid))
 
@@ -204,8 +246,10 @@ def object_mask(segmentation: np.ndarray, objtype: int = mujoco.mjtObj.mjOBJ_FLE
 def mask_outline(mask: np.ndarray, width: int = 2) -> np.ndarray:
     """The boundary of a mask (H, W) bool, ``width`` pixels thick on its inside -> (H, W)."""
     m = np.asarray(mask, dtype=bool)
+    if m.ndim != 2:
+        raise ValueError(f"mask must have shape (H, W), got {m.shape}")
     inner = m.copy()
-    for _ in range(max(1, int(width))):
+    for _ in range(check_int(width, "width", 1)):
         pad = np.pad(inner, 1, constant_values=False)
         inner = (inner & pad[:-2, 1:-1] & pad[2:, 1:-1] & pad[1:-1, :-2] & pad[1:-1, 2:])
     return m & ~inner
@@ -221,11 +265,16 @@ def draw_markers(image: np.ndarray, pixels: np.ndarray, colour=(255, 215, 0),
     ``outline`` None draws none."""
     if style not in ("dot", "ring", "cross", "square"):
         raise ValueError(f"unknown marker style {style!r}")
-    img = np.array(image, copy=True)
+    img = _image(image)
     h, w = img.shape[:2]
     rows, cols = np.mgrid[0:h, 0:w]
-    colour = np.asarray(colour, dtype=img.dtype)
-    for c, r in np.asarray(pixels, dtype=float).reshape(-1, 2):
+    colour = _colour(colour, img, "colour")
+    outline = None if outline is None else _colour(outline, img, "outline")
+    radius = check_real(radius, "radius", positive=True)
+    px = float_array(pixels, "pixels", finite=False)
+    if px.shape[-1:] != (2,):
+        raise ValueError(f"pixels must have shape (M, 2) (column, row), got {px.shape}")
+    for c, r in px.reshape(-1, 2):
         if not (np.isfinite(c) and np.isfinite(r)):
             continue
         r0, r1 = int(max(r - radius - 3, 0)), int(min(r + radius + 4, h))
@@ -249,20 +298,40 @@ def draw_markers(image: np.ndarray, pixels: np.ndarray, colour=(255, 215, 0),
             inner, edge = inside & (across <= 1.2), inside & (across <= 2.4)
         patch = img[r0:r1, c0:c1]
         if outline is not None:
-            patch[edge & ~inner] = np.asarray(outline, dtype=img.dtype)
+            patch[edge & ~inner] = outline
         patch[inner] = colour
     return img
+
+
+def _image(image) -> np.ndarray:
+    """A copy of an (H, W, C) image."""
+    img = np.array(image, copy=True)
+    if img.ndim != 3 or img.dtype.kind not in "uif":
+        raise ValueError(f"image must be an (H, W, C) numeric array, got shape {img.shape} "
+                         f"dtype {img.dtype}")
+    return img
+
+
+def _colour(colour, img: np.ndarray, name: str) -> np.ndarray:
+    c = float_array(colour, name, (img.shape[2],))
+    return c.astype(img.dtype)
 
 
 def draw_segments(image: np.ndarray, start: np.ndarray, end: np.ndarray,
                   colour=(0, 0, 0), width: float = 1.5) -> np.ndarray:
     """A copy of ``image`` with a line from each start pixel (M, 2) to its end pixel (M, 2)."""
-    img = np.array(image, copy=True)
+    img = _image(image)
     h, w = img.shape[:2]
     rows, cols = np.mgrid[0:h, 0:w]
-    colour = np.asarray(colour, dtype=img.dtype)
-    for a, b in zip(np.asarray(start, float).reshape(-1, 2),
-                    np.asarray(end, float).reshape(-1, 2), strict=True):
+    colour = _colour(colour, img, "colour")
+    width = check_real(width, "width", positive=True)
+    start = float_array(start, "start", finite=False)
+    if start.shape[-1:] != (2,):
+        raise ValueError(f"start must have shape (M, 2) (column, row), got {start.shape}")
+    end = float_array(end, "end", finite=False)
+    if end.shape != start.shape:
+        raise ValueError(f"end must have the shape of start {start.shape}, got {end.shape}")
+    for a, b in zip(start.reshape(-1, 2), end.reshape(-1, 2), strict=True):
         if not (np.all(np.isfinite(a)) and np.all(np.isfinite(b))):
             continue
         c0, c1 = int(max(min(a[0], b[0]) - width - 1, 0)), int(min(max(a[0], b[0]) + width + 2, w))
@@ -305,18 +374,30 @@ def replay(scene, start_state: np.ndarray, actions: Sequence[dict],
         max_frames: most frames kept (>= 2).
     """
     from dopt.tasks.pick.picker import CONTROL_SPEC
+    from dopt.tasks.pick.scene import DeformableScene
 
-    if max_frames < 2:
-        raise ValueError(f"max_frames must be >= 2, got {max_frames}")
+    if not isinstance(scene, DeformableScene):
+        raise TypeError(f"scene must be a DeformableScene, got {type(scene).__name__}")
+    max_frames = check_int(max_frames, "max_frames", 2)
     m, spec = scene.model, scene.scene.layout.spec
-    rows = [scene.picker.encode(np.asarray(a["particles"])[None],
-                                np.asarray(a["displacements"], dtype=float)[None])[0]
-            for a in actions]                                            # (H*K, ncontrol)
+    start_state = check_states(m, start_state, spec, batched=False, name="start_state")
+    if isinstance(actions, (str, Mapping)) or not isinstance(actions, Sequence):
+        raise TypeError(f"actions must be a sequence of per-stage dicts, got {actions!r}")
+    rows = []
+    for k, a in enumerate(actions):
+        if not isinstance(a, Mapping) or not {"particles", "displacements"} <= set(a):
+            raise ValueError(f"actions[{k}] must be a dict with 'particles' (H,) and "
+                             f"'displacements' (H, 3), got {a!r}")
+        if not np.size(a["particles"]):                  # a stage that took no action
+            rows.append(np.empty((0, scene.picker.ncontrol)))
+            continue
+        rows.append(scene.picker.encode(np.asarray(a["particles"])[None],
+                                        np.asarray(a["displacements"])[None])[0])  # (H*K, nc)
     total = sum(len(r) for r in rows)
     every = max(1, int(np.ceil(total / (max_frames - 1))))
     K = scene.picker.steps_per_action
     data = mujoco.MjData(m)
-    mujoco.mj_setState(m, data, np.asarray(start_state, dtype=float), spec)
+    mujoco.mj_setState(m, data, start_state, spec)
     size = mujoco.mj_stateSize(m, spec)
     states, info = [], []
 

@@ -31,7 +31,8 @@ from dopt import kernels
 from dopt.rollout_batch import BatchRoute
 from dopt.rollout_c import CRoute
 from dopt.scene import Scene
-from dopt.state import check_states
+from dopt.state import check_spec, check_states
+from dopt.validation import check_config, float_array, is_int
 
 CTRL = int(mujoco.mjtState.mjSTATE_CTRL)
 USER = int(mujoco.mjtState.mjSTATE_USER)
@@ -47,10 +48,7 @@ class RolloutConfig:
     c_kernels: bool = True
 
     def __post_init__(self):
-        if not isinstance(self.threads, int) or self.threads < 0:
-            raise ValueError(f"threads must be an int >= 0, got {self.threads!r}")
-        if not isinstance(self.c_kernels, bool):
-            raise TypeError(f"c_kernels must be a bool, got {self.c_kernels!r}")
+        check_config(self, minimum={"threads": 0})
 
 
 @dataclass(frozen=True)
@@ -70,8 +68,7 @@ class FDConfig:
     centered: bool = False
 
     def __post_init__(self):
-        if not (np.isfinite(self.eps) and self.eps > 0):
-            raise ValueError(f"eps must be a positive finite number, got {self.eps!r}")
+        check_config(self, positive=("eps",))
 
 
 @dataclass(frozen=True)
@@ -130,6 +127,8 @@ class RolloutService:
     def __init__(self, scene: Scene, config: RolloutConfig = RolloutConfig()):
         if not isinstance(scene, Scene):
             raise TypeError(f"scene must be a dopt.Scene, got {type(scene).__name__}")
+        if not isinstance(config, RolloutConfig):
+            raise TypeError(f"config must be a dopt.RolloutConfig, got {type(config).__name__}")
         self.scene = scene
         self.model = scene.model
         self.config = config
@@ -189,16 +188,19 @@ class RolloutService:
                 rollout and at which step).
             RuntimeError: the service is closed.
         """
+        if not is_int(control_spec):
+            raise TypeError(f"control_spec must be an int of mjtState bits, got {control_spec!r}")
         if control_spec & ~USER or not control_spec:
             raise ValueError(f"control_spec must be a non-empty subset of mjSTATE_USER "
                              f"({USER}), got {control_spec}")
+        record = _check_record(record)
         ncontrol = mujoco.mj_stateSize(self.model, control_spec)
-        u = _as_float(controls, "controls")
+        u = float_array(controls, "controls")
         if u.ndim == 2:
             u = u[None]
-        if u.ndim != 3 or u.shape[2] != ncontrol or u.shape[1] == 0:
+        if u.ndim != 3 or u.shape[2] != ncontrol or u.shape[1] == 0 or u.shape[0] == 0:
             raise ValueError(f"controls must have shape (P, T, {ncontrol}) or (T, {ncontrol}) "
-                             f"with T >= 1, got {np.shape(controls)}")
+                             f"with P, T >= 1, got {np.shape(controls)}")
         x0 = check_states(self.model, initial_states, name="initial_states")
         n_x0 = x0.shape[0] if x0.ndim == 2 else 1
         if 1 not in (n_x0, u.shape[0]) and n_x0 != u.shape[0]:
@@ -212,9 +214,10 @@ class RolloutService:
 
     def trajectory(self, initial_state, controls) -> Trajectory:
         """One open-loop rollout that keeps every state row: (ns,), (T, nu) -> Trajectory."""
-        u = _as_float(controls, "controls")
-        if u.ndim != 2:
-            raise ValueError(f"controls must have shape (T, nu), got {u.shape}")
+        u = float_array(controls, "controls")
+        if u.ndim != 2 or u.shape[1] != self.model.nu or not len(u):
+            raise ValueError(f"controls must have shape (T, {self.model.nu}) with T >= 1, got "
+                             f"{u.shape}")
         x0 = check_states(self.model, initial_state, batched=False, name="initial_state")
         spec = self.scene.layout.spec
         res = self.rollout(x0, u[None], record=(spec,))
@@ -244,16 +247,20 @@ class RolloutService:
         """
         m = self.model
         x0 = check_states(m, initial_state, batched=False, name="initial_state")
-        u = _as_float(controls, "controls")
+        u = float_array(controls, "controls")
         ref = check_states(m, ref_states, batched=True, name="ref_states")
-        K = _as_float(gains, "gains")
+        K = float_array(gains, "gains")
         C = self.scene.as_dofs(dofs)
         T = u.shape[1] if u.ndim == 3 else 0
-        if u.ndim != 3 or u.shape[2] != m.nu or T == 0:
-            raise ValueError(f"controls must have shape (P, T, {m.nu}), got {u.shape}")
-        if ref.shape[0] != T or K.shape != (T, m.nu, 2 * len(C)):
-            raise ValueError(f"ref_states must be ({T}, ns) and gains ({T}, {m.nu}, "
-                             f"{2 * len(C)}); got {ref.shape} and {K.shape}")
+        if u.ndim != 3 or u.shape[2] != m.nu or T == 0 or not len(u):
+            raise ValueError(f"controls must have shape (P, T, {m.nu}) with P, T >= 1, got "
+                             f"{u.shape}")
+        if ref.shape[0] != T:
+            raise ValueError(f"ref_states must have shape ({T}, {self.scene.nstate}) (one row "
+                             f"per step of controls), got {ref.shape}")
+        if K.shape != (T, m.nu, 2 * len(C)):
+            raise ValueError(f"gains must have shape ({T}, {m.nu}, {2 * len(C)}) (T, nu, "
+                             f"2|C|), got {K.shape}")
         with self._lock:
             states, applied = self._open_route().feedback(x0, u, ref, K, C)
         return Trajectory(states, applied)
@@ -284,6 +291,8 @@ class RolloutService:
         if m.opt.integrator == mujoco.mjtIntegrator.mjINT_RK4:
             raise ValueError("derivatives: the RK4 integrator is not supported (as in "
                              "mjd_transitionFD)")
+        if not isinstance(fd, FDConfig):
+            raise TypeError(f"fd must be a dopt.FDConfig, got {type(fd).__name__}")
         x = check_states(m, states, batched=True, name="states")
         C = self.scene.dofs() if dofs is None else self.scene.as_dofs(dofs)
         with self._lock:
@@ -291,10 +300,15 @@ class RolloutService:
         return Derivatives(F, C, fd)
 
 
-def _as_float(x, name: str) -> np.ndarray:
-    arr = np.asarray(x)
-    if not (np.issubdtype(arr.dtype, np.floating) or np.issubdtype(arr.dtype, np.integer)):
-        raise TypeError(f"{name} must be a float array, got dtype {arr.dtype}")
-    if not np.all(np.isfinite(arr)):
-        raise ValueError(f"{name} contains NaN/inf")
-    return np.ascontiguousarray(arr, dtype=np.float64)
+def _check_record(record) -> tuple:
+    """The record items of ``rollout``: a sequence of MjData field names and mjtState specs."""
+    if isinstance(record, (str, int)) or not isinstance(record, Sequence):
+        raise TypeError(f"record must be a sequence of MjData field names and mjtState specs, "
+                        f"got {record!r}")
+    for item in record:
+        if isinstance(item, str):
+            if not isinstance(getattr(mujoco.MjData, item, None), property):
+                raise ValueError(f"record: {item!r} is not an MjData field")
+        else:
+            check_spec(item, "record item")
+    return tuple(record)

@@ -24,10 +24,9 @@ from mujoco.batch import Batch, SimulationError
 from dopt.errors import RolloutError, UnstableRolloutError
 from dopt.kernels import warning_names
 from dopt.scene import Scene
+from dopt.state import StateLayout, fault, faulty_rows
 
 log = logging.getLogger(__name__)
-
-_TIME = int(mujoco.mjtState.mjSTATE_TIME)
 
 
 def ctrl_bounds(model: mujoco.MjModel) -> tuple[np.ndarray, np.ndarray]:
@@ -37,17 +36,18 @@ def ctrl_bounds(model: mujoco.MjModel) -> tuple[np.ndarray, np.ndarray]:
             np.where(limited, model.actuator_ctrlrange[:, 1], np.inf))
 
 
-def first_unstable(batch: Batch, n: int, states: np.ndarray) -> tuple[int, str] | None:
+def first_unstable(batch: Batch, n: int, states: np.ndarray,
+                   layout: StateLayout) -> tuple[int, str] | None:
     """(i, reason) of the first of the batch's first n simulations that raised a MuJoCo
-    warning or holds a non-finite row of ``states`` (n, ns); None if none did. reason: the
-    first warning's name, or "non-finite state"."""
+    warning or holds a row of ``states`` (n, ns) that is no valid state (``state.fault``);
+    None if none did. reason: the first warning's name, else the fault."""
     warned = batch.warning[:n, :, 1] > 0                                 # (n, nwarning)
-    bad = warned.any(axis=1) | ~np.isfinite(states).all(axis=1)
+    bad = warned.any(axis=1) | faulty_rows(layout, states)
     if not bad.any():
         return None
     i = int(np.argmax(bad))
     names = warning_names(batch.warning[i, :, 1])
-    return i, names[0] if names else "non-finite state"
+    return i, names[0] if names else (fault(layout, states[i]) or "non-finite state")
 
 
 class BatchRoute:
@@ -74,24 +74,43 @@ class BatchRoute:
 
         Returns (final states (P, ns), records: item -> (P, T, ...))."""
         P, T = u.shape[:2]
-        items = [_TIME] + [r for r in record if r != _TIME]
         batch, ids = self._batch_of(P)
         batch.state[:P] = x0
         batch.warning[:P] = 0
         try:
-            rec = batch.rollout(T, control=u, control_spec=control_spec, record=items, ids=ids)
+            rec = batch.rollout(T, control=u, control_spec=control_spec, record=list(record),
+                                ids=ids)
         except SimulationError as e:
             raise RolloutError(f"rollout: {e}") from e
         final = batch.state[:P].copy()
-        if bad := first_unstable(batch, P, final):
+        if bad := first_unstable(batch, P, final, self.scene.layout):
             i, reason = bad
-            t = rec[_TIME][i, :, 0]                     # a stalled clock: the step that failed
-            stalled = np.nonzero(np.diff(t) <= 0)[0]
-            step = int(stalled[0] + 1) if len(stalled) else len(t) - 1
+            start = x0 if x0.ndim == 1 else x0[i if len(x0) > 1 else 0]
+            step, reason = self._replay(start, u[i], control_spec) or (T - 1, reason)
             raise UnstableRolloutError(i, step, reason, "rollout")
-        if _TIME not in record:
-            rec.pop(_TIME)
         return final, rec
+
+    def _replay(self, x0: np.ndarray, u: np.ndarray, control_spec: int) -> tuple[int, str] | None:
+        """(step, reason) of the first step of one open-loop rollout, x0 (ns,), u (T,
+        ncontrol), that warns or leaves no valid state, replayed with mj_step (which
+        ``Batch.rollout`` equals bit for bit; it stops a simulation at its first warning, which
+        can come a step after the step that caused it); None if none does."""
+        m, lay = self.model, self.scene.layout
+        d = mujoco.MjData(m)
+        row = np.empty(lay.size)
+        try:
+            mujoco.mj_setState(m, d, x0, lay.spec)
+            for t, ut in enumerate(u):
+                mujoco.mj_setState(m, d, np.ascontiguousarray(ut), control_spec)
+                mujoco.mj_step(m, d)
+                if names := warning_names(d.warning.number):
+                    return t, names[0]
+                mujoco.mj_getState(m, d, row, lay.spec)
+                if reason := fault(lay, row):
+                    return t, reason
+        except Exception:  # a MuJoCo error in the replay: the batch's report stands
+            log.debug("replay of an unstable rollout failed", exc_info=True)
+        return None
 
     def feedback(self, x0: np.ndarray, u: np.ndarray, ref: np.ndarray, K: np.ndarray,
                  C: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -118,7 +137,8 @@ class BatchRoute:
                 applied[:, t] = ut
                 out[:, t] = rows[:P]
                 batch.step(ids=ids)
-                if bad := first_unstable(batch, P, rows[:P]):   # lock-step: the first step
+                # lock-step: the first step that failed, its first rollout
+                if bad := first_unstable(batch, P, rows[:P], self.scene.layout):
                     raise UnstableRolloutError(bad[0], t, bad[1], "rollout_feedback")
         except SimulationError as e:
             raise RolloutError(f"rollout_feedback: {e}") from e
@@ -174,10 +194,9 @@ class BatchRoute:
         except SimulationError as e:
             raise RolloutError(f"derivatives: {e}") from e
         nxt = batch.state[:n].reshape(T, K, -1).copy()
-        if bad := first_unstable(batch, n, nxt.reshape(n, -1)):   # row i: timestep i // K
-            i, reason = bad
-            raise UnstableRolloutError(i, 0, reason,
-                                       f"derivatives t={i // K} perturbation={i % K}")
+        if bad := first_unstable(batch, n, nxt.reshape(n, -1), self.scene.layout):
+            t, k = divmod(bad[0], K)                        # row i: timestep i // K
+            raise UnstableRolloutError(k, t, bad[1], f"derivatives t={t} perturbation={k}")
 
         qpos, qvel = nxt[..., self._qpos], nxt[..., self._qvel]       # (T, K, nq|nv)
         diff = self.scene.tangent.difference

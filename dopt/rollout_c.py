@@ -36,8 +36,8 @@ class CRoute(BatchRoute):
         """As ``BatchRoute.feedback``: x0 (ns,), u (P, T, nu), ref (T, ns), K (T, nu, 2|C|)
         -> (states (P, T+1, ns), applied controls (P, T, nu))."""
         out, applied, bad = self._kernel().feedback(x0, u, ref, K, C, self.lo, self.hi)
-        if bad:
-            p, step, names = bad[0]
+        if bad:   # the first step that failed, its first rollout (as the lock-step Batch)
+            step, p, names = bad[0]
             raise UnstableRolloutError(p, step, names[0], "rollout_feedback")
         return out, applied
 
@@ -46,8 +46,8 @@ class CRoute(BatchRoute):
         """As ``BatchRoute.derivatives``: x (T, ns), C (|C|,) -> F (T, 2|C|, 2|C| + nu)."""
         F, bad = self._kernel().fd(x, C, eps, centered, self.lo, self.hi)
         if bad:
-            t, names = bad[0]
-            raise UnstableRolloutError(t, 0, names[0], f"derivatives t={t}")
+            t, k, names = bad[0]
+            raise UnstableRolloutError(k, t, names[0], f"derivatives t={t} perturbation={k}")
         return F
 
     def _kernel(self) -> kernels.Kernels:

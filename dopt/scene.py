@@ -21,7 +21,8 @@ from collections.abc import Iterable, Mapping
 import mujoco
 import numpy as np
 
-from dopt.state import INTEGRATION, StateLayout, Tangent
+from dopt.state import INTEGRATION, StateLayout, Tangent, check_data
+from dopt.validation import index_array
 
 
 class Scene:
@@ -40,11 +41,19 @@ class Scene:
         self.tangent = Tangent(model)
         self.groups: dict[str, np.ndarray] = _default_groups(model)
         for name, dofs in (groups or {}).items():
-            self.groups[name] = self._checked_dofs(np.asarray(list(dofs)), name)
+            if not isinstance(name, str):
+                raise TypeError(f"groups: DoF group names must be str, got {name!r}")
+            if isinstance(dofs, str):
+                raise TypeError(f"groups[{name!r}] must be DoF indices, got {dofs!r}")
+            if isinstance(dofs, Iterable) and not isinstance(dofs, np.ndarray):
+                dofs = list(dofs)
+            self.groups[name] = self._checked_dofs(dofs, name)
 
     @classmethod
     def from_xml(cls, xml: str, groups: Mapping[str, Iterable[int]] | None = None) -> Scene:
         """Compile an MJCF string."""
+        if not isinstance(xml, str):
+            raise TypeError(f"xml must be an MJCF string, got {type(xml).__name__}")
         return cls(mujoco.MjModel.from_xml_string(xml), groups)
 
     @property
@@ -69,6 +78,8 @@ class Scene:
             return np.arange(self.nv)
         parts = []
         for name in names:
+            if not isinstance(name, str):
+                raise TypeError(f"DoF group names must be str, got {name!r}")
             if name not in self.groups:
                 close = difflib.get_close_matches(name, self.groups, n=3)
                 hint = f"; did you mean {close}?" if close else ""
@@ -78,13 +89,18 @@ class Scene:
         return np.unique(np.concatenate(parts))
 
     def as_dofs(self, dofs) -> np.ndarray:
-        """Accept a group name, a list of names, or DoF indices; return sorted unique indices."""
+        """Accept a group name, a list of names, or DoF indices; return sorted unique indices.
+
+        Indices must be ints in [0, nv) (no negative wrap-around; floats, bools and NaN raise
+        TypeError); names must be known groups."""
         if isinstance(dofs, str):
             return self.dofs(dofs)
-        arr = np.asarray(dofs)
-        if arr.dtype.kind in "UO":
-            return self.dofs(*[str(n) for n in arr.ravel()])
-        return self._checked_dofs(arr, "dofs")
+        if dofs is None:
+            raise TypeError("dofs must be DoF indices or group names, got None")
+        names = _names(dofs)
+        if names is not None:
+            return self.dofs(*names)
+        return self._checked_dofs(dofs, "dofs")
 
     def tangent_indices(self, dofs) -> np.ndarray:
         """Indices of the DoF set in the 2*nv tangent state [dq; dv]: (2|C|,)."""
@@ -109,11 +125,18 @@ class Scene:
         return np.unique(np.asarray(out, dtype=int))
 
     def linear_qpos_indices(self, dofs) -> np.ndarray:
-        """qpos index of each DoF, in the given order, for DoFs whose tangent coordinate is
-        their qpos coordinate (hinge, slide, free-joint translation); ValueError for the
-        rotational DoFs of ball and free joints."""
+        """qpos index of each DoF, in the given order (group names: sorted), for DoFs whose
+        tangent coordinate is their qpos coordinate (hinge, slide, free-joint translation);
+        ValueError for the rotational DoFs of ball and free joints. Indices are checked as in
+        ``as_dofs``."""
+        if isinstance(dofs, str) or _names(dofs) is not None:
+            order = self.as_dofs(dofs)
+        elif dofs is None:
+            raise TypeError("dofs must be DoF indices or group names, got None")
+        else:
+            order = index_array(dofs, "dofs", self.nv)
         m, out = self.model, []
-        for dof in np.asarray(dofs, dtype=int).ravel():
+        for dof in order:
             j = m.dof_jntid[dof]
             k, jt = dof - m.jnt_dofadr[j], int(m.jnt_type[j])
             if jt == int(mujoco.mjtJoint.mjJNT_BALL) or (
@@ -125,20 +148,26 @@ class Scene:
 
     def state_of(self, data: mujoco.MjData) -> np.ndarray:
         """The (ns,) mjSTATE_INTEGRATION row of data."""
+        check_data(self.model, data)
         state = np.empty(self.nstate)
         mujoco.mj_getState(self.model, data, state, INTEGRATION)
         return state
 
-    def _checked_dofs(self, arr: np.ndarray, what: str) -> np.ndarray:
-        if arr.size and not np.issubdtype(arr.dtype, np.integer):
-            raise TypeError(f"{what}: DoF indices must be integers, got dtype {arr.dtype}")
-        arr = arr.astype(int).ravel()
-        if arr.size == 0:
-            raise ValueError(f"{what}: empty DoF set")
-        if arr.min() < 0 or arr.max() >= self.nv:
-            raise ValueError(f"{what}: DoF index out of range [0, {self.nv}): "
-                             f"{arr[(arr < 0) | (arr >= self.nv)][:5].tolist()}")
-        return np.unique(arr)
+    def _checked_dofs(self, dofs, what: str) -> np.ndarray:
+        """DoF indices -> sorted unique int array; ``what`` names them in errors."""
+        return np.unique(index_array(dofs, what, self.nv))
+
+
+def _names(dofs) -> list[str] | None:
+    """The group names in ``dofs`` (a list or array of str), None if it holds no str."""
+    if isinstance(dofs, np.ndarray):
+        if dofs.dtype.kind == "U" or (dofs.dtype == object and dofs.size
+                                      and all(isinstance(n, str) for n in dofs.ravel())):
+            return [str(n) for n in dofs.ravel()]
+        return None
+    if isinstance(dofs, (list, tuple)) and dofs and all(isinstance(n, str) for n in dofs):
+        return list(dofs)
+    return None
 
 
 _JOINT_NDOF = {int(mujoco.mjtJoint.mjJNT_FREE): 6, int(mujoco.mjtJoint.mjJNT_BALL): 3}

@@ -13,7 +13,13 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
+from dopt.validation import float_array, is_int
+
 INTEGRATION = int(mujoco.mjtState.mjSTATE_INTEGRATION)
+#: mjMAXVAL: MuJoCo rejects a qpos, qvel or qacc entry beyond +-1e10 (or NaN) as unstable
+#: (mj_checkPos / mj_checkVel / mj_checkAcc, mjWARN_BADQPOS / BADQVEL / BADQACC)
+MAXVAL = 1e10
+_NSTATE = int(mujoco.mjtState.mjNSTATE)
 
 # single-bit state components, in the order MuJoCo lays them out in a state row
 _COMPONENTS = [(name[len("mjSTATE_"):].lower(), int(bit))
@@ -39,6 +45,8 @@ class StateLayout:
 
     @classmethod
     def of(cls, model: mujoco.MjModel, spec: int = INTEGRATION) -> StateLayout:
+        check_model(model)
+        spec = check_spec(spec)
         slices, offset = {}, 0
         for name, bit in _COMPONENTS:
             if spec & bit:
@@ -59,8 +67,43 @@ class StateLayout:
                              f"it has {sorted(self.slices)}") from None
 
 
+def check_model(model, name: str = "model") -> mujoco.MjModel:
+    """TypeError unless ``model`` is a ``mujoco.MjModel``."""
+    if not isinstance(model, mujoco.MjModel):
+        raise TypeError(f"{name} must be a mujoco.MjModel, got {type(model).__name__}")
+    return model
+
+
+def check_data(model: mujoco.MjModel, data, name: str = "data") -> mujoco.MjData:
+    """TypeError unless ``data`` is a ``mujoco.MjData``; ValueError unless it was made for a
+    model of ``model``'s sizes (reading or writing a state through another model's sizes would
+    run past its buffers)."""
+    if not isinstance(data, mujoco.MjData):
+        raise TypeError(f"{name} must be a mujoco.MjData, got {type(data).__name__}")
+    dm = data.model
+    if dm._address != model._address and (
+            (dm.nq, dm.nv, dm.nu, dm.na, dm.neq, dm.nmocap)
+            != (model.nq, model.nv, model.nu, model.na, model.neq, model.nmocap)
+            or mujoco.mj_stateSize(dm, INTEGRATION) != mujoco.mj_stateSize(model, INTEGRATION)):
+        raise ValueError(f"{name} was made for another model (nq {dm.nq}, nv {dm.nv}, nu "
+                         f"{dm.nu}; this one has nq {model.nq}, nv {model.nv}, nu {model.nu})")
+    return data
+
+
+def check_spec(spec, name: str = "spec") -> int:
+    """``spec`` as an int: a non-empty set of mjtState bits."""
+    if not is_int(spec):
+        raise TypeError(f"{name} must be an int of mjtState bits, got {spec!r}")
+    if not 0 < spec < 1 << _NSTATE:
+        raise ValueError(f"{name} must be a non-empty set of mjtState bits (1 .. "
+                         f"{(1 << _NSTATE) - 1}), got {spec}")
+    return int(spec)
+
+
 def get_state(model: mujoco.MjModel, data: mujoco.MjData, spec: int = INTEGRATION) -> np.ndarray:
     """Save ``data``'s state: returns the (ns,) row of ``spec``."""
+    check_data(check_model(model), data)
+    spec = check_spec(spec)
     state = np.empty(mujoco.mj_stateSize(model, spec))
     mujoco.mj_getState(model, data, state, spec)
     return state
@@ -70,6 +113,7 @@ def set_state(model: mujoco.MjModel, data: mujoco.MjData, state: np.ndarray,
               spec: int = INTEGRATION) -> None:
     """Restore a (ns,) row of ``spec`` into ``data`` (derived quantities are not recomputed)."""
     state = check_states(model, state, spec, batched=False)
+    check_data(model, data)
     mujoco.mj_setState(model, data, state, spec)
 
 
@@ -79,11 +123,9 @@ def check_states(model: mujoco.MjModel, states, spec: int = INTEGRATION, *,
 
     ``batched`` True requires (P, ns), False requires (ns,), None accepts either.
     """
-    arr = np.asarray(states)
-    if arr.dtype == object or not (np.issubdtype(arr.dtype, np.floating)
-                                   or np.issubdtype(arr.dtype, np.integer)):
-        raise TypeError(f"{name} must be a float array, got dtype {arr.dtype}")
-    ns = mujoco.mj_stateSize(model, spec)
+    check_model(model)
+    arr = float_array(states, name, finite=False)
+    ns = mujoco.mj_stateSize(model, check_spec(spec))
     ndim_ok = {None: (1, 2), True: (2,), False: (1,)}[batched]
     if arr.ndim not in ndim_ok or arr.shape[-1] != ns:
         want = {None: f"({ns},) or (P, {ns})", True: f"(P, {ns})", False: f"({ns},)"}[batched]
@@ -94,7 +136,25 @@ def check_states(model: mujoco.MjModel, states, spec: int = INTEGRATION, *,
     if not np.all(np.isfinite(arr)):
         bad = np.argwhere(~np.isfinite(np.atleast_2d(arr)))[0]
         raise ValueError(f"{name} contains NaN/inf (first at row {bad[0]}, column {bad[1]})")
-    return np.ascontiguousarray(arr, dtype=np.float64)
+    return arr
+
+
+def faulty_rows(layout: StateLayout, states: np.ndarray) -> np.ndarray:
+    """Which state rows (..., ns) are no valid state: a qpos or qvel entry NaN or beyond
+    +-MAXVAL (what MuJoCo's next step would reject), or any entry non-finite -> (...) bool."""
+    q, v = states[..., layout["qpos"]], states[..., layout["qvel"]]
+    return (~(np.abs(q) <= MAXVAL).all(axis=-1) | ~(np.abs(v) <= MAXVAL).all(axis=-1)
+            | ~np.isfinite(states).all(axis=-1))
+
+
+def fault(layout: StateLayout, row: np.ndarray) -> str | None:
+    """Why the state row (ns,) is no valid state, named as MuJoCo's next step would warn:
+    "mjWARN_BADQPOS", "mjWARN_BADQVEL", "non-finite state"; None if it is valid."""
+    if not (np.abs(row[layout["qpos"]]) <= MAXVAL).all():
+        return "mjWARN_BADQPOS"
+    if not (np.abs(row[layout["qvel"]]) <= MAXVAL).all():
+        return "mjWARN_BADQVEL"
+    return None if np.isfinite(row).all() else "non-finite state"
 
 
 class Tangent:

@@ -6,6 +6,15 @@ and returns a JSON-able dict. Each finished trial is written at once to ``OUT/tr
 trial whose file exists. The same code runs inline (``workers=1``), on a local process pool, or
 on Ray (``ray_address``: "local" starts a local instance, anything else is passed to
 ``ray.init``), so a sweep of thousands of trials goes to many machines without code changes.
+
+Trial files are checked when read: a file that is not a trial record (truncated or invalid
+JSON, not an object, without "key", "params" or "result", or whose key is not its file name) is
+named in a logged warning and moved to ``OUT/trials/corrupt/`` (never deleted), and its trial is
+recomputed. Each record stores ``dopt.provenance.code_version()`` under "code": a rerun
+recomputes a trial written by another dopt version (its record is moved to
+``OUT/trials/outdated/``), reuses one written by another commit of the same version and counts
+the commits of all records (``SweepResult.commits``), so a summary can say when it mixes code.
+A record written before records held "code" is reused and counted as commit "unknown".
 """
 
 from __future__ import annotations
@@ -15,13 +24,21 @@ import logging
 import os
 import sys
 import tempfile
+from collections import Counter
 from collections.abc import Callable, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from multiprocessing import get_context
 from pathlib import Path
 
+from dopt.provenance import code_version
+
 log = logging.getLogger(__name__)
+
+#: folders under OUT/trials where unusable trial files are moved (never deleted)
+CORRUPT_DIR, OUTDATED_DIR = "corrupt", "outdated"
+#: the fields every trial record has
+RECORD_FIELDS = ("key", "params", "result")
 
 
 @dataclass(frozen=True)
@@ -38,35 +55,89 @@ class Trial:
 
 @dataclass(frozen=True)
 class SweepResult:
-    """records: {key: {"key", "params", "result"}} of every finished trial (old and new);
-    ran: keys run in this call; skipped: keys found finished; failed: {key: error message}."""
+    """The trials of one ``run_sweep`` call.
+
+    Attributes:
+        records: {key: {"key", "params", "result", "code"}} of every finished trial (old and
+            new).
+        ran: keys run in this call; skipped: keys found finished and reused.
+        failed: {key: "ErrorType: message"} of the trials that raised.
+        commits: {commit: number of records} over ``records`` (``code_version()["commit"]``;
+            "unknown" for records without one): more than one key means the results mix code.
+        recomputed: {key: reason} of trials that had a file but were run again (fresh, another
+            dopt version, a corrupt file).
+        corrupt: {file name: reason} of the files moved to OUT/trials/corrupt in this call.
+    """
 
     records: dict
     ran: list
     skipped: list
     failed: dict
+    commits: dict = field(default_factory=dict)
+    recomputed: dict = field(default_factory=dict)
+    corrupt: dict = field(default_factory=dict)
 
 
 def trial_path(out_dir: Path | str, key: str) -> Path:
     return Path(out_dir) / "trials" / f"{key}.json"
 
 
-def load_finished(out_dir: Path | str) -> dict:
-    """{key: record} of every trial file under OUT/trials."""
+def check_record(path: Path | str) -> tuple[dict | None, str | None]:
+    """(record, None) if the file at ``path`` is a trial record, else (None, what is wrong)."""
+    path = Path(path)
+    try:
+        rec = json.loads(path.read_text())
+    except (OSError, UnicodeDecodeError) as e:
+        return None, f"unreadable ({type(e).__name__}: {e})"
+    except ValueError as e:
+        return None, f"not valid JSON, truncated? ({e})"
+    if not isinstance(rec, dict):
+        return None, f"not a trial record (a JSON {type(rec).__name__}, not an object)"
+    missing = [k for k in RECORD_FIELDS if k not in rec]
+    if missing:
+        return None, f"not a trial record (no {', '.join(repr(k) for k in missing)})"
+    if rec["key"] != path.stem:
+        return None, f"its key {rec['key']!r} is not its file name"
+    if not isinstance(rec["params"], dict):
+        return None, "its params are not an object"
+    code = rec.get("code")
+    if code is not None and not (isinstance(code, dict) and "version" in code):
+        return None, f"its code version {code!r} is not {{\"version\", \"commit\"}}"
+    return rec, None
+
+
+def check_trial_files(out_dir: Path | str) -> tuple[dict, dict]:
+    """({key: record} of the valid trial files under OUT/trials, {file name: reason} of the
+    others, each moved to OUT/trials/corrupt/ with a logged warning). Hidden files (the
+    temporary files of writes that were killed) are left alone."""
     folder = Path(out_dir) / "trials"
     if not folder.is_dir():
-        return {}
-    out = {}
+        return {}, {}
+    records, corrupt = {}, {}
     for path in sorted(folder.glob("*.json")):
-        with open(path) as f:
-            rec = json.load(f)
-        out[rec["key"]] = rec
-    return out
+        if path.name.startswith(".") or not path.is_file():
+            continue
+        rec, problem = check_record(path)
+        if rec is not None:
+            records[rec["key"]] = rec
+            continue
+        corrupt[path.name] = problem
+        where = _move_aside(path, CORRUPT_DIR)
+        log.warning("trial file %s is not used (%s): %s", path, problem,
+                    f"moved to {where}" if where else "it could not be moved aside")
+    return records, corrupt
+
+
+def load_finished(out_dir: Path | str) -> dict:
+    """{key: record} of every valid trial file under OUT/trials (others are moved aside:
+    ``check_trial_files``)."""
+    return check_trial_files(out_dir)[0]
 
 
 def run_sweep(fn: Callable[[dict], dict], trials: Sequence[Trial], out_dir: Path | str, *,
               workers: int = 1, ray_address: str | None = None,
-              progress: Callable[[str, dict | None], None] | None = None) -> SweepResult:
+              progress: Callable[[str, dict | None], None] | None = None,
+              fresh: bool = False) -> SweepResult:
     """Run the trials not yet finished under ``out_dir``.
 
     Args:
@@ -76,6 +147,11 @@ def run_sweep(fn: Callable[[dict], dict], trials: Sequence[Trial], out_dir: Path
         workers: processes of the local pool (1: run inline in this process).
         ray_address: run on Ray instead ("local" for a local instance).
         progress: called with (key, record or None on failure) as each trial ends.
+        fresh: recompute every trial (the old files are moved to OUT/trials/outdated/).
+
+    A trial whose file is corrupt, or was written by another dopt version, is recomputed
+    (``SweepResult.recomputed``); a trial that raises, or returns something that is not
+    JSON-able, is a failure (``SweepResult.failed``), never a result.
     """
     keys = [t.key for t in trials]
     if len(set(keys)) != len(keys):
@@ -83,22 +159,46 @@ def run_sweep(fn: Callable[[dict], dict], trials: Sequence[Trial], out_dir: Path
     if workers < 1:
         raise ValueError(f"workers must be >= 1, got {workers}")
     (Path(out_dir) / "trials").mkdir(parents=True, exist_ok=True)
-    done = load_finished(out_dir)
+    code = code_version()
+    done, corrupt = check_trial_files(out_dir)
+    recomputed: dict = {}
+    for t in trials:
+        if f"{t.key}.json" in corrupt:
+            recomputed[t.key] = f"corrupt trial file: {corrupt[f'{t.key}.json']}"
+        rec = done.get(t.key)
+        if rec is None:
+            continue
+        old = (rec.get("code") or {}).get("version", code["version"])
+        if fresh:
+            reason = "fresh sweep"
+        elif old != code["version"]:
+            reason = f"written by dopt {old}, this is dopt {code['version']}"
+        else:
+            continue
+        recomputed[t.key] = reason
+        del done[t.key]
+        where = _move_aside(trial_path(out_dir, t.key), OUTDATED_DIR)
+        log.log(logging.INFO if fresh else logging.WARNING, "trial %s is recomputed: %s (old "
+                "file moved to %s)", t.key, reason, where)
     todo = [t for t in trials if t.key not in done]
     skipped = [t.key for t in trials if t.key in done]
-    log.info("sweep: %d trials, %d already finished, %d to run", len(trials), len(skipped),
-             len(todo))
+    log.info("sweep: %d trials, %d already finished, %d to run (%d recomputed)", len(trials),
+             len(skipped), len(todo), len(recomputed))
     records = {k: done[k] for k in skipped}
     failed: dict = {}
 
     def finish(trial: Trial, result=None, error: BaseException | None = None):
+        rec = None
+        if error is None:
+            rec = {"key": trial.key, "params": trial.params, "result": result, "code": code}
+            try:
+                _write_json_atomic(trial_path(out_dir, trial.key), rec)
+            except (TypeError, ValueError) as e:        # not JSON-able: a failure, not a result
+                error, rec = TypeError(f"its result is not JSON-able ({e})"), None
         if error is not None:
             failed[trial.key] = f"{type(error).__name__}: {error}"
             log.error("trial %s failed: %s", trial.key, failed[trial.key])
-            rec = None
         else:
-            rec = {"key": trial.key, "params": trial.params, "result": result}
-            _write_json_atomic(trial_path(out_dir, trial.key), rec)
             records[trial.key] = rec
         if progress is not None:
             progress(trial.key, rec)
@@ -119,7 +219,28 @@ def run_sweep(fn: Callable[[dict], dict], trials: Sequence[Trial], out_dir: Path
             for fut in as_completed(futures):
                 err = fut.exception()
                 finish(futures[fut], None if err else fut.result(), err)
-    return SweepResult(records, [t.key for t in todo if t.key not in failed], skipped, failed)
+    commits = Counter(str((r.get("code") or {}).get("commit") or "unknown")
+                      for r in records.values())
+    return SweepResult(records, [t.key for t in todo if t.key not in failed], skipped, failed,
+                       dict(commits), recomputed, corrupt)
+
+
+def _move_aside(path: Path, folder: str) -> Path | None:
+    """Move ``path`` into ``folder`` next to it (a free name: <stem>.1.json, ...); None if it
+    cannot be moved (it is then left where it is)."""
+    dest_dir = path.parent / folder
+    try:
+        dest_dir.mkdir(exist_ok=True)
+        dest = dest_dir / path.name
+        n = 0
+        while dest.exists():
+            n += 1
+            dest = dest_dir / f"{path.stem}.{n}{path.suffix}"
+        os.replace(path, dest)
+    except OSError as e:
+        log.warning("could not move %s to %s/: %s", path, dest_dir, e)
+        return None
+    return dest
 
 
 def _run_ray(fn, todo, address, finish) -> None:

@@ -73,7 +73,7 @@ def test_unstable_rollout_names_rollout_and_step(scene, moving_state):
         svc.rollout(moving_state, u)
     err = info.value
     assert err.rollout == 1
-    assert 6 <= err.step <= 8
+    assert err.step == 6                      # the step that applied the first huge control
     assert "rollout" in str(err) and "simulation 1" in str(err)
 
 
@@ -166,7 +166,7 @@ def test_unstable_feedback_names_rollout(scene, moving_state, c_kernels):
     ff[2, 6:, 2] = 1e300   # the unlimited ball motor blows up rollout 2 from step 6
     with pytest.raises(UnstableRolloutError) as info:
         svc.rollout_feedback(moving_state, ff, ref, np.zeros((T, scene.nu, 2)), [0])
-    assert info.value.rollout == 2 and 6 <= info.value.step <= 8
+    assert info.value.rollout == 2 and info.value.step == 6
     assert "rollout_feedback" in str(info.value)
 
 

@@ -1,5 +1,8 @@
-"""Resumable sweeps: inline, process pool, Ray, and a killed sweep that resumes."""
+"""Resumable sweeps: inline, process pool, Ray, a killed sweep that resumes, bad trial files
+(named, moved aside, recomputed) and the code-version rule of a resume."""
 
+import json
+import logging
 import os
 import signal
 import subprocess
@@ -10,8 +13,14 @@ from pathlib import Path
 
 import pytest
 
-from dopt.sweep import Trial, load_finished, run_sweep
+from dopt import sweep
+from dopt.provenance import code_version
+from dopt.sweep import Trial, check_record, load_finished, run_sweep
 from tests.dopt.sweep_trials import square
+
+
+def not_json(params):
+    return {"y": object()}
 
 HERE = Path(__file__).parent
 
@@ -80,3 +89,123 @@ def test_bad_input(tmp_path):
         run_sweep(square, trials([1]), tmp_path, workers=0)
     with pytest.raises(ValueError, match="file name"):
         Trial("a/b", {})
+
+
+# ------------------------------------------------------------------ trial files on resume
+CODE = {"version": "1.0.0", "commit": "c0ffee"}
+
+
+@pytest.fixture
+def code(monkeypatch):
+    """This process's code version, fixed (dopt.sweep reads it through code_version)."""
+    monkeypatch.setattr(sweep, "code_version", lambda: dict(CODE))
+    return CODE
+
+
+def test_records_store_the_code_version(tmp_path, code):
+    res = run_sweep(square, trials([1, 2]), tmp_path)
+    assert res.commits == {"c0ffee": 2} and res.recomputed == {} and res.corrupt == {}
+    rec = json.loads((tmp_path / "trials" / "x1.json").read_text())
+    assert rec["code"] == CODE and rec["result"]["y"] == 1
+
+
+def test_real_code_version_names_dopt_and_its_commit():
+    v = code_version()
+    assert set(v) == {"version", "commit"} and v["version"] and v["commit"]
+
+
+@pytest.mark.parametrize("name, text, reason", [
+    ("x1.json", '{"key": "x1", "params": {"x": 1}, "res', "not valid JSON"),
+    ("x1.json", "", "not valid JSON"),
+    ("x1.json", "[1, 2]", "a JSON list, not an object"),
+    ("x1.json", '{"key": "x1", "params": {"x": 1}}', "no 'result'"),
+    ("x1.json", '{"key": "x2", "params": {"x": 2}, "result": {"y": 4}}', "is not its file name"),
+    ("x1.json", '{"key": "x1", "params": 3, "result": {"y": 1}}', "params are not an object"),
+    ("x1.json", b'\xff\xfe{"key"', "unreadable"),
+    ("notes.json", '{"a": 1}', "no 'key', 'params', 'result'"),
+])
+def test_a_bad_trial_file_is_named_moved_aside_and_recomputed(tmp_path, code, caplog, name,
+                                                              text, reason):
+    folder = tmp_path / "trials"
+    folder.mkdir()
+    if isinstance(text, bytes):
+        (folder / name).write_bytes(text)
+    else:
+        (folder / name).write_text(text)
+    (folder / ".tmp-abc.json").write_text('{"trunc')     # a write that was killed: left alone
+    with caplog.at_level(logging.WARNING, logger="dopt.sweep"):
+        res = run_sweep(square, trials([1, 2]), tmp_path)
+    assert list(res.corrupt) == [name] and reason in res.corrupt[name]
+    warnings = [r.getMessage() for r in caplog.records if r.levelno == logging.WARNING]
+    assert len(warnings) == 1 and str(folder / name) in warnings[0] and reason in warnings[0]
+    assert (folder / "corrupt" / name).read_bytes() == (
+        text if isinstance(text, bytes) else text.encode())        # moved, not deleted
+    assert sorted(res.ran) == ["x1", "x2"] and res.failed == {}
+    if name == "x1.json":
+        assert res.recomputed == {"x1": f"corrupt trial file: {res.corrupt[name]}"}
+    assert check_record(folder / "x1.json")[1] is None             # the recomputed record
+    assert (folder / ".tmp-abc.json").exists() and not (folder / "notes.json").exists()
+    # a second corrupt file of the same name does not overwrite the first one moved aside
+    (folder / "x1.json").write_text("{")
+    assert load_finished(tmp_path).keys() == {"x2"}
+    assert (folder / "corrupt" / "x1.1.json").exists() or name != "x1.json"
+
+
+def test_load_finished_never_raises_on_garbage(tmp_path, code):
+    folder = tmp_path / "trials"
+    folder.mkdir()
+    for i, text in enumerate(["{", "null", "42", '"s"', '{"key": 1}', "\x00\x01"]):
+        (folder / f"g{i}.json").write_text(text)
+    (folder / "sub.json").mkdir()                      # a folder named like a trial file
+    assert load_finished(tmp_path) == {}
+    assert len(list((folder / "corrupt").iterdir())) == 6
+
+
+def _record(tmp_path, key, x, code=None):
+    rec = {"key": key, "params": {"x": x}, "result": {"y": -1}}
+    if code is not None:
+        rec["code"] = code
+    path = tmp_path / "trials" / f"{key}.json"
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(json.dumps(rec))
+    return path
+
+
+def test_resume_recomputes_other_versions_and_counts_other_commits(tmp_path, code, caplog):
+    _record(tmp_path, "x1", 1, {"version": "0.9.0", "commit": "old"})   # another version
+    _record(tmp_path, "x2", 2, {"version": "1.0.0", "commit": "beef"})  # another commit
+    _record(tmp_path, "x3", 3)                                           # before "code"
+    with caplog.at_level(logging.WARNING, logger="dopt.sweep"):
+        res = run_sweep(square, trials([1, 2, 3, 4]), tmp_path)
+    assert sorted(res.ran) == ["x1", "x4"] and sorted(res.skipped) == ["x2", "x3"]
+    assert res.recomputed == {"x1": "written by dopt 0.9.0, this is dopt 1.0.0"}
+    assert "x1" in caplog.text and "0.9.0" in caplog.text
+    assert res.records["x1"]["result"]["y"] == 1 and res.records["x2"]["result"]["y"] == -1
+    assert res.commits == {"c0ffee": 2, "beef": 1, "unknown": 1}
+    old = json.loads((tmp_path / "trials" / "outdated" / "x1.json").read_text())
+    assert old["code"]["version"] == "0.9.0"                             # kept, not deleted
+
+
+def test_fresh_recomputes_everything(tmp_path, code):
+    run_sweep(square, trials([1, 2]), tmp_path)
+    _record(tmp_path, "x2", 2, CODE)                          # a stale result of this version
+    res = run_sweep(square, trials([1, 2]), tmp_path, fresh=True)
+    assert sorted(res.ran) == ["x1", "x2"] and res.skipped == []
+    assert res.recomputed == {"x1": "fresh sweep", "x2": "fresh sweep"}
+    assert res.records["x2"]["result"]["y"] == 4
+    assert sorted(p.name for p in (tmp_path / "trials" / "outdated").iterdir()) == [
+        "x1.json", "x2.json"]
+
+
+def test_a_failed_recompute_leaves_no_old_result(tmp_path, code):
+    _record(tmp_path, "x-1", -1, {"version": "0.9.0", "commit": "old"})
+    res = run_sweep(square, trials([-1]), tmp_path)
+    assert list(res.failed) == ["x-1"] and res.records == {}
+    assert load_finished(tmp_path) == {}            # the next resume runs it again
+
+
+def test_a_result_that_is_not_json_is_a_failure(tmp_path, code):
+    res = run_sweep(not_json, trials([1]), tmp_path)
+    assert res.records == {} and "not JSON-able" in res.failed["x1"]
+    assert not (tmp_path / "trials" / "x1.json").exists()
+    assert not [p for p in (tmp_path / "trials").iterdir() if p.name.startswith(".tmp")]

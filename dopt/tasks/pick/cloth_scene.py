@@ -15,8 +15,9 @@ from dataclasses import dataclass
 
 import mujoco
 
-from dopt.tasks.pick.picker import PickerConfig, check_positive, picker_mjcf
-from dopt.tasks.pick.scene import DeformableScene, floor_scene_xml
+from dopt.tasks.pick.picker import PickerConfig, picker_mjcf
+from dopt.tasks.pick.scene import DeformableScene, check_pickable, floor_scene_xml
+from dopt.validation import check_config
 
 FLEX = "cloth"
 
@@ -63,9 +64,13 @@ class ClothSceneConfig:
     settle: float = 0.2
 
     def __post_init__(self):
-        if self.n < 2:
-            raise ValueError(f"a cloth needs n >= 2 particles per side, got {self.n}")
-        check_positive(self, "side", "mass", "young", "thickness", "timestep")
+        check_config(self, positive=("side", "mass", "radius", "young", "thickness", "impratio",
+                                     "timestep"),
+                     minimum={"n": 2, "poisson": 0, "damping": 0, "friction": 0,
+                              "iterations": 1, "tolerance": 0, "settle": 0},
+                     choices={"cone": ("elliptic", "pyramidal")})
+        if not self.poisson < 0.5:
+            raise ValueError(f"ClothSceneConfig.poisson must be < 0.5, got {self.poisson!r}")
 
     @property
     def spacing(self) -> float:
@@ -80,9 +85,11 @@ def cloth_xml(config: ClothSceneConfig = ClothSceneConfig(),
               picker: PickerConfig = PickerConfig(), pickable: Sequence[int] | None = None) -> str:
     """MJCF of the cloth on a floor with the picker; ``pickable`` particles get a grasp
     equality (None: all N)."""
+    if not isinstance(config, ClothSceneConfig):
+        raise TypeError(f"config must be a ClothSceneConfig, got {type(config).__name__}")
+    ids = check_pickable(pickable, config.n * config.n, picker)
     c = config
     n, sp, r = c.n, c.spacing, c.particle_radius
-    ids = range(n * n) if pickable is None else pickable
     fr = f"{c.friction} 0.005 0.0001"
     flexcomp = f"""<flexcomp name="{FLEX}" type="grid" dim="2" count="{n} {n} 1"
               spacing="{sp} {sp} {sp}"

@@ -26,21 +26,14 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
-from dopt.state import StateLayout
+from dopt.state import StateLayout, check_model
+from dopt.validation import as_array, check_config, check_int, float_array
 
 #: particle index of the None action (hold nothing)
 NONE = -1
 #: what the picker's control rows set before every step: ctrl, then eq_active
 CONTROL_SPEC = int(mujoco.mjtState.mjSTATE_CTRL) | int(mujoco.mjtState.mjSTATE_EQ_ACTIVE)
 _AXES = "xyz"
-
-
-def check_positive(config, *names: str) -> None:
-    """Raise ValueError unless each named attribute of config is a positive finite number."""
-    for name in names:
-        v = getattr(config, name)
-        if not (np.isfinite(v) and v > 0):
-            raise ValueError(f"{name} must be a positive finite number, got {v!r}")
 
 
 @dataclass(frozen=True)
@@ -72,13 +65,8 @@ class PickerConfig:
     start: tuple[float, float, float] = (0.0, 0.0, 0.3)
 
     def __post_init__(self):
-        b = np.asarray(self.bound, dtype=float)
-        if b.shape != (3,) or not np.all(np.isfinite(b)) or np.any(b <= 0):
-            raise ValueError(f"bound must be three positive finite numbers, got {self.bound!r}")
-        check_positive(self, "speed", "settle", "kv", "mass")
-        if self.snap_steps < 1 or self.hold_steps < 0:
-            raise ValueError(f"snap_steps must be >= 1 and hold_steps >= 0, got "
-                             f"{self.snap_steps}, {self.hold_steps}")
+        check_config(self, positive=("bound", "speed", "settle", "kv", "mass"),
+                     minimum={"snap_steps": 1, "hold_steps": 0})
 
 
 def picker_mjcf(flex_name: str, particles: Iterable[int],
@@ -142,8 +130,11 @@ class Picker:
 
     def __init__(self, model: mujoco.MjModel, n_particles: int,
                  config: PickerConfig = PickerConfig()):
+        check_model(model)
+        if not isinstance(config, PickerConfig):
+            raise TypeError(f"config must be a PickerConfig, got {type(config).__name__}")
         self.config = config
-        self.n_particles = int(n_particles)
+        self.n_particles = check_int(n_particles, "n_particles", minimum=1)
         self.dt = float(model.opt.timestep)
         self.bound = np.asarray(config.bound, dtype=float)
         layout = StateLayout.of(model, CONTROL_SPEC)
@@ -201,11 +192,15 @@ class Picker:
             (P, H) int64 particles and (P, H, 3) float64 displacements (None actions' zeroed).
 
         Raises:
-            ValueError: shape mismatch, a particle index out of range or without a grasp
-                equality, a NaN/inf displacement, or one beyond the bound.
+            TypeError: particles that are not integers (bool, str; floats must hold integer
+                values), displacements that are not numbers.
+            ValueError: shape mismatch, no action, a particle index out of range or without a
+                grasp equality, a NaN/inf displacement, or one beyond the bound.
         """
-        idx = np.asarray(particles)
-        disp = np.asarray(displacements, dtype=float)
+        idx = as_array(particles, "particles")
+        if idx.dtype.kind not in "iuf":
+            raise TypeError(f"particles must be integer indices, got dtype {idx.dtype}")
+        disp = float_array(displacements, "displacements", finite=False)
         if idx.ndim == 1:
             idx = idx[None]
         if disp.ndim == 2:
@@ -213,7 +208,10 @@ class Picker:
         if idx.ndim != 2 or disp.shape != idx.shape + (3,):
             raise ValueError(f"particles (P, H) and displacements (P, H, 3) do not match: "
                              f"{np.shape(particles)} and {np.shape(displacements)}")
-        if idx.size and not np.issubdtype(idx.dtype, np.integer):
+        if not idx.size:
+            raise ValueError(f"particles (P, H) must hold at least one sequence of at least one "
+                             f"action, got shape {np.shape(particles)}")
+        if idx.dtype.kind == "f":
             if not np.all(np.isfinite(idx)) or np.any(idx != np.round(idx)):
                 raise ValueError(f"particle indices must be integers, got {idx.ravel()[:5]}")
         idx = idx.astype(np.int64)
@@ -265,7 +263,7 @@ class Picker:
     def decode(self, controls) -> tuple[np.ndarray, np.ndarray]:
         """Inverse of :meth:`encode`: (P, H*K, ncontrol) -> particles (P, H), displacements
         (P, H, 3)."""
-        U = np.asarray(controls, dtype=float)
+        U = float_array(controls, "controls", finite=False)
         K = self.steps_per_action
         if U.ndim != 3 or U.shape[2] != self.ncontrol or U.shape[1] % K:
             raise ValueError(f"controls must have shape (P, H*{K}, {self.ncontrol}), "

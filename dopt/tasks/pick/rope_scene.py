@@ -18,8 +18,9 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
-from dopt.tasks.pick.picker import PickerConfig, check_positive, picker_mjcf
-from dopt.tasks.pick.scene import DeformableScene, floor_scene_xml
+from dopt.tasks.pick.picker import PickerConfig, picker_mjcf
+from dopt.tasks.pick.scene import DeformableScene, check_pickable, floor_scene_xml
+from dopt.validation import check_config
 
 FLEX = "rope"
 
@@ -56,15 +57,18 @@ class RopeSceneConfig:
     settle: float = 0.4
 
     def __post_init__(self):
-        if self.n < 3:
-            raise ValueError(f"a rope needs n >= 3 particles, got {self.n}")
-        check_positive(self, "length", "mass", "radius", "young", "timestep")
+        check_config(self, positive=("length", "mass", "radius", "young", "timestep"),
+                     minimum={"n": 3, "damping": 0, "friction": 0, "iterations": 1,
+                              "tolerance": 0, "settle": 0})
 
 
 def rope_xml(config: RopeSceneConfig = RopeSceneConfig(),
              picker: PickerConfig = PickerConfig(), pickable: Sequence[int] | None = None) -> str:
     """MJCF of the straight rope on a floor with the picker; ``pickable`` particles get a grasp
     equality (None: all N)."""
+    if not isinstance(config, RopeSceneConfig):
+        raise TypeError(f"config must be a RopeSceneConfig, got {type(config).__name__}")
+    pickable = check_pickable(pickable, config.n, picker)
     c = config
     sp = c.length / (c.n - 1)
     fr = f"{c.friction} 0.005 0.0001"
@@ -79,8 +83,7 @@ def rope_xml(config: RopeSceneConfig = RopeSceneConfig(),
     </flexcomp>"""
     option = f'timestep="{c.timestep}" iterations="{c.iterations}" tolerance="{c.tolerance}"'
     return floor_scene_xml(f"rope{c.n}", option, 64, f'friction="{fr}"', flexcomp,
-                           picker_mjcf(FLEX, range(c.n) if pickable is None else pickable,
-                                       picker))
+                           picker_mjcf(FLEX, pickable, picker))
 
 
 def make_rope(config: RopeSceneConfig = RopeSceneConfig(),

@@ -11,13 +11,31 @@ Shapes: P population, H actions per sequence, K steps per action, N particles, n
 
 from __future__ import annotations
 
+from collections.abc import Iterable
+
 import mujoco
 import numpy as np
 
 from dopt.rollout import RolloutConfig, RolloutService
 from dopt.scene import Scene
-from dopt.state import check_states
+from dopt.state import check_model, check_states
 from dopt.tasks.pick.picker import CONTROL_SPEC, Picker, PickerConfig, fix_grasp_anchors
+from dopt.validation import check_real, float_array, index_array, is_int
+
+
+def check_pickable(pickable: Iterable[int] | None, n: int, picker) -> np.ndarray:
+    """The pickable particles of an object of n: (k,) unique ints in [0, n) (None: all), for
+    a picker built from the ``PickerConfig`` ``picker``."""
+    if not isinstance(picker, PickerConfig):
+        raise TypeError(f"picker must be a PickerConfig, got {type(picker).__name__}")
+    if pickable is None:
+        return np.arange(n)
+    if isinstance(pickable, Iterable) and not isinstance(pickable, (np.ndarray, str)):
+        pickable = list(pickable)
+    ids = index_array(pickable, "pickable", n)
+    if len(np.unique(ids)) != len(ids):
+        raise ValueError(f"pickable has repeated particles: {ids.tolist()}")
+    return ids
 
 
 def floor_scene_xml(name: str, option: str, memory_mb: int, floor: str, flexcomp: str,
@@ -64,6 +82,10 @@ class DeformableScene:
     def __init__(self, model: mujoco.MjModel, flex: str, picker: PickerConfig,
                  settle: float = 0.2,
                  positions: np.ndarray | None = None):
+        check_model(model)
+        if not isinstance(flex, str):
+            raise TypeError(f"flex must be the flex's name, got {flex!r}")
+        check_real(settle, "settle", minimum=0)
         fix_grasp_anchors(model)
         self.model = model
         self.scene = Scene(model)
@@ -89,16 +111,16 @@ class DeformableScene:
 
     def positions(self, states: np.ndarray) -> np.ndarray:
         """Particle positions of state rows: (..., ns) -> (..., N, 3)."""
-        qpos = np.asarray(states)[..., self.scene.layout["qpos"]]
+        states = float_array(states, "states", finite=False)
+        if states.shape[-1:] != (self.nstate,):
+            raise ValueError(f"states must have shape (..., {self.nstate}), got {states.shape}")
+        qpos = states[..., self.scene.layout["qpos"]]
         return self._origin + qpos[..., self._qpos]
 
     def with_positions(self, state: np.ndarray, positions: np.ndarray) -> np.ndarray:
         """A copy of state row (ns,) with the particles placed at positions (N, 3), at rest."""
-        pos = np.asarray(positions, dtype=float)
-        if pos.shape != (self.n_particles, 3) or not np.all(np.isfinite(pos)):
-            raise ValueError(f"positions must be a finite ({self.n_particles}, 3) array, "
-                             f"got shape {pos.shape}")
-        out = np.array(state, dtype=float, copy=True)
+        out = check_states(self.model, state, batched=False, name="state").copy()
+        pos = float_array(positions, "positions", (self.n_particles, 3))
         lay = self.scene.layout
         qpos = out[lay["qpos"]]
         qpos[self._qpos] = pos - self._origin
@@ -110,9 +132,10 @@ class DeformableScene:
     def settle(self, state: np.ndarray, seconds: float) -> np.ndarray:
         """Let the object come to rest holding nothing: (ns,) -> (ns,)."""
         m = self.model
+        state = check_states(m, state, batched=False, name="state")
+        seconds = check_real(seconds, "seconds", minimum=0)
         data = mujoco.MjData(m)
-        mujoco.mj_setState(m, data, check_states(m, state, batched=False),
-                           self.scene.layout.spec)
+        mujoco.mj_setState(m, data, state, self.scene.layout.spec)
         mujoco.mj_setState(m, data, self.picker.idle_row, CONTROL_SPEC)
         for _ in range(int(round(seconds / m.opt.timestep))):
             mujoco.mj_step(m, data)
@@ -149,12 +172,13 @@ class PickPlaceTask:
     def __init__(self, scene: DeformableScene, goal: np.ndarray,
                  start_state: np.ndarray | None = None,
                  rollout: RolloutService | None = None):
+        if not isinstance(scene, DeformableScene):
+            raise TypeError(f"scene must be a DeformableScene, got {type(scene).__name__}")
+        if rollout is not None and not callable(getattr(rollout, "rollout", None)):
+            raise TypeError(f"rollout must be a dopt.RolloutService, got "
+                            f"{type(rollout).__name__}")
         self.scene = scene
-        goal = np.asarray(goal, dtype=float)
-        if goal.shape != (scene.n_particles, 3) or not np.all(np.isfinite(goal)):
-            raise ValueError(f"goal must be a finite ({scene.n_particles}, 3) array, "
-                             f"got shape {goal.shape}")
-        self.goal = goal
+        self.goal = float_array(goal, "goal", (scene.n_particles, 3))
         state = scene.initial_state if start_state is None else start_state
         self.start_state = check_states(scene.model, state, batched=False, name="start_state")
         self.service = rollout or RolloutService(scene.scene, RolloutConfig())
@@ -178,7 +202,8 @@ class PickPlaceTask:
             dopt.errors.UnstableRolloutError: a simulation went unstable.
         """
         U = self.picker.encode(_numpy(particles), _numpy(displacements))
-        x0 = self.start_state if start is None else start
+        x0 = self.start_state if start is None else check_states(
+            self.scene.model, start, batched=False, name="start")
         return self.service.rollout(x0, U, control_spec=CONTROL_SPEC).final_states
 
     def cost(self, states: np.ndarray) -> np.ndarray:
@@ -205,8 +230,12 @@ class PickPlaceTask:
                             np.asarray(_numpy(displacements), dtype=float)[None], start)[0]
 
     def step(self, state: np.ndarray, particle: int, displacement) -> np.ndarray:
-        """One action from ``state``: (ns,) -> (ns,)."""
-        return self.execute([particle], np.reshape(displacement, (1, 3)), state)
+        """One action from ``state``: (ns,) -> (ns,); ``particle`` an int (NONE = -1),
+        ``displacement`` (3,) metres."""
+        if not is_int(particle):
+            raise TypeError(f"particle must be an int (or NONE = -1), got {particle!r}")
+        disp = float_array(_numpy(displacement), "displacement", (3,), finite=False)
+        return self.execute([particle], disp[None], state)
 
 
 def _is_torch(x) -> bool:

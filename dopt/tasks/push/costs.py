@@ -18,7 +18,7 @@ The weights are ours (the paper does not give its W, R, W_f); they are in ``Push
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 
 import mujoco
 import numpy as np
@@ -27,6 +27,7 @@ from dopt.costs import EEDistanceTerm, QuadraticCost
 from dopt.scene import Scene
 from dopt.tasks.push.panda import TAU_MAX
 from dopt.tasks.push.task_model import TaskModel, planar_dofs
+from dopt.validation import check_config
 
 
 @dataclass(frozen=True)
@@ -43,6 +44,10 @@ class PushWeights:
     ee: float = 10.0
     ee_f: float = 10.0
     success_radius: float = 0.02     # m: goal object centre within this of the goal ends the task
+
+    def __post_init__(self):
+        check_config(self, minimum=dict.fromkeys((f.name for f in fields(self)), 0),
+                     positive=("success_radius",))
 
 
 def _xy(scene: Scene, bodies: list[int]) -> tuple[np.ndarray, np.ndarray]:
