@@ -16,7 +16,8 @@ Writes OUT/summary.json ({"goal", "settings", "methods": {method: {"final_cost_m
 for the first seed of each method OUT/goal_vs_<method>.png (goal | result from above and
 obliquely, key and picked particles marked) and OUT/plan_<method>.gif (the executed plan
 replayed) (renders; MUJOCO_GL=egl, skipped with --no-render), OUT/trials/*.json (one per
-finished trial; a rerun resumes). Exits 1 if a trial failed.
+finished trial; a rerun resumes, --fresh recomputes). Exits 1 if a trial failed
+(summary.json lists it under "failed") or the run failed (one line on stderr).
 
     python experiments/cloth_fold.py --goal diagonal --out results/cloth_diagonal
 """

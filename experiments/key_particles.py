@@ -6,7 +6,11 @@ with its key particles, and DIR/summary.json with counts, indices, errors and ti
 provenance: command, git commit, versions; --record PATH writes a copy to PATH). Unless
 --quick, it also sweeps cloth resolutions x triangulations and goal noise and records the key
 counts (the robustness tables of docs/RESULTS.md); the noise sweep appends one line per goal to
-DIR/noise.jsonl as it goes, and a rerun resumes it.
+DIR/noise.jsonl as it goes, and a rerun resumes it (lines that cannot be read, failed goals and
+goals of another dopt version are recomputed; --fresh moves the journal to
+DIR/noise.jsonl.old and starts again). A goal whose reduction never reaches the threshold is a
+result (no key count); any other error is a failure: summary.json lists it under "failed"
+({what: error}), the other goals go on, and the script exits 1.
 
     python experiments/key_particles.py --task all --out results/key_particles
 """
@@ -24,7 +28,19 @@ from pathlib import Path
 import numpy as np
 
 # experiments/ is on the path: it is the script's folder (pytest: pythonpath in pyproject)
-from cli_args import choices_list
+from cli_args import (
+    EPILOG,
+    choices_type,
+    guarded,
+    int_at_least,
+    nonneg_int,
+    number_list,
+    one_line,
+    output_dir,
+    output_file,
+    positive_int,
+    record_problem,
+)
 
 from deformables import (
     ClothConfig,
@@ -36,7 +52,7 @@ from deformables import (
 )
 from deformables.cloth import PANEL_MODES
 from deformables.goals import TRIANGULATIONS
-from dopt.provenance import provenance
+from dopt.provenance import code_version, provenance
 
 ROPE_TASKS = ["rope_straighten", "rope_fold", "rope_fold_unequal"]
 CLOTH_TASKS = ["cloth_diagonal", "cloth_side", "cloth_reflective", "cloth_underneath"]
@@ -51,7 +67,19 @@ PAPER = {"rope_straighten": {"keys": 2}, "rope_fold": {"keys": 4},
 REFERENCE_KEYS = {"cloth_diagonal": 4, "cloth_side": 6, "cloth_reflective": 8,
                   "cloth_underneath": 10}
 
+#: the smallest cloth the goals are defined for (particles per side)
+MIN_CLOTH_N = 2
+#: how ``deformables.reduction.grow_until_below``'s ValueError starts when no model size reached
+#: the threshold: an outcome of the sweeps (no key count), not a failure
+NOT_CONVERGED = "the error never fell below the threshold"
+
 logger = logging.getLogger("key_particles")
+
+
+def not_converged(exc: BaseException) -> bool:
+    """Whether ``exc`` says the reduction never reached its threshold (a result, not an
+    error)."""
+    return isinstance(exc, ValueError) and str(exc).startswith(NOT_CONVERGED)
 
 
 def reduce_goal(goal, rope_config: RopeConfig, cloth_config: ClothConfig):
@@ -112,21 +140,26 @@ def plot_task(path: Path, task: str, goal, result, z_scale: float) -> None:
 
 
 def resolution_sweep(rng: np.random.Generator, cloth_config: ClothConfig,
-                     resolutions: list[int]) -> list[dict]:
-    """Key counts of the noise-free cloth goals over resolutions x triangulations."""
-    rows = []
+                     resolutions: list[int]) -> tuple[list[dict], dict]:
+    """Key counts of the noise-free cloth goals over resolutions x triangulations: (rows,
+    {goal: error} of the goals that failed; a goal that did not converge is a row with
+    n_keys None and its "failure")."""
+    rows, failed = [], {}
     for task in CLOTH_TASKS:
         for n in resolutions:
             for triangulation in TRIANGULATIONS:
-                goal = make_goal(task, n=n, triangulation=triangulation, rng=rng)
                 try:
+                    goal = make_goal(task, n=n, triangulation=triangulation, rng=rng)
                     r = reduce_goal(goal, RopeConfig(), cloth_config)
                     row = {"n_keys": r.n_keys, "n_elements": r.n_elements, "seconds": r.seconds}
-                except ValueError as exc:
+                except Exception as exc:
                     row = {"n_keys": None, "n_elements": None, "failure": str(exc)}
+                    if not not_converged(exc):
+                        row["error"] = failed[f"grid/{task}/n{n}/{triangulation}"] = \
+                            one_line(exc)
                 rows.append({"task": task, "n": n, "triangulation": triangulation, **row})
                 logger.info("grid %s n=%d %s: %s", task, n, triangulation, row)
-    return rows
+    return rows, failed
 
 
 def _noise_key(row: dict) -> tuple:
@@ -134,16 +167,51 @@ def _noise_key(row: dict) -> tuple:
             row["panels"])
 
 
+def _noise_name(row: dict) -> str:
+    """A noise-sweep goal as the "failed" list names it."""
+    cloth = f"/n{row['n']}/{row['triangulation']}/panels-{row['panels']}" if row["n"] else ""
+    return f"noise/{row['task']}{cloth}/sigma{row['sigma_m']:g}/seed{row['seed']}"
+
+
+def load_journal(journal: Path) -> dict:
+    """{cell: row} of the noise journal's readable lines (a later line of a cell replaces an
+    earlier one); a line that is not a row (a write cut short) is named in a warning and its
+    goal is recomputed."""
+    rows: dict = {}
+    if not journal.exists():
+        return rows
+    for i, line in enumerate(journal.read_text().splitlines(), 1):
+        if not line.strip():
+            continue
+        try:
+            row = json.loads(line)
+            rows[_noise_key(row)] = row
+        except (ValueError, TypeError, KeyError) as exc:
+            logger.warning("%s line %d is not a noise row (%s): its goal is recomputed",
+                           journal, i, one_line(exc))
+    return rows
+
+
 def noise_sweep(journal: Path, rope_config: RopeConfig, cloth_config: ClothConfig,
                 sigmas: list[float], resolutions: list[int], seeds: int,
-                panel_modes: list[str]) -> list[dict]:
+                panel_modes: list[str]) -> tuple[list[dict], dict]:
     """Key counts under Gaussian goal noise, one JSON line per goal appended to ``journal`` as it
-    is done (a rerun skips those already there). Rope at its default size; cloth at each of
-    ``resolutions`` particles per side x triangulations x ``panel_modes`` (ClothConfig.panels).
-    Goal ``seed`` draws the random triangulation, then the noise."""
-    rows = ([json.loads(line) for line in journal.read_text().splitlines() if line.strip()]
-            if journal.exists() else [])
-    done = {_noise_key(r) for r in rows}
+    is done (a rerun skips those already there, unless the line holds an error or was written
+    by another dopt version). Rope at its default size; cloth at each of ``resolutions``
+    particles per side x triangulations x ``panel_modes`` (ClothConfig.panels). Goal ``seed``
+    draws the random triangulation, then the noise. Returns (the rows of these goals, {goal:
+    error} of those that failed); each row holds ``code_version()`` under "code"."""
+    code = code_version()
+    done = {}
+    for key, row in load_journal(journal).items():
+        old = (row.get("code") or {}).get("version", code["version"])
+        if "error" in row:
+            logger.info("noise goal %s failed before (%s): recomputed", key, row["error"])
+        elif old != code["version"]:
+            logger.warning("noise goal %s was written by dopt %s, this is dopt %s: recomputed",
+                           key, old, code["version"])
+        else:
+            done[key] = row
     reference = {task: reduce_goal(make_goal(task), rope_config, cloth_config).n_keys
                  for task in ROPE_TASKS}
     reference.update({task: REFERENCE_KEYS[task] for task in CLOTH_TASKS})
@@ -153,33 +221,43 @@ def noise_sweep(journal: Path, rope_config: RopeConfig, cloth_config: ClothConfi
                  itertools.product(resolutions, TRIANGULATIONS, [panel_modes])
                  if task in CLOTH_TASKS else [(None, None, ["-"])])
              for sigma, seed, panels in itertools.product(sigmas, range(seeds), modes)]
+    rows, failed = [], {}
+    if journal.exists() and journal.stat().st_size and not journal.read_bytes().endswith(b"\n"):
+        with journal.open("a") as handle:     # a line cut short: the next row starts afresh
+            handle.write("\n")
     with journal.open("a") as handle:
         for task, n, triangulation, sigma, seed, panels in cells:
             row = {"task": task, "n": n, "triangulation": triangulation, "seed": seed,
                    "sigma_m": sigma, "panels": panels}
             if _noise_key(row) in done:
+                rows.append(done[_noise_key(row)])
                 continue
-            rng = np.random.default_rng(seed)
-            cloth = task in CLOTH_TASKS
-            goal = (make_goal(task, n=n, triangulation=triangulation, rng=rng) if cloth
-                    else make_goal(task))
-            noisy = goal.positions + rng.normal(0.0, sigma, goal.positions.shape)
-            config = replace(cloth_config, panels=panels) if cloth else None
             try:
+                rng = np.random.default_rng(seed)
+                cloth = task in CLOTH_TASKS
+                goal = (make_goal(task, n=n, triangulation=triangulation, rng=rng) if cloth
+                        else make_goal(task))
+                noisy = goal.positions + rng.normal(0.0, sigma, goal.positions.shape)
+                config = replace(cloth_config, panels=panels) if cloth else None
                 keys = reduce_goal(replace(goal, positions=noisy), rope_config, config).n_keys
-            except ValueError:
+            except Exception as exc:
                 keys = None
-            row.update(n_keys=keys, held=keys == reference[task])
+                if not not_converged(exc):
+                    row["error"] = failed[_noise_name(row)] = one_line(exc)
+                    logger.error("%s failed: %s", _noise_name(row), row["error"])
+            row.update(n_keys=keys, held=keys == reference[task], code=code)
             handle.write(json.dumps(row) + "\n")
             handle.flush()
             rows.append(row)
-    return rows
+    return rows, failed
 
 
 def noise_table(rows: list[dict]) -> dict:
     """Goals whose key count equals the reference, per task kind, panel mode and sigma."""
     table: dict = {}
     for r in rows:
+        if "error" in r:                # a failure is listed under "failed", not counted
+            continue
         kind = "rope" if r["task"] in ROPE_TASKS else f"cloth, panels {r['panels']}"
         cell = table.setdefault(kind, {}).setdefault(f"{r['sigma_m'] * 1e3:g} mm", [0, 0])
         cell[0] += bool(r["held"])
@@ -188,42 +266,53 @@ def noise_table(rows: list[dict]) -> dict:
             for kind, cells in table.items()}
 
 
-def _panel_modes(text: str) -> list[str]:
-    try:
-        return choices_list(text, PANEL_MODES, "panel modes")
-    except ValueError as e:       # argparse shows an ArgumentTypeError's own message
-        raise argparse.ArgumentTypeError(str(e)) from e
+def parser() -> argparse.ArgumentParser:
+    ap = argparse.ArgumentParser(
+        prog="key_particles.py",
+        description="Key particles of the paper's rope and cloth goals (Fig. 4, Sec. IV-C.1).",
+        epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--task", choices=TASKS + ["all"], default="all",
+                    help="goal to reduce (rope_fold_unequal is the crossed triangle with "
+                         "legs 1 : 1.3 : 1.6); 'all' runs every task")
+    ap.add_argument("--out", type=output_dir, required=True,
+                    help="output folder for summary.json, curve_<task>.csv, <task>.png, "
+                         "noise.jsonl")
+    ap.add_argument("--record", type=output_file, default=None, metavar="PATH",
+                    help="also write the summary to PATH (the committed result files under "
+                         "docs/results/ that docs/RESULTS.md is generated from)")
+    ap.add_argument("--seed", type=nonneg_int, default=0,
+                    help="seed of the random triangulations of the resolution sweep (the "
+                         "noise sweep uses goal seeds 0..--noise-seeds-1)")
+    ap.add_argument("--quick", action="store_true",
+                    help="smoke-sized run: 16 x 16 cloth, no robustness sweep")
+    ap.add_argument("--cloth-n", type=int_at_least(MIN_CLOTH_N), default=None,
+                    help=f"cloth particles per side, >= {MIN_CLOTH_N} (default 25, or 16 with "
+                         "--quick)")
+    ap.add_argument("--noise-n", type=number_list(int, MIN_CLOTH_N, "particles per side"),
+                    default=[16, 25, 40],
+                    help="cloth particles per side of the goal-noise sweep (comma-separated, "
+                         f"each >= {MIN_CLOTH_N}; default 16,25,40; docs/DESIGN-NOTES.md uses "
+                         "12,16,21,25,28,32,40)")
+    ap.add_argument("--noise-seeds", type=positive_int, default=3,
+                    help="goal seeds per noise level (triangulation draw and noise; default "
+                         "%(default)s)")
+    ap.add_argument("--noise-panels", type=choices_type(PANEL_MODES, "panel modes"),
+                    default=["on", "off"],
+                    help="ClothConfig.panels modes of the noise sweep (comma-separated; "
+                         "default: the library default 'on' and the ablation 'off', ~2 s "
+                         "per goal that does not converge)")
+    ap.add_argument("--fresh", action="store_true",
+                    help="recompute the noise sweep (DIR/noise.jsonl moves to "
+                         "DIR/noise.jsonl.old) instead of resuming it")
+    return ap
 
 
+@guarded("key_particles.py")
 def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(
-        description="Key particles of the paper's rope and cloth goals (Fig. 4, Sec. IV-C.1).")
-    parser.add_argument("--task", choices=TASKS + ["all"], default="all",
-                        help="goal to reduce (rope_fold_unequal is the crossed triangle with "
-                             "legs 1 : 1.3 : 1.6); 'all' runs every task")
-    parser.add_argument("--out", type=Path, required=True,
-                        help="output folder for summary.json, curve_<task>.csv, <task>.png")
-    parser.add_argument("--record", type=Path, default=None, metavar="PATH",
-                        help="also write the summary to PATH (the committed result files under "
-                             "docs/results/ that docs/RESULTS.md is generated from)")
-    parser.add_argument("--seed", type=int, default=0,
-                        help="seed of the random triangulations of the resolution sweep (the "
-                             "noise sweep uses goal seeds 0..--noise-seeds-1)")
-    parser.add_argument("--quick", action="store_true",
-                        help="smoke-sized run: 16 x 16 cloth, no robustness sweep")
-    parser.add_argument("--cloth-n", type=int, default=None,
-                        help="cloth particles per side (default 25, or 16 with --quick)")
-    parser.add_argument("--noise-n", type=lambda t: [int(v) for v in t.split(",")],
-                        default=[16, 25, 40],
-                        help="cloth particles per side of the goal-noise sweep (comma-separated; "
-                             "docs/DESIGN-NOTES.md uses 12,16,21,25,28,32,40)")
-    parser.add_argument("--noise-seeds", type=int, default=3,
-                        help="goal seeds per noise level (triangulation draw and noise)")
-    parser.add_argument("--noise-panels", type=_panel_modes, default=["on", "off"],
-                        help="ClothConfig.panels modes of the noise sweep (comma-separated; "
-                             "default: the library default 'on' and the ablation 'off', ~2 s "
-                             "per goal that does not converge)")
-    args = parser.parse_args(argv)
+    ap = parser()
+    args = ap.parse_args(argv)
+    if record_problem(args.record, args.out):
+        ap.error(record_problem(args.record, args.out))
     logging.basicConfig(level=logging.INFO, format="%(levelname)s %(name)s: %(message)s")
 
     rng = np.random.default_rng(args.seed)
@@ -234,14 +323,23 @@ def main(argv=None) -> int:
     curve_config = replace(cloth_config, exact_errors=True)
     tasks = TASKS if args.task == "all" else [args.task]
     args.out.mkdir(parents=True, exist_ok=True)
+    code = code_version()
     summary = {"experiment": "key_particles", "seed": args.seed, "quick": args.quick,
                "cloth_particles_per_side": cloth_n,
                "rope_config": vars(rope_config),
-               "cloth_config": vars(curve_config), "paper": PAPER, "tasks": {}}
+               "cloth_config": vars(curve_config), "paper": PAPER, "tasks": {}, "failed": {}}
+    failed = summary["failed"]
+    commits = {code["commit"]: 0}
     for task in tasks:
         kwargs = {} if task in ROPE_TASKS else {"n": cloth_n}
-        sequence = goal_sequence(task, **kwargs)
-        results = [reduce_goal(goal, rope_config, curve_config) for goal in sequence]
+        try:
+            sequence = goal_sequence(task, **kwargs)
+            results = [reduce_goal(goal, rope_config, curve_config) for goal in sequence]
+        except Exception as exc:        # listed, the other tasks go on
+            failed[task] = one_line(exc)
+            logger.error("%s failed: %s", task, failed[task])
+            continue
+        commits[code["commit"]] += 1
         goal, result = sequence[-1], results[-1]
         entry = record(result)
         entry["particles"] = len(goal.positions)
@@ -255,14 +353,32 @@ def main(argv=None) -> int:
         logger.info("%s: %d elements, %d key particles %s, %.4f s", task, result.n_elements,
                     result.n_keys, result.indices.tolist(), result.seconds)
     if not args.quick:
-        noise = noise_sweep(args.out / "noise.jsonl", rope_config, cloth_config,
-                            sigmas=[2e-5, 5e-5, 1e-4, 3e-4, 5e-4, 1e-3, 2e-3],
-                            resolutions=args.noise_n, seeds=args.noise_seeds,
-                            panel_modes=args.noise_panels)
-        summary["robustness"] = {
-            "cloth_grid": resolution_sweep(rng, cloth_config, [12, 16, 21, 25, 28, 32, 40]),
-            "noise": noise_table(noise)}
+        journal = args.out / "noise.jsonl"
+        if args.fresh and journal.exists():
+            journal.replace(args.out / "noise.jsonl.old")
+        noise, grid = [], []
+        try:
+            noise, noise_failed = noise_sweep(
+                journal, rope_config, cloth_config,
+                sigmas=[2e-5, 5e-5, 1e-4, 3e-4, 5e-4, 1e-3, 2e-3], resolutions=args.noise_n,
+                seeds=args.noise_seeds, panel_modes=args.noise_panels)
+            failed.update(noise_failed)
+        except Exception as exc:        # the sweep as a whole (its reference counts)
+            failed["noise"] = one_line(exc)
+        try:
+            grid, grid_failed = resolution_sweep(rng, cloth_config,
+                                                 [12, 16, 21, 25, 28, 32, 40])
+            failed.update(grid_failed)
+        except Exception as exc:
+            failed["grid"] = one_line(exc)
+        summary["robustness"] = {"cloth_grid": grid, "noise": noise_table(noise)}
         logger.info("noise: %s", summary["robustness"]["noise"])
+        commits[code["commit"]] += sum("error" not in g for g in grid)
+        for row in noise:
+            if "error" not in row:
+                c = str((row.get("code") or {}).get("commit") or "unknown")
+                commits[c] = commits.get(c, 0) + 1
+    summary["trial_commits"] = {c: n for c, n in commits.items() if n}
     summary["provenance"] = provenance(["experiments/key_particles.py",
                                         *(sys.argv[1:] if argv is None else argv)])
     text = json.dumps(summary, indent=1)
@@ -270,8 +386,10 @@ def main(argv=None) -> int:
     if args.record:
         args.record.parent.mkdir(parents=True, exist_ok=True)
         args.record.write_text(text)
-    return 0
+    for what, err in failed.items():
+        print(f"FAILED {what}: {err}", file=sys.stderr)
+    return 1 if failed else 0
 
 
 if __name__ == "__main__":
-    raise SystemExit(main())
+    sys.exit(main())

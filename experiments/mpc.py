@@ -12,7 +12,10 @@ Writes OUT/summary.json ({"task", "methods": {name: {"mpc_cost_normalised_mean",
 "provenance"}), OUT/table1.md and OUT/table1.csv, and the plots of the first seed of each
 method: OUT/mpc_dofs.png (|C| per optimisation over the episode), OUT/mpc_goal_distance.png
 (the goal object's distance to the goal per step) and OUT/final_<method>.png (the final
-scene; MUJOCO_GL=egl, skipped with --no-render). Exits 1 if a trial failed.
+scene; MUJOCO_GL=egl, skipped with --no-render). summary.json also holds "trial_commits"
+(the code commits of the trial results: more than one when a resumed sweep mixes code). Exits 1
+if a trial failed (summary.json lists it under "failed") or the run failed (one line on
+stderr); 2 on a bad flag.
 
     python experiments/mpc.py --task clutter --trials 20 --out results/mpc_clutter
 """
@@ -21,6 +24,7 @@ from __future__ import annotations
 
 import argparse
 import csv
+import importlib.util
 import json
 import logging
 import os
@@ -31,14 +35,26 @@ import numpy as np
 
 os.environ.setdefault("MUJOCO_GL", "egl")   # offscreen renders; read when mujoco is imported
 
-from cli_args import choices_list, nonneg_float, nonneg_int, positive_float, positive_int
+from cli_args import (
+    EPILOG,
+    choices_type,
+    guarded,
+    nonneg_float,
+    nonneg_int,
+    output_dir,
+    output_file,
+    positive_float,
+    positive_int,
+    record_problem,
+)
 
 from dopt.provenance import provenance
-from dopt.sweep import Trial, run_sweep
+from dopt.sweep import SweepResult, Trial, run_sweep
 from dopt.tasks import PUSH_TASKS
 from planners.svr import METHODS, paper_theta
 from planners.svr_mpc import (
     OUTLIER_DISTANCE,
+    SVRMPCSettings,
     feedback_effect,
     row_label,
     run_trial,
@@ -51,9 +67,10 @@ FEEDBACK = {"off": (False,), "on": (True,), "both": (False, True)}
 
 
 def parser() -> argparse.ArgumentParser:
-    ap = argparse.ArgumentParser(description=__doc__,
+    ap = argparse.ArgumentParser(prog="mpc.py", description=__doc__, epilog=EPILOG,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--methods", default=",".join(METHODS),
+    ap.add_argument("--methods", type=choices_type(METHODS, "method(s)"),
+                    default=",".join(METHODS),
                     help="comma-separated DoF-selection methods (default: all five)")
     ap.add_argument("--rho", type=nonneg_float, default=1.0,
                     help="SVR importance threshold: DoFs below it leave the active set "
@@ -95,21 +112,32 @@ def add_run_arguments(ap: argparse.ArgumentParser) -> None:
                     help="simulation threads per trial (default: all cores, 1 with workers>1)")
     ap.add_argument("--quick", action="store_true",
                     help="smoke run: 1 trial per method, Y = 100 steps")
-    ap.add_argument("--out", type=Path, required=True, help="output folder")
-    ap.add_argument("--record", type=Path, default=None, metavar="PATH",
+    ap.add_argument("--out", type=output_dir, required=True,
+                    help="output folder; finished trials are kept under OUT/trials and a "
+                         "rerun resumes")
+    ap.add_argument("--fresh", action="store_true",
+                    help="recompute every trial (old trial files go to OUT/trials/outdated/)")
+    ap.add_argument("--record", type=output_file, default=None, metavar="PATH",
                     help="also write the summary to PATH (docs/results/...)")
 
 
 def parse_args(argv=None, ap: argparse.ArgumentParser | None = None) -> argparse.Namespace:
     ap = ap or parser()
     args = ap.parse_args(argv)
-    if hasattr(args, "methods"):
-        try:
-            args.methods = choices_list(args.methods, METHODS, "method(s)")
-        except ValueError as e:
-            ap.error(str(e))
-    if args.out.exists() and not args.out.is_dir():
-        ap.error(f"--out {args.out} exists and is not a folder")
+    if args.ray is not None and importlib.util.find_spec("ray") is None:
+        ap.error("--ray needs the ray package (pip install 'dopt[cluster]')")
+    try:               # the pipeline's own checks of the settings, as usage errors
+        for method in getattr(args, "methods", ["baseline"]):
+            settings = SVRMPCSettings(
+                task=args.task, method=method, rho=getattr(args, "rho", 1.0),
+                theta=getattr(args, "theta", None), slowdown=args.slowdown,
+                timeout=args.timeout, feedback=args.feedback == "on",
+                control_noise=args.control_noise, threads=args.threads or 0)
+            _ = settings.selection
+    except (ValueError, TypeError) as e:
+        ap.error(str(e))
+    if record_problem(args.record, args.out):
+        ap.error(record_problem(args.record, args.out))
     if args.quick:
         args.trials, args.timeout = 1, args.timeout or 100
     if args.threads is None:
@@ -144,19 +172,20 @@ def _task_slowdown(task: str) -> float:
     return float(PUSH_TASKS[task](np.random.default_rng(0)).slowdown)
 
 
-def run(args, trials) -> tuple[list, dict]:
-    """Run (or resume) the trials; returns their records and {key: error} of the failed."""
+def run(args, trials) -> tuple[list, SweepResult]:
+    """Run (or resume; ``args.fresh``: recompute) the trials; returns their records and the
+    sweep's result (``failed``: {key: error}, ``commits``: code commits of the records)."""
     from tqdm import tqdm
 
     bar = tqdm(total=len(trials), desc=f"{args.task} trials", unit="trial")
     res = run_sweep(run_trial, trials, args.out, workers=args.workers, ray_address=args.ray,
-                    progress=lambda key, rec: bar.update(1))
+                    progress=lambda key, rec: bar.update(1), fresh=args.fresh)
     bar.update(len(res.skipped))
     bar.close()
     for key, err in res.failed.items():
         print(f"FAILED {key}: {err}", file=sys.stderr)
     wanted = {t.key for t in trials}
-    return [r for k, r in res.records.items() if k in wanted], res.failed
+    return [r for k, r in res.records.items() if k in wanted], res
 
 
 def write_table(out: Path, task: str, methods: dict, feedback: dict | None = None) -> None:
@@ -364,11 +393,13 @@ def write_final(path: Path, task: str, row: str, r: dict) -> None:
     plt.close(fig)
 
 
+@guarded("mpc.py")
 def main(argv=None) -> int:
     logging.basicConfig(level=logging.WARNING)
     args = parse_args(argv)
     trials = make_trials(args)
-    records, failed = run(args, trials)
+    records, res = run(args, trials)
+    failed = res.failed
     methods = summarize(records, baseline="baseline +fb" if args.feedback == "on"
                         else "baseline")
     order = {m: i for i, m in enumerate(METHODS)}
@@ -377,7 +408,7 @@ def main(argv=None) -> int:
     summary = {"experiment": "table1", "task": args.task, "rho": args.rho,
                "theta": {m: _theta(args.theta, m) for m in args.methods},
                "slowdown": trials[0].params["slowdown"], "methods": methods,
-               "failed": failed}
+               "failed": failed, "trial_commits": res.commits}
     if args.feedback == "both":
         summary["feedback_effect"] = feedback_effect(records)
     write_summary(args, summary, argv)

@@ -24,11 +24,22 @@ from functools import partial
 from pathlib import Path
 
 import numpy as np
-from cli_args import choices_list, nonneg_int, positive_float, positive_int
+from cli_args import (
+    EPILOG,
+    choices_type,
+    folder_problem,
+    guarded,
+    nonneg_int,
+    output_dir,
+    output_file,
+    positive_float,
+    positive_int,
+    record_problem,
+)
 
 from dopt.provenance import provenance
 from dopt.stats import mean_ci
-from dopt.sweep import Trial, run_sweep
+from dopt.sweep import SweepResult, Trial, run_sweep
 from planners.pick_place import (
     GOALS,
     LABELS,
@@ -48,19 +59,24 @@ def parser(task: str, doc: str, help_: dict) -> argparse.ArgumentParser:
     """The flags of an experiment on ``task`` ("cloth" or "rope"); ``help_`` holds the
     task-specific help texts of "seed", "quick", "n", "population", "elites", "iterations",
     "horizon", "bound"."""
-    ap = argparse.ArgumentParser(description=doc,
+    ap = argparse.ArgumentParser(prog=f"{'cloth_fold' if task == 'cloth' else 'rope'}.py",
+                                 description=doc, epilog=EPILOG,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
     goals = GOALS[task]
     ap.add_argument("--goal", choices=goals, default=goals[0],
                     help="the task's goal (default %(default)s)")
-    ap.add_argument("--methods", default=",".join(METHODS),
+    ap.add_argument("--methods", type=choices_type(METHODS, "methods"),
+                    default=",".join(METHODS),
                     help="comma-separated subset of " + ", ".join(METHODS) + " (default: all)")
     ap.add_argument("--seeds", type=positive_int, default=3,
                     help="seeds per method (default %(default)s)")
     ap.add_argument("--seed", type=nonneg_int, default=0, help=help_["seed"])
-    ap.add_argument("--out", type=Path, default=None,
-                    help=f"output folder (default results/{task}_<goal>)")
-    ap.add_argument("--record", type=Path, default=None, metavar="PATH",
+    ap.add_argument("--out", type=output_dir, default=None,
+                    help=f"output folder (default results/{task}_<goal>); finished trials "
+                         "are kept under OUT/trials and a rerun resumes")
+    ap.add_argument("--fresh", action="store_true",
+                    help="recompute every trial (old trial files go to OUT/trials/outdated/)")
+    ap.add_argument("--record", type=output_file, default=None, metavar="PATH",
                     help="also write the summary to PATH (the committed result files under "
                          "docs/results/ that docs/RESULTS.md is generated from)")
     ap.add_argument("--quick", action="store_true", help=help_["quick"])
@@ -84,7 +100,6 @@ def parse(ap: argparse.ArgumentParser, task: str, argv) -> tuple[argparse.Namesp
     bad value: the settings' own checks are reported as usage errors too)."""
     args = ap.parse_args(argv)
     try:
-        args.methods = choices_list(args.methods, METHODS, "methods")
         s = PickPlaceSettings.preset(task, args.goal, quick=args.quick)
         cem = {k: getattr(args, k) for k in ("population", "elites", "iterations", "horizon")
                if getattr(args, k) is not None}
@@ -92,8 +107,13 @@ def parse(ap: argparse.ArgumentParser, task: str, argv) -> tuple[argparse.Namesp
                     n=args.n or s.n, bound=args.bound or s.bound)
     except (ValueError, TypeError) as e:
         ap.error(str(e))
-    if args.out is not None and args.out.exists() and not args.out.is_dir():
-        ap.error(f"--out {args.out} exists and is not a folder")
+    if args.out is None:
+        args.out = Path("results") / f"{task}_{args.goal}"
+        problem = folder_problem(args.out)
+        if problem:
+            ap.error(f"argument --out: (default) {problem}")
+    if record_problem(args.record, args.out):
+        ap.error(record_problem(args.record, args.out))
     return args, s
 
 
@@ -107,13 +127,17 @@ def trial_key(method: str, seed: int, settings: PickPlaceSettings) -> str:
 
 def main(task: str, script: str, doc: str, help_: dict, argv=None) -> int:
     """The whole experiment ``script`` (its path, for the provenance): every trial (resuming),
-    the report, a printed table. Returns the exit code (1 when a trial failed; the failures
-    are listed in summary.json)."""
+    the report, a printed table. Returns the exit code (1 when a trial failed, the failures
+    listed in summary.json, or when the run failed: one line on stderr; 2 bad flags)."""
+    return guarded(Path(script).name)(_main)(task, script, doc, help_, argv)
+
+
+def _main(task: str, script: str, doc: str, help_: dict, argv=None) -> int:
     ap = parser(task, doc, help_)
     args, settings = parse(ap, task, argv)
     logging.basicConfig(level=logging.INFO if args.verbose else logging.WARNING,
                         format="%(levelname)s %(name)s: %(message)s")
-    out = args.out or Path("results") / f"{task}_{args.goal}"
+    out = args.out
     out.mkdir(parents=True, exist_ok=True)
     seeds = range(args.seed, args.seed + (1 if args.quick else args.seeds))
     problem = make_problem(settings, seeds[0])
@@ -124,11 +148,13 @@ def main(task: str, script: str, doc: str, help_: dict, argv=None) -> int:
     trials = [Trial(trial_key(m, seed, settings),
                     {"settings": settings.to_dict(), "method": m, "seed": int(seed)})
               for seed in seeds for m in args.methods]
-    results, failed = _run(trials, settings.cem.iterations * len(problem.stages), out)
+    results, res = _run(trials, settings.cem.iterations * len(problem.stages), out, args.fresh)
+    failed = res.failed
     summary = {"experiment": "fig7", "task": task, "goal": args.goal,
                "settings": settings.to_dict(),
                "methods": summarize(results, args.methods, problem.metric_names),
-               "failed": failed, "wall_s": time.perf_counter() - start,
+               "failed": failed, "trial_commits": res.commits,
+               "wall_s": time.perf_counter() - start,
                "provenance": provenance([script, *(sys.argv[1:] if argv is None else argv)])}
     text = json.dumps(summary, indent=2)
     (out / "summary.json").write_text(text)
@@ -141,10 +167,11 @@ def main(task: str, script: str, doc: str, help_: dict, argv=None) -> int:
     if not args.no_render:
         render_report(out, problem, results, args.methods, seeds[0])
     for m, e in summary["methods"].items():
-        ci = e["final_cost_ci95"]
-        line = (f"{m:9s} final cost {e['final_cost_mean'] * 1e3:6.1f} mm"
+        mean, ci = e["final_cost_mean"], e["final_cost_ci95"]
+        line = (f"{m:9s} final cost "
+                + (f"{mean * 1e3:6.1f} mm" if mean is not None else "   n/a (not finite)")
                 + (f" +- {ci * 1e3:.1f}" if ci is not None else ""))
-        if "end_to_end_ratio_mean" in e:
+        if e.get("end_to_end_ratio_mean") is not None:
             line += f", end-to-end / length {e['end_to_end_ratio_mean']:.3f}"
         print(line + f"  ({e['n_candidates']} candidates)")
     print(f"wrote {out}/summary.json in {summary['wall_s']:.0f} s")
@@ -153,9 +180,11 @@ def main(task: str, script: str, doc: str, help_: dict, argv=None) -> int:
     return 1 if failed else 0
 
 
-def _run(trials: list[Trial], iterations_per_trial: int, out: Path) -> tuple[list, dict]:
-    """Every trial not finished yet under ``out``, with a progress bar of CEM iterations.
-    Returns the results of the given trials and {key: error} of those that failed."""
+def _run(trials: list[Trial], iterations_per_trial: int, out: Path,
+         fresh: bool = False) -> tuple[list, SweepResult]:
+    """Every trial not finished yet under ``out`` (all of them when ``fresh``), with a progress
+    bar of CEM iterations. Returns the results of the given trials and the sweep's result
+    (``failed``: {key: error}, ``commits``: the code versions of the results)."""
     from tqdm import tqdm
 
     n_cem = sum(1 for t in trials if t.params["method"] != "scripted")
@@ -167,9 +196,10 @@ def _run(trials: list[Trial], iterations_per_trial: int, out: Path) -> tuple[lis
         def done(key, rec):
             bar.write(f"finished {key}" if rec else f"FAILED {key}")
 
-        res = run_sweep(partial(run_trial, on_iteration=tick), trials, out, progress=done)
+        res = run_sweep(partial(run_trial, on_iteration=tick), trials, out, progress=done,
+                        fresh=fresh)
     keys = {t.key for t in trials}
-    return [r["result"] for k, r in res.records.items() if k in keys], res.failed
+    return [r["result"] for k, r in res.records.items() if k in keys], res
 
 
 # --------------------------------------------------------------------------------- report
@@ -219,7 +249,8 @@ def plot_curves(path: Path, results: list, methods, title: str) -> None:
     ax.set_xlim(1, max(n_iter, 2))
     ax.set_ylim(bottom=0)
     ax.grid(alpha=0.3)
-    ax.legend()
+    if ax.get_legend_handles_labels()[0]:          # nothing to label when every trial failed
+        ax.legend()
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)

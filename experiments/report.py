@@ -17,6 +17,8 @@ Result kinds (the file's "experiment" field): "fig7" (experiments/cloth_fold.py,
     python experiments/report.py            # regenerate both files
     python experiments/report.py --check    # exit 1 if either file is not what it would write
 
+A result file that cannot be read exits 2 naming it; one whose provenance lacks the command,
+the git commit or the versions of dopt, mujoco and torch is named in a note on stderr.
 Standard library only, so it runs anywhere (no torch, no MuJoCo).
 """
 
@@ -29,6 +31,9 @@ import os
 import sys
 from dataclasses import dataclass, field
 from pathlib import Path
+
+# experiments/ is on the path: it is the script's folder (pytest: pythonpath in pyproject)
+from cli_args import EPILOG, existing_dir, file_problem, guarded
 
 ROOT = Path(__file__).resolve().parents[1]
 BEGIN, END = "<!-- results:begin -->", "<!-- results:end -->"
@@ -45,6 +50,9 @@ FIG7_PANELS = {("rope", "straighten"): "(a) rope straightening",
                ("cloth", "side"): "(d) cloth side fold",
                ("cloth", "reflective"): "(e) cloth reflective fold",
                ("cloth", "underneath"): "(f) cloth underneath fold"}
+#: what every result file's "provenance" holds (``dopt.provenance.provenance()``)
+PROVENANCE_FIELDS = ("command", "git_commit", "versions")
+PROVENANCE_VERSIONS = ("dopt", "mujoco", "torch")
 KP = "key particles"
 SVR = "state-vector reduction"
 
@@ -121,6 +129,16 @@ class Result:
     def quick(self) -> bool:
         """A smoke-sized run (--quick): its numbers are not the paper's settings."""
         return bool(self.data.get("quick")) or "--quick" in self.command.split()
+
+
+def provenance_gaps(r: Result) -> list[str]:
+    """What the result's provenance lacks of the command, the git commit and the versions of
+    dopt, mujoco and torch (empty when complete)."""
+    p = r.provenance
+    gaps = [k for k in PROVENANCE_FIELDS if not p.get(k)]
+    versions = p.get("versions") if isinstance(p.get("versions"), dict) else {}
+    gaps += [f"versions.{k}" for k in PROVENANCE_VERSIONS if not versions.get(k)]
+    return gaps
 
 
 class ReportError(Exception):
@@ -557,8 +575,8 @@ def replace_block(text: str, block: str) -> str | None:
 
 # ------------------------------------------------------------------------------- main
 def generate(results_dir: Path, results_md_path: Path, readme: Path) -> dict:
-    """{path: wanted text} of both outputs (README only when it has the markers); a note
-    about a README without markers under key "note"."""
+    """{"files": {path: wanted text} of both outputs (README only when it has the markers),
+    "note": about a README without markers (or None), "results": the result files read}."""
     results = load_results(results_dir)
     out = {Path(results_md_path): results_md(results, results_dir, results_md_path)}
     note = None
@@ -572,27 +590,44 @@ def generate(results_dir: Path, results_md_path: Path, readme: Path) -> dict:
             out[Path(readme)] = new
     else:
         note = f"{readme} does not exist: left alone"
-    return {"files": out, "note": note}
+    return {"files": out, "note": note, "results": results}
 
 
-def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__,
+def parser() -> argparse.ArgumentParser:
+    ap = argparse.ArgumentParser(prog="report.py", description=__doc__, epilog=EPILOG,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--check", action="store_true",
                     help="write nothing; exit 1 if RESULTS.md or the README block differs "
                          "from what this script would generate")
-    ap.add_argument("--results-dir", type=Path, default=ROOT / "docs" / "results",
-                    help="folder of the result files (default docs/results)")
+    ap.add_argument("--results-dir", type=existing_dir, default=ROOT / "docs" / "results",
+                    help="folder of the result files (default docs/results; given, it must "
+                         "exist)")
     ap.add_argument("--results-md", type=Path, default=ROOT / "docs" / "RESULTS.md",
                     help="the generated page (default docs/RESULTS.md)")
     ap.add_argument("--readme", type=Path, default=ROOT / "README.md",
                     help="the README whose results block is rewritten (default README.md)")
+    return ap
+
+
+@guarded("report.py")
+def main(argv=None) -> int:
+    ap = parser()
     args = ap.parse_args(argv)
+    if not args.check:
+        for flag, path in (("--results-md", args.results_md), ("--readme", args.readme)):
+            problem = file_problem(path) if flag == "--results-md" or path.exists() else None
+            if problem:
+                ap.error(f"argument {flag}: {problem}")
     try:
         gen = generate(args.results_dir, args.results_md, args.readme)
     except ReportError as e:
-        print(f"error: {e}", file=sys.stderr)
+        print(f"report.py: error: {e}", file=sys.stderr)
         return 2
+    for r in gen["results"]:
+        gaps = provenance_gaps(r)
+        if gaps:
+            print(f"note: {_display(r.path)}: its provenance lacks {', '.join(gaps)} (rerun "
+                  f"the experiment to record them)", file=sys.stderr)
     if gen["note"]:
         print(f"note: {gen['note']}", file=sys.stderr)
     stale = [p for p, text in gen["files"].items()

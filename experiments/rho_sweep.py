@@ -3,7 +3,9 @@
 Runs svr-sum (or --method svr-svd) for every (rho, theta) and baseline once per seed for the
 normalisation, all as resumable trials under OUT/trials (the MPC flags are experiments/mpc.py's).
 Writes OUT/summary.json, OUT/rho_sweep.csv and OUT/rho_sweep.png (normalised MPC cost and mean
-|C| vs rho, one line per theta). Exits 1 if a trial failed.
+|C| vs rho, one line per theta; summary.json also holds "trial_commits", the code commits of
+the trial results). Exits 1 if a trial failed (listed under "failed" in summary.json) or the run
+failed (one line on stderr); 2 on a bad flag.
 
     python experiments/rho_sweep.py --task clutter --rhos 0.1,1,10,100 --thetas 0,5,10 \\
         --trials 5 --out results/rho
@@ -16,37 +18,25 @@ import csv
 import sys
 
 import mpc as table1
+from cli_args import EPILOG, guarded, number_list
 
 from planners.svr_mpc import summarize
 
 
-def _values(kind, what: str):
-    def parse(text: str) -> list:
-        try:
-            vals = [kind(v) for v in text.split(",") if v.strip()]
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"{what} must be comma-separated "
-                                             f"{kind.__name__}s, got {text!r}") from None
-        if not vals or any(not v >= 0 for v in vals) or any(v != v for v in vals):
-            raise argparse.ArgumentTypeError(f"{what} must be one or more numbers >= 0, "
-                                             f"got {text!r}")
-        return vals
-    return parse
-
-
 def parser() -> argparse.ArgumentParser:
-    ap = argparse.ArgumentParser(description=__doc__,
+    ap = argparse.ArgumentParser(prog="rho_sweep.py", description=__doc__, epilog=EPILOG,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--rhos", type=_values(float, "--rhos"), default="0.1,1,10,100",
-                    help="comma-separated rho values (default %(default)s)")
-    ap.add_argument("--thetas", type=_values(int, "--thetas"), default="0,5,10",
-                    help="comma-separated theta values (default %(default)s)")
+    ap.add_argument("--rhos", type=number_list(float, 0.0, "rhos"), default="0.1,1,10,100",
+                    help="comma-separated rho values, each >= 0 (default %(default)s)")
+    ap.add_argument("--thetas", type=number_list(int, 0, "thetas"), default="0,5,10",
+                    help="comma-separated theta values, integers >= 0 (default %(default)s)")
     ap.add_argument("--method", default="svr-sum", choices=["svr-sum", "svr-svd"],
                     help="SVR importance method (default %(default)s)")
     table1.add_run_arguments(ap)
     return ap
 
 
+@guarded("rho_sweep.py")
 def main(argv=None) -> int:
     ap = parser()
     args = table1.parse_args(argv, ap)
@@ -56,7 +46,8 @@ def main(argv=None) -> int:
     fb = " +fb" if args.feedback == "on" else ""
     trials = table1.make_trials(args, methods=["baseline"]) + table1.make_trials(
         args, methods=[args.method], rhos=args.rhos, thetas=args.thetas)
-    recs, failed = table1.run(args, trials)
+    recs, res = table1.run(args, trials)
+    failed = res.failed
     base = [r for r in recs if r["params"]["method"] == "baseline"]
     rows = []
     for theta in args.thetas:
@@ -68,7 +59,8 @@ def main(argv=None) -> int:
                                  **summarize(base + group, baseline="baseline" + fb)[
                                      args.method + fb]))
     table1.write_summary(args, {"experiment": "fig4", "task": args.task,
-                                "method": args.method, "points": rows, "failed": failed},
+                                "method": args.method, "points": rows, "failed": failed,
+                                "trial_commits": res.commits},
                          argv, "experiments/rho_sweep.py")
     if rows:
         with open(args.out / "rho_sweep.csv", "w", newline="") as f:

@@ -102,7 +102,9 @@ def test_committed_results_md_and_readme_are_generated():
 
 
 def test_the_script_needs_only_the_standard_library():
+    # as `python experiments/report.py`: the script's folder (its sibling cli_args) on the path
     code = ("import sys, runpy; sys.argv = ['report.py', '--help']\n"
+            f"sys.path.insert(0, {str(SCRIPT.parent)!r})\n"
             f"try:\n    runpy.run_path({str(SCRIPT)!r}, run_name='__main__')\n"
             "except SystemExit:\n    pass\n"
             "bad = sorted({'torch', 'numpy', 'mujoco', 'dopt', 'planners'} & set(sys.modules))\n"
