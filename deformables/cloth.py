@@ -35,7 +35,15 @@ from .goals import CLOTH_LAYER_GAP
 from .mesh import canonical_triangulation, edges
 from .panels import project_on_panels
 from .reduction import KeyParticles, grow_until_below
-from .validation import check_faces, check_positions, check_threshold
+from .validation import (
+    check_areas,
+    check_faces,
+    check_fields,
+    check_positions,
+    check_rest_matches,
+    check_threshold,
+    warn_non_manifold,
+)
 
 logger = logging.getLogger(__name__)
 
@@ -132,7 +140,10 @@ class ClothConfig:
             raise ValueError(f"panels must be one of {PANEL_MODES}, got {self.panels!r}")
         for name in ("z_scale", "layer_gap", "threshold_gaps", "geodesic_radius",
                      "geodesic_spacings", "geodesic_cap", "sample_spacings", "panel_noise_floor"):
-            check_threshold(getattr(self, name), name)
+            check_threshold(getattr(self, name), f"ClothConfig.{name}")
+        check_fields(self, ints={"max_faces": None, "restarts": None, "restart_seed": 0,
+                                 "coarse_faces": None},
+                     bools=("exact_errors", "canonical_triangulation"))
         if self.max_faces < 2:
             raise ValueError(f"max_faces must be at least 2, got {self.max_faces}")
         if self.restarts < 1:
@@ -216,7 +227,8 @@ def cloth_key_particles(positions, faces, threshold: float | None = None,
         threshold: Alg. 1's threshold on the symmetric Hausdorff distance, in metres of the
             z-stretched space; ``None`` uses ``config.threshold_gaps * layer_gap * z_scale``.
         rest_positions: ``(N, 3)`` flat rest positions, for the geodesic filter and the particle
-            spacing; ``None`` uses the goal mesh's edges for both.
+            spacing; ``None`` uses the goal mesh's edges for both. Particle i of the rest shape
+            is particle i of the goal: the goal's edges must keep about their rest length.
         config: back-end, stretch and threshold options.
 
     Returns:
@@ -224,18 +236,31 @@ def cloth_key_particles(positions, faces, threshold: float | None = None,
         ``elements`` ``(NS, 3)`` of the simplified mesh, ``n_elements = NS`` and ``sizes``
         counted in target faces.
 
+    A non-manifold mesh (an edge of more than two faces, sheets meeting at a vertex) is
+    reduced as it is, with a warning.
+
     Raises:
+        TypeError: non-numeric positions or faces, a config that is not a ClothConfig, a
+            threshold that is not a number.
         ValueError: bad positions or faces (NaN/inf, fewer than 3 particles, zero extent,
-            indices out of range, zero-area faces), a non-positive threshold, or a threshold
-            that no model up to ``config.max_faces`` reaches.
+            indices out of range, particles in no face, zero-area faces), rest positions that
+            do not match the goal (edge lengths disagree far beyond what a fold does), a
+            non-positive threshold, or a threshold that no model up to ``config.max_faces``
+            reaches.
     """
     start = time.perf_counter()
+    if not isinstance(config, ClothConfig):
+        raise TypeError(f"config must be a ClothConfig, got {type(config).__name__}")
     goal = check_positions(positions)
     rest = None if rest_positions is None else check_positions(rest_positions, "rest_positions")
     if rest is not None and rest.shape != goal.shape:
         raise ValueError(f"rest_positions {rest.shape} and positions {goal.shape} differ in shape")
     reference = goal if rest is None else rest
-    tri = check_faces(faces, len(goal), reference)
+    tri = check_faces(faces, len(goal), require_all=True)
+    warn_non_manifold(tri, len(goal))
+    if rest is not None:
+        check_rest_matches(goal, rest, tri)
+    check_areas(tri, reference)
     if rest is not None and config.panels != "off":
         floor = config.panel_noise_floor if config.panels == "auto" else None
         goal = project_on_panels(goal, rest, tri, config.layer_gap, min_noise=floor).positions

@@ -21,6 +21,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from dopt.validation import check_int, check_real
+
 logger = logging.getLogger(__name__)
 
 ROPE_PARTICLES = 40
@@ -92,10 +94,18 @@ def _resample(path: np.ndarray, n: int) -> np.ndarray:
 
 
 def _check_rope_size(n: int, length: float) -> None:
+    check_int(n, "n")
     if n < 3:
         raise ValueError(f"a rope needs at least 3 particles, got n={n}")
+    if not isinstance(length, (int, float, np.integer, np.floating)) or isinstance(length, bool):
+        raise TypeError(f"length must be a number of metres, got {length!r}")
     if not np.isfinite(length) or length <= 0:
         raise ValueError(f"rope length must be a positive number of metres, got {length}")
+
+
+def _check_generator(rng, name: str = "rng") -> None:
+    if not isinstance(rng, np.random.Generator):
+        raise TypeError(f"{name} must be a numpy.random.Generator, got {type(rng).__name__}")
 
 
 def rope_straight(n: int = ROPE_PARTICLES, length: float = ROPE_LENGTH,
@@ -105,6 +115,7 @@ def rope_straight(n: int = ROPE_PARTICLES, length: float = ROPE_LENGTH,
     Returns a :class:`RopeGoal` with ``positions`` ``(n, 3)`` and ``corners`` = the two ends.
     """
     _check_rope_size(n, length)
+    check_real(angle, "angle")
     direction = np.array([np.cos(angle), np.sin(angle)])
     t = np.linspace(-length / 2, length / 2, n)
     positions = np.zeros((n, 3))
@@ -130,6 +141,10 @@ def rope_crossed_triangle(n: int = ROPE_PARTICLES, length: float = ROPE_LENGTH,
         ValueError: if the legs cannot form such a triangle.
     """
     _check_rope_size(n, length)
+    check_real(cross_at, "cross_at", positive=True, maximum=1.0)
+    check_real(overshoot, "overshoot", minimum=0.0)
+    if overshoot >= 1.0:
+        raise ValueError(f"overshoot must be < 1, got {overshoot!r}")
     legs_arr = np.asarray(legs, dtype=float)
     if legs_arr.shape != (3,) or not np.all(np.isfinite(legs_arr)) or np.any(legs_arr <= 0):
         raise ValueError(f"legs must be three positive lengths, got {legs}")
@@ -173,6 +188,9 @@ def rope_crumpled(rng: np.random.Generator, n: int = ROPE_PARTICLES,
     Returns a :class:`RopeGoal` with ``positions`` ``(n, 3)`` and ``corners`` = the two ends.
     """
     _check_rope_size(n, length)
+    _check_generator(rng)
+    check_real(turn, "turn", minimum=0.0)
+    check_int(smooth, "smooth", minimum=1)
     turns = np.convolve(rng.normal(0.0, turn, n - 1), np.ones(smooth) / smooth, mode="same")
     heading = np.cumsum(turns)
     steps = np.stack([np.cos(heading), np.sin(heading)], axis=1) * length / (n - 1)
@@ -195,8 +213,11 @@ def grid_faces(n: int, triangulation: str = "mujoco",
             ``"alternating"`` the two in a checkerboard ("union jack");
             ``"random"`` each square at random (needs ``rng``).
     """
-    if triangulation not in TRIANGULATIONS:
+    if not isinstance(triangulation, str) or triangulation not in TRIANGULATIONS:
         raise ValueError(f"unknown triangulation {triangulation!r}; choose from {TRIANGULATIONS}")
+    check_int(n, "n")
+    if n < 2:
+        raise ValueError(f"a cloth grid needs at least 2 particles per side, got n={n}")
     ix, iy = np.meshgrid(np.arange(n - 1), np.arange(n - 1), indexing="ij")
     ix, iy = ix.ravel(), iy.ravel()
     v00, v10 = ix * n + iy, (ix + 1) * n + iy
@@ -210,6 +231,7 @@ def grid_faces(n: int, triangulation: str = "mujoco",
     else:
         if rng is None:
             raise ValueError("triangulation='random' needs a numpy.random.Generator rng")
+        _check_generator(rng)
         main = rng.random(len(ix)) < 0.5
     first = np.where(main[:, None], np.stack([v00, v10, v11], 1), np.stack([v00, v10, v01], 1))
     second = np.where(main[:, None], np.stack([v00, v11, v01], 1), np.stack([v10, v11, v01], 1))
@@ -218,9 +240,11 @@ def grid_faces(n: int, triangulation: str = "mujoco",
 
 def cloth_rest(n: int = CLOTH_PARTICLES_PER_SIDE, side: float = CLOTH_SIDE) -> np.ndarray:
     """Flat rest positions ``(n * n, 3)`` of the cloth grid, z = 0."""
+    check_int(n, "n")
     if n < 2:
         raise ValueError(f"a cloth grid needs at least 2 particles per side, got n={n}")
-    if not np.isfinite(side) or side <= 0:
+    check_real(side, "side")
+    if side <= 0:
         raise ValueError(f"cloth side must be a positive number of metres, got {side}")
     coord = -side / 2 + np.arange(n) * side / (n - 1)
     x, y = np.meshgrid(coord, coord, indexing="ij")
@@ -253,15 +277,17 @@ def roll_over(positions: np.ndarray, movable: np.ndarray, point: np.ndarray,
 
 
 def _cloth_base(n: int, side: float, triangulation: str,
-                rng: np.random.Generator | None) -> tuple[np.ndarray, np.ndarray]:
-    return cloth_rest(n, side), grid_faces(n, triangulation, rng)
+                rng: np.random.Generator | None, gap: float) -> tuple[np.ndarray, np.ndarray]:
+    rest = cloth_rest(n, side)
+    check_real(gap, "gap", positive=True)
+    return rest, grid_faces(n, triangulation, rng)
 
 
 def cloth_flat(n: int = CLOTH_PARTICLES_PER_SIDE, side: float = CLOTH_SIDE,
                triangulation: str = "mujoco", rng: np.random.Generator | None = None,
                gap: float = CLOTH_LAYER_GAP) -> ClothGoal:
     """The flat cloth (goal = rest shape)."""
-    rest, faces = _cloth_base(n, side, triangulation, rng)
+    rest, faces = _cloth_base(n, side, triangulation, rng, gap)
     return ClothGoal("cloth_flat", rest, faces, rest, gap)
 
 
@@ -269,7 +295,7 @@ def cloth_diagonal(n: int = CLOTH_PARTICLES_PER_SIDE, side: float = CLOTH_SIDE,
                    triangulation: str = "mujoco", rng: np.random.Generator | None = None,
                    gap: float = CLOTH_LAYER_GAP) -> ClothGoal:
     """Diagonal fold: the corner (+x, +y) is folded onto (-x, -y) across the line x + y = 0."""
-    rest, faces = _cloth_base(n, side, triangulation, rng)
+    rest, faces = _cloth_base(n, side, triangulation, rng, gap)
     everything = np.ones(len(rest), dtype=bool)
     goal = roll_over(rest, everything, np.zeros(2), np.array([1.0, 1.0]), 0.0, gap / 2)
     return ClothGoal("cloth_diagonal", goal, faces, rest, gap)
@@ -290,7 +316,7 @@ def cloth_side(n: int = CLOTH_PARTICLES_PER_SIDE, side: float = CLOTH_SIDE,
                triangulation: str = "mujoco", rng: np.random.Generator | None = None,
                gap: float = CLOTH_LAYER_GAP) -> ClothGoal:
     """Side fold: the half x > 0 is folded over onto the half x < 0 (crease x = 0)."""
-    rest, faces = _cloth_base(n, side, triangulation, rng)
+    rest, faces = _cloth_base(n, side, triangulation, rng, gap)
     return ClothGoal("cloth_side", _side_fold(rest, gap), faces, rest, gap)
 
 
@@ -299,7 +325,7 @@ def cloth_reflective(n: int = CLOTH_PARTICLES_PER_SIDE, side: float = CLOTH_SIDE
                      gap: float = CLOTH_LAYER_GAP) -> ClothGoal:
     """Reflective fold: the side fold, then the outer quarter of the top layer folded back on top
     (crease x = -side / 4), a Z-fold with 3 layers over -side/4 < x < 0."""
-    rest, faces = _cloth_base(n, side, triangulation, rng)
+    rest, faces = _cloth_base(n, side, triangulation, rng, gap)
     return ClothGoal("cloth_reflective", _reflective_fold(rest, side, gap), faces, rest, gap)
 
 
@@ -308,7 +334,7 @@ def cloth_underneath(n: int = CLOTH_PARTICLES_PER_SIDE, side: float = CLOTH_SIDE
                      gap: float = CLOTH_LAYER_GAP) -> ClothGoal:
     """Underneath fold: after the reflective fold, the remaining single-layer quarter
     (x < -side / 4) is folded under the rest, giving 4 layers over -side/4 < x < 0."""
-    rest, faces = _cloth_base(n, side, triangulation, rng)
+    rest, faces = _cloth_base(n, side, triangulation, rng, gap)
     reflective = _reflective_fold(rest, side, gap)
     bottom = rest[:, 0] < 0
     goal = roll_over(reflective, bottom, np.array([-side / 4, 0.0]), np.array([-1.0, 0.0]),
@@ -341,8 +367,13 @@ GOAL_SEQUENCES: dict[str, tuple[str, ...]] = {
 
 
 def make_goal(name: str, **kwargs) -> RopeGoal | ClothGoal:
-    """Build the goal registered as ``name`` (see :data:`GOALS`) with factory ``kwargs``."""
-    if name not in GOALS:
+    """Build the goal registered as ``name`` (see :data:`GOALS`) with factory ``kwargs``.
+
+    Raises:
+        ValueError: an unknown name or a bad value; TypeError: an argument the factory does
+            not take, or of the wrong type (n not an int, rng not a Generator, ...).
+    """
+    if not isinstance(name, str) or name not in GOALS:
         raise ValueError(f"unknown goal {name!r}; choose from {sorted(GOALS)}")
     return GOALS[name](**kwargs)
 

@@ -44,7 +44,10 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
+from dopt.validation import check_int, check_real
+
 from .mesh import edges
+from .validation import check_faces, check_numeric, check_positions
 
 logger = logging.getLogger(__name__)
 
@@ -86,7 +89,20 @@ def rigid_fit(rest: np.ndarray, goal: np.ndarray) -> tuple[np.ndarray, np.ndarra
 
     Returns:
         ``R`` ``(B, 3, 3)`` proper rotations, ``t`` ``(B, 3)``, RMS residual ``(B,)``.
+
+    Raises:
+        TypeError / ValueError: non-numeric arrays, shapes other than the same ``(B, k, 3)``
+            with B, k >= 1, or NaN/inf entries.
     """
+    rest = np.asarray(check_numeric(rest, "rest"), dtype=float)
+    goal = np.asarray(check_numeric(goal, "goal"), dtype=float)
+    if rest.ndim != 3 or rest.shape[2] != 3 or rest.shape[0] < 1 or rest.shape[1] < 1:
+        raise ValueError(f"rest must have shape (B, k, 3) with B, k >= 1, got {rest.shape}")
+    if goal.shape != rest.shape:
+        raise ValueError(f"goal must have the shape of rest {rest.shape}, got {goal.shape}")
+    for name, arr in (("rest", rest), ("goal", goal)):
+        if not np.all(np.isfinite(arr)):
+            raise ValueError(f"{name} contains NaN/inf")
     rest_c, goal_c = rest.mean(axis=1), goal.mean(axis=1)
     cov = np.einsum("bki,bkj->bij", rest - rest_c[:, None], goal - goal_c[:, None])
     u, _, vt = np.linalg.svd(cov)
@@ -144,7 +160,24 @@ def panel_weights(rest: np.ndarray, labels: np.ndarray, n_panels: int, width: fl
     the product of its factors, normalised. Particles more than ``width`` from every line belong
     to one panel exactly; those on a line get a blend, so a crease that runs through a row of
     particles, or cuts it at a shallow angle, stays a line instead of a saw-tooth.
+
+    Raises:
+        TypeError / ValueError: bad rest positions, labels that are not integers in
+            ``[0, n_panels)`` of shape ``(N,)``, ``n_panels`` not an int >= 1, ``width`` or ``l2``
+            not a finite number > 0 (>= 0 for ``l2``).
     """
+    rest = check_positions(rest, "rest")
+    n_panels = check_int(n_panels, "n_panels", 1)
+    check_real(width, "width", positive=True)
+    check_real(l2, "l2", minimum=0.0)
+    labels = check_numeric(labels, "labels")
+    if labels.dtype.kind not in "iu":
+        raise TypeError(f"labels must be integer panel indices, got dtype {labels.dtype}")
+    if labels.shape != (len(rest),):
+        raise ValueError(f"labels must have shape ({len(rest)},), got {labels.shape}")
+    if np.any((labels < 0) | (labels >= n_panels)):
+        raise ValueError(f"labels must lie in [0, {n_panels}), got values "
+                         f"{np.unique(labels[(labels < 0) | (labels >= n_panels)])[:5].tolist()}")
     centred = rest - rest.mean(axis=0)
     plane = centred @ np.linalg.svd(centred, full_matrices=False)[2][:2].T        # (N, 2)
     extent = np.ptp(plane, axis=0).max()
@@ -201,7 +234,28 @@ def project_on_panels(goal: np.ndarray, rest: np.ndarray, faces: np.ndarray, lay
     Returns:
         :class:`PanelFit`; with no panel found, or too little noise, ``positions`` is ``goal``
         and nothing moves.
+
+    Raises:
+        TypeError / ValueError: goal and rest not finite ``(N, 3)`` arrays of one shape, bad
+            faces (see :func:`deformables.validation.check_faces`), or an option out of range
+            (each named): ``layer_gap`` > 0, ``neighbours`` an int >= 3, ``angle_deg`` in
+            (0, 180], ``min_fraction`` in [0, 1], ``min_width`` >= 0, ``crease_width`` > 0,
+            ``tolerance`` and ``min_noise`` None or >= 0.
     """
+    goal = check_positions(goal, "goal")
+    rest = check_positions(rest, "rest")
+    if rest.shape != goal.shape:
+        raise ValueError(f"rest {rest.shape} and goal {goal.shape} differ in shape")
+    faces = check_faces(faces, len(goal))
+    check_real(layer_gap, "layer_gap", positive=True)
+    check_int(neighbours, "neighbours", 3)
+    check_real(angle_deg, "angle_deg", positive=True, maximum=180.0)
+    check_real(min_fraction, "min_fraction", minimum=0.0, maximum=1.0)
+    check_real(min_width, "min_width", minimum=0.0)
+    check_real(crease_width, "crease_width", positive=True)
+    for name, value in (("tolerance", tolerance), ("min_noise", min_noise)):
+        if value is not None:
+            check_real(value, name, minimum=0.0)
     n = len(goal)
     pairs = edges(faces)
     spacing = float(np.median(np.linalg.norm(rest[pairs[:, 0]] - rest[pairs[:, 1]], axis=1)))

@@ -4,19 +4,29 @@ Shape letters: N particles, NE evenly spaced samples along the rope, M polyline 
 (the model size NS of the paper), K key particles.
 
 The polyline is fitted by a QP over its vertices ``V`` ``(M, 3)``: NE samples ``Q`` are taken
-evenly by arc length along the particle chain, and sample k corresponds to the point of the
-polyline at the same arc-length position inside its segment, ``S = A V`` with a fixed
-correspondence matrix ``A`` ``(NE, M)``. The QP minimises ``||A V - Q||^2``; the error of Alg. 1
-is the mean distance ``mean_k ||(A V - Q)_k||`` (the paper's Eq. 3).
+evenly along the particle chain, and sample k corresponds to the point of the polyline at the
+same relative position inside its segment, ``S = A V`` with a fixed correspondence matrix
+``A`` ``(NE, M)``. The QP minimises ``||A V - Q||^2``; the error of Alg. 1 is the mean distance
+``mean_k ||(A V - Q)_k||`` (the paper's Eq. 3).
 
-``A`` depends on where the segments start and end along the rope (the knots):
+"Evenly along the chain" is by arc length with every edge between neighbouring particles
+counted at most ``EDGE_CAP`` (2) times the particle spacing (the median edge length). A rope's
+particles are about evenly spaced, and then this is plain arc length; but one particle 2 m off
+the rope, or a 5 m gap in the chain, would otherwise take nine tenths of the samples and dilute
+the error of a missing corner elsewhere below the threshold. Such an edge weighs as two
+spacings: it is still a feature the fit must model, and no more.
+
+The polyline's end vertices correspond to the chain's ends (the first and last samples), so the
+two end particles are always key particles.
+
+``A`` depends on where the segments start and end along the chain (the knots):
 
 * ``fit="fixed"``: knots evenly spaced, every segment owns the same share of the samples. This
   is the paper's linear parametrisation; it finds a corner only where the corner happens to sit
-  at a multiple of ``1 / (M - 1)`` of the rope length.
+  at a multiple of ``1 / (M - 1)`` of the chain.
 * ``fit="breakpoints"`` (default): knots at particles, chosen by dynamic programming as the
   optimal segmentation of the rope under the QP's objective with vertices on particles; the QP
-  then places the vertices. This finds corners at any arc-length position.
+  then places the vertices. This finds corners at any position along the chain.
 """
 from __future__ import annotations
 
@@ -30,11 +40,13 @@ import cvxpy as cp
 import numpy as np
 
 from .reduction import KeyParticles, grow_until_below
-from .validation import check_positions, check_threshold
+from .validation import check_fields, check_positions, check_threshold
 
 logger = logging.getLogger(__name__)
 
 FITS = ("breakpoints", "fixed")
+#: longest an edge between neighbouring particles counts along the chain, in particle spacings
+EDGE_CAP = 2.0
 
 
 @dataclass(frozen=True)
@@ -44,11 +56,12 @@ class RopeConfig:
     Attributes:
         fit: ``"breakpoints"`` (knots chosen among particles) or ``"fixed"`` (equal shares).
         n_samples: NE, samples along the rope for the fit and the error.
-        threshold_spacings: the default threshold, as a multiple of the mean particle spacing
-            (used when no threshold in metres is given). 0.5 spacing (6.4 mm for 40 particles on
-            0.5 m) sits between the error of a resolved shape (below 1.5 mm on clean goals,
-            about 1.6 sigma under Gaussian noise of std sigma) and the error of a missing corner
-            (above 20 mm for the folding goals).
+        threshold_spacings: the default threshold, as a multiple of the particle spacing (used
+            when no threshold in metres is given). The spacing is the median distance between
+            neighbouring particles, so that an outlier particle or a gap in the chain does not
+            inflate it. 0.5 spacing (6.4 mm for 40 particles on 0.5 m) sits between the error of
+            a resolved shape (below 1.5 mm on clean goals, about 1.6 sigma under Gaussian noise
+            of std sigma) and the error of a missing corner (above 20 mm for the folding goals).
         max_vertices: cap on M; ``None`` means N.
     """
 
@@ -60,17 +73,19 @@ class RopeConfig:
     def __post_init__(self):
         if self.fit not in FITS:
             raise ValueError(f"unknown rope fit {self.fit!r}; choose from {FITS}")
+        check_fields(self, ints={"n_samples": None, "max_vertices": None})
         if self.n_samples < 2:
-            raise ValueError(f"n_samples must be at least 2, got {self.n_samples}")
-        check_threshold(self.threshold_spacings, "threshold_spacings")
+            raise ValueError(f"RopeConfig.n_samples must be at least 2, got {self.n_samples}")
+        check_threshold(self.threshold_spacings, "RopeConfig.threshold_spacings")
         if self.max_vertices is not None and self.max_vertices < 2:
-            raise ValueError(f"max_vertices must be at least 2, got {self.max_vertices}")
+            raise ValueError(f"RopeConfig.max_vertices must be at least 2, got "
+                             f"{self.max_vertices}")
 
 
 @dataclass(frozen=True)
 class Polyline:
-    """A fitted polyline: ``vertices`` ``(M, 3)``, ``knots`` ``(M,)`` arc-length position of
-    each vertex along the rope, and the Eq. 3 ``error``."""
+    """A fitted polyline: ``vertices`` ``(M, 3)``, ``knots`` ``(M,)`` chain position of each
+    vertex (capped arc length, see the module docstring), and the Eq. 3 ``error``."""
 
     vertices: np.ndarray
     knots: np.ndarray
@@ -78,8 +93,8 @@ class Polyline:
 
 
 def correspondence(t: np.ndarray, knots: np.ndarray) -> np.ndarray:
-    """Correspondence matrix ``A`` ``(NE, M)``: sample at arc length ``t[k]`` ``(NE,)`` maps to
-    the point at the same relative position of the segment between the knots around it."""
+    """Correspondence matrix ``A`` ``(NE, M)``: sample at chain position ``t[k]`` ``(NE,)`` maps
+    to the point at the same relative position of the segment between the knots around it."""
     m = len(knots)
     seg = np.clip(np.searchsorted(knots, t, side="right") - 1, 0, m - 2)
     length = np.maximum(knots[seg + 1] - knots[seg], 1e-15)
@@ -125,7 +140,7 @@ class _Segmentation:
     all (i, j) at once. ``breakpoints(m)`` returns the ``(m,)`` particle indices of the best
     polyline with m vertices, extending the table on demand."""
 
-    def __init__(self, positions: np.ndarray, arc: np.ndarray, t: np.ndarray, q: np.ndarray):
+    def __init__(self, positions: np.ndarray, chain: np.ndarray, t: np.ndarray, q: np.ndarray):
         n = len(positions)
 
         def prefix(values):
@@ -133,10 +148,10 @@ class _Segmentation:
 
         sums = [prefix(v) for v in (np.ones_like(t), t, t * t, q, t[:, None] * q,
                                      np.einsum("kd,kd->k", q, q))]
-        lo = np.searchsorted(t, arc, side="left")               # first sample of each particle
+        lo = np.searchsorted(t, chain, side="left")             # first sample of each particle
         s0, s1, s2, sq, stq, sqq = (c[lo][None, :] - c[lo][:, None] for c in sums)  # (i, j)
-        start = arc[:, None]
-        length = np.maximum(arc[None, :] - start, 1e-15)
+        start = chain[:, None]
+        length = np.maximum(chain[None, :] - start, 1e-15)
         w1 = (s1 - start * s0) / length                                   # sum of w
         w2 = (s2 - 2 * start * s1 + start ** 2 * s0) / length ** 2        # sum of w^2
         wq = (stq - start[..., None] * sq) / length[..., None]            # sum of w q
@@ -161,21 +176,17 @@ class _Segmentation:
         return np.array(idx[::-1], dtype=np.int64)
 
 
-def _arc_length(positions: np.ndarray) -> np.ndarray:
-    return np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(positions, axis=0), axis=1))])
-
-
-def _nearest_in_window(positions: np.ndarray, arc: np.ndarray, vertices: np.ndarray,
-                       knots: np.ndarray) -> np.ndarray:
-    """Key particles ``(K,)``: for each vertex, the nearest particle among those between the
-    neighbouring knots along the rope (so a crossing strand is never picked)."""
-    lo = np.concatenate([[knots[0]], knots[:-1]])
-    hi = np.concatenate([knots[1:], [knots[-1]]])
-    keys = []
-    for vertex, a, b in zip(vertices, lo, hi, strict=True):
-        window = np.flatnonzero((arc >= a - 1e-12) & (arc <= b + 1e-12))
-        if len(window) == 0:     # knots between two particles: the nearest along the rope
-            window = np.array([int(np.argmin(np.abs(arc - 0.5 * (a + b))))])
+def _key_particles(positions: np.ndarray, chain: np.ndarray, vertices: np.ndarray,
+                   knots: np.ndarray) -> np.ndarray:
+    """Key particles ``(K,)``: the two end particles for the end vertices (they correspond to
+    the chain's ends), and for each inner vertex the nearest particle among those between the
+    neighbouring knots along the chain (so a crossing strand is never picked)."""
+    lo, hi = knots[:-2], knots[2:]
+    keys = [0, len(positions) - 1]
+    for vertex, a, b in zip(vertices[1:-1], lo, hi, strict=True):
+        window = np.flatnonzero((chain >= a - 1e-12) & (chain <= b + 1e-12))
+        if len(window) == 0:     # knots between two particles: the nearest along the chain
+            window = np.array([int(np.argmin(np.abs(chain - 0.5 * (a + b))))])
         keys.append(window[np.argmin(np.linalg.norm(positions[window] - vertex, axis=1))])
     return np.unique(np.array(keys, dtype=np.int64))
 
@@ -187,32 +198,40 @@ def rope_key_particles(positions, threshold: float | None = None,
     Args:
         positions: ``(N, 3)`` goal positions of the particles, in order along the rope, metres.
         threshold: Alg. 1's error threshold in metres (mean distance, Eq. 3); ``None`` uses
-            ``config.threshold_spacings`` times the mean particle spacing.
+            ``config.threshold_spacings`` times the particle spacing, the median distance
+            between neighbouring particles (an outlier particle or a gap does not move it).
         config: fit and threshold options.
 
     Returns:
         :class:`KeyParticles` with ``vertices`` ``(M, 3)``, ``elements`` ``(M - 1, 2)`` segments,
-        ``n_elements = M - 1`` and ``sizes`` counted in vertices (M).
+        ``n_elements = M - 1`` and ``sizes`` counted in vertices (M). The indices always hold
+        both end particles, 0 and N - 1.
 
     Raises:
+        TypeError: non-numeric positions, a threshold that is not a number, a config that is
+            not a RopeConfig.
         ValueError: bad positions (NaN/inf, fewer than 3 particles, zero extent), a
             non-positive threshold, or a threshold that no model up to the cap reaches.
     """
     start = time.perf_counter()
+    if not isinstance(config, RopeConfig):
+        raise TypeError(f"config must be a RopeConfig, got {type(config).__name__}")
     p = check_positions(positions)
-    arc = _arc_length(p)
-    spacing = arc[-1] / (len(p) - 1)
+    edge = np.linalg.norm(np.diff(p, axis=0), axis=1)
+    spacing = float(np.median(edge[edge > 0]))       # positive: the extent is not zero
+    # position of each particle along the chain: arc length, long edges capped
+    chain = np.concatenate([[0.0], np.cumsum(np.minimum(edge, EDGE_CAP * spacing))])
     thr = (check_threshold(threshold) if threshold is not None
            else config.threshold_spacings * spacing)
-    t = np.linspace(0.0, arc[-1], config.n_samples)
-    q = np.stack([np.interp(t, arc, p[:, d]) for d in range(3)], axis=1)
-    segmentation = _Segmentation(p, arc, t, q) if config.fit == "breakpoints" else None
+    t = np.linspace(0.0, chain[-1], config.n_samples)
+    q = np.stack([np.interp(t, chain, p[:, d]) for d in range(3)], axis=1)
+    segmentation = _Segmentation(p, chain, t, q) if config.fit == "breakpoints" else None
 
     def simplify(m: int) -> Polyline:
         if segmentation is not None:
-            knots = arc[segmentation.breakpoints(m)]
+            knots = chain[segmentation.breakpoints(m)]
         else:
-            knots = np.linspace(0.0, arc[-1], m)
+            knots = np.linspace(0.0, chain[-1], m)
         a = correspondence(t, knots)
         vertices = _polyline_qp(config.n_samples, m).solve(a, q)
         error = float(np.mean(np.linalg.norm(a @ vertices - q, axis=1)))
@@ -221,7 +240,7 @@ def rope_key_particles(positions, threshold: float | None = None,
     max_vertices = min(config.max_vertices or len(p), len(p))
     reduction = grow_until_below(simplify, lambda model: model.error, thr, max_vertices)
     line = reduction.model
-    keys = _nearest_in_window(p, arc, line.vertices, line.knots)
+    keys = _key_particles(p, chain, line.vertices, line.knots)
     m = reduction.size
     result = KeyParticles(
         indices=keys, n_elements=m - 1, vertices=line.vertices,

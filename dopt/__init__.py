@@ -10,18 +10,28 @@ Glossary of shape letters used in every docstring:
     C   active DoF set (indices into qvel); |C| its size, 2|C| the reduced tangent state
 """
 
-from dopt.errors import RolloutError, UnstableRolloutError
-from dopt.rollout import (
-                          Derivatives,
-                          FDConfig,
-                          RolloutConfig,
-                          RolloutResult,
-                          RolloutService,
-                          Trajectory,
-)
-from dopt.scene import Scene
-from dopt.state import INTEGRATION, StateLayout, get_state, set_state
+import importlib
 
-__all__ = ["Derivatives", "FDConfig", "INTEGRATION", "RolloutConfig", "RolloutError",
-           "RolloutResult", "RolloutService", "Scene", "StateLayout", "Trajectory",
-           "UnstableRolloutError", "get_state", "set_state"]
+#: public name -> the module that defines it; loaded on first use, so that the pure-Python
+#: modules (dopt.validation, dopt.stats, dopt.provenance) import without MuJoCo or torch
+_EXPORTS = {
+    "RolloutError": "dopt.errors", "UnstableRolloutError": "dopt.errors",
+    "Derivatives": "dopt.rollout", "FDConfig": "dopt.rollout", "RolloutConfig": "dopt.rollout",
+    "RolloutResult": "dopt.rollout", "RolloutService": "dopt.rollout",
+    "Trajectory": "dopt.rollout", "Scene": "dopt.scene", "INTEGRATION": "dopt.state",
+    "StateLayout": "dopt.state", "get_state": "dopt.state", "set_state": "dopt.state",
+}
+
+__all__ = sorted(_EXPORTS)
+
+
+def __getattr__(name: str):
+    if name in _EXPORTS:
+        value = getattr(importlib.import_module(_EXPORTS[name]), name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module 'dopt' has no attribute {name!r}")
+
+
+def __dir__():
+    return sorted(set(globals()) | set(_EXPORTS))

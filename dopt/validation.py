@@ -1,4 +1,5 @@
-"""Input checks shared by dopt: typed fields of frozen config dataclasses, numeric arrays,
+"""Input checks shared by dopt, planners and deformables (pure Python and numpy: importing it
+loads neither MuJoCo nor torch): typed fields of frozen config dataclasses, numeric arrays,
 index arrays and scalars.
 
 Every check raises TypeError (wrong type or dtype) or ValueError (wrong value or shape, NaN/inf,
@@ -103,9 +104,10 @@ def check_int(value, name: str, minimum: int | None = None) -> int:
     return int(value)
 
 
-def check_real(value, name: str, *, positive: bool = False,
-               minimum: float | None = None) -> float:
-    """``value`` as a finite float (not a bool); > 0 if ``positive``, >= ``minimum`` if given."""
+def check_real(value, name: str, *, positive: bool = False, minimum: float | None = None,
+               maximum: float | None = None) -> float:
+    """``value`` as a finite float (not a bool); > 0 if ``positive``, within the inclusive
+    ``minimum`` / ``maximum`` if given."""
     if not is_real(value):
         raise TypeError(f"{name} must be a number, got {value!r}")
     if not math.isfinite(value):
@@ -114,6 +116,8 @@ def check_real(value, name: str, *, positive: bool = False,
         raise ValueError(f"{name} must be > 0, got {value!r}")
     if minimum is not None and value < minimum:
         raise ValueError(f"{name} must be >= {minimum}, got {value!r}")
+    if maximum is not None and value > maximum:
+        raise ValueError(f"{name} must be <= {maximum}, got {value!r}")
     return float(value)
 
 

@@ -9,7 +9,9 @@ for every action slot h,
   bound when sampled),
 
 samples a population of P sequences, asks the task for their costs, and refits both to the
-E elite sequences, blending with the previous distribution by ``smoothing``. A candidate's
+E elite sequences, blending with the previous distribution by ``smoothing``. A sample whose
+cost is NaN or inf (a simulation gone unstable) scores +inf: it is never an elite nor the
+best, and a population without one finite cost is an error, not a plan. A candidate's
 Gaussian moves towards its elites' mean and std by the share of elites that chose it (all E:
 a plain smoothed refit; one: a small step, since one sample tells nothing of a spread).
 
@@ -30,6 +32,9 @@ from typing import Protocol
 
 import numpy as np
 import torch
+
+from dopt.validation import check_config
+from planners._checks import particle_indices, picker_bound
 
 log = logging.getLogger(__name__)
 
@@ -86,10 +91,8 @@ class CEMConfig:
         return cls(**{"iterations": 30, "horizon": horizon, **overrides})
 
     def __post_init__(self):
-        for name in ("population", "elites", "iterations", "horizon"):
-            v = getattr(self, name)
-            if isinstance(v, bool) or not isinstance(v, (int, np.integer)):
-                raise TypeError(f"{name} must be an int, got {v!r}")
+        # types: ints (not bools), finite numbers, keep_best a bool (TypeError / ValueError)
+        check_config(self)
         if not (1 <= self.elites <= self.population):
             raise ValueError(f"need 1 <= elites <= population, got elites={self.elites}, "
                              f"population={self.population}")
@@ -156,6 +159,8 @@ class CEM:
     """Cross-entropy method over pick-and-place sequences (see the module docstring)."""
 
     def __init__(self, config: CEMConfig = CEMConfig()):
+        if not isinstance(config, CEMConfig):
+            raise TypeError(f"config must be a CEMConfig, got {type(config).__name__}")
         self.config = config
 
     # ----------------------------------------------------------------- pieces
@@ -186,13 +191,25 @@ class CEM:
     def refit(self, dist: Distribution, samples: Samples, costs: torch.Tensor,
               bound: torch.Tensor) -> tuple[Distribution, torch.Tensor]:
         """Refit to the E lowest-cost samples; returns the new distribution and the elite
-        indices (E,). Candidates no elite chose keep their Gaussian."""
+        indices (E,). Candidates no elite chose keep their Gaussian.
+
+        A sample with a non-finite cost is never an elite: with fewer than E finite costs the
+        refit uses the finite ones (E' < E of them, and the returned indices are E').
+
+        Raises:
+            ValueError: no sample has a finite cost.
+        """
         cfg = self.config
         H, C1 = dist.probs.shape
         elite = torch.argsort(costs, stable=True)[:cfg.elites]
+        elite = elite[torch.isfinite(costs[elite])]
+        n_elites = len(elite)
+        if n_elites == 0:
+            raise ValueError(f"no sample has a finite cost (all {len(costs)} are NaN or inf); "
+                             f"nothing to refit to")
         onehot = torch.nn.functional.one_hot(samples.choice[elite], C1).to(torch.float64)
         counts = onehot.sum(0)                                                   # (H, C+1)
-        probs = counts / cfg.elites
+        probs = counts / n_elites
         a = cfg.smoothing
         probs = a * dist.probs + (1 - a) * probs
         if cfg.prob_floor:
@@ -206,7 +223,7 @@ class CEM:
         # each candidate's Gaussian moves by the share of elites that chose it: all elites
         # agreeing is a plain smoothed refit, a single elite barely moves it (one sample says
         # nothing about a spread), and an unchosen candidate keeps its Gaussian
-        step = ((1 - a) * counts / cfg.elites)[..., None]
+        step = ((1 - a) * counts / n_elites)[..., None]
         mean = dist.mean + step * (mu - dist.mean)
         std = dist.std + step * (sd - dist.std)
         std = torch.maximum(std, cfg.min_std * bound)
@@ -217,26 +234,39 @@ class CEM:
              on_iteration: Callable[[int, float], None] | None = None) -> CEMResult:
         """Optimise H-action sequences over the candidate particles.
 
+        Samples whose cost is NaN or inf score +inf: they are never elites nor the best. An
+        iteration in which every sample does is an error, not a result.
+
         Args:
-            task: evaluates a population (see ``PickTask``).
-            candidates: (C,) particle indices the picker may grasp (None is always allowed).
-            generator: the only source of randomness; the same seed gives the same result.
+            task: evaluates a population (see ``PickTask``); its ``bound`` must be (3,) (or a
+                scalar) of finite non-negative metres; with an ``n_particles`` attribute the
+                candidates are checked against it.
+            candidates: (C,) distinct integer particle indices the picker may grasp (None is
+                always allowed).
+            generator: a ``torch.Generator``, the only source of randomness; the same seed gives
+                the same result.
             on_iteration: called as ``on_iteration(i, best_cost)`` after every iteration
                 (progress bars live in the caller).
 
         Raises:
-            ValueError: empty or repeated candidates.
+            TypeError: candidates that are not integers (floats, bools), a generator that is not
+                a ``torch.Generator``, an ``on_iteration`` that is not callable, or costs from
+                ``task.evaluate`` that are not numbers.
+            ValueError: empty, repeated, negative or out-of-range candidates, a bad bound, or
+                ``task.evaluate`` returning costs of another shape than (P,).
+            RuntimeError: every sample of an iteration had a non-finite cost.
             whatever ``task.evaluate`` raises (bad actions, an unstable simulation).
         """
         cfg = self.config
-        cand = torch.tensor(np.array(candidates, dtype=np.int64)).reshape(-1)
-        if cand.numel() == 0:
-            raise ValueError("candidates is empty: give at least one particle to pick")
-        if torch.unique(cand).numel() != cand.numel():
-            raise ValueError(f"candidates has repeated particles: {cand.tolist()}")
-        if (cand < 0).any():
-            raise ValueError(f"candidates must be particle indices >= 0, got {cand.tolist()}")
-        bound = torch.as_tensor(np.asarray(task.bound, dtype=float), dtype=torch.float64)
+        cand = torch.from_numpy(particle_indices(candidates, "candidates",
+                                                 getattr(task, "n_particles", None),
+                                                 distinct=True))
+        bound = torch.from_numpy(picker_bound(getattr(task, "bound", None)))
+        if not isinstance(generator, torch.Generator):
+            raise TypeError(f"generator must be a torch.Generator (the only source of "
+                            f"randomness), got {type(generator).__name__}")
+        if on_iteration is not None and not callable(on_iteration):
+            raise TypeError(f"on_iteration must be callable or None, got {on_iteration!r}")
         dist = self.initial(cand.numel(), bound)
         best_cost, best = float("inf"), None
         history, elite_hist, seconds = [], [], []
@@ -245,9 +275,18 @@ class CEM:
             s = self.sample(dist, cand, bound, generator)
             if cfg.keep_best and best is not None:
                 s.choice[0], s.particles[0], s.displacements[0] = best
-            costs = torch.as_tensor(task.evaluate(s.particles, s.displacements),
-                                    dtype=torch.float64)
-            costs = torch.where(torch.isfinite(costs), costs, torch.inf)
+            costs = _check_costs(task, task.evaluate(s.particles, s.displacements),
+                                 cfg.population)
+            finite = torch.isfinite(costs)
+            if not finite.any():
+                raise RuntimeError(
+                    f"every sample of CEM iteration {it} had a non-finite cost (all "
+                    f"{cfg.population} NaN or inf from {_evaluate_name(task)}); no plan to "
+                    f"return")
+            if not finite.all():
+                log.debug("CEM iteration %d: %d of %d costs non-finite, scored +inf", it,
+                          int((~finite).sum()), cfg.population)
+            costs = torch.where(finite, costs, torch.inf)
             dist, elite = self.refit(dist, s, costs, bound)
             i = int(elite[0])
             if float(costs[i]) < best_cost:
@@ -263,3 +302,25 @@ class CEM:
         return CEMResult(best[1].numpy().copy(), best[2].numpy().copy(), best_cost,
                          np.array(history), np.array(elite_hist), np.array(seconds),
                          cand.numpy().copy())
+
+
+def _evaluate_name(task) -> str:
+    return f"{type(task).__name__}.evaluate"
+
+
+def _check_costs(task, raw, population: int) -> torch.Tensor:
+    """The costs ``task.evaluate`` returned as a (P,) float64 tensor (NaN/inf kept)."""
+    if raw is None:
+        raise TypeError(f"{_evaluate_name(task)} returned None; it must return "
+                        f"({population},) float costs")
+    try:
+        costs = torch.as_tensor(raw.detach().cpu() if torch.is_tensor(raw)
+                                else np.asarray(raw, dtype=float), dtype=torch.float64)
+    except (TypeError, ValueError) as e:
+        raise TypeError(f"{_evaluate_name(task)} must return ({population},) float costs, got "
+                        f"{type(raw).__name__}: {e}") from None
+    if costs.shape != (population,):
+        raise ValueError(f"{_evaluate_name(task)} returned costs of shape "
+                         f"{tuple(costs.shape)} for {population} samples; it must return "
+                         f"one cost per sample, shape ({population},)")
+    return costs

@@ -20,6 +20,7 @@ import torch
 
 from dopt.costs import QuadraticCost
 from dopt.rollout import FDConfig, RolloutService
+from dopt.validation import check_config, check_int, check_real, float_array
 
 log = logging.getLogger(__name__)
 
@@ -44,6 +45,9 @@ class ILQRConfig:
     alphas: tuple[float, ...] = field(default_factory=_default_alphas)
 
     def __post_init__(self):
+        if not isinstance(self.fd, FDConfig):
+            raise TypeError(f"ILQRConfig.fd must be an FDConfig, got {self.fd!r}")
+        check_config(self)
         if not 0 <= self.mu_min <= self.mu_init <= self.mu_max:
             raise ValueError("need 0 <= mu_min <= mu_init <= mu_max")
         if self.mu_factor <= 1:
@@ -96,6 +100,13 @@ class ILQR:
 
     def __init__(self, service: RolloutService, cost: QuadraticCost,
                  config: ILQRConfig = ILQRConfig()):
+        if not isinstance(config, ILQRConfig):
+            raise TypeError(f"config must be an ILQRConfig, got {type(config).__name__}")
+        for name, obj, kind in (("service", service, "RolloutService"),
+                                ("cost", cost, "QuadraticCost")):
+            if not hasattr(obj, "scene"):
+                raise TypeError(f"{name} must be a {kind} (with a scene), got "
+                                f"{type(obj).__name__}")
         if cost.scene is not service.scene:
             raise ValueError("cost and rollout service must share one Scene")
         self.service, self.cost, self.config = service, cost, config
@@ -106,11 +117,20 @@ class ILQR:
                 nominal: np.ndarray | None = None) -> ILQRStep:
         """One iteration from state x0 (ns,) and controls (T, nu) on the DoF set ``dofs``
         (None: all). ``nominal`` (T+1, ns) may pass the trajectory of these controls if the
-        caller has it; otherwise it is rolled out."""
+        caller has it; otherwise it is rolled out.
+
+        Raises:
+            TypeError / ValueError: controls that are not a finite (T, nu) float array with
+                T >= 1, a nominal that is not (T+1, ns), bad DoFs or a bad x0 (the rollout
+                service's checks).
+        """
         svc, scene = self.service, self.service.scene
         C = scene.dofs() if dofs is None else scene.as_dofs(dofs)
-        U = np.ascontiguousarray(controls, dtype=float)
-        X = svc.trajectory(x0, U).states if nominal is None else nominal
+        U = _controls(controls, scene.nu)
+        if nominal is None:
+            X = svc.trajectory(x0, U).states
+        else:
+            X = float_array(nominal, "nominal", (len(U) + 1, None))
         J0 = float(self.cost.total(X, U))
 
         t0 = time.perf_counter()
@@ -148,9 +168,9 @@ class ILQR:
               rtol: float = 1e-6) -> ILQRResult:
         """Iterate until the relative improvement drops below rtol after an accepted step,
         the regularisation saturates, or max_iterations."""
-        if max_iterations < 1:
-            raise ValueError("max_iterations must be >= 1")
-        U, X = np.asarray(controls, dtype=float), None
+        check_int(max_iterations, "max_iterations", minimum=1)
+        check_real(rtol, "rtol", minimum=0.0)
+        U, X = _controls(controls, self.service.scene.nu), None
         steps, costs = [], []
         for _ in range(max_iterations):
             step = self.iterate(x0, U, dofs, nominal=X)
@@ -179,6 +199,8 @@ def backward_pass(F: torch.Tensor, lx: torch.Tensor, lxx: torch.Tensor, lu: torc
     q = [lx; lu] + F^T V'_x (l_ux = 0), with F^T as a view (no transposed copy of F), which
     keeps the number of small torch calls, and the bytes copied, low.
     """
+    if not (np.isfinite(mu) and mu >= 0):
+        raise ValueError(f"mu must be a finite number >= 0, got {mu!r}")
     T, n, m = F.shape
     nu = m - n
     mu_eye = mu * torch.eye(nu, dtype=F.dtype)
@@ -203,3 +225,11 @@ def backward_pass(F: torch.Tensor, lx: torch.Tensor, lxx: torch.Tensor, lu: torc
         Vxx = torch.addmm(torch.addmm(Q[:n, :n], K.T, W[:, 1:]), Qux.T, K)
         Vxx = 0.5 * (Vxx + Vxx.T)
     return G[:, :, 1:].contiguous(), G[:, :, 0].contiguous()
+
+
+def _controls(controls, nu: int) -> np.ndarray:
+    """A (T, nu) C-contiguous float64 control sequence with T >= 1 and finite entries."""
+    U = float_array(controls, "controls", (None, nu))
+    if len(U) == 0:
+        raise ValueError(f"controls must have T >= 1 rows, got shape {U.shape}")
+    return U

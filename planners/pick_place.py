@@ -39,6 +39,7 @@ from dopt.tasks.pick.cloth_scene import ClothSceneConfig, make_cloth
 from dopt.tasks.pick.picker import PickerConfig
 from dopt.tasks.pick.rope_scene import RopeSceneConfig, make_rope
 from dopt.tasks.pick.scene import DeformableScene, PickPlaceTask, end_to_end, mean_distance
+from dopt.validation import check_config, check_int
 from planners.cem import CEM, CEMConfig
 from planners.scripted import ScriptedConfig, scripted
 
@@ -84,25 +85,34 @@ class PickPlaceSettings:
     threads: int = 0
 
     def __post_init__(self):
-        if self.task not in GOALS:
+        if not isinstance(self.task, str) or self.task not in GOALS:
             raise ValueError(f"unknown task {self.task!r}; choose from {', '.join(GOALS)}")
-        if self.goal not in GOALS[self.task]:
+        if not isinstance(self.goal, str) or self.goal not in GOALS[self.task]:
             raise ValueError(f"unknown {self.task} goal {self.goal!r}; choose from "
                              f"{', '.join(GOALS[self.task])}")
-        if isinstance(self.n, bool) or not isinstance(self.n, (int, np.integer)) or self.n < 3:
-            raise ValueError(f"n must be an int >= 3, got {self.n!r}")
-        if not (np.isfinite(self.bound) and self.bound > 0):
-            raise ValueError(f"bound must be a positive number of metres, got {self.bound!r}")
-        if isinstance(self.threads, bool) or not isinstance(self.threads, (int, np.integer)) \
-                or self.threads < 0:
-            raise ValueError(f"threads must be an int >= 0 (0: one per core), got {self.threads!r}")
+        if not isinstance(self.cem, CEMConfig):
+            raise TypeError(f"PickPlaceSettings.cem must be a CEMConfig, got {self.cem!r}")
+        if not isinstance(self.scripted, ScriptedConfig):
+            raise TypeError(f"PickPlaceSettings.scripted must be a ScriptedConfig, got "
+                            f"{self.scripted!r}")
+        # n an int >= 3, bound / side / length finite > 0 (m), threads an int >= 0 (0: one
+        # per core), selfcollide a bool; TypeError or ValueError naming the field
+        check_config(self, positive=("bound", "side", "length"),
+                     minimum={"n": 3, "threads": 0})
+        for name in ("n", "threads"):          # numpy scalars -> Python (JSON-able to_dict)
+            object.__setattr__(self, name, int(getattr(self, name)))
+        for name in ("bound", "side", "length"):
+            object.__setattr__(self, name, float(getattr(self, name)))
+        object.__setattr__(self, "selfcollide", bool(self.selfcollide))
 
     @classmethod
     def preset(cls, task: str, goal: str, quick: bool = False) -> PickPlaceSettings:
         """The settings the experiments run by default (``PRESETS``); ``quick`` shrinks them
         to a smoke run (8 x 8 cloth or 20-particle rope, population 8, 2 iterations)."""
-        if task not in GOALS or goal not in GOALS[task]:
+        if (task, goal) not in PRESETS:
             raise ValueError(f"no preset for {task!r} / {goal!r}; choose from {GOALS}")
+        if not isinstance(quick, (bool, np.bool_)):
+            raise TypeError(f"quick must be a bool, got {quick!r}")
         p = PRESETS[task, goal]
         cem = CEMConfig(horizon=p.horizon, iterations=p.iterations, population=p.population,
                         elites=p.elites)
@@ -119,9 +129,15 @@ class PickPlaceSettings:
 
     @classmethod
     def from_dict(cls, d: dict) -> PickPlaceSettings:
+        """Inverse of ``to_dict``; ValueError naming missing or unknown fields."""
+        if not isinstance(d, dict):
+            raise TypeError(f"PickPlaceSettings.from_dict needs a dict, got {type(d).__name__}")
         d = dict(d)
-        d["cem"] = CEMConfig(**d["cem"])
-        d["scripted"] = ScriptedConfig(**d["scripted"])
+        for name, config in (("cem", CEMConfig), ("scripted", ScriptedConfig)):
+            if isinstance(d.get(name), dict):
+                _check_fields(config, d[name], f"settings[{name!r}]")
+                d[name] = config(**d[name])
+        _check_fields(cls, d, "settings")
         return cls(**d)
 
 
@@ -198,6 +214,8 @@ class Problem:
 def make_problem(settings: PickPlaceSettings, seed: int = 0) -> Problem:
     """The scene, start and stages of a task (the seed picks the crumpled start of rope
     straightening; every other start is deterministic)."""
+    _check_settings(settings)
+    _check_seed(seed)
     if settings.task == "cloth":
         return _cloth_problem(settings)
     return _rope_problem(settings, seed)
@@ -284,6 +302,7 @@ class CEMPlanner:
     def __init__(self, config: CEMConfig, candidates: str, seed: int):
         if candidates not in self.CANDIDATES:
             raise ValueError(f"candidates must be one of {self.CANDIDATES}, got {candidates!r}")
+        _check_seed(seed)
         self.cem, self.candidates = CEM(config), candidates
         self.generator = torch.Generator().manual_seed(int(seed))
         self.rng = np.random.default_rng(int(seed))
@@ -310,6 +329,8 @@ class ScriptedPlanner:
     """The paper's scripted policy over the key particles (deterministic: no seed)."""
 
     def __init__(self, config: ScriptedConfig = ScriptedConfig()):
+        if not isinstance(config, ScriptedConfig):
+            raise TypeError(f"config must be a ScriptedConfig, got {type(config).__name__}")
         self.config = config
 
     def plan(self, task, keys, on_iteration=None) -> StagePlan:
@@ -319,12 +340,15 @@ class ScriptedPlanner:
 
 
 def make_planner(method: str, settings: PickPlaceSettings, seed: int = 0) -> PickPlanner:
-    """The planner of a method name (``METHODS``) with the settings' configs."""
+    """The planner of a method name (``METHODS``) with the settings' configs; ``seed`` an
+    int >= 0."""
+    if not isinstance(method, str) or method not in METHODS:
+        raise ValueError(f"unknown method {method!r}; choose from {', '.join(METHODS)}")
+    _check_settings(settings)
+    _check_seed(seed)
     if method == "scripted":
         return ScriptedPlanner(settings.scripted)
     kinds = {"simple": "keys", "original": "all", "random": "random"}
-    if method not in kinds:
-        raise ValueError(f"unknown method {method!r}; choose from {', '.join(METHODS)}")
     return CEMPlanner(settings.cem, kinds[method], seed)
 
 
@@ -364,6 +388,12 @@ def run_problem(problem: Problem, planner: PickPlanner, *, method: str = "", see
     ``service`` defaults to a new one with the settings' threads (closed at the end);
     ``method`` and ``seed`` only label the result.
     """
+    if not isinstance(problem, Problem):
+        raise TypeError(f"problem must be a Problem (make_problem), got {type(problem).__name__}")
+    if not callable(getattr(planner, "plan", None)):
+        raise TypeError(f"planner must be a PickPlanner (with plan), got {type(planner).__name__}")
+    if on_iteration is not None and not callable(on_iteration):
+        raise TypeError(f"on_iteration must be callable or None, got {on_iteration!r}")
     start = time.perf_counter()
     own = service is None
     svc = service or RolloutService(problem.scene.scene,
@@ -397,10 +427,17 @@ def run_problem(problem: Problem, planner: PickPlanner, *, method: str = "", see
 def solve(settings: PickPlaceSettings, method: str = "simple", seed: int = 0,
           on_iteration: Callable[[int, float], None] | None = None) -> PickPlaceResult:
     """One trial in one call: build the problem, plan every stage with ``method``, execute,
-    measure. The same settings, method and seed give the same result."""
+    measure. The same settings, method and seed give the same result.
+
+    Raises:
+        TypeError / ValueError: settings that are not PickPlaceSettings, an unknown method, a
+            seed that is not an int >= 0, an on_iteration that is not callable.
+    """
+    if on_iteration is not None and not callable(on_iteration):
+        raise TypeError(f"on_iteration must be callable or None, got {on_iteration!r}")
+    planner = make_planner(method, settings, seed)      # checks all three before any scene
     problem = make_problem(settings, seed)
-    return run_problem(problem, make_planner(method, settings, seed), method=method,
-                       seed=seed, on_iteration=on_iteration)
+    return run_problem(problem, planner, method=method, seed=seed, on_iteration=on_iteration)
 
 
 def run_trial(params: dict, on_iteration: Callable[[int, float], None] | None = None) -> dict:
@@ -436,6 +473,33 @@ def summarize(results: Sequence[dict], methods: Sequence[str],
         entry["n"] = len(runs)
         out[m] = entry
     return out
+
+
+def _check_seed(seed) -> None:
+    check_int(seed, "seed", minimum=0)
+    if seed >= 2 ** 63:
+        raise ValueError(f"seed must be < 2**63, got {seed}")
+
+
+def _check_settings(settings) -> None:
+    if not isinstance(settings, PickPlaceSettings):
+        raise TypeError(f"settings must be PickPlaceSettings (PickPlaceSettings.preset or "
+                        f"from_dict), got {type(settings).__name__}")
+
+
+def _check_fields(cls, d: dict, name: str) -> None:
+    """ValueError naming the fields of dataclass ``cls`` that ``d`` lacks or does not know."""
+    import dataclasses
+
+    fields = {f.name: f for f in dataclasses.fields(cls)}
+    unknown = sorted(set(d) - set(fields))
+    missing = sorted(n for n, f in fields.items() if n not in d
+                     and f.default is dataclasses.MISSING
+                     and f.default_factory is dataclasses.MISSING)
+    if unknown or missing:
+        raise ValueError(f"{name} does not match {cls.__name__}: "
+                         + "; ".join(([f"missing {missing}"] if missing else [])
+                                     + ([f"unknown {unknown}"] if unknown else [])))
 
 
 def _finite(x: float | None) -> float | None:

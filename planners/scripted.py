@@ -15,6 +15,9 @@ from typing import Protocol
 
 import numpy as np
 
+from dopt.validation import check_config, float_array
+from planners._checks import particle_indices, picker_bound
+
 log = logging.getLogger(__name__)
 
 
@@ -54,8 +57,8 @@ class ScriptedConfig:
     max_actions: int = 12
 
     def __post_init__(self):
-        if self.lift < 0 or self.tolerance <= 0 or min(self.per_particle, self.max_actions) < 1:
-            raise ValueError(f"need lift >= 0, tolerance > 0, max_actions >= 1, got {self}")
+        check_config(self, positive=("tolerance",),
+                     minimum={"lift": 0.0, "per_particle": 1, "max_actions": 1})
 
 
 @dataclass(frozen=True)
@@ -77,17 +80,27 @@ def scripted(task: ScriptedTask, keys, config: ScriptedConfig = ScriptedConfig()
     towards (goal + lift) and released, in several actions if the bound clips the displacement
     (at most ``per_particle`` per key particle and ``max_actions`` in all). Where it lands is
     not corrected.
+
+    Raises:
+        TypeError: keys that are not integers, a config that is not a ScriptedConfig.
+        ValueError: empty, negative or out-of-range keys (the task's ``goal`` has N rows), a
+            bad bound, a goal that is not a finite (N, 3) array, a non-finite start state.
+        RuntimeError: the final state's cost is not finite.
     """
-    bound = np.asarray(task.bound, dtype=float)
+    if not isinstance(config, ScriptedConfig):
+        raise TypeError(f"config must be a ScriptedConfig, got {type(config).__name__}")
+    bound = picker_bound(task.bound)
+    goal = float_array(task.goal, "task.goal", (None, 3))
+    keys = particle_indices(keys, "keys", len(goal))
     lift = np.array([0.0, 0.0, config.lift])
-    state = np.asarray(task.start_state, dtype=float)
+    state = float_array(task.start_state, "task.start_state", ndim=1)
     particles, disps = [], []
-    for k in np.asarray(keys, dtype=int).reshape(-1):
+    for k in keys:
         for _ in range(config.per_particle):
             if len(particles) >= config.max_actions:
                 break
             p = task.positions(state)[k]
-            target = task.goal[k] + lift
+            target = goal[k] + lift
             if np.linalg.norm(target[:2] - p[:2]) < config.tolerance:
                 break
             d = np.clip(target - p, -bound, bound)
@@ -98,5 +111,8 @@ def scripted(task: ScriptedTask, keys, config: ScriptedConfig = ScriptedConfig()
             if np.array_equal(d, target - p):    # placed above its goal: next particle
                 break
     cost = float(task.cost(state))
+    if not np.isfinite(cost):
+        raise RuntimeError(f"the scripted policy's final state has a non-finite cost ({cost}) "
+                           f"after {len(particles)} actions")
     return ScriptedResult(np.array(particles, dtype=np.int64),
                           np.array(disps, dtype=float).reshape(-1, 3), cost, state)

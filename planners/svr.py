@@ -23,12 +23,32 @@ import numpy as np
 import torch
 
 from dopt.mpc import Plan
+from dopt.validation import check_config, check_int, index_array
 
 METHODS = ("baseline", "rand", "naive", "svr-sum", "svr-svd")
 
 
+def _gains(K, name: str = "K") -> torch.Tensor:
+    """K as a (T, nu, 2c) floating torch tensor with T, nu, c >= 1 and finite entries."""
+    if not torch.is_tensor(K):
+        arr = np.asarray(K)
+        if arr.dtype.kind not in "f":
+            raise TypeError(f"{name} must be a float tensor (T, nu, 2c), got "
+                            f"{type(K).__name__} of dtype {arr.dtype}")
+        K = torch.from_numpy(np.ascontiguousarray(arr))
+    if not K.is_floating_point():
+        raise TypeError(f"{name} must be a float tensor (T, nu, 2c), got dtype {K.dtype}")
+    if K.ndim != 3 or min(K.shape) < 1 or K.shape[-1] % 2:
+        raise ValueError(f"{name} must have shape (T, nu, 2c) with T, nu, c >= 1, got "
+                         f"{tuple(K.shape)}")
+    if not torch.isfinite(K).all():
+        raise ValueError(f"{name} contains NaN/inf")
+    return K
+
+
 def importance_sum(K: torch.Tensor) -> torch.Tensor:
     """Eq. 15: (T, nu, 2c) -> (c,)."""
+    K = _gains(K)
     c = K.shape[-1] // 2
     a = K.abs().sum(dim=(0, 1))
     return (a[:c] + a[c:]) / K.shape[0]
@@ -36,6 +56,8 @@ def importance_sum(K: torch.Tensor) -> torch.Tensor:
 
 def importance_svd(K: torch.Tensor, g: int = 3) -> torch.Tensor:
     """Eq. 17 with the first g singular values: (T, nu, 2c) -> (c,)."""
+    K = _gains(K)
+    check_int(g, "g", minimum=1)
     c = K.shape[-1] // 2
     _, S, Vh = torch.linalg.svd(K, full_matrices=False)     # S (T, r), Vh (T, r, 2c)
     g = min(g, S.shape[-1])
@@ -77,12 +99,7 @@ class SelectionConfig:
     def __post_init__(self):
         if self.method not in METHODS:
             raise ValueError(f"unknown method {self.method!r}; choose from {METHODS}")
-        if not np.isfinite(self.rho) or self.rho < 0:
-            raise ValueError(f"rho must be >= 0, got {self.rho}")
-        if not isinstance(self.theta, (int, np.integer)) or self.theta < 0:
-            raise ValueError(f"theta must be an int >= 0, got {self.theta}")
-        if self.g < 1:
-            raise ValueError(f"g must be >= 1, got {self.g}")
+        check_config(self, minimum={"rho": 0.0, "theta": 0, "g": 1})
 
 
 class DofSelector:
@@ -100,10 +117,14 @@ class DofSelector:
                  rng: np.random.Generator):
         if not isinstance(rng, np.random.Generator):
             raise TypeError("rng must be a numpy.random.Generator")
+        if not isinstance(config, SelectionConfig):
+            raise TypeError(f"config must be a SelectionConfig, got {type(config).__name__}")
+        nv = check_int(nv, "nv", minimum=1)
         self.nv, self.config, self.rng = nv, config, rng
-        self.robot = np.unique(np.asarray(robot, dtype=int))
+        self.robot = np.unique(index_array(robot, "robot", nv, allow_empty=True))
+        costed = index_array(costed, "costed", nv, allow_empty=True)
         if config.method == "naive":
-            self.active = np.union1d(self.robot, np.asarray(costed, dtype=int))
+            self.active = np.union1d(self.robot, costed)
         else:
             self.active = np.arange(nv)   # baseline and SVR start from F (rand redraws)
         self.importance: np.ndarray | None = None
@@ -127,6 +148,11 @@ class DofSelector:
         method = self.config.method
         if not method.startswith("svr"):
             return self.active
+        dofs = index_array(dofs, "dofs", self.nv)
+        K = _gains(K)
+        if K.shape[-1] != 2 * len(dofs):
+            raise ValueError(f"K has {K.shape[-1]} columns for {len(dofs)} dofs; it must have "
+                             f"2 |dofs| = {2 * len(dofs)}")
         imp = importance_sum(K) if method == "svr-sum" else importance_svd(K, self.config.g)
         self.importance = imp.numpy()
         keep = (self.importance >= self.config.rho) | np.isin(dofs, self.robot)
@@ -144,6 +170,11 @@ class SVROptimiser:
     """
 
     def __init__(self, ilqr, selector: DofSelector):
+        if not callable(getattr(ilqr, "iterate", None)):
+            raise TypeError(f"ilqr must be a planners.ilqr.ILQR (with iterate), got "
+                            f"{type(ilqr).__name__}")
+        if not isinstance(selector, DofSelector):
+            raise TypeError(f"selector must be a DofSelector, got {type(selector).__name__}")
         self.ilqr, self.selector = ilqr, selector
 
     def optimise(self, state: np.ndarray, plan: Plan) -> Plan:

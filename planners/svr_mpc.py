@@ -29,6 +29,7 @@ from dopt.stats import mean_ci
 from dopt.tasks import get_task
 from dopt.tasks.push.costs import PushWeights, goal_distance, push_cost
 from dopt.tasks.push.task_model import TaskModel
+from dopt.validation import check_config, check_int
 from planners.ilqr import ILQR, ILQRConfig
 from planners.svr import METHODS, DofSelector, SelectionConfig, SVROptimiser, paper_theta
 
@@ -65,8 +66,11 @@ class SVRMPCSettings:
         get_task(self.task)                       # ValueError naming the known tasks
         if self.method not in METHODS:
             raise ValueError(f"unknown method {self.method!r}; choose from {METHODS}")
-        if self.threads < 0:
-            raise ValueError(f"threads must be >= 0 (0: one per core), got {self.threads}")
+        # rho, control_noise finite >= 0; theta an int >= 0 or None; slowdown finite > 0 or
+        # None; timeout an int >= 1 or None; feedback, synchronous bools; threads an int >= 0
+        check_config(self, positive=("slowdown",),
+                     minimum={"rho": 0.0, "theta": 0, "timeout": 1, "control_noise": 0.0,
+                              "threads": 0})
 
     @property
     def selection(self) -> SelectionConfig:
@@ -158,6 +162,10 @@ def run_svr_mpc(settings: SVRMPCSettings = SVRMPCSettings(), seed: int = 0) -> S
     ``synchronous``.
     """
     import torch
+
+    if not isinstance(settings, SVRMPCSettings):
+        raise TypeError(f"settings must be SVRMPCSettings, got {type(settings).__name__}")
+    check_int(seed, "seed", minimum=0)
 
     torch.set_num_threads(1)
     seed = int(seed)

@@ -49,12 +49,14 @@ def test_noise_sweep_journals_each_goal_and_a_rerun_resumes(tmp_path):
 
     journal = tmp_path / "noise.jsonl"
     args = (RopeConfig(), ClothConfig(), [1e-3], [12], 1, ["auto", "off"])
-    rows = key_particles.noise_sweep(journal, *args)
+    rows, failed = key_particles.noise_sweep(journal, *args)
+    assert failed == {}
     assert len(rows) == 3 + 4 * 4 * 2        # rope tasks + folds x triangulations x modes
     lines = journal.read_text().splitlines()
     assert len(lines) == len(rows)
     journal.write_text("\n".join(lines[:-5]) + "\n")    # a sweep killed 5 goals before the end
-    again = key_particles.noise_sweep(journal, *args)
+    again, failed = key_particles.noise_sweep(journal, *args)
+    assert failed == {}
     assert len(journal.read_text().splitlines()) == len(rows)
     assert sorted(map(str, again)) == sorted(map(str, rows))     # same seeds, same counts
     table = key_particles.noise_table(again)
