@@ -269,15 +269,9 @@ def write_plots(out: Path, task: str, records: list[dict], rows, render: bool = 
         y = list(r["n_dofs"]) + list(r["n_dofs"][-1:])
         ax.step(x, y, where="post", **style[row],
                 label=f"{row} (mean {r['dofs_mean']:.1f}, {len(r['n_dofs'])} optimisations)")
-    ax.set_xlabel("agent step at which the optimisation started")
-    ax.set_ylabel("active DoFs |C|")
-    ax.set_title(f"{task}: DoFs optimised over the episode (first seed of each method)")
-    ax.set_ylim(bottom=0)
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize=9)
-    fig.tight_layout()
-    fig.savefig(out / "mpc_dofs.png", dpi=110)
-    plt.close(fig)
+    _save(fig, ax, out / "mpc_dofs.png", "agent step at which the optimisation started",
+          "active DoFs |C|", f"{task}: DoFs optimised over the episode (first seed of each "
+          "method)")
 
     fig, ax = plt.subplots(figsize=(7, 4))
     for row, r in first.items():
@@ -288,15 +282,9 @@ def write_plots(out: Path, task: str, records: list[dict], rows, render: bool = 
                           f"end {d[-1]:.3f} m")
     ax.axhline(PushWeights().success_radius, color="k", ls="--", lw=1,
                label="success radius")
-    ax.set_xlabel("executed agent step")
-    ax.set_ylabel("goal object's distance to the goal (m)")
-    ax.set_title(f"{task}: goal distance over the episode (first seed of each method)")
-    ax.set_ylim(bottom=0)
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize=9)
-    fig.tight_layout()
-    fig.savefig(out / "mpc_goal_distance.png", dpi=110)
-    plt.close(fig)
+    _save(fig, ax, out / "mpc_goal_distance.png", "executed agent step",
+          "goal object's distance to the goal (m)",
+          f"{task}: goal distance over the episode (first seed of each method)")
 
     if not render:
         return
@@ -416,6 +404,21 @@ def main(argv=None) -> int:
     write_plots(args.out, args.task, records, list(methods), render=not args.no_render)
     print((args.out / "table1.md").read_text())
     return 1 if failed else 0
+
+
+def _save(fig, ax, path: Path, xlabel: str, ylabel: str, title: str) -> None:
+    """Label, grid and legend one plot, write it to ``path`` and close it."""
+    import matplotlib.pyplot as plt
+
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel)
+    ax.set_title(title)
+    ax.set_ylim(bottom=0)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=9)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
 
 
 if __name__ == "__main__":

@@ -1,8 +1,7 @@
-import mujoco
-import numpy as np
 import pytest
 
 from dopt.scene import Scene
+from tests.dopt import models
 from tests.dopt.models import MIXED_JOINTS
 
 
@@ -14,15 +13,7 @@ def scene():
 @pytest.fixture
 def moving_state(scene):
     """An mjSTATE_INTEGRATION row of the mixed model in motion, with contacts."""
-    m = scene.model
-    d = mujoco.MjData(m)
-    rng = np.random.default_rng(3)
-    d.qvel[:] = rng.normal(0, 0.3, m.nv)
-    for _ in range(40):
-        d.ctrl[:] = rng.uniform(-1, 1, m.nu)
-        mujoco.mj_step(m, d)
-    assert d.ncon > 0
-    return scene.state_of(d)
+    return models.moving_state(scene)
 
 
 @pytest.fixture(params=[True, False], ids=["c-kernels", "batch"])

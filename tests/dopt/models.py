@@ -41,3 +41,20 @@ MIXED_JOINTS = """
 TINY_ARENA = """<mujoco><size memory="3K"/><worldbody><geom type="plane" size="1 1 .1"/>
 <body pos="0 0 .05"><freejoint/><geom type="box" size=".05 .05 .05"/></body>
 <body pos="0 0 .16"><freejoint/><geom type="box" size=".05 .05 .05"/></body></worldbody></mujoco>"""
+
+
+def moving_state(scene):
+    """An mjSTATE_INTEGRATION row (ns,) of ``scene`` (MIXED_JOINTS) in motion, with contacts:
+    random velocities, then 40 steps of random controls (seeded)."""
+    import mujoco
+    import numpy as np
+
+    m = scene.model
+    d = mujoco.MjData(m)
+    rng = np.random.default_rng(3)
+    d.qvel[:] = rng.normal(0, 0.3, m.nv)
+    for _ in range(40):
+        d.ctrl[:] = rng.uniform(-1, 1, m.nu)
+        mujoco.mj_step(m, d)
+    assert d.ncon > 0
+    return scene.state_of(d)

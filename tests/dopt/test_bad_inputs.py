@@ -32,7 +32,7 @@ from dopt.tasks.pick.picker import PickerConfig  # noqa: E402
 from dopt.tasks.pick.rope_scene import RopeSceneConfig, make_rope  # noqa: E402
 from dopt.tasks.pick.scene import PickPlaceTask  # noqa: E402
 from dopt.tasks.push.costs import PushWeights  # noqa: E402
-from tests.dopt.models import MIXED_JOINTS  # noqa: E402
+from tests.dopt.models import MIXED_JOINTS, moving_state  # noqa: E402
 
 # one 0.1 kg slider, an unlimited motor, a 2 s timestep: u = 9e8 gives qacc 9e9 (< mjMAXVAL
 # 1e10, no warning in that step) but leaves qvel 1.8e10 and qpos 3.6e10 behind, which MuJoCo
@@ -46,21 +46,12 @@ HEAVY = SLIDER.replace('timestep="2"', 'timestep=".01"').replace('mass=".1"', 'm
 OTHER = """<mujoco><worldbody><body><freejoint/><geom size=".1"/></body></worldbody></mujoco>"""
 
 
-def _moving(scene):
-    m = scene.model
-    d = mujoco.MjData(m)
-    rng = np.random.default_rng(3)
-    d.qvel[:] = rng.normal(0, 0.3, m.nv)
-    for _ in range(40):
-        d.ctrl[:] = rng.uniform(-1, 1, m.nu)
-        mujoco.mj_step(m, d)
-    return scene.state_of(d)
 
 
 @pytest.fixture(scope="module")
 def mixed():
     scene = Scene.from_xml(MIXED_JOINTS)
-    x = _moving(scene)
+    x = moving_state(scene)
     svc = RolloutService(scene, RolloutConfig(threads=1, c_kernels=False))
     traj = svc.trajectory(x, np.zeros((10, scene.nu)))
     return SimpleNamespace(scene=scene, x=x, states=traj.states)
@@ -252,7 +243,7 @@ def c():
     small rope with its pick-and-place task, a cost, an MPC, a camera, images."""
     sc = Scene.from_xml(MIXED_JOINTS)
     m = sc.model
-    x = _moving(sc)
+    x = moving_state(sc)
     nv, nu, ns = m.nv, m.nu, sc.nstate
     svc = RolloutService(sc, RolloutConfig(threads=1))
     T = 3
