@@ -155,7 +155,7 @@ def make_trials(args, methods=None, rhos=None, thetas=None) -> list[Trial]:
                 for theta in thetas or [_theta(args.theta, method)]:
                     for feedback in FEEDBACK[args.feedback]:
                         p = dict(task=args.task, method=method, rho=rho, theta=theta,
-                                 seed=seed, slowdown=slowdown, timeout=args.timeout or 0,
+                                 seed=seed, slowdown=slowdown, timeout=args.timeout,
                                  threads=args.threads, feedback=feedback,
                                  control_noise=args.control_noise)
                         out.append(Trial(trial_key(p), p))

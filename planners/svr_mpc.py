@@ -205,9 +205,10 @@ def run_trial(params: dict) -> dict:
 
 
 def trial_key(p: dict) -> str:
-    """File-name key of a trial's params: everything that changes its outcome."""
+    """File-name key of a trial's params: everything that changes its outcome (timeout None,
+    the task's own, is Y0)."""
     parts = [p["task"], p["method"], f"rho{p['rho']:g}", f"theta{p['theta']}",
-             f"slow{p['slowdown']:g}", f"Y{p['timeout']}", f"seed{p['seed']}"]
+             f"slow{p['slowdown']:g}", f"Y{p['timeout'] or 0}", f"seed{p['seed']}"]
     if p.get("feedback"):
         parts.append("fb")
     if p.get("control_noise"):

@@ -70,3 +70,20 @@ def test_ray_path(tmp_path):
 def test_bad_arguments(tmp_path, args, message):
     proc = run(*args, "--out", str(tmp_path), check=False)
     assert proc.returncode == 2 and message in proc.stderr
+
+
+@pytest.mark.parametrize("flags", [[], ["--timeout", "7", "--feedback", "both"]])
+def test_trials_of_the_default_flags_are_valid_settings(tmp_path, flags):
+    """Every trial the flags make (the task's own timeout when --timeout is not given) builds
+    valid SVRMPCSettings, so a full run cannot fail on its parameters alone."""
+    import mpc
+
+    from planners.svr_mpc import SVRMPCSettings
+
+    args = mpc.parse_args(["--out", str(tmp_path / "o"), "--trials", "2", *flags])
+    trials = mpc.make_trials(args)
+    assert len(trials) == 2 * 5 * (2 if "both" in flags else 1)
+    for t in trials:
+        p = {k: v for k, v in t.params.items() if k != "seed"}
+        SVRMPCSettings(**p)
+        assert ("-Y7-" if flags else "-Y0-") in t.key
