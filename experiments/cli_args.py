@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import argparse
 import functools
+import json
 import math
 import os
 import sys
@@ -208,3 +209,19 @@ def guarded(script: str):
                 return 1
         return run
     return wrap
+
+
+def write_summary(summary: dict, out: Path, record: Path | None, script: str, argv,
+                  indent: int = 2) -> str:
+    """Add this run's provenance (``script`` and its flags: ``argv``, or ``sys.argv[1:]`` when
+    None) to ``summary``, write it to OUT/summary.json and, with --record, to that path too.
+    Returns the JSON text."""
+    from dopt.provenance import provenance  # pure Python: no MuJoCo, no torch
+
+    summary["provenance"] = provenance([script, *(sys.argv[1:] if argv is None else argv)])
+    text = json.dumps(summary, indent=indent)
+    (Path(out) / "summary.json").write_text(text)
+    if record:
+        Path(record).parent.mkdir(parents=True, exist_ok=True)
+        Path(record).write_text(text)
+    return text

@@ -40,6 +40,7 @@ from cli_args import (
     output_file,
     positive_int,
     record_problem,
+    write_summary,
 )
 
 from deformables import (
@@ -52,7 +53,7 @@ from deformables import (
 )
 from deformables.cloth import PANEL_MODES
 from deformables.goals import TRIANGULATIONS
-from dopt.provenance import code_version, provenance
+from dopt.provenance import code_version
 
 ROPE_TASKS = ["rope_straighten", "rope_fold", "rope_fold_unequal"]
 CLOTH_TASKS = ["cloth_diagonal", "cloth_side", "cloth_reflective", "cloth_underneath"]
@@ -379,13 +380,8 @@ def main(argv=None) -> int:
                 c = str((row.get("code") or {}).get("commit") or "unknown")
                 commits[c] = commits.get(c, 0) + 1
     summary["trial_commits"] = {c: n for c, n in commits.items() if n}
-    summary["provenance"] = provenance(["experiments/key_particles.py",
-                                        *(sys.argv[1:] if argv is None else argv)])
-    text = json.dumps(summary, indent=1)
-    (args.out / "summary.json").write_text(text)
-    if args.record:
-        args.record.parent.mkdir(parents=True, exist_ok=True)
-        args.record.write_text(text)
+    write_summary(summary, args.out, args.record, "experiments/key_particles.py", argv,
+                  indent=1)
     for what, err in failed.items():
         print(f"FAILED {what}: {err}", file=sys.stderr)
     return 1 if failed else 0

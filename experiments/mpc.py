@@ -25,7 +25,6 @@ from __future__ import annotations
 import argparse
 import csv
 import importlib.util
-import json
 import logging
 import os
 import sys
@@ -46,9 +45,9 @@ from cli_args import (
     positive_float,
     positive_int,
     record_problem,
+    write_summary,
 )
 
-from dopt.provenance import provenance
 from dopt.sweep import SweepResult, Trial, run_sweep
 from dopt.tasks import PUSH_TASKS
 from planners.svr import METHODS, paper_theta
@@ -222,16 +221,6 @@ def write_table(out: Path, task: str, methods: dict, feedback: dict | None = Non
     (out / "table1.md").write_text("\n".join(lines) + "\n")
 
 
-def write_summary(args, summary: dict, argv, script: str = "experiments/mpc.py") -> None:
-    """summary.json under --out (and --record), with the provenance of this run."""
-    summary["provenance"] = provenance([script, *(sys.argv[1:] if argv is None else argv)])
-    text = json.dumps(summary, indent=2)
-    (args.out / "summary.json").write_text(text)
-    if args.record:
-        args.record.parent.mkdir(parents=True, exist_ok=True)
-        args.record.write_text(text)
-
-
 # ---------------------------------------------------------------------------------- plots
 
 def first_seed(records: list[dict], rows) -> dict:
@@ -399,7 +388,7 @@ def main(argv=None) -> int:
                "failed": failed, "trial_commits": res.commits}
     if args.feedback == "both":
         summary["feedback_effect"] = feedback_effect(records)
-    write_summary(args, summary, argv)
+    write_summary(summary, args.out, args.record, "experiments/mpc.py", argv)
     write_table(args.out, args.task, methods, summary.get("feedback_effect"))
     write_plots(args.out, args.task, records, list(methods), render=not args.no_render)
     print((args.out / "table1.md").read_text())

@@ -35,9 +35,9 @@ from cli_args import (
     positive_float,
     positive_int,
     record_problem,
+    write_summary,
 )
 
-from dopt.provenance import provenance
 from dopt.stats import mean_ci
 from dopt.sweep import SweepResult, Trial, run_sweep
 from planners.pick_place import (
@@ -154,13 +154,8 @@ def _main(task: str, script: str, doc: str, help_: dict, argv=None) -> int:
                "settings": settings.to_dict(),
                "methods": summarize(results, args.methods, problem.metric_names),
                "failed": failed, "trial_commits": res.commits,
-               "wall_s": time.perf_counter() - start,
-               "provenance": provenance([script, *(sys.argv[1:] if argv is None else argv)])}
-    text = json.dumps(summary, indent=2)
-    (out / "summary.json").write_text(text)
-    if args.record:
-        args.record.parent.mkdir(parents=True, exist_ok=True)
-        args.record.write_text(text)
+               "wall_s": time.perf_counter() - start}
+    write_summary(summary, out, args.record, script, argv)
     write_curves(out / "curves.csv", results)
     plot_curves(out / "cost_curves.png", results, args.methods,
                 f"{args.goal}: best cost per iteration")

@@ -18,7 +18,7 @@ import csv
 import sys
 
 import mpc as table1
-from cli_args import EPILOG, guarded, number_list
+from cli_args import EPILOG, guarded, number_list, write_summary
 
 from planners.svr_mpc import summarize
 
@@ -58,10 +58,9 @@ def main(argv=None) -> int:
                 rows.append(dict(rho=rho, theta=theta,
                                  **summarize(base + group, baseline="baseline" + fb)[
                                      args.method + fb]))
-    table1.write_summary(args, {"experiment": "fig4", "task": args.task,
-                                "method": args.method, "points": rows, "failed": failed,
-                                "trial_commits": res.commits},
-                         argv, "experiments/rho_sweep.py")
+    write_summary({"experiment": "fig4", "task": args.task, "method": args.method,
+                   "points": rows, "failed": failed, "trial_commits": res.commits},
+                  args.out, args.record, "experiments/rho_sweep.py", argv)
     if rows:
         with open(args.out / "rho_sweep.csv", "w", newline="") as f:
             w = csv.DictWriter(f, fieldnames=list(rows[0]))
