@@ -29,6 +29,8 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import dijkstra
 from scipy.spatial import cKDTree
 
+from dopt.validation import check_config
+
 from .decimation import BACKENDS, EmptyDecimationError, decimate
 from .distance import SurfaceDistance, hausdorff
 from .goals import CLOTH_LAYER_GAP
@@ -38,7 +40,6 @@ from .reduction import KeyParticles, grow_until_below
 from .validation import (
     check_areas,
     check_faces,
-    check_fields,
     check_positions,
     check_rest_matches,
     check_threshold,
@@ -141,9 +142,7 @@ class ClothConfig:
         for name in ("z_scale", "layer_gap", "threshold_gaps", "geodesic_radius",
                      "geodesic_spacings", "geodesic_cap", "sample_spacings", "panel_noise_floor"):
             check_threshold(getattr(self, name), f"ClothConfig.{name}")
-        check_fields(self, ints={"max_faces": None, "restarts": None, "restart_seed": 0,
-                                 "coarse_faces": None},
-                     bools=("exact_errors", "canonical_triangulation"))
+        check_config(self, minimum={"restart_seed": 0})
         if self.max_faces < 2:
             raise ValueError(f"max_faces must be at least 2, got {self.max_faces}")
         if self.restarts < 1:

@@ -39,8 +39,10 @@ from dataclasses import dataclass
 import cvxpy as cp
 import numpy as np
 
+from dopt.validation import check_config
+
 from .reduction import KeyParticles, grow_until_below
-from .validation import check_fields, check_positions, check_threshold
+from .validation import check_positions, check_threshold
 
 logger = logging.getLogger(__name__)
 
@@ -73,7 +75,7 @@ class RopeConfig:
     def __post_init__(self):
         if self.fit not in FITS:
             raise ValueError(f"unknown rope fit {self.fit!r}; choose from {FITS}")
-        check_fields(self, ints={"n_samples": None, "max_vertices": None})
+        check_config(self)
         if self.n_samples < 2:
             raise ValueError(f"RopeConfig.n_samples must be at least 2, got {self.n_samples}")
         check_threshold(self.threshold_spacings, "RopeConfig.threshold_spacings")

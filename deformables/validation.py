@@ -10,14 +10,13 @@ that ``deformables`` imports; it loads neither MuJoCo nor torch).
 """
 from __future__ import annotations
 
-import dataclasses
 import logging
 
 import numpy as np
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
-from dopt.validation import check_int, is_real
+from dopt.validation import is_real
 
 logger = logging.getLogger(__name__)
 
@@ -29,29 +28,6 @@ REST_RATIO_RANGE = (0.5, 2.0)
 #: (a fold never stretches an edge; 2 mm of Gaussian goal noise on a 40 x 40 sheet of 0.3 m
 #: stretches the worst of its edges 2.7 times, 3 would take 15 mm)
 STRETCH_LIMIT = 3.0
-
-
-# ----------------------------------------------------------------------------- scalars
-def check_bool(value, name: str) -> bool:
-    """``value`` as a bool (not 0/1, not a string)."""
-    if not isinstance(value, (bool, np.bool_)):
-        raise TypeError(f"{name} must be a bool, got {value!r}")
-    return bool(value)
-
-
-def check_fields(config, ints: dict | None = None, bools: tuple = ()) -> None:
-    """Types of a config dataclass: ``ints`` maps int fields to their minimum (None: no
-    minimum; a None value is accepted for fields whose default is None), ``bools`` names the
-    bool fields. Messages name ``Class.field``."""
-    cls = type(config).__name__
-    defaults = {f.name: f.default for f in dataclasses.fields(config)}
-    for name, lo in (ints or {}).items():
-        value = getattr(config, name)
-        if value is None and defaults.get(name) is None:
-            continue
-        check_int(value, f"{cls}.{name}", lo)
-    for name in bools:
-        check_bool(getattr(config, name), f"{cls}.{name}")
 
 
 # ----------------------------------------------------------------------------- arrays
