@@ -4,7 +4,8 @@
  *   dopt_fd:        reduced finite-difference A^C, B^C of a list of timesteps. As
  *                   mjd_transitionFD restricted to the DoF set C: control nudges skip the
  *                   position and velocity stages, velocity nudges skip the position stage.
- *   dopt_feedback:  one closed-loop rollout u_t = u_ff,t + K_t dx_C(x_t, ref_t), clamped.
+ *   dopt_feedback:  one closed-loop rollout u_t = u_ff,t + K_t dx_C(x_t, ref_t), clamped,
+ *                   judged after every step by the stability bounds of dopt/stability.py.
  *
  * Both stop at the first step that fails and name it: step t (the step from state row t with
  * control t) fails when MuJoCo warns during it (mj_checkPos / mj_checkVel of its start state,
@@ -70,7 +71,7 @@ static void log_handler(const log_message_t* msg) {
 
 /* the calling convention of this file; dopt/kernels.py refuses a build with another one
  * (a stale extension after an update that changed a signature) */
-int dopt_abi_version(void) { return 4; }
+int dopt_abi_version(void) { return 5; }
 
 /* install once, before the first kernel call */
 void dopt_install_log_handler(void) {
@@ -105,7 +106,8 @@ static void advance(const mjModel* m, mjData* d, int skip) {
 
 /* why a step failed (dopt/kernels.py names them): MuJoCo warned (read its counters), or the
  * state it left has a bad qpos, a bad qvel (|x| > mjMAXVAL or NaN), another non-finite entry */
-enum { FAULT_NONE = -1, FAULT_WARNING = 0, FAULT_QPOS = 1, FAULT_QVEL = 2, FAULT_NONFINITE = 3 };
+enum { FAULT_NONE = -1, FAULT_WARNING = 0, FAULT_QPOS = 1, FAULT_QVEL = 2, FAULT_NONFINITE = 3,
+       FAULT_SPEED = 4, FAULT_PENETRATION = 5, FAULT_STRAIN = 6, FAULT_CAPPED = 7 };
 #define MAXVAL 1e10   /* mjMAXVAL of mujoco/mjtype.h: the bound of mj_checkPos/Vel/Acc */
 
 static int bad_value(mjtNum x) { return x != x || x > MAXVAL || x < -MAXVAL; }
@@ -280,17 +282,99 @@ int dopt_fd(const mjModel* m, mjData* d, const layout_t* L, const warnings_t* wa
   return -1;
 }
 
+/* The stability bounds of one model (dopt.stability.Monitor fills it): the same expressions,
+ * in the same order, as Monitor.speed / penetration / strain / capped. */
+typedef struct {
+  const int* groups; int ngroup;        /* (ngroup, 3) qvel indices of linear DoFs, -1 pad */
+  const mjtNum* planes; int nplane;     /* (nplane, 4): unit normal, offset n.p */
+  const mjtNum* radius; int nvert;      /* (nvert,) flex vertex radii */
+  const mjtNum* length0; int nedge;     /* (nedge,) flex edge rest lengths (<= 0: skipped) */
+  int iteration_cap, max_capped;        /* max_capped < 0: capped steps are only counted */
+  mjtNum max_speed, max_penetration, max_strain;
+} bounds_t;
+
+/* one MjData's fields, read in place: flexvert_xpos (nvert, 3), flexedge_length (nedge),
+ * solver_niter (nisland) */
+typedef struct {
+  const mjtNum* vert_xpos;
+  const mjtNum* edge_length;
+  const int* niter;
+  int nisland;
+} probe_t;
+
+/* running extremes of one rollout: max speed, penetration, strain, capped steps; and the
+ * violated bound's value and index */
+enum { STAT_SPEED, STAT_PENETRATION, STAT_STRAIN, STAT_CAPPED, STAT_VALUE, STAT_INDEX, NSTAT };
+
+/* Judge the step just taken (qvel of the new state, positions of the step's start state):
+ * FAULT_NONE or the first broken bound, with its value and index in stats. */
+static int judge(const bounds_t* B, const probe_t* p, const mjtNum* qvel, mjtNum* stats) {
+  mjtNum speed = -INFINITY, pen = -INFINITY, strain = -INFINITY;
+  int si = 0, pi = 0, ei = 0;
+  for (int g = 0; g < B->ngroup; g++) {
+    mjtNum v[3] = {0, 0, 0};
+    for (int k = 0; k < 3; k++) {
+      const int i = B->groups[3 * g + k];
+      if (i >= 0) v[k] = qvel[i];
+    }
+    const mjtNum s = sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+    if (s > speed) { speed = s; si = g; }
+  }
+  if (B->nplane) {
+    for (int i = 0; i < B->nvert; i++) {
+      const mjtNum* x = p->vert_xpos + 3 * i;
+      mjtNum depth = -INFINITY;
+      for (int k = 0; k < B->nplane; k++) {
+        const mjtNum* n = B->planes + 4 * k;
+        const mjtNum dk = B->radius[i] - ((x[0] * n[0] + x[1] * n[1] + x[2] * n[2]) - n[3]);
+        if (dk > depth) depth = dk;
+      }
+      if (depth > pen) { pen = depth; pi = i; }
+    }
+  }
+  for (int e = 0; e < B->nedge; e++) {
+    if (B->length0[e] <= 0) continue;
+    const mjtNum r = fabs(p->edge_length[e] / B->length0[e] - 1.0);
+    if (r > strain) { strain = r; ei = e; }
+  }
+  int capped = 0;
+  for (int i = 0; i < p->nisland; i++) {
+    if (p->niter[i] >= B->iteration_cap) capped = 1;
+  }
+  if (B->ngroup == 0) speed = 0;
+  if (B->nplane == 0 || B->nvert == 0) pen = 0;
+  if (strain == -INFINITY) strain = 0;
+  stats[STAT_CAPPED] += capped;
+  if (speed > stats[STAT_SPEED]) stats[STAT_SPEED] = speed;
+  if (pen > stats[STAT_PENETRATION]) stats[STAT_PENETRATION] = pen;
+  if (strain > stats[STAT_STRAIN]) stats[STAT_STRAIN] = strain;
+  if (speed > B->max_speed) {
+    stats[STAT_VALUE] = speed; stats[STAT_INDEX] = si; return FAULT_SPEED;
+  }
+  if (pen > B->max_penetration) {
+    stats[STAT_VALUE] = pen; stats[STAT_INDEX] = pi; return FAULT_PENETRATION;
+  }
+  if (strain > B->max_strain) {
+    stats[STAT_VALUE] = strain; stats[STAT_INDEX] = ei; return FAULT_STRAIN;
+  }
+  if (B->max_capped >= 0 && stats[STAT_CAPPED] > B->max_capped) {
+    stats[STAT_VALUE] = stats[STAT_CAPPED]; stats[STAT_INDEX] = 0; return FAULT_CAPPED;
+  }
+  return FAULT_NONE;
+}
+
 /* One closed-loop rollout of T steps from the state row x0:
  *   u_t = clamp(ff_t + K_t [q_C (-) ref_q_C ; v_C - ref_v_C], lo, hi)
  * ff: (T, nu); ref: (T, nstate); K: (T, nu, 2c); out: (T+1, nstate), row t holding u_t;
- * applied: (T, nu). Returns -1, or the first step that failed (see the top of this file; the
- * rollout stops there) with info[0] its FAULT_*, or -2 - t if MuJoCo raised an error in step t
- * (d is then unusable). */
+ * applied: (T, nu). After each step that MuJoCo accepted, the bounds B judge it (probe: d's
+ * fields); stats (NSTAT) collects the extremes. Returns -1, or the first step that failed or
+ * broke a bound (the rollout stops there) with info[0] its FAULT_*, or -2 - t if MuJoCo raised
+ * an error in step t (d is then unusable). */
 int dopt_feedback(const mjModel* m, mjData* d, const layout_t* L, const warnings_t* warn,
-                  const mjtNum* x0, int T,
+                  const bounds_t* B, const probe_t* probe, const mjtNum* x0, int T,
                   const mjtNum* ff, const mjtNum* ref, const mjtNum* K, const int* dofs, int nc,
                   const mjtNum* lo, const mjtNum* hi, mjtNum* out, mjtNum* applied,
-                  mjtNum* work, int* info) {
+                  mjtNum* work, mjtNum* stats, int* info) {
   const int nu = L->nu, n2 = 2 * nc;
   mjtNum* dq = work;          /* nv */
   mjtNum* dx = dq + L->nv;    /* 2c */
@@ -301,6 +385,7 @@ int dopt_feedback(const mjModel* m, mjData* d, const layout_t* L, const warnings
     return -2 - current;
   }
   recovery = &env;
+  for (int i = 0; i < NSTAT; i++) stats[i] = 0;
   mj_setState(m, d, x0, L->sig);
   mj_getState(m, d, out, L->sig);
   for (int t = 0; t < T; t++) {
@@ -327,6 +412,7 @@ int dopt_feedback(const mjModel* m, mjData* d, const layout_t* L, const warnings
     mj_getState(m, d, next, L->sig);
     int fault = warned(warn) ? FAULT_WARNING : fault_of(L, next + L->qpos, next + L->qvel);
     if (fault == FAULT_NONE && !finite(next, L->nstate)) fault = FAULT_NONFINITE;
+    if (fault == FAULT_NONE) fault = judge(B, probe, next + L->qvel, stats);
     if (fault != FAULT_NONE) {
       info[0] = fault;
       recovery = NULL;

@@ -23,12 +23,13 @@ import mujoco
 import numpy as np
 
 from dopt.errors import RolloutError
+from dopt.stability import Monitor
 from dopt.state import StateLayout
 
 log = logging.getLogger(__name__)
 
 MUJOCO_VERSION = 4000000          # the prototypes in _rollout_kernels.c are MuJoCo 4.0's
-ABI_VERSION = 4                   # dopt_abi_version() of the C file this front matches
+ABI_VERSION = 5                   # dopt_abi_version() of the C file this front matches
 _HERE = os.path.dirname(os.path.abspath(__file__))
 _lib = None
 _load_error: str | None = None
@@ -64,6 +65,56 @@ class Warnings(ctypes.Structure):
         if number.itemsize != ctypes.sizeof(ctypes.c_int) or number.strides[0] % number.itemsize:
             raise RuntimeError("unexpected layout of mjData.warning")
         return cls(number.ctypes.data, stride, len(number))
+
+
+class Bounds(ctypes.Structure):
+    """bounds_t of the C file: a ``dopt.stability.Monitor``'s arrays and bounds. Holds
+    references to the arrays it points into."""
+
+    _fields_ = [("groups", ctypes.c_void_p), ("ngroup", ctypes.c_int),
+                ("planes", ctypes.c_void_p), ("nplane", ctypes.c_int),
+                ("radius", ctypes.c_void_p), ("nvert", ctypes.c_int),
+                ("length0", ctypes.c_void_p), ("nedge", ctypes.c_int),
+                ("iteration_cap", ctypes.c_int), ("max_capped", ctypes.c_int),
+                ("max_speed", ctypes.c_double), ("max_penetration", ctypes.c_double),
+                ("max_strain", ctypes.c_double)]
+
+    @classmethod
+    def of(cls, monitor: Monitor) -> Bounds:
+        keep = [np.ascontiguousarray(monitor.groups, dtype=np.int32),
+                np.ascontiguousarray(monitor.planes, dtype=np.float64),
+                np.ascontiguousarray(monitor.radius, dtype=np.float64),
+                np.ascontiguousarray(monitor.length0, dtype=np.float64)]
+        b = monitor.bounds
+        out = cls(keep[0].ctypes.data, len(keep[0]), keep[1].ctypes.data, len(keep[1]),
+                  keep[2].ctypes.data, len(keep[2]), keep[3].ctypes.data, len(keep[3]),
+                  monitor.iteration_cap,
+                  -1 if b.max_capped_steps is None else b.max_capped_steps,
+                  b.max_speed, b.max_penetration, b.max_strain)
+        out._keep = keep
+        return out
+
+
+class Probe(ctypes.Structure):
+    """probe_t of the C file: the fields of one MjData the bounds read, in place."""
+
+    _fields_ = [("vert_xpos", ctypes.c_void_p), ("edge_length", ctypes.c_void_p),
+                ("niter", ctypes.c_void_p), ("nisland", ctypes.c_int)]
+
+    @classmethod
+    def of(cls, data: mujoco.MjData) -> Probe:
+        niter = data.solver_niter
+        if niter.dtype != np.int32 or not niter.flags.c_contiguous:
+            raise RuntimeError("unexpected layout of mjData.solver_niter")
+        for f in (data.flexvert_xpos, data.flexedge_length):
+            if f.size and not f.flags.c_contiguous:
+                raise RuntimeError("unexpected layout of mjData flex fields")
+        return cls(data.flexvert_xpos.ctypes.data, data.flexedge_length.ctypes.data,
+                   niter.ctypes.data, len(niter))
+
+
+#: the columns of the C file's per-rollout stats (NSTAT)
+STATS = ("speed", "penetration", "strain", "capped", "value", "index")
 
 
 def _library_path() -> str | None:
@@ -108,8 +159,9 @@ def load():
     _lib.dopt_feedback_work.argtypes = [L, ctypes.c_int]
     _lib.dopt_fd.argtypes = [_p, _p, L, W, _dbl, _int, ctypes.c_int, _int, ctypes.c_int,
                              ctypes.c_double, ctypes.c_int, _dbl, _dbl, _dbl, _dbl, _int]
-    _lib.dopt_feedback.argtypes = [_p, _p, L, W, _dbl, ctypes.c_int, _dbl, _dbl, _dbl, _int,
-                                   ctypes.c_int, _dbl, _dbl, _dbl, _dbl, _dbl, _int]
+    B, Pr = ctypes.POINTER(Bounds), ctypes.POINTER(Probe)
+    _lib.dopt_feedback.argtypes = [_p, _p, L, W, B, Pr, _dbl, ctypes.c_int, _dbl, _dbl, _dbl,
+                                   _int, ctypes.c_int, _dbl, _dbl, _dbl, _dbl, _dbl, _dbl, _int]
     for f in (_lib.dopt_fd_work, _lib.dopt_feedback_work, _lib.dopt_fd, _lib.dopt_feedback):
         f.restype = ctypes.c_int
     _lib.dopt_error_message.restype = ctypes.c_char_p
@@ -132,15 +184,18 @@ class Kernels:
     concurrent use.
     """
 
-    def __init__(self, model: mujoco.MjModel, layout: StateLayout, threads: int):
+    def __init__(self, model: mujoco.MjModel, layout: StateLayout, threads: int,
+                 monitor: Monitor | None = None):
         self.lib = load()
         if self.lib is None:
             raise RuntimeError(f"C rollout kernels unavailable: {_load_error}")
         self.model = model
         self.layout = Layout.of(model, layout)
         self.threads = threads
+        self.bounds = Bounds.of(monitor or Monitor(model))
         self._datas = [mujoco.MjData(model) for _ in range(threads)]
         self._warnings = [Warnings.of(d) for d in self._datas]
+        self._probes = [Probe.of(d) for d in self._datas]
         # close() shuts the workers down (else they exit when the pool is garbage-collected)
         self._pool = ThreadPoolExecutor(threads) if threads > 1 else None
 
@@ -149,7 +204,7 @@ class Kernels:
         if self._pool is not None:
             self._pool.shutdown(wait=True)
             self._pool = None
-        self._datas, self._warnings = [], []
+        self._datas, self._warnings, self._probes = [], [], []
 
     def _map(self, job, n_items: int):
         """Run job(i, items) on `threads` interleaved shares of range(n_items); share i runs
@@ -191,12 +246,14 @@ class Kernels:
                  dofs: np.ndarray, lo: np.ndarray, hi: np.ndarray):
         """P closed-loop rollouts: x0 (ns,), ff (P, T, nu), ref (T, ns), K (T, nu, 2c).
 
-        Returns (states (P, T+1, ns), applied (P, T, nu), bad): bad lists (step, p, reasons)
-        of the rollouts that failed, sorted, with the step that failed and the reasons (warning
-        names); their later rows are undefined."""
+        Returns (states (P, T+1, ns), applied (P, T, nu), stats (P, NSTAT) (columns
+        ``STATS``), bad): bad lists (step, p, fault, reasons) of the rollouts that failed or
+        broke a bound, sorted, with the step, the C file's FAULT_* code and the reasons
+        (warning names, or the fault's name); their rows after step + 1 are undefined."""
         P, T, nu = ff.shape
         out = np.empty((P, T + 1, self.layout.nstate))
         applied = np.empty((P, T, nu))
+        stats = np.zeros((P, len(STATS)))
         C = np.ascontiguousarray(dofs, dtype=np.int32)
         lay = ctypes.byref(self.layout)
         work = [np.empty(self.lib.dopt_feedback_work(lay, len(C))) for _ in self._datas]
@@ -207,17 +264,19 @@ class Kernels:
             for p in ps:
                 d.warning.number[:] = 0
                 step = self.lib.dopt_feedback(m, d._address, lay, ctypes.byref(self._warnings[i]),
-                                              x0, T, ff[p], ref, K, C, len(C), lo, hi, out[p],
-                                              applied[p], w, info)
+                                              ctypes.byref(self.bounds),
+                                              ctypes.byref(self._probes[i]), x0, T, ff[p], ref,
+                                              K, C, len(C), lo, hi, out[p], applied[p], w,
+                                              stats[p], info)
                 if step <= -2:
                     self._raise_mujoco_error(
                         i, f"rollout_feedback: simulation {p} step {-2 - step}")
                 if step >= 0:
-                    bad.append((step, int(p), _reasons(d, int(info[0]))))
+                    bad.append((step, int(p), int(info[0]), _reasons(d, int(info[0]))))
             return bad
 
         bad = sorted(b for share in self._map(job, P) for b in share)
-        return out, applied, bad
+        return out, applied, stats, bad
 
     def _raise_mujoco_error(self, i: int, where: str):
         """MuJoCo raised inside a call on MjData i: replace it (its stack is left mid-call)
@@ -225,6 +284,7 @@ class Kernels:
         message = self.lib.dopt_error_message().decode(errors="replace")
         self._datas[i] = mujoco.MjData(self.model)
         self._warnings[i] = Warnings.of(self._datas[i])
+        self._probes[i] = Probe.of(self._datas[i])
         raise RolloutError(f"{where}: MuJoCo error: {message}")
 
 
@@ -240,10 +300,15 @@ def _warnings(d: mujoco.MjData) -> list[str]:
     return warning_names(d.warning.number)
 
 
-# the FAULT_* codes of the C file, past FAULT_WARNING: the warning MuJoCo's next step would give
+# the FAULT_* codes of the C file, past FAULT_WARNING: the warning MuJoCo's next step would give,
+# then the stability bounds (dopt.stability.BOUNDS, in order)
 _FAULTS = {1: "mjWARN_BADQPOS", 2: "mjWARN_BADQVEL", 3: "non-finite state"}
+FAULT_BOUNDS = {4: "speed", 5: "penetration", 6: "strain", 7: "capped_steps"}
 
 
 def _reasons(d: mujoco.MjData, fault: int) -> list[str]:
-    """Why a step of a kernel call on d failed: MuJoCo's warnings, else the C file's fault."""
+    """Why a step of a kernel call on d failed: MuJoCo's warnings, else the C file's fault
+    (for a broken bound, the bound's name)."""
+    if fault in FAULT_BOUNDS:
+        return [FAULT_BOUNDS[fault]]
     return _warnings(d) or [_FAULTS.get(fault, "non-finite state")]

@@ -29,6 +29,7 @@ import numpy as np
 
 from dopt.errors import UnstableRolloutError
 from dopt.scene import Scene
+from dopt.stability import Stability
 from dopt.state import INTEGRATION, check_states, fault
 from dopt.validation import check_config, check_int, float_array, index_array
 
@@ -132,7 +133,9 @@ class MPCResult:
     success condition was met. opt_seconds: wall time of each optimisation; opt_step: the agent
     step each optimisation started from; n_dofs: |C| of each; dofs: the active set of each;
     lag_steps: agent steps elapsed during each optimisation; late_steps: agent steps that
-    started behind schedule."""
+    started behind schedule; stability: the verdict on the executed episode (one rollout,
+    judged by the scene's ``StabilityBounds`` after every agent step; a broken bound is
+    reported here, MuJoCo warnings and non-finite states raise)."""
 
     states: np.ndarray
     controls: np.ndarray
@@ -143,6 +146,7 @@ class MPCResult:
     dofs: list
     lag_steps: list
     late_steps: int
+    stability: Stability
 
 
 class MPC:
@@ -208,7 +212,8 @@ class MPC:
         n = self._step
         return MPCResult(np.array(self._states[:n + 1]), np.array(self._controls[:n]),
                          self._succeeded, self._log["seconds"], self._log["step"],
-                         self._log["n_dofs"], self._log["dofs"], self._log["lag"], self._late)
+                         self._log["n_dofs"], self._log["dofs"], self._log["lag"], self._late,
+                         self._scan.result())
 
     # ---------------------------------------------------------------- internals
     def _reset(self, x0: np.ndarray, plan: Plan) -> None:
@@ -221,6 +226,7 @@ class MPC:
         self._succeeded, self._error = False, None
         self._stop = threading.Event()
         self._log = {"seconds": [], "step": [], "n_dofs": [], "dofs": [], "lag": []}
+        self._scan = self.scene.monitor.start(1)
 
     @property
     def _done(self) -> bool:
@@ -264,6 +270,11 @@ class MPC:
         nxt = self.scene.state_of(d)
         if reason := bad[0].name if bad else fault(self.scene.layout, nxt):
             raise UnstableRolloutError(0, self._step, reason, "mpc agent")
+        if not self._scan.unstable[0]:
+            fields = {f: np.asarray(getattr(d, f))[None, None] for f in self.scene.monitor.record}
+            if len(self._scan.update(np.zeros(1, int), self._step, fields)):
+                log.warning("MPC agent: the executed episode broke a stability bound at step "
+                            "%d (%s)", self._step, self._scan.reason[0])
         with self._lock:
             self._states[-1] = row
             self._controls.append(u)

@@ -28,9 +28,11 @@ import mujoco
 import numpy as np
 
 from dopt import kernels
+from dopt.errors import UnstableRolloutError
 from dopt.rollout_batch import BatchRoute
 from dopt.rollout_c import CRoute
 from dopt.scene import Scene
+from dopt.stability import Stability
 from dopt.state import check_spec, check_states
 from dopt.validation import check_config, float_array, is_int
 
@@ -42,13 +44,17 @@ USER = int(mujoco.mjtState.mjSTATE_USER)
 class RolloutConfig:
     """threads: simulation threads of the batched calls (0: one per CPU core).
     c_kernels: run derivatives and feedback rollouts in dopt.kernels' C loops when they were
-    built (False: always mujoco.batch.Batch, the slower reference route)."""
+    built (False: always mujoco.batch.Batch, the slower reference route).
+    on_unstable: what a rollout that breaks the scene's stability bounds (or makes MuJoCo
+    warn, or goes non-finite) does: "flag" it in the result's ``stability`` verdict and let the
+    others finish, or "raise" ``UnstableRolloutError`` naming the first one."""
 
     threads: int = 0
     c_kernels: bool = True
+    on_unstable: str = "flag"
 
     def __post_init__(self):
-        check_config(self, minimum={"threads": 0})
+        check_config(self, minimum={"threads": 0}, choices={"on_unstable": ("flag", "raise")})
 
 
 @dataclass(frozen=True)
@@ -73,21 +79,27 @@ class FDConfig:
 
 @dataclass(frozen=True)
 class RolloutResult:
-    """final_states: (P, ns) state rows after the last step; records: item -> (P, T, ...)
-    arrays recorded after each step (MjData field names or mjtState bit specs)."""
+    """final_states: (P, ns) state rows after the last step (a rollout that made MuJoCo warn:
+    where MuJoCo stopped it); records: item -> (P, T, ...) arrays recorded after each step
+    (MjData field names or mjtState bit specs); stability: the verdict on each rollout
+    (``dopt.stability.Stability``)."""
 
     final_states: np.ndarray
     records: dict
+    stability: Stability
 
 
 @dataclass(frozen=True)
 class Trajectory:
     """states: (..., T+1, ns). Row t is the state before step t holding control u_t, so
     rows[:T] feed ``derivatives`` directly; the last row is the final state (holding u_{T-1}).
-    controls: (..., T, nu), the controls applied (after clamping, where a call clamps)."""
+    controls: (..., T, nu), the controls applied (after clamping, where a call clamps).
+    stability: the verdict on each rollout (P of them, or one for ``trajectory``); rows after
+    an unstable rollout's failing step repeat the state it stopped in."""
 
     states: np.ndarray
     controls: np.ndarray
+    stability: Stability
 
 
 @dataclass(frozen=True)
@@ -182,10 +194,15 @@ class RolloutService:
             control_spec: mjtState bits within mjSTATE_USER that ``controls`` sets before each
                 step (e.g. ctrl | eq_active for a picker that grasps and releases).
 
+        Returns:
+            RolloutResult; its ``stability`` flags every rollout that broke the scene's
+            ``StabilityBounds``, made MuJoCo warn or went non-finite, with the step and reason;
+            the other rollouts are unaffected by them (bit-identical to a call without them).
+
         Raises:
             ValueError: bad shapes or dtypes, NaN/inf inputs.
-            UnstableRolloutError: a rollout produced NaN or a MuJoCo warning (names which
-                rollout and at which step).
+            UnstableRolloutError: with ``RolloutConfig(on_unstable="raise")``, the first
+                unstable rollout (which one, at which step, why).
             RuntimeError: the service is closed.
         """
         if not is_int(control_spec):
@@ -209,8 +226,9 @@ class RolloutService:
         P = max(u.shape[0], n_x0)
         u = np.broadcast_to(u, (P, u.shape[1], ncontrol))
         with self._lock:
-            final, records = self._open_route().rollout(x0, u, control_spec, record)
-        return RolloutResult(final, records)
+            final, records, verdict = self._open_route().rollout(x0, u, control_spec, record)
+        self._check_verdict(verdict, "rollout")
+        return RolloutResult(final, records, verdict)
 
     def trajectory(self, initial_state, controls) -> Trajectory:
         """One open-loop rollout that keeps every state row: (ns,), (T, nu) -> Trajectory."""
@@ -225,7 +243,7 @@ class RolloutService:
         ctrl = self.scene.layout["ctrl"]
         states[0, ctrl] = u[0]
         states[1:-1, ctrl] = u[1:]
-        return Trajectory(states, np.array(u))
+        return Trajectory(states, np.array(u), res.stability)
 
     def rollout_feedback(self, initial_state, controls, ref_states, gains, dofs) -> Trajectory:
         """P closed-loop rollouts in lock-step: u_t = U[p, t] + K_t dx_C(x_t, ref_t).
@@ -242,8 +260,8 @@ class RolloutService:
             dofs: the active DoF set C (indices, group names).
 
         Returns:
-            Trajectory with states (P, T+1, ns) (row t holds the applied u_t) and the applied
-            controls (P, T, nu).
+            Trajectory with states (P, T+1, ns) (row t holds the applied u_t), the applied
+            controls (P, T, nu) and the verdict on each rollout (as ``rollout``).
         """
         m = self.model
         x0 = check_states(m, initial_state, batched=False, name="initial_state")
@@ -262,8 +280,14 @@ class RolloutService:
             raise ValueError(f"gains must have shape ({T}, {m.nu}, {2 * len(C)}) (T, nu, "
                              f"2|C|), got {K.shape}")
         with self._lock:
-            states, applied = self._open_route().feedback(x0, u, ref, K, C)
-        return Trajectory(states, applied)
+            states, applied, verdict = self._open_route().feedback(x0, u, ref, K, C)
+        self._check_verdict(verdict, "rollout_feedback")
+        return Trajectory(states, applied, verdict)
+
+    def _check_verdict(self, verdict: Stability, what: str) -> None:
+        """Raise for the first unstable rollout when the config says so."""
+        if self.config.on_unstable == "raise" and (first := verdict.first()):
+            raise UnstableRolloutError(*first, what)
 
     # --------------------------------------------------------------- derivatives
     def derivatives(self, states, dofs=None, fd: FDConfig = FDConfig()) -> Derivatives:

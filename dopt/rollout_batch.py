@@ -24,9 +24,15 @@ from mujoco.batch import Batch, SimulationError
 from dopt.errors import RolloutError, UnstableRolloutError
 from dopt.kernels import warning_names
 from dopt.scene import Scene
+from dopt.stability import Stability
 from dopt.state import StateLayout, fault, faulty_rows
 
 log = logging.getLogger(__name__)
+
+CTRL = int(mujoco.mjtState.mjSTATE_CTRL)
+
+#: largest bytes of MjData fields recorded by one Batch.rollout call of an open-loop rollout
+CHUNK_BYTES = 32 << 20
 
 
 def ctrl_bounds(model: mujoco.MjModel) -> tuple[np.ndarray, np.ndarray]:
@@ -60,6 +66,7 @@ class BatchRoute:
         self.threads = threads
         self.lo, self.hi = ctrl_bounds(scene.model)                     # (nu,) each
         self._batch: Batch | None = None
+        self._scratch: mujoco.MjData | None = None
         lay = scene.layout
         self._qpos, self._qvel, self._ctrl = lay["qpos"], lay["qvel"], lay["ctrl"]
 
@@ -69,26 +76,72 @@ class BatchRoute:
 
     # ------------------------------------------------------------------ rollouts
     def rollout(self, x0: np.ndarray, u: np.ndarray, control_spec: int,
-                record) -> tuple[np.ndarray, dict]:
+                record) -> tuple[np.ndarray, dict, Stability]:
         """P open-loop rollouts of T steps: x0 (ns,) or (P, ns) or (1, ns), u (P, T, ncontrol).
 
-        Returns (final states (P, ns), records: item -> (P, T, ...))."""
+        Runs in chunks of steps so that the fields the stability monitor reads are checked
+        after every step without holding all T of them. Every rollout runs its T steps (a
+        broken bound is only flagged) unless MuJoCo warns, where ``Batch.rollout`` stops it
+        (its later records repeat its last); results do not depend on the chunk length.
+
+        Returns (final states (P, ns), records: item -> (P, T, ...), the verdict)."""
         P, T = u.shape[:2]
-        batch, ids = self._batch_of(P)
+        mon = self.scene.monitor
+        batch, _ = self._batch_of(P)
         batch.state[:P] = x0
         batch.warning[:P] = 0
-        try:
-            rec = batch.rollout(T, control=u, control_spec=control_spec, record=list(record),
-                                ids=ids)
-        except SimulationError as e:
-            raise RolloutError(f"rollout: {e}") from e
+        scan = mon.start(P)
+        items = list(dict.fromkeys(list(record) + list(mon.record)))
+        K = self._chunk(P, T, items)
+        rec: dict = {}
+        active = np.arange(P, dtype=np.int32)
+        for s in range(0, T, K):
+            k = min(K, T - s)
+            ids = active if len(active) < batch.nsim else None
+            try:
+                out = batch.rollout(k, control=np.ascontiguousarray(u[active, s:s + k]),
+                                    control_spec=control_spec, record=items, ids=ids)
+            except SimulationError as e:
+                raise RolloutError(f"rollout: {e}") from e
+            for item in record:
+                if item not in rec:
+                    rec[item] = np.empty((P, T) + out[item].shape[2:], out[item].dtype)
+                rec[item][active, s:s + k] = out[item]
+                if len(active) < P:     # stopped rollouts repeat their last record
+                    stopped = np.setdiff1d(np.arange(P), active)
+                    rec[item][stopped, s:s + k] = rec[item][stopped, s - 1:s]
+            scan.update(active, s, {f: out[f] for f in mon.record})
+            keep = ~(batch.warning[active, :, 1] > 0).any(axis=1)
+            if s + k < T and not keep.all():     # Batch stops a warned simulation: so here
+                active = active[keep]
+                if not len(active):
+                    for item in record:
+                        rec[item][:, s + k:] = rec[item][:, s + k - 1:s + k]
+                    break
         final = batch.state[:P].copy()
-        if bad := first_unstable(batch, P, final, self.scene.layout):
-            i, reason = bad
+        warned = (batch.warning[:P, :, 1] > 0).any(axis=1) | faulty_rows(self.scene.layout,
+                                                                          final)
+        for i in np.flatnonzero(warned):
             start = x0 if x0.ndim == 1 else x0[i if len(x0) > 1 else 0]
-            step, reason = self._replay(start, u[i], control_spec) or (T - 1, reason)
-            raise UnstableRolloutError(i, step, reason, "rollout")
-        return final, rec
+            names = warning_names(batch.warning[i, :, 1])
+            fallback = names[0] if names else (fault(self.scene.layout, final[i])
+                                               or "non-finite state")
+            step, reason = self._replay(start, u[i], control_spec) or (T - 1, fallback)
+            scan.flag(int(i), step, reason)
+        return final, rec, scan.result()
+
+    def _chunk(self, P: int, T: int, items: list) -> int:
+        """Steps per Batch.rollout call so that the records of one call stay under
+        CHUNK_BYTES."""
+        data = self._data()
+        row = sum(np.asarray(getattr(data, f)).nbytes if isinstance(f, str)
+                  else 8 * mujoco.mj_stateSize(self.model, int(f)) for f in items)
+        return int(np.clip(CHUNK_BYTES // max(1, P * row), 1, T))
+
+    def _data(self) -> mujoco.MjData:
+        if self._scratch is None:
+            self._scratch = mujoco.MjData(self.model)
+        return self._scratch
 
     def _replay(self, x0: np.ndarray, u: np.ndarray, control_spec: int) -> tuple[int, str] | None:
         """(step, reason) of the first step of one open-loop rollout, x0 (ns,), u (T,
@@ -113,37 +166,60 @@ class BatchRoute:
         return None
 
     def feedback(self, x0: np.ndarray, u: np.ndarray, ref: np.ndarray, K: np.ndarray,
-                 C: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+                 C: np.ndarray) -> tuple[np.ndarray, np.ndarray, Stability]:
         """P closed-loop rollouts in lock-step: x0 (ns,), u (P, T, nu) feed-forward, ref
         (T, ns), K (T, nu, 2|C|), C (|C|,); u_t = clip(u[p, t] + K_t dx_C(x_t, ref_t)).
 
-        Returns (states (P, T+1, ns), applied controls (P, T, nu))."""
+        A rollout that warns, leaves a bad state or breaks a bound at step t is not stepped
+        further: its rows after t + 1 repeat row t + 1, its later controls repeat u_t.
+
+        Returns (states (P, T+1, ns), applied controls (P, T, nu), the verdict)."""
         P, T, nu = u.shape
         ref_q, ref_v = ref[:, self._qpos], ref[:, self._qvel][:, C]
         out = np.empty((P, T + 1, self.scene.nstate))
         applied = np.empty((P, T, nu))
         diff = self.scene.tangent.difference
-        batch, ids = self._batch_of(P)
+        mon, lay = self.scene.monitor, self.scene.layout
+        scan = mon.start(P)
+        batch, _ = self._batch_of(P)
         rows = batch.state
         rows[:P] = x0
         batch.warning[:P] = 0
+        active = np.arange(P, dtype=np.int32)
         try:
             for t in range(T):
-                x = rows[:P]
+                x = rows[active]
                 dx = np.concatenate([diff(ref_q[t], x[:, self._qpos], 1.0, C),
                                      x[:, self._qvel][:, C] - ref_v[t]], axis=1)
-                ut = np.clip(u[:, t] + dx @ K[t].T, self.lo, self.hi)
-                rows[:P, self._ctrl] = ut
-                applied[:, t] = ut
-                out[:, t] = rows[:P]
-                batch.step(ids=ids)
-                # lock-step: the first step that failed, its first rollout
-                if bad := first_unstable(batch, P, rows[:P], self.scene.layout):
-                    raise UnstableRolloutError(bad[0], t, bad[1], "rollout_feedback")
+                ut = np.clip(u[active, t] + dx @ K[t].T, self.lo, self.hi)
+                x[:, self._ctrl] = ut
+                rows[active] = x
+                applied[active, t] = ut
+                out[active, t] = x
+                # one-step rollout: the step, and the fields the monitor reads (a
+                # non-persistent Batch keeps no MjData fields between calls)
+                rec = batch.rollout(1, control=ut[:, None], control_spec=CTRL,
+                                    record=list(mon.record), ids=active)
+                nxt = rows[active]
+                out[active, t + 1] = nxt
+                warned = (batch.warning[active, :, 1] > 0).any(axis=1)
+                bad = warned | faulty_rows(lay, nxt)
+                for j in np.flatnonzero(bad):
+                    names = warning_names(batch.warning[active[j], :, 1])
+                    scan.flag(int(active[j]), t, names[0] if names else
+                              (fault(lay, nxt[j]) or "non-finite state"))
+                ok = active[~bad]
+                scan.update(ok, t, {f: rec[f][~bad] for f in mon.record})
+                stopped = active[scan.unstable[active]]
+                if len(stopped):
+                    out[stopped, t + 2:] = out[stopped, t + 1:t + 2]
+                    applied[stopped, t + 1:] = applied[stopped, t:t + 1]
+                    active = active[~scan.unstable[active]]
+                    if not len(active):
+                        break
         except SimulationError as e:
             raise RolloutError(f"rollout_feedback: {e}") from e
-        out[:, T] = rows[:P]
-        return out, applied
+        return out, applied, scan.result()
 
     # --------------------------------------------------------------- derivatives
     def derivatives(self, x: np.ndarray, C: np.ndarray, eps: float,

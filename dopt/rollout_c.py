@@ -14,6 +14,7 @@ import numpy as np
 from dopt import kernels
 from dopt.errors import UnstableRolloutError
 from dopt.rollout_batch import BatchRoute
+from dopt.stability import Stability
 
 
 class CRoute(BatchRoute):
@@ -32,14 +33,24 @@ class CRoute(BatchRoute):
         super().close()
 
     def feedback(self, x0: np.ndarray, u: np.ndarray, ref: np.ndarray, K: np.ndarray,
-                 C: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+                 C: np.ndarray) -> tuple[np.ndarray, np.ndarray, Stability]:
         """As ``BatchRoute.feedback``: x0 (ns,), u (P, T, nu), ref (T, ns), K (T, nu, 2|C|)
-        -> (states (P, T+1, ns), applied controls (P, T, nu))."""
-        out, applied, bad = self._kernel().feedback(x0, u, ref, K, C, self.lo, self.hi)
-        if bad:   # the first step that failed, its first rollout (as the lock-step Batch)
-            step, p, names = bad[0]
-            raise UnstableRolloutError(p, step, names[0], "rollout_feedback")
-        return out, applied
+        -> (states (P, T+1, ns), applied controls (P, T, nu), the verdict)."""
+        out, applied, stats, bad = self._kernel().feedback(x0, u, ref, K, C, self.lo, self.hi)
+        mon = self.scene.monitor
+        col = {name: i for i, name in enumerate(kernels.STATS)}
+        step, reason = np.full(len(u), -1), [""] * len(u)
+        for t, p, code, names in bad:
+            step[p] = t
+            bound = kernels.FAULT_BOUNDS.get(code)
+            reason[p] = (mon.reason(bound, stats[p, col["value"]], int(stats[p, col["index"]]))
+                         if bound else names[0])
+            out[p, t + 2:] = out[p, t + 1]       # as the Batch route: stopped where it failed
+            applied[p, t + 1:] = applied[p, t]
+        verdict = Stability(step >= 0, step, tuple(reason), stats[:, col["speed"]].copy(),
+                            stats[:, col["penetration"]].copy(), stats[:, col["strain"]].copy(),
+                            stats[:, col["capped"]].astype(int))
+        return out, applied, verdict
 
     def derivatives(self, x: np.ndarray, C: np.ndarray, eps: float,
                     centered: bool) -> np.ndarray:
@@ -52,5 +63,6 @@ class CRoute(BatchRoute):
 
     def _kernel(self) -> kernels.Kernels:
         if self._kernels is None:
-            self._kernels = kernels.Kernels(self.model, self.scene.layout, self.threads)
+            self._kernels = kernels.Kernels(self.model, self.scene.layout, self.threads,
+                                            self.scene.monitor)
         return self._kernels

@@ -21,6 +21,7 @@ from collections.abc import Iterable, Mapping
 import mujoco
 import numpy as np
 
+from dopt.stability import Monitor, StabilityBounds
 from dopt.state import INTEGRATION, StateLayout, Tangent, check_data
 from dopt.validation import index_array
 
@@ -31,12 +32,15 @@ class Scene:
     Args:
         model: the compiled model.
         groups: extra or overriding groups, name -> DoF indices (into qvel).
+        stability: the bounds every rollout on this scene is judged by (``dopt.stability``).
     """
 
-    def __init__(self, model: mujoco.MjModel, groups: Mapping[str, Iterable[int]] | None = None):
+    def __init__(self, model: mujoco.MjModel, groups: Mapping[str, Iterable[int]] | None = None,
+                 stability: StabilityBounds = StabilityBounds()):
         if not isinstance(model, mujoco.MjModel):
             raise TypeError(f"model must be a mujoco.MjModel, got {type(model).__name__}")
         self.model = model
+        self.monitor = Monitor(model, stability)
         self.layout = StateLayout.of(model, INTEGRATION)
         self.tangent = Tangent(model)
         self.groups: dict[str, np.ndarray] = _default_groups(model)
@@ -50,11 +54,17 @@ class Scene:
             self.groups[name] = self._checked_dofs(dofs, name)
 
     @classmethod
-    def from_xml(cls, xml: str, groups: Mapping[str, Iterable[int]] | None = None) -> Scene:
+    def from_xml(cls, xml: str, groups: Mapping[str, Iterable[int]] | None = None,
+                 stability: StabilityBounds = StabilityBounds()) -> Scene:
         """Compile an MJCF string."""
         if not isinstance(xml, str):
             raise TypeError(f"xml must be an MJCF string, got {type(xml).__name__}")
-        return cls(mujoco.MjModel.from_xml_string(xml), groups)
+        return cls(mujoco.MjModel.from_xml_string(xml), groups, stability)
+
+    @property
+    def stability(self) -> StabilityBounds:
+        """The bounds every rollout on this scene is judged by."""
+        return self.monitor.bounds
 
     @property
     def nv(self) -> int:

@@ -40,6 +40,7 @@ from cli_args import (
 
 from dopt.stats import mean_ci
 from dopt.sweep import SweepResult, Trial, run_sweep
+from dopt.tasks.pick.cloth_scene import PHYSICS_PRESETS
 from planners.pick_place import (
     GOALS,
     LABELS,
@@ -86,6 +87,9 @@ def parser(task: str, doc: str, help_: dict) -> argparse.ArgumentParser:
     ap.add_argument("--iterations", type=positive_int, default=None, help=help_["iterations"])
     ap.add_argument("--horizon", type=positive_int, default=None, help=help_["horizon"])
     ap.add_argument("--bound", type=positive_float, default=None, help=help_["bound"])
+    ap.add_argument("--physics", choices=tuple(PHYSICS_PRESETS), default="default",
+                    help="physics preset of the scene (default %(default)s; the table: "
+                         "docs/RESULTS.md, physics presets)")
     ap.add_argument("--threads", type=nonneg_int, default=0,
                     help="simulation threads (0: one per core, the default)")
     ap.add_argument("--no-render", action="store_true",
@@ -104,7 +108,7 @@ def parse(ap: argparse.ArgumentParser, task: str, argv) -> tuple[argparse.Namesp
         cem = {k: getattr(args, k) for k in ("population", "elites", "iterations", "horizon")
                if getattr(args, k) is not None}
         s = replace(s, cem=replace(s.cem, **cem), threads=args.threads,
-                    n=args.n or s.n, bound=args.bound or s.bound)
+                    n=args.n or s.n, bound=args.bound or s.bound, physics=args.physics)
     except (ValueError, TypeError) as e:
         ap.error(str(e))
     if args.out is None:
@@ -168,7 +172,11 @@ def _main(task: str, script: str, doc: str, help_: dict, argv=None) -> int:
                 + (f" +- {ci * 1e3:.1f}" if ci is not None else ""))
         if e.get("end_to_end_ratio_mean") is not None:
             line += f", end-to-end / length {e['end_to_end_ratio_mean']:.3f}"
-        print(line + f"  ({e['n_candidates']} candidates)")
+        if e["n_unstable_trials"]:
+            line += f"  [{e['n_unstable_trials']} unstable trial(s) left out: seeds " \
+                    f"{e['unstable_seeds']}]"
+        print(line + f"  ({e['n_candidates']} candidates, {e['n_unstable_rollouts']} of "
+                     f"{e['n_rollouts']} rollouts unstable)")
     print(f"wrote {out}/summary.json in {summary['wall_s']:.0f} s")
     for key, err in failed.items():
         print(f"FAILED {key}: {err}", file=sys.stderr)

@@ -144,6 +144,9 @@ class CEMResult:
         elite_history: (iterations,) mean elite cost of each iteration.
         seconds_per_iteration: (iterations,) wall time of each iteration.
         candidates: (C,) the candidate particles planned over.
+        n_evaluated: samples evaluated (iterations x population).
+        n_nonfinite: samples whose cost was NaN or inf and scored +inf (a ``PickPlaceTask``
+            gives +inf to every rollout its stability verdict flags).
     """
 
     particles: np.ndarray
@@ -153,6 +156,8 @@ class CEMResult:
     elite_history: np.ndarray
     seconds_per_iteration: np.ndarray
     candidates: np.ndarray
+    n_evaluated: int = 0
+    n_nonfinite: int = 0
 
 
 class CEM:
@@ -270,6 +275,7 @@ class CEM:
         dist = self.initial(cand.numel(), bound)
         best_cost, best = float("inf"), None
         history, elite_hist, seconds = [], [], []
+        n_nonfinite = 0
         for it in range(cfg.iterations):
             t0 = time.perf_counter()
             s = self.sample(dist, cand, bound, generator)
@@ -283,6 +289,7 @@ class CEM:
                     f"every sample of CEM iteration {it} had a non-finite cost (all "
                     f"{cfg.population} NaN or inf from {_evaluate_name(task)}); no plan to "
                     f"return")
+            n_nonfinite += int((~finite).sum())
             if not finite.all():
                 log.debug("CEM iteration %d: %d of %d costs non-finite, scored +inf", it,
                           int((~finite).sum()), cfg.population)
@@ -301,7 +308,7 @@ class CEM:
                 on_iteration(it, best_cost)
         return CEMResult(best[1].numpy().copy(), best[2].numpy().copy(), best_cost,
                          np.array(history), np.array(elite_hist), np.array(seconds),
-                         cand.numpy().copy())
+                         cand.numpy().copy(), cfg.iterations * cfg.population, n_nonfinite)
 
 
 def _evaluate_name(task) -> str:

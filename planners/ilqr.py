@@ -62,7 +62,8 @@ class ILQRStep:
     when no alpha improved); K (T, nu, 2c), k (T, nu): the gains of the backward pass; dofs
     (c,): the active set; cost_before/cost_after: J of the old and new nominal; alpha: the
     accepted step (0 if rejected); mu: the regularisation used; seconds: wall time of
-    'derivatives', 'backward', 'forward'."""
+    'derivatives', 'backward', 'forward'; n_unstable: line-search rollouts the stability
+    verdict flagged (scored +inf, never accepted)."""
 
     controls: np.ndarray
     states: np.ndarray
@@ -74,6 +75,7 @@ class ILQRStep:
     alpha: float
     mu: float
     seconds: dict
+    n_unstable: int = 0
 
     @property
     def accepted(self) -> bool:
@@ -128,7 +130,11 @@ class ILQR:
         C = scene.dofs() if dofs is None else scene.as_dofs(dofs)
         U = _controls(controls, scene.nu)
         if nominal is None:
-            X = svc.trajectory(x0, U).states
+            traj = svc.trajectory(x0, U)
+            X = traj.states
+            if traj.stability.n_unstable:
+                log.warning("iLQR: the nominal rollout is unstable (step %d: %s)",
+                            traj.stability.step[0], traj.stability.reason[0])
         else:
             X = float_array(nominal, "nominal", (len(U) + 1, None))
         J0 = float(self.cost.total(X, U))
@@ -154,15 +160,21 @@ class ILQR:
         ff = U[None] + self._alphas[:, None, None] * k.numpy()[None]     # (A, T, nu)
         trial = svc.rollout_feedback(x0, ff, X[:-1], K.numpy(), C)
         costs = self.cost.total(trial.states, trial.controls).numpy()    # (A,)
+        flagged = trial.stability.unstable
+        costs = np.where(flagged, np.inf, costs)
+        if flagged.any():
+            log.debug("iLQR line search: %d of %d alphas unstable (%s)", int(flagged.sum()),
+                      len(flagged), trial.stability.first()[2])
         t3 = time.perf_counter()
         best = int(np.argmin(costs))
         seconds = {"derivatives": t1 - t0, "backward": t2 - t1, "forward": t3 - t2}
         if costs[best] < J0:
             self.mu = max(self.mu / self.config.mu_factor, self.config.mu_min)
             return ILQRStep(trial.controls[best], trial.states[best], K, k, C, J0,
-                            float(costs[best]), float(self._alphas[best]), self.mu, seconds)
+                            float(costs[best]), float(self._alphas[best]), self.mu, seconds,
+                            int(flagged.sum()))
         self.mu = min(self.mu * self.config.mu_factor, self.config.mu_max)
-        return ILQRStep(U, X, K, k, C, J0, J0, 0.0, self.mu, seconds)
+        return ILQRStep(U, X, K, k, C, J0, J0, 0.0, self.mu, seconds, int(flagged.sum()))
 
     def solve(self, x0: np.ndarray, controls: np.ndarray, dofs=None, max_iterations: int = 50,
               rtol: float = 1e-6) -> ILQRResult:

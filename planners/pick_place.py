@@ -35,7 +35,7 @@ import torch
 
 from dopt.rollout import RolloutConfig, RolloutService
 from dopt.stats import mean_ci
-from dopt.tasks.pick.cloth_scene import ClothSceneConfig, make_cloth
+from dopt.tasks.pick.cloth_scene import PHYSICS_PRESETS, ClothSceneConfig, make_cloth
 from dopt.tasks.pick.picker import PickerConfig
 from dopt.tasks.pick.rope_scene import RopeSceneConfig, make_rope
 from dopt.tasks.pick.scene import DeformableScene, PickPlaceTask, end_to_end, mean_distance
@@ -70,6 +70,8 @@ class PickPlaceSettings:
         scripted: the scripted policy's settings.
         selfcollide: cloth self-collision (the multi-layer folds need it).
         side: cloth edge length (m); length: rope length (m).
+        physics: the scene's physics preset (``ClothSceneConfig.preset`` /
+            ``RopeSceneConfig.preset``: "fast", "default", "accurate").
         threads: simulation threads (0: one per core); not part of a trial's identity.
     """
 
@@ -82,6 +84,7 @@ class PickPlaceSettings:
     selfcollide: bool = False
     side: float = 0.3
     length: float = 0.5
+    physics: str = "default"
     threads: int = 0
 
     def __post_init__(self):
@@ -98,7 +101,8 @@ class PickPlaceSettings:
         # n an int >= 3, bound / side / length finite > 0 (m), threads an int >= 0 (0: one
         # per core), selfcollide a bool; TypeError or ValueError naming the field
         check_config(self, positive=("bound", "side", "length"),
-                     minimum={"n": 3, "threads": 0})
+                     minimum={"n": 3, "threads": 0},
+                     choices={"physics": tuple(PHYSICS_PRESETS)})
         for name in ("n", "threads"):          # numpy scalars -> Python (JSON-able to_dict)
             object.__setattr__(self, name, int(getattr(self, name)))
         for name in ("bound", "side", "length"):
@@ -211,21 +215,27 @@ class Problem:
         return out
 
 
-def make_problem(settings: PickPlaceSettings, seed: int = 0) -> Problem:
+def make_problem(settings: PickPlaceSettings, seed: int = 0,
+                 scene_overrides: dict | None = None) -> Problem:
     """The scene, start and stages of a task (the seed picks the crumpled start of rope
-    straightening; every other start is deterministic)."""
+    straightening; every other start is deterministic). ``scene_overrides``: scene-config
+    fields set on top of the physics preset (what ``python -m planners.bench cloth`` sweeps)."""
     _check_settings(settings)
     _check_seed(seed)
+    if scene_overrides is not None and not isinstance(scene_overrides, dict):
+        raise TypeError(f"scene_overrides must be a dict of scene-config fields, got "
+                        f"{type(scene_overrides).__name__}")
     if settings.task == "cloth":
-        return _cloth_problem(settings)
-    return _rope_problem(settings, seed)
+        return _cloth_problem(settings, scene_overrides or {})
+    return _rope_problem(settings, seed, scene_overrides or {})
 
 
-def _cloth_problem(s: PickPlaceSettings) -> Problem:
+def _cloth_problem(s: PickPlaceSettings, overrides: dict) -> Problem:
     from deformables.cloth import cloth_key_particles
     from deformables.goals import goal_sequence
 
-    scene = make_cloth(ClothSceneConfig(n=s.n, side=s.side, selfcollide=s.selfcollide),
+    fields = {"n": s.n, "side": s.side, "selfcollide": s.selfcollide, **overrides}
+    scene = make_cloth(ClothSceneConfig.preset(s.physics, **fields),
                        PickerConfig(bound=(s.bound,) * 3))
     lift = np.array([0.0, 0.0, scene.radius])          # the cloth rests at z = radius
     stages = []
@@ -236,13 +246,13 @@ def _cloth_problem(s: PickPlaceSettings) -> Problem:
     return Problem(s, scene, scene.initial_state, stages)
 
 
-def _rope_problem(s: PickPlaceSettings, seed: int) -> Problem:
+def _rope_problem(s: PickPlaceSettings, seed: int, overrides: dict) -> Problem:
     """Straighten: a crumpled start (one per seed), the straight rope along the line through
     its ends, centred between them. Fold: the straight rope to the crossed triangle."""
     from deformables.goals import rope_crossed_triangle, rope_crumpled, rope_straight
     from deformables.rope import rope_key_particles
 
-    config = RopeSceneConfig(n=s.n, length=s.length)
+    config = RopeSceneConfig.preset(s.physics, **{"n": s.n, "length": s.length, **overrides})
     picker = PickerConfig(bound=(s.bound,) * 3)
     if s.goal == "straighten":
         start = rope_crumpled(np.random.default_rng(seed), s.n, s.length,
@@ -267,8 +277,10 @@ def _rope_problem(s: PickPlaceSettings, seed: int) -> Problem:
 class StagePlan:
     """A planner's answer for one stage: the actions particles (H,) / displacements (H, 3),
     the state (ns,) after executing them, its cost (m), the best cost after each iteration
-    (one entry for the scripted policy), the candidates planned over and the seconds of
-    each CEM iteration (empty for the scripted policy)."""
+    (one entry for the scripted policy), the candidates planned over, the seconds of
+    each CEM iteration (empty for the scripted policy), the rollouts simulated while planning
+    and how many of them the stability verdict flagged, and whether the executed plan was
+    unstable (with the reason)."""
 
     particles: np.ndarray
     displacements: np.ndarray
@@ -277,6 +289,10 @@ class StagePlan:
     cost_history: list
     n_candidates: int
     seconds_per_iteration: list = field(default_factory=list)
+    n_rollouts: int = 0
+    n_unstable_rollouts: int = 0
+    unstable: bool = False
+    unstable_reason: str = ""
 
 
 class PickPlanner(Protocol):
@@ -319,10 +335,11 @@ class CEMPlanner:
     def plan(self, task, keys, on_iteration=None) -> StagePlan:
         cand = self.candidate_particles(keys, task.n_particles)
         res = self.cem.plan(task, cand, self.generator, on_iteration)
-        state = task.execute(res.particles, res.displacements)
-        return StagePlan(res.particles, res.displacements, state, float(res.cost),
+        done = task.execute(res.particles, res.displacements)
+        return StagePlan(res.particles, res.displacements, done.state, float(res.cost),
                          res.cost_history.tolist(), len(cand),
-                         res.seconds_per_iteration.tolist())
+                         res.seconds_per_iteration.tolist(), res.n_evaluated + 1,
+                         res.n_nonfinite + int(done.unstable), done.unstable, done.reason)
 
 
 class ScriptedPlanner:
@@ -336,7 +353,9 @@ class ScriptedPlanner:
     def plan(self, task, keys, on_iteration=None) -> StagePlan:
         res = scripted(task, keys, self.config)
         return StagePlan(res.particles, res.displacements, res.final_state, float(res.cost),
-                         [float(res.cost)], len(np.asarray(keys).reshape(-1)))
+                         [float(res.cost)], len(np.asarray(keys).reshape(-1)),
+                         n_rollouts=len(res.particles), n_unstable_rollouts=int(res.unstable),
+                         unstable=res.unstable, unstable_reason=res.reason)
 
 
 def make_planner(method: str, settings: PickPlaceSettings, seed: int = 0) -> PickPlanner:
@@ -358,7 +377,9 @@ class PickPlaceResult:
     """One trial: ``metrics`` of the final state (``Problem.metrics``), the best cost after
     every iteration of every stage (``cost_history``, with ``stage_of_iteration``), each
     stage's cost, candidates and actions, seconds per CEM iteration (None when scripted), the
-    final state (ns,) and the wall time (s)."""
+    final state (ns,), the wall time (s), the rollouts simulated and how many the stability
+    verdict flagged, and whether an executed plan was unstable (``unstable_reason`` names the
+    stage, step and bound): such a trial's metrics are not those of a physical result."""
 
     method: str
     seed: int
@@ -371,6 +392,10 @@ class PickPlaceResult:
     actions: list
     final_state: np.ndarray
     wall_s: float
+    n_rollouts: int = 0
+    n_unstable_rollouts: int = 0
+    unstable: bool = False
+    unstable_reason: str = ""
 
     def to_dict(self) -> dict:
         """JSON-able form: the metrics at the top level, the final state as a list."""
@@ -401,6 +426,8 @@ def run_problem(problem: Problem, planner: PickPlanner, *, method: str = "", see
     try:
         state = problem.start_state
         history, stage_of, n_cand, seconds, actions, stage_costs = [], [], [], [], [], []
+        n_rollouts = n_unstable = 0
+        reasons = []
         for k, stage in enumerate(problem.stages):
             task = PickPlaceTask(problem.scene, stage.goal, state, svc)
             plan = planner.plan(task, stage.keys, on_iteration)
@@ -410,6 +437,12 @@ def run_problem(problem: Problem, planner: PickPlanner, *, method: str = "", see
             seconds += plan.seconds_per_iteration
             n_cand.append(plan.n_candidates)
             stage_costs.append(plan.cost)
+            n_rollouts += plan.n_rollouts
+            n_unstable += plan.n_unstable_rollouts
+            if plan.unstable:
+                reasons.append(f"stage {stage.name}: {plan.unstable_reason}")
+                log.warning("%s seed %d stage %s: the executed plan went unstable (%s)", method,
+                            seed, stage.name, plan.unstable_reason)
             # full precision: a cloth amplifies a micrometre of rounding into centimetres, and
             # the recorded actions must replay to the recorded final state
             actions.append({"stage": stage.name, "particles": plan.particles.tolist(),
@@ -421,7 +454,8 @@ def run_problem(problem: Problem, planner: PickPlanner, *, method: str = "", see
             svc.close()
     return PickPlaceResult(method, int(seed), problem.metrics(state), history, stage_of,
                            stage_costs, n_cand, float(np.mean(seconds)) if seconds else None,
-                           actions, np.asarray(state), time.perf_counter() - start)
+                           actions, np.asarray(state), time.perf_counter() - start,
+                           n_rollouts, n_unstable, bool(reasons), "; ".join(reasons))
 
 
 def solve(settings: PickPlaceSettings, method: str = "simple", seed: int = 0,
@@ -451,7 +485,10 @@ def summarize(results: Sequence[dict], methods: Sequence[str],
               metric_names: Sequence[str]) -> dict:
     """Per method (in ``methods`` order, those with results): the mean, 95 % CI half-width
     (None with one seed) and per-seed values of each metric, the candidates (last stage and
-    per stage), the mean seconds per CEM iteration (None when scripted) and the seeds.
+    per stage), the mean seconds per CEM iteration (None when scripted), the seeds, the
+    rollouts simulated and flagged unstable, and the trials whose executed plan was unstable.
+    The means and intervals are over the stable trials only; the per-seed values list every
+    trial (``unstable_seeds`` marks the others).
 
     results: ``PickPlaceResult.to_dict()`` of finished trials.
     """
@@ -461,8 +498,9 @@ def summarize(results: Sequence[dict], methods: Sequence[str],
         if not runs:
             continue
         entry: dict = {}
+        stable = [r for r in runs if not r["unstable"]]
         for name in metric_names:
-            mean, ci = mean_ci([r[name] for r in runs])
+            mean, ci = mean_ci([r[name] for r in stable]) if stable else (None, None)
             entry[f"{name}_mean"], entry[f"{name}_ci95"] = _finite(mean), _finite(ci)
             entry[f"{name}s"] = [r[name] for r in runs]
         entry["n_candidates"] = int(runs[0]["n_candidates"][-1])
@@ -471,6 +509,11 @@ def summarize(results: Sequence[dict], methods: Sequence[str],
         entry["s_per_iteration"] = float(np.mean(secs)) if secs else None
         entry["seeds"] = [r["seed"] for r in runs]
         entry["n"] = len(runs)
+        entry["n_stable"] = len(stable)
+        entry["n_unstable_trials"] = len(runs) - len(stable)
+        entry["unstable_seeds"] = [r["seed"] for r in runs if r["unstable"]]
+        entry["n_rollouts"] = int(sum(r["n_rollouts"] for r in runs))
+        entry["n_unstable_rollouts"] = int(sum(r["n_unstable_rollouts"] for r in runs))
         out[m] = entry
     return out
 

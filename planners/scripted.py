@@ -33,8 +33,9 @@ class ScriptedTask(Protocol):
     def positions(self, state: np.ndarray) -> np.ndarray:
         """(ns,) -> (N, 3) particle positions."""
 
-    def step(self, state: np.ndarray, particle: int, displacement: np.ndarray) -> np.ndarray:
-        """Execute one action from state: (ns,) -> (ns,)."""
+    def step(self, state: np.ndarray, particle: int, displacement: np.ndarray):
+        """Execute one action from state (ns,): an object with ``state`` (ns,), ``unstable``
+        (bool) and ``reason`` (str), as ``dopt.tasks.pick.scene.Execution``."""
 
     def cost(self, states: np.ndarray) -> np.ndarray:
         """(..., ns) -> (...) cost."""
@@ -64,12 +65,15 @@ class ScriptedConfig:
 @dataclass(frozen=True)
 class ScriptedResult:
     """particles (H,), displacements (H, 3) of the actions taken; cost of the final state;
-    final_state (ns,)."""
+    final_state (ns,); unstable: whether an action's simulation broke a stability bound (the
+    policy stops there) and the reason."""
 
     particles: np.ndarray
     displacements: np.ndarray
     cost: float
     final_state: np.ndarray
+    unstable: bool = False
+    reason: str = ""
 
 
 def scripted(task: ScriptedTask, keys, config: ScriptedConfig = ScriptedConfig()
@@ -79,7 +83,7 @@ def scripted(task: ScriptedTask, keys, config: ScriptedConfig = ScriptedConfig()
     A key particle within ``tolerance`` of its goal (in xy) is left alone; any other is carried
     towards (goal + lift) and released, in several actions if the bound clips the displacement
     (at most ``per_particle`` per key particle and ``max_actions`` in all). Where it lands is
-    not corrected.
+    not corrected. An action whose simulation goes unstable ends the run, flagged in the result.
 
     Raises:
         TypeError: keys that are not integers, a config that is not a ScriptedConfig.
@@ -94,8 +98,10 @@ def scripted(task: ScriptedTask, keys, config: ScriptedConfig = ScriptedConfig()
     keys = particle_indices(keys, "keys", len(goal))
     lift = np.array([0.0, 0.0, config.lift])
     state = float_array(task.start_state, "task.start_state", ndim=1)
-    particles, disps = [], []
+    particles, disps, reason = [], [], ""
     for k in keys:
+        if reason:
+            break
         for _ in range(config.per_particle):
             if len(particles) >= config.max_actions:
                 break
@@ -104,10 +110,15 @@ def scripted(task: ScriptedTask, keys, config: ScriptedConfig = ScriptedConfig()
             if np.linalg.norm(target[:2] - p[:2]) < config.tolerance:
                 break
             d = np.clip(target - p, -bound, bound)
-            state = task.step(state, int(k), d)
+            done = task.step(state, int(k), d)
+            state = done.state
             particles.append(int(k))
             disps.append(d)
             log.debug("scripted: particle %d moved by %s", k, np.round(d, 4))
+            if done.unstable:
+                reason = f"action {len(particles) - 1}: {done.reason}"
+                log.warning("scripted: the simulation went unstable (%s)", reason)
+                break
             if np.array_equal(d, target - p):    # placed above its goal: next particle
                 break
     cost = float(task.cost(state))
@@ -115,4 +126,5 @@ def scripted(task: ScriptedTask, keys, config: ScriptedConfig = ScriptedConfig()
         raise RuntimeError(f"the scripted policy's final state has a non-finite cost ({cost}) "
                            f"after {len(particles)} actions")
     return ScriptedResult(np.array(particles, dtype=np.int64),
-                          np.array(disps, dtype=float).reshape(-1, 3), cost, state)
+                          np.array(disps, dtype=float).reshape(-1, 3), cost, state,
+                          bool(reason), reason)

@@ -167,6 +167,8 @@ class SVROptimiser:
     Args:
         ilqr: a planners.ilqr.ILQR.
         selector: the DofSelector of this run.
+
+    ``n_unstable_rollouts`` counts the line-search rollouts the stability verdict flagged.
     """
 
     def __init__(self, ilqr, selector: DofSelector):
@@ -176,11 +178,13 @@ class SVROptimiser:
         if not isinstance(selector, DofSelector):
             raise TypeError(f"selector must be a DofSelector, got {type(selector).__name__}")
         self.ilqr, self.selector = ilqr, selector
+        self.n_unstable_rollouts = 0
 
     def optimise(self, state: np.ndarray, plan: Plan) -> Plan:
         C = self.selector.before()
         step = self.ilqr.iterate(state, plan.controls, C)
         self.selector.after(step.K, step.dofs)
+        self.n_unstable_rollouts += step.n_unstable
         info = dict(step.seconds, cost=step.cost_after, alpha=step.alpha, n_dofs=len(C))
         return Plan(controls=step.controls, states=step.states, K=step.K.numpy(),
                     dofs=step.dofs, info=info)

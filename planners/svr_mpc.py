@@ -121,7 +121,9 @@ class SVRMPCResult:
     optimisation its wall time (ms), |C|, start step and active set, mean lag (agent steps per
     optimisation), steps that started late, and the slowdown and timeout it ran with; the goal
     object's distance to the goal after every executed step (m, S + 1 values, the start
-    first) and the final state row (ns,) as a list."""
+    first), the final state row (ns,) as a list, the line-search rollouts the stability
+    verdict flagged, and whether the executed episode broke a stability bound (the reason
+    names the step and bound)."""
 
     mpc_cost: float
     success: bool
@@ -138,6 +140,9 @@ class SVRMPCResult:
     timeout: int
     goal_distance: list = field(default_factory=list)
     final_state: list = field(default_factory=list)
+    n_unstable_rollouts: int = 0
+    unstable: bool = False
+    unstable_reason: str = ""
 
     @property
     def opt_ms_mean(self) -> float:
@@ -192,7 +197,11 @@ def run_svr_mpc(settings: SVRMPCSettings = SVRMPCSettings(), seed: int = 0) -> S
         lag_steps_mean=float(np.mean(res.lag_steps)), late_steps=int(res.late_steps),
         slowdown=config.slowdown, timeout=config.timeout,
         goal_distance=[round(ctl.goal_distance(x), 6) for x in res.states],
-        final_state=np.asarray(res.states[-1], dtype=float).tolist())
+        final_state=np.asarray(res.states[-1], dtype=float).tolist(),
+        n_unstable_rollouts=ctl.optimiser.n_unstable_rollouts,
+        unstable=bool(res.stability.unstable[0]),
+        unstable_reason=(f"step {res.stability.step[0]}: {res.stability.reason[0]}"
+                         if res.stability.unstable[0] else ""))
 
 
 # ----------------------------------------------------------------------- many trials
@@ -260,6 +269,8 @@ def summarize(records: list[dict], baseline: str = "baseline", level: float = 0.
             "lag_steps_mean": float(np.mean([v["lag_steps_mean"] for v in res])),
             "outliers": int(sum(outlier(v) for v in res)),
             "trials": len(res),
+            "n_unstable_trials": int(sum(v.get("unstable", False) for v in res)),
+            "n_unstable_rollouts": int(sum(v.get("n_unstable_rollouts", 0) for v in res)),
         }
     return out
 

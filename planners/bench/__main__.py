@@ -1,4 +1,4 @@
-"""python -m planners.bench {ilqr,cem} [options]: print timings as JSON."""
+"""python -m planners.bench {ilqr,cem,cloth,rope} [options]: print timings as JSON."""
 
 from __future__ import annotations
 
@@ -32,6 +32,20 @@ def main(argv=None) -> int:
     p.add_argument("--bound", type=float, default=None,
                    help="picker displacement bound per axis, m (default: cloth 0.3, rope 0.1)")
 
+    for task in ("cloth", "rope"):
+        p = sub.add_parser(task, help=f"the {task} physics presets: speed, blow-ups per 1000 "
+                                      f"random actions, strain, scripted error")
+        add_common_args(p)
+        p.add_argument("--sizes", default="12" if task == "cloth" else "40",
+                       help="comma-separated particles per side / along the rope")
+        p.add_argument("--settings", default=None,
+                       help="comma-separated setting names (default: all of "
+                            "planners.bench.physics' table)")
+        p.add_argument("--actions", type=int, default=1000,
+                       help="random pick-and-place actions per setting and size")
+        p.add_argument("--no-scripted", action="store_true",
+                       help="skip the scripted policy on the task's goals")
+
     args = ap.parse_args(argv)
     if args.bench == "ilqr":
         from planners.bench.ilqr import bench_ilqr
@@ -41,6 +55,11 @@ def main(argv=None) -> int:
         from planners.bench.cem import bench_cem
         out = bench_cem(args.task, args.n, args.P, args.H, args.bound, args.threads,
                         args.repeats, args.seed)
+    elif args.bench in ("cloth", "rope"):
+        from planners.bench.physics import bench_physics
+        out = bench_physics(args.bench, [int(n) for n in args.sizes.split(",")],
+                            args.settings.split(",") if args.settings else None, args.actions,
+                            args.threads, args.seed, scripted=not args.no_scripted)
     print_json(out)
     return 0
 

@@ -58,7 +58,7 @@ def mixed():
 
 
 def _services(scene, c_kernels):
-    return RolloutService(scene, RolloutConfig(threads=2, c_kernels=c_kernels))
+    return RolloutService(scene, RolloutConfig(threads=2, c_kernels=c_kernels, on_unstable="raise"))
 
 
 def _raised(call) -> UnstableRolloutError:

@@ -146,7 +146,7 @@ def test_replay_ends_where_the_rollout_does(cloth):
     particles = np.array([0, -1, 35])
     displacements = np.array([[0.05, 0.02, 0.04], [0.0, 0.0, 0.0], [-0.03, 0.0, 0.02]])
     task = PickPlaceTask(cloth, cloth.positions(cloth.initial_state))
-    final = task.execute(particles, displacements)
+    final = task.execute(particles, displacements).state
     actions = [{"particles": particles[:2].tolist(), "displacements": displacements[:2].tolist()},
                {"particles": particles[2:].tolist(), "displacements": displacements[2:].tolist()}]
     rep = render.replay(cloth, cloth.initial_state, actions, max_frames=40)

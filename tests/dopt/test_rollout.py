@@ -64,16 +64,28 @@ def test_trajectory_rows_hold_their_controls(scene, moving_state):
                                   tr.states[-1, scene.layout["qpos"]])
 
 
-def test_unstable_rollout_names_rollout_and_step(scene, moving_state):
-    svc = RolloutService(scene, RolloutConfig(threads=1))
+def test_unstable_rollout_is_flagged_and_spares_the_others(scene, moving_state):
+    """One NaN-producing sample among good ones: the batch returns, the bad one is flagged with
+    its step, the others are bit-identical to a batch without it; on_unstable="raise" names
+    it instead."""
+    svc = RolloutService(scene, RolloutConfig(threads=2))
     T = 20
     u = np.zeros((3, T, scene.nu))
+    u[:, :, 0] = [[0.1], [0.2], [-0.3]]
     u[1, 6:, 2] = 1e300   # the ball motor is unlimited: from step 6 its torque blows up rollout 1
+    res = svc.rollout(moving_state, u, record=("qpos",))
+    assert res.stability.unstable.tolist() == [False, True, False]
+    assert res.stability.step.tolist() == [-1, 6, -1]    # the step that applied the huge control
+    assert res.stability.reason[1].startswith("mjWARN_")
+    alone = svc.rollout(moving_state, u[[0, 2]], record=("qpos",))
+    assert not alone.stability.unstable.any()
+    assert np.array_equal(res.final_states[[0, 2]], alone.final_states)
+    assert np.array_equal(res.records["qpos"][[0, 2]], alone.records["qpos"])
+    strict = RolloutService(scene, RolloutConfig(threads=1, on_unstable="raise"))
     with pytest.raises(UnstableRolloutError) as info:
-        svc.rollout(moving_state, u)
+        strict.rollout(moving_state, u)
     err = info.value
-    assert err.rollout == 1
-    assert err.step == 6                      # the step that applied the first huge control
+    assert err.rollout == 1 and err.step == 6
     assert "rollout" in str(err) and "simulation 1" in str(err)
 
 
@@ -158,14 +170,25 @@ def test_feedback_rollouts_equal_step_loop(scene, moving_state, c_kernels, threa
     np.testing.assert_array_equal(got.states[:, :-1, ctrl], got.controls)
 
 
-def test_unstable_feedback_names_rollout(scene, moving_state, c_kernels):
+def test_unstable_feedback_is_flagged_and_spares_the_others(scene, moving_state, c_kernels):
     svc = RolloutService(scene, RolloutConfig(threads=2, c_kernels=c_kernels))
     T = 20
     ref = svc.trajectory(moving_state, np.zeros((T, scene.nu))).states[:-1]
     ff = np.zeros((3, T, scene.nu))
+    ff[:, :, 0] = [[0.1], [0.2], [-0.3]]
     ff[2, 6:, 2] = 1e300   # the unlimited ball motor blows up rollout 2 from step 6
+    K = np.zeros((T, scene.nu, 2))
+    res = svc.rollout_feedback(moving_state, ff, ref, K, [0])
+    assert res.stability.unstable.tolist() == [False, False, True]
+    assert res.stability.step.tolist() == [-1, -1, 6]
+    alone = svc.rollout_feedback(moving_state, ff[:2], ref, K, [0])
+    assert np.array_equal(res.states[:2], alone.states)
+    assert np.array_equal(res.controls[:2], alone.controls)
+    assert np.array_equal(res.states[2, 8:], np.repeat(res.states[2, 7:8], T - 7, 0))
+    strict = RolloutService(scene, RolloutConfig(threads=2, c_kernels=c_kernels,
+                                                 on_unstable="raise"))
     with pytest.raises(UnstableRolloutError) as info:
-        svc.rollout_feedback(moving_state, ff, ref, np.zeros((T, scene.nu, 2)), [0])
+        strict.rollout_feedback(moving_state, ff, ref, K, [0])
     assert info.value.rollout == 2 and info.value.step == 6
     assert "rollout_feedback" in str(info.value)
 

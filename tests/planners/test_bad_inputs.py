@@ -2,6 +2,8 @@
 passes as a result: CEM's cost handling (non-finite populations, costs of the wrong shape),
 candidates, bounds and configs; the scripted policy; iLQR; DoF selection; both pipelines'
 settings."""
+from types import SimpleNamespace
+
 import mujoco
 import numpy as np
 import pytest
@@ -62,7 +64,7 @@ class Points:
     def step(self, state, particle, displacement):
         p = self.positions(state).copy()
         p[particle] += displacement
-        return p.ravel()
+        return SimpleNamespace(state=p.ravel(), unstable=False, reason="")
 
     def cost(self, state):
         return float(np.linalg.norm(self.positions(state) - self.goal, axis=1).mean())

@@ -137,5 +137,5 @@ def test_cloth_iteration_is_reproducible():
             for _ in range(2)]
     assert runs[0].cost == runs[1].cost
     assert np.array_equal(runs[0].displacements, runs[1].displacements)
-    replay = task.cost(task.execute(runs[0].particles, runs[0].displacements))
+    replay = task.cost(task.execute(runs[0].particles, runs[0].displacements).state)
     assert replay == runs[0].cost

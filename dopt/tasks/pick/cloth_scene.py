@@ -11,15 +11,30 @@ the numbering of ``deformables.goals``.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import mujoco
 
 from dopt.tasks.pick.picker import PickerConfig, picker_mjcf
-from dopt.tasks.pick.scene import DeformableScene, check_pickable, floor_scene_xml
+from dopt.tasks.pick.scene import (
+    SOLVERS,
+    DeformableScene,
+    check_pickable,
+    floor_scene_xml,
+    preset_fields,
+)
 from dopt.validation import check_config
 
 FLEX = "cloth"
+
+#: physics presets: name -> the fields that differ from ClothSceneConfig's defaults (which are
+#: "default"), chosen by ``python -m planners.bench cloth`` (docs/DESIGN-NOTES.md, "Cloth and
+#: rope physics presets")
+PHYSICS_PRESETS: dict[str, dict] = {
+    "fast": {},
+    "default": {},
+    "accurate": {"timestep": 0.01},
+}
 
 
 @dataclass(frozen=True)
@@ -59,6 +74,7 @@ class ClothSceneConfig:
     impratio: float = 10.0
     selfcollide: bool = False
     timestep: float = 0.02
+    solver: str = "CG"
     iterations: int = 30
     tolerance: float = 1e-6
     settle: float = 0.2
@@ -68,9 +84,14 @@ class ClothSceneConfig:
                                      "timestep"),
                      minimum={"n": 2, "poisson": 0, "damping": 0, "friction": 0,
                               "iterations": 1, "tolerance": 0, "settle": 0},
-                     choices={"cone": ("elliptic", "pyramidal")})
+                     choices={"cone": ("elliptic", "pyramidal"), "solver": SOLVERS})
         if not self.poisson < 0.5:
             raise ValueError(f"ClothSceneConfig.poisson must be < 0.5, got {self.poisson!r}")
+
+    @classmethod
+    def preset(cls, name: str = "default", **fields) -> ClothSceneConfig:
+        """A named physics preset (``PHYSICS_PRESETS``) with ``fields`` on top."""
+        return replace(cls(**fields), **preset_fields(PHYSICS_PRESETS, name, fields))
 
     @property
     def spacing(self) -> float:
@@ -99,11 +120,11 @@ def cloth_xml(config: ClothSceneConfig = ClothSceneConfig(),
       <elasticity young="{c.young}" poisson="{c.poisson}" thickness="{c.thickness}"
                   elastic2d="both" damping="{c.damping}"/>
     </flexcomp>"""
-    option = (f'timestep="{c.timestep}" iterations="{c.iterations}" tolerance="{c.tolerance}" '
-              f'cone="{c.cone}" impratio="{c.impratio}"')
+    option = (f'solver="{c.solver}" timestep="{c.timestep}" iterations="{c.iterations}" '
+              f'tolerance="{c.tolerance}" cone="{c.cone}" impratio="{c.impratio}"')
     return floor_scene_xml(f"cloth{n}", option, max(64, n * n // 2),
                            f'condim="3" friction="{fr}"', flexcomp,
-                           picker_mjcf(FLEX, ids, picker))
+                           picker_mjcf(FLEX, ids, picker, lowest=r))
 
 
 def make_cloth(config: ClothSceneConfig = ClothSceneConfig(),

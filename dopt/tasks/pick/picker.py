@@ -70,17 +70,26 @@ class PickerConfig:
 
 
 def picker_mjcf(flex_name: str, particles: Iterable[int],
-                config: PickerConfig = PickerConfig()) -> tuple[str, str, str]:
+                config: PickerConfig = PickerConfig(),
+                lowest: float | None = None) -> tuple[str, str, str]:
     """MJCF fragments of the picker for the flex ``flex_name`` (vertex bodies
     ``<flex_name>_<i>``): (worldbody body, equality block content, actuator block content).
 
     ``particles``: the pickable particles, one ``connect`` equality each (only candidates need
-    one). The compiled model must go through :func:`fix_grasp_anchors`.
+    one). ``lowest``: the lowest height (m) the picker may reach (a joint limit; None: no
+    limit). At the floor plus a particle radius, a move that points into the floor stops
+    there instead of pressing the held particle through it (a grasp equality overpowers the
+    floor contact: measured 22 mm deep, with 50 % edge strain, from random 12 x 12 cloth
+    actions), as SoftGym's pickers are clipped above the floor. The compiled model must go
+    through :func:`fix_grasp_anchors`.
     """
     x, y, z = config.start
+    limit = ["", "", "" if lowest is None else
+             f' limited="true" range="{float(lowest) - z:.6g} {max(1.0, 10 * z):.6g}"']
     body = (f'<body name="picker" pos="{x} {y} {z}" gravcomp="1">'
-            + "".join(f'<joint name="picker_{a}" type="slide" axis="{axis}"/>'
-                      for a, axis in zip(_AXES, ("1 0 0", "0 1 0", "0 0 1"), strict=True))
+            + "".join(f'<joint name="picker_{a}" type="slide" axis="{axis}"{lim}/>'
+                      for a, axis, lim in zip(_AXES, ("1 0 0", "0 1 0", "0 0 1"), limit,
+                                              strict=True))
             + f'<geom name="picker" type="sphere" size="0.006" mass="{config.mass}" '
               f'contype="0" conaffinity="0" rgba="0.1 0.8 0.1 1"/></body>')
     ref = f"{config.solref[0]} {config.solref[1]}"

@@ -13,16 +13,31 @@ Particle i lies at x = -length/2 + i * length/(n-1) when straight.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import mujoco
 import numpy as np
 
 from dopt.tasks.pick.picker import PickerConfig, picker_mjcf
-from dopt.tasks.pick.scene import DeformableScene, check_pickable, floor_scene_xml
+from dopt.tasks.pick.scene import (
+    SOLVERS,
+    DeformableScene,
+    check_pickable,
+    floor_scene_xml,
+    preset_fields,
+)
 from dopt.validation import check_config
 
 FLEX = "rope"
+
+#: physics presets: name -> the fields that differ from RopeSceneConfig's defaults (which are
+#: "default"), chosen by ``python -m planners.bench rope`` (docs/DESIGN-NOTES.md, "Cloth and
+#: rope physics presets")
+PHYSICS_PRESETS: dict[str, dict] = {
+    "fast": {},
+    "default": {},
+    "accurate": {"timestep": 0.01},
+}
 
 
 @dataclass(frozen=True)
@@ -52,6 +67,7 @@ class RopeSceneConfig:
     friction: float = 0.8
     selfcollide: bool = False
     timestep: float = 0.02
+    solver: str = "CG"
     iterations: int = 50
     tolerance: float = 1e-6
     settle: float = 0.4
@@ -59,7 +75,13 @@ class RopeSceneConfig:
     def __post_init__(self):
         check_config(self, positive=("length", "mass", "radius", "young", "timestep"),
                      minimum={"n": 3, "damping": 0, "friction": 0, "iterations": 1,
-                              "tolerance": 0, "settle": 0})
+                              "tolerance": 0, "settle": 0},
+                     choices={"solver": SOLVERS})
+
+    @classmethod
+    def preset(cls, name: str = "default", **fields) -> RopeSceneConfig:
+        """A named physics preset (``PHYSICS_PRESETS``) with ``fields`` on top."""
+        return replace(cls(**fields), **preset_fields(PHYSICS_PRESETS, name, fields))
 
 
 def rope_xml(config: RopeSceneConfig = RopeSceneConfig(),
@@ -81,9 +103,10 @@ def rope_xml(config: RopeSceneConfig = RopeSceneConfig(),
       <edge equality="true" solref="{c.edge_solref[0]} {c.edge_solref[1]}"/>
       <elasticity young="{c.young}" damping="{c.damping}"/>
     </flexcomp>"""
-    option = f'timestep="{c.timestep}" iterations="{c.iterations}" tolerance="{c.tolerance}"'
+    option = (f'solver="{c.solver}" timestep="{c.timestep}" iterations="{c.iterations}" '
+              f'tolerance="{c.tolerance}"')
     return floor_scene_xml(f"rope{c.n}", option, 64, f'friction="{fr}"', flexcomp,
-                           picker_mjcf(FLEX, pickable, picker))
+                           picker_mjcf(FLEX, pickable, picker, lowest=c.radius))
 
 
 def make_rope(config: RopeSceneConfig = RopeSceneConfig(),

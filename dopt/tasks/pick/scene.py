@@ -12,12 +12,14 @@ Shapes: P population, H actions per sequence, K steps per action, N particles, n
 from __future__ import annotations
 
 from collections.abc import Iterable
+from dataclasses import dataclass, replace
 
 import mujoco
 import numpy as np
 
-from dopt.rollout import RolloutConfig, RolloutService
+from dopt.rollout import RolloutConfig, RolloutResult, RolloutService
 from dopt.scene import Scene
+from dopt.stability import StabilityBounds
 from dopt.state import check_model, check_states
 from dopt.tasks.pick.picker import CONTROL_SPEC, Picker, PickerConfig, fix_grasp_anchors
 from dopt.validation import check_real, float_array, index_array, is_int
@@ -38,18 +40,30 @@ def check_pickable(pickable: Iterable[int] | None, n: int, picker) -> np.ndarray
     return ids
 
 
+#: the constraint solvers a scene config may name
+SOLVERS = ("CG", "Newton", "PGS")
+
+
+def preset_fields(presets: dict, name: str, fields: dict) -> dict:
+    """The fields of preset ``name`` that ``fields`` does not set; ValueError naming an unknown
+    preset."""
+    if not isinstance(name, str) or name not in presets:
+        raise ValueError(f"unknown physics preset {name!r}; choose from {', '.join(presets)}")
+    return {k: v for k, v in presets[name].items() if k not in fields}
+
+
 def floor_scene_xml(name: str, option: str, memory_mb: int, floor: str, flexcomp: str,
                     picker_parts: tuple[str, str, str]) -> str:
     """MJCF shell shared by the rope and cloth: options, a lit floor, one flexcomp, the picker.
 
-    option: extra <option> attributes after the discrete-integrator/CG ones; floor: extra
-    attributes of the floor geom; flexcomp: the <flexcomp> element; picker_parts: (body,
-    equalities, actuators) from ``picker_mjcf``.
+    option: extra <option> attributes after the discrete integrator (solver, timestep, ...);
+    floor: extra attributes of the floor geom; flexcomp: the <flexcomp> element;
+    picker_parts: (body, equalities, actuators) from ``picker_mjcf``.
     """
     body, eqs, acts = picker_parts
     return f"""
 <mujoco model="{name}">
-  <option integrator="discrete" solver="CG" {option}/>
+  <option integrator="discrete" {option}/>
   <size memory="{memory_mb}M"/>
   <visual><global offwidth="640" offheight="480"/></visual>
   <worldbody>
@@ -73,6 +87,8 @@ class DeformableScene:
         picker: the picker config the model was built with.
         settle: seconds the object settles to make ``initial_state``.
         positions: (N, 3) start positions of the particles (None: the compiled layout).
+        stability: the bounds rollouts of this scene are judged by (the picker, a massless
+            virtual gripper, is never speed-judged).
 
     Attributes:
         scene: the ``dopt.Scene``; picker: the ``Picker``; radius: particle radius (m);
@@ -81,14 +97,19 @@ class DeformableScene:
 
     def __init__(self, model: mujoco.MjModel, flex: str, picker: PickerConfig,
                  settle: float = 0.2,
-                 positions: np.ndarray | None = None):
+                 positions: np.ndarray | None = None,
+                 stability: StabilityBounds = StabilityBounds()):
         check_model(model)
+        if not isinstance(stability, StabilityBounds):
+            raise TypeError(f"stability must be a StabilityBounds, got "
+                            f"{type(stability).__name__}")
         if not isinstance(flex, str):
             raise TypeError(f"flex must be the flex's name, got {flex!r}")
         check_real(settle, "settle", minimum=0)
         fix_grasp_anchors(model)
         self.model = model
-        self.scene = Scene(model)
+        unjudged = tuple(dict.fromkeys(stability.unjudged_bodies + ("picker",)))
+        self.scene = Scene(model, stability=replace(stability, unjudged_bodies=unjudged))
         self.flex = flex
         f = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_FLEX, flex)
         if f < 0:
@@ -183,6 +204,8 @@ class PickPlaceTask:
         self.start_state = check_states(scene.model, state, batched=False, name="start_state")
         self.service = rollout or RolloutService(scene.scene, RolloutConfig())
         self.picker = scene.picker
+        self.n_evaluated = 0
+        self.n_unstable = 0
 
     @property
     def n_particles(self) -> int:
@@ -193,18 +216,18 @@ class PickPlaceTask:
         """(3,) largest displacement per axis (m)."""
         return self.picker.bound
 
-    def rollout(self, particles, displacements, start: np.ndarray | None = None) -> np.ndarray:
-        """Final states of a population of action sequences: (P, H), (P, H, 3) -> (P, ns),
-        from ``start`` (ns,) (default: the task's start state).
+    def rollout(self, particles, displacements, start: np.ndarray | None = None
+                ) -> RolloutResult:
+        """A population of action sequences, (P, H), (P, H, 3), simulated from ``start`` (ns,)
+        (default: the task's start state): final states (P, ns) and the stability verdict.
 
         Raises:
             ValueError: a bad action (see ``Picker.check``).
-            dopt.errors.UnstableRolloutError: a simulation went unstable.
         """
         U = self.picker.encode(_numpy(particles), _numpy(displacements))
         x0 = self.start_state if start is None else check_states(
             self.scene.model, start, batched=False, name="start")
-        return self.service.rollout(x0, U, control_spec=CONTROL_SPEC).final_states
+        return self.service.rollout(x0, U, control_spec=CONTROL_SPEC)
 
     def cost(self, states: np.ndarray) -> np.ndarray:
         """Eq. 2 (mean particle distance to the goal, m) of state rows: (..., ns) -> (...)."""
@@ -212,8 +235,12 @@ class PickPlaceTask:
 
     def evaluate(self, particles, displacements):
         """Costs of a population: (P, H) ints (NONE = -1), (P, H, 3) metres -> (P,) torch
-        float64 tensor (numpy in, numpy out)."""
-        costs = self.cost(self.rollout(particles, displacements))
+        float64 tensor (numpy in, numpy out). An unstable rollout (``dopt.stability``) costs
+        +inf; ``n_evaluated`` and ``n_unstable`` count them over the task's life."""
+        res = self.rollout(particles, displacements)
+        costs = np.where(res.stability.unstable, np.inf, self.cost(res.final_states))
+        self.n_evaluated += len(costs)
+        self.n_unstable += res.stability.n_unstable
         if _is_torch(particles) or _is_torch(displacements):
             import torch
             return torch.from_numpy(costs)
@@ -223,19 +250,37 @@ class PickPlaceTask:
         """Particle positions: (..., ns) -> (..., N, 3)."""
         return self.scene.positions(states)
 
-    def execute(self, particles, displacements, start: np.ndarray | None = None) -> np.ndarray:
-        """Final state of one action sequence: (H,), (H, 3) -> (ns,), from ``start`` (ns,)
-        (default: the task's start state)."""
-        return self.rollout(np.asarray(_numpy(particles))[None],
-                            np.asarray(_numpy(displacements), dtype=float)[None], start)[0]
+    def execute(self, particles, displacements, start: np.ndarray | None = None) -> Execution:
+        """One action sequence, (H,), (H, 3), from ``start`` (ns,) (default: the task's start
+        state): its final state and verdict."""
+        res = self.rollout(np.asarray(_numpy(particles))[None],
+                           np.asarray(_numpy(displacements), dtype=float)[None], start)
+        st = res.stability
+        return Execution(res.final_states[0], bool(st.unstable[0]), int(st.step[0]),
+                         st.reason[0], float(st.max_speed[0]), float(st.max_penetration[0]),
+                         float(st.max_strain[0]))
 
-    def step(self, state: np.ndarray, particle: int, displacement) -> np.ndarray:
-        """One action from ``state``: (ns,) -> (ns,); ``particle`` an int (NONE = -1),
-        ``displacement`` (3,) metres."""
+    def step(self, state: np.ndarray, particle: int, displacement) -> Execution:
+        """One action from ``state`` (ns,): ``particle`` an int (NONE = -1), ``displacement``
+        (3,) metres."""
         if not is_int(particle):
             raise TypeError(f"particle must be an int (or NONE = -1), got {particle!r}")
         disp = float_array(_numpy(displacement), "displacement", (3,), finite=False)
         return self.execute([particle], disp[None], state)
+
+
+@dataclass(frozen=True)
+class Execution:
+    """An executed action sequence: the final state (ns,), whether the simulation broke a
+    stability bound (``dopt.stability``), the step and reason, and the extremes seen."""
+
+    state: np.ndarray
+    unstable: bool
+    step: int
+    reason: str
+    max_speed: float
+    max_penetration: float
+    max_strain: float
 
 
 def _is_torch(x) -> bool:

@@ -112,14 +112,14 @@ def test_grasped_particle_follows_displacement(cloth):
     task = _task(cloth)
     corner = cloth.n_particles - 1
     d = np.array([-0.1, -0.05, 0.0])
-    final = task.execute([corner], d[None])
+    final = task.execute([corner], d[None]).state
     p0 = cloth.positions(cloth.initial_state)[corner]
     assert np.linalg.norm(cloth.positions(final)[corner] - (p0 + d)) < 0.01
 
 
 def test_none_action_leaves_cloth_at_rest(cloth):
     task = _task(cloth)
-    final = task.execute([NONE], np.zeros((1, 3)))
+    final = task.execute([NONE], np.zeros((1, 3))).state
     assert mean_distance(cloth.positions(final), cloth.positions(cloth.initial_state)) < 1e-3
 
 
@@ -128,7 +128,7 @@ def test_batched_rollout_equals_step_loop(rope):
     task = _task(rope)
     particles = np.array([[0, NONE], [11, 5]])
     disp = np.array([[[0.05, 0.02, 0.03], [0, 0, 0]], [[-0.1, 0.1, 0.0], [0.0, -0.05, 0.02]]])
-    finals = task.rollout(particles, disp)
+    finals = task.rollout(particles, disp).final_states
     U = rope.picker.encode(particles, disp)
     m = rope.model
     for k in range(2):
@@ -147,13 +147,20 @@ def test_task_costs_eq2(cloth):
     assert costs[0] < 1e-3 < costs[1]
 
 
-def test_unstable_rollout_raises_service_error():
-    """An absurd gravity blows the simulation up: the rollout service's error, not NaN costs."""
+def test_unstable_rollout_costs_inf_and_is_counted():
+    """An absurd gravity blows the simulation up: +inf cost and a count, not NaN costs; with
+    on_unstable="raise" the rollout service's error."""
     scene = make_rope(RopeSceneConfig(n=6, length=0.1))
     scene.model.opt.gravity[:] = (0.0, 0.0, -1e12)
     task = _task(scene)
+    costs = task.evaluate(np.array([[2], [3]]), np.array([[[0.1, 0.1, 0.1]]] * 2))
+    assert np.isposinf(costs).all() and task.n_unstable == 2 and task.n_evaluated == 2
+    done = task.execute([2], [[0.1, 0.1, 0.1]])
+    assert done.unstable and done.reason
+    strict = PickPlaceTask(scene, task.goal, rollout=RolloutService(
+        scene.scene, RolloutConfig(threads=1, on_unstable="raise")))
     with pytest.raises(UnstableRolloutError):
-        task.evaluate(np.array([[2]]), np.array([[[0.1, 0.1, 0.1]]]))
+        strict.evaluate(np.array([[2]]), np.array([[[0.1, 0.1, 0.1]]]))
 
 
 def test_scripted_diagonal_fold_reaches_goal():

@@ -1,0 +1,333 @@
+"""A stability verdict on every rollout: physical bounds that MuJoCo itself does not check.
+
+MuJoCo flags a simulation only when a value is NaN or beyond +-1e10. A cloth can go 7 cm
+through the floor and be thrown a metre up at 22 m/s with every state finite and no warning.
+``StabilityBounds`` (part of a ``dopt.Scene``) names what a trustworthy step must keep:
+
+- speed: the largest translational speed of a body moved by a free joint or by slide joints
+  (flex particles, picker, free objects), |v| over its linear DoFs (m/s; for slide joints the
+  norm over up to three of them, which is the speed when their axes are orthonormal, as a
+  flexcomp's and the picker's are);
+- penetration: the deepest flex vertex below a static plane (the floor), counting the
+  vertex radius, r - n.(x - p) (m);
+- strain: the largest relative length change of a flex edge, |l / l0 - 1|;
+- capped steps: steps whose constraint solver stopped at its iteration cap (counted; a bound
+  only if ``max_capped_steps`` is set: CG at 30 iterations caps on cloth often and harmlessly).
+
+MuJoCo's own warnings and non-finite states stay unstable as before. ``Monitor`` evaluates the
+bounds on the fields MuJoCo leaves in MjData after step t: qvel of state t+1, flex vertex
+positions and edge lengths of state t (computed during step t). The C loops of
+``dopt/_rollout_kernels.c`` evaluate the same expressions in the same order, so both rollout
+routes give the same verdict (tested).
+
+Shapes: P rollouts, K steps of a chunk, G bodies with linear DoFs, V flex vertices, E flex
+edges.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import mujoco
+import numpy as np
+
+from dopt.validation import check_config
+
+#: the bound names in the order they are checked within one step
+BOUNDS = ("speed", "penetration", "strain", "capped_steps")
+
+
+@dataclass(frozen=True)
+class StabilityBounds:
+    """What a step must keep to count as physical (see the module docstring).
+
+    Attributes:
+        max_speed: m/s, translational speed of any body on a free joint or slide joints.
+        max_penetration: m, depth of any flex vertex (radius included) below a static plane.
+        max_strain: relative elongation or compression |l / l0 - 1| of any flex edge.
+        max_capped_steps: steps at the solver's iteration cap a rollout may take (None: counted
+            and reported, never unstable).
+        unjudged_bodies: names of bodies whose speed is not judged: virtual actuators such as
+            the pick scenes' massless picker, which snaps onto a particle at up to 15 m/s.
+    """
+
+    max_speed: float = 5.0
+    max_penetration: float = 0.02
+    max_strain: float = 0.5
+    max_capped_steps: int | None = None
+    unjudged_bodies: tuple[str, ...] = ()
+
+    def __post_init__(self):
+        check_config(self, positive=("max_speed", "max_penetration", "max_strain"),
+                     minimum={"max_capped_steps": 0})
+
+
+@dataclass(frozen=True)
+class Stability:
+    """The verdict on P rollouts.
+
+    Attributes:
+        unstable: (P,) bool; step: (P,) int, the step that first broke a bound or warned
+            (-1 where stable); reason: P strings naming it ("" where stable);
+        max_speed, max_penetration, max_strain: (P,) the largest values seen up to the end of
+            the rollout (or the step it was stopped at); capped_steps: (P,) int.
+    """
+
+    unstable: np.ndarray
+    step: np.ndarray
+    reason: tuple
+    max_speed: np.ndarray
+    max_penetration: np.ndarray
+    max_strain: np.ndarray
+    capped_steps: np.ndarray
+
+    @property
+    def n_unstable(self) -> int:
+        return int(self.unstable.sum())
+
+    def first(self) -> tuple[int, int, str] | None:
+        """(rollout, step, reason) of the earliest unstable step (lowest rollout on a tie),
+        or None if all are stable."""
+        if not self.unstable.any():
+            return None
+        idx = np.flatnonzero(self.unstable)
+        i = int(idx[np.argmin(self.step[idx])])
+        return i, int(self.step[i]), self.reason[i]
+
+    def take(self, index) -> Stability:
+        """The verdict of a subset of the rollouts (an index array or a slice)."""
+        r = np.asarray(self.reason, dtype=object)[index]
+        return Stability(self.unstable[index], self.step[index], tuple(np.atleast_1d(r)),
+                         self.max_speed[index], self.max_penetration[index],
+                         self.max_strain[index], self.capped_steps[index])
+
+    def summary(self) -> dict:
+        """JSON-able counts and extremes."""
+        return {"n_rollouts": len(self.unstable), "n_unstable": self.n_unstable,
+                "max_speed": float(self.max_speed.max(initial=0.0)),
+                "max_penetration": float(self.max_penetration.max(initial=0.0)),
+                "max_strain": float(self.max_strain.max(initial=0.0)),
+                "reasons": sorted({r.split(" ", 1)[0] for r in self.reason if r})}
+
+
+class Monitor:
+    """The bounds of one model, evaluated on batches of MjData fields (see ``scan``).
+
+    Attributes (read by the C loops too): groups (G, 3) int32 qvel indices of each body's
+    linear DoFs, -1 padded; group_body (G,) their bodies; planes (nplane, 4) unit normal and
+    offset n.p of each static plane geom; radius (V,) flex vertex radii; length0 (E,) rest
+    lengths of the flex edges; iteration_cap: the solver's iteration limit.
+    """
+
+    def __init__(self, model: mujoco.MjModel, bounds: StabilityBounds = StabilityBounds()):
+        if not isinstance(bounds, StabilityBounds):
+            raise TypeError(f"bounds must be a StabilityBounds, got {type(bounds).__name__}")
+        self.model, self.bounds = model, bounds
+        self.groups, self.group_body = _linear_groups(model, _body_ids(model,
+                                                                        bounds.unjudged_bodies))
+        self.planes = _static_planes(model)
+        self.radius = np.repeat(model.flex_radius, model.flex_vertnum).astype(float)
+        self.length0 = np.array(model.flexedge_length0, dtype=float)
+        self.iteration_cap = int(model.opt.iterations)
+        self.has_flex = model.nflexvert > 0
+        self.has_edges = bool((self.length0 > 0).any())
+        self._safe_length0 = np.where(self.length0 > 0, self.length0, 1.0)
+
+    @property
+    def record(self) -> tuple[str, ...]:
+        """The MjData fields ``scan`` reads."""
+        items = ["qvel", "solver_niter"]
+        if self.has_flex:
+            items += ["flexvert_xpos", "flexedge_length"]
+        return tuple(items)
+
+    # ---------------------------------------------------------------- per step values
+    def speed(self, qvel: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(..., nv) -> largest linear body speed (...) and which group (...)."""
+        if not len(self.groups):
+            z = np.zeros(qvel.shape[:-1])
+            return z, z.astype(int)
+        padded = np.concatenate([qvel, np.zeros(qvel.shape[:-1] + (1,))], axis=-1)
+        v = padded[..., self.groups]                                   # (..., G, 3)
+        s = np.sqrt(v[..., 0] * v[..., 0] + v[..., 1] * v[..., 1] + v[..., 2] * v[..., 2])
+        s = np.where(np.isnan(s), -np.inf, s)
+        i = s.argmax(axis=-1)
+        return np.take_along_axis(s, i[..., None], -1)[..., 0], i
+
+    def penetration(self, xpos: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(..., V, 3) vertex positions -> deepest penetration (...) and which vertex."""
+        if not len(self.planes) or not self.has_flex:
+            z = np.zeros(xpos.shape[:-2])
+            return z, z.astype(int)
+        n, off = self.planes[:, :3], self.planes[:, 3]
+        dist = (xpos[..., None, 0] * n[:, 0] + xpos[..., None, 1] * n[:, 1]
+                + xpos[..., None, 2] * n[:, 2]) - off                  # (..., V, nplane)
+        depth = (self.radius[:, None] - dist).max(axis=-1)             # (..., V)
+        depth = np.where(np.isnan(depth), -np.inf, depth)
+        i = depth.argmax(axis=-1)
+        return np.take_along_axis(depth, i[..., None], -1)[..., 0], i
+
+    def strain(self, length: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(..., E) edge lengths -> largest |l / l0 - 1| (...) and which edge."""
+        if not self.has_edges:
+            z = np.zeros(length.shape[:-1])
+            return z, z.astype(int)
+        e = np.abs(length / self._safe_length0 - 1.0)
+        e = np.where((self.length0 > 0) & ~np.isnan(e), e, -np.inf)
+        i = e.argmax(axis=-1)
+        return np.take_along_axis(e, i[..., None], -1)[..., 0], i
+
+    def capped(self, niter: np.ndarray) -> np.ndarray:
+        """(..., nisland) solver iterations -> whether any island hit the cap (...)."""
+        return (niter >= self.iteration_cap).any(axis=-1)
+
+    # ------------------------------------------------------------------ scanning
+    def start(self, n: int) -> Scan:
+        """A verdict in progress for n rollouts."""
+        return Scan(self, n)
+
+    def reason(self, bound: str, value: float, index: int) -> str:
+        """The reason text of a violated bound."""
+        b, m = self.bounds, self.model
+        if bound == "speed":
+            body = mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_BODY, int(self.group_body[index]))
+            return (f"speed {value:.3g} m/s > {b.max_speed:g} m/s (body "
+                    f"{body or int(self.group_body[index])})")
+        if bound == "penetration":
+            return (f"penetration {value * 1e3:.3g} mm > {b.max_penetration * 1e3:g} mm (flex "
+                    f"vertex {index})")
+        if bound == "strain":
+            return f"strain {value:.3g} > {b.max_strain:g} (flex edge {index})"
+        return (f"capped_steps {int(value)} > {b.max_capped_steps} (solver at its "
+                f"{self.iteration_cap}-iteration cap)")
+
+
+class Scan:
+    """Running verdict of n rollouts, fed chunk by chunk (``update``) in step order."""
+
+    def __init__(self, monitor: Monitor, n: int):
+        self.monitor = monitor
+        self.step = np.full(n, -1)
+        self.reason = [""] * n
+        self.max_speed = np.zeros(n)
+        self.max_penetration = np.zeros(n)
+        self.max_strain = np.zeros(n)
+        self.capped = np.zeros(n, dtype=int)
+
+    @property
+    def unstable(self) -> np.ndarray:
+        return self.step >= 0
+
+    def update(self, rows: np.ndarray, step0: int, fields: dict, nstep: np.ndarray | None = None
+               ) -> np.ndarray:
+        """Fold K steps of MjData fields into the verdict of rollouts ``rows`` (n,).
+
+        fields: ``Monitor.record`` name -> (n, K, ...) as after steps step0 .. step0+K-1.
+        nstep: (n,) how many of the K steps each row really took (default K), e.g. a
+        simulation stopped by a warning. Only the steps before a row's first violation count.
+        Returns the rows (a subset of ``rows``) that became unstable in this chunk.
+        """
+        mon, b = self.monitor, self.monitor.bounds
+        K = fields["qvel"].shape[1]
+        speed, sp_i = mon.speed(fields["qvel"])                             # (n, K)
+        if mon.has_flex:
+            pen, pen_i = mon.penetration(fields["flexvert_xpos"])
+            strain, st_i = mon.strain(fields["flexedge_length"])
+        else:
+            pen = strain = np.zeros_like(speed)
+            pen_i = st_i = np.zeros(speed.shape, int)
+        capped = mon.capped(fields["solver_niter"])
+        valid = np.ones(speed.shape, bool) if nstep is None else \
+            np.arange(K)[None, :] < np.asarray(nstep)[:, None]
+        cum_capped = self.capped[rows][:, None] + np.cumsum(capped & valid, axis=1)
+        checks = [(speed > b.max_speed, speed, sp_i), (pen > b.max_penetration, pen, pen_i),
+                  (strain > b.max_strain, strain, st_i)]
+        if b.max_capped_steps is not None:
+            checks.append((cum_capped > b.max_capped_steps, cum_capped.astype(float),
+                           np.zeros_like(sp_i)))
+        broke = np.zeros(speed.shape, bool)
+        for over, _, _ in checks:
+            broke |= over
+        broke &= valid
+        newly = []
+        for j, r in enumerate(rows):
+            if self.step[r] >= 0:
+                continue
+            hit = np.flatnonzero(broke[j])
+            last = hit[0] if len(hit) else (K if nstep is None else int(nstep[j]))
+            upto = slice(0, last + 1 if len(hit) else last)
+            self.max_speed[r] = max(self.max_speed[r], _max(speed[j, upto]))
+            self.max_penetration[r] = max(self.max_penetration[r], _max(pen[j, upto]))
+            self.max_strain[r] = max(self.max_strain[r], _max(strain[j, upto]))
+            self.capped[r] = int(cum_capped[j, upto.stop - 1]) if upto.stop else self.capped[r]
+            if len(hit):
+                k = hit[0]
+                name, (_, value, index) = next((BOUNDS[n], c) for n, c in enumerate(checks)
+                                               if c[0][j, k])
+                self.step[r] = step0 + k
+                self.reason[r] = mon.reason(name, float(value[j, k]), int(index[j, k]))
+                newly.append(r)
+        return np.array(newly, dtype=int)
+
+    def flag(self, row: int, step: int, reason: str) -> None:
+        """Mark a row unstable at ``step`` for a reason found elsewhere (a MuJoCo warning, a
+        non-finite state), unless a bound already broke at an earlier step (at the same step
+        the warning wins, as in the C loops, which check it first)."""
+        if self.step[row] < 0 or step <= self.step[row]:
+            self.step[row], self.reason[row] = step, reason
+
+    def result(self) -> Stability:
+        return Stability(self.step >= 0, self.step.copy(), tuple(self.reason),
+                         self.max_speed.copy(), self.max_penetration.copy(),
+                         self.max_strain.copy(), self.capped.copy())
+
+
+def _max(x: np.ndarray) -> float:
+    x = x[np.isfinite(x)]
+    return float(x.max()) if len(x) else 0.0
+
+
+def _body_ids(model: mujoco.MjModel, names: tuple[str, ...]) -> set[int]:
+    """Body ids of names; ValueError naming an unknown body."""
+    out = set()
+    for name in names:
+        b = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, name)
+        if b < 0:
+            raise ValueError(f"StabilityBounds.unjudged_bodies: the model has no body {name!r}")
+        out.add(b)
+    return out
+
+
+def _linear_groups(model: mujoco.MjModel, skip: set[int]) -> tuple[np.ndarray, np.ndarray]:
+    """(G, 3) qvel indices of the linear DoFs of each body on a free joint or slide joints
+    (-1 padded), and (G,) the bodies; bodies in ``skip`` left out."""
+    per_body: dict[int, list[int]] = {}
+    for j in range(model.njnt):
+        jt, b, v = int(model.jnt_type[j]), int(model.jnt_bodyid[j]), int(model.jnt_dofadr[j])
+        if b in skip:
+            continue
+        if jt == mujoco.mjtJoint.mjJNT_FREE:
+            per_body.setdefault(b, []).extend(range(v, v + 3))
+        elif jt == mujoco.mjtJoint.mjJNT_SLIDE:
+            per_body.setdefault(b, []).append(v)
+    groups, bodies = [], []
+    for b, dofs in per_body.items():
+        for k in range(0, len(dofs), 3):        # more than 3 slides: groups of 3
+            part = dofs[k:k + 3]
+            groups.append(part + [-1] * (3 - len(part)))
+            bodies.append(b)
+    return (np.array(groups, dtype=np.int32).reshape(-1, 3),
+            np.array(bodies, dtype=np.int32))
+
+
+def _static_planes(model: mujoco.MjModel) -> np.ndarray:
+    """(nplane, 4) unit normal and offset of each plane geom fixed to the world."""
+    out = []
+    for g in range(model.ngeom):
+        if model.geom_type[g] != mujoco.mjtGeom.mjGEOM_PLANE or model.geom_bodyid[g] != 0:
+            continue
+        mat = np.empty(9)
+        mujoco.mju_quat2Mat(mat, model.geom_quat[g])
+        normal = mat.reshape(3, 3)[:, 2]
+        out.append([*normal, float(normal @ model.geom_pos[g])])
+    return np.array(out, dtype=float).reshape(-1, 4)

@@ -1,0 +1,143 @@
+"""python -m planners.bench cloth|rope: the physics presets measured, setting by setting.
+
+Per setting (scene-config overrides) and size: CPU ms per simulated step (wall x threads /
+steps, from the random-action batch), steps per pick-and-place action, unstable rollouts per
+1000 random actions (``dopt.stability`` verdict; bounded displacements, random particles, from
+the flat start and from a folded one), the strain percentiles those actions reach, and the
+scripted policy's error on the task's goals (Fig. 7 protocol, one trial each) with its
+verdict. Lives in planners.bench, not dopt.bench, because the scripted folds need the goals
+(deformables) and the scripted policy (planners).
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import replace
+
+import numpy as np
+
+from dopt.provenance import provenance
+from dopt.rollout import RolloutConfig, RolloutService
+from dopt.tasks.pick.cloth_scene import ClothSceneConfig, make_cloth
+from dopt.tasks.pick.picker import CONTROL_SPEC, PickerConfig
+from dopt.tasks.pick.rope_scene import RopeSceneConfig, make_rope
+from planners.pick_place import GOALS, PickPlaceSettings, ScriptedPlanner, make_problem, run_problem
+
+#: the settings the sweep compares: name -> scene-config overrides (on top of the config's
+#: defaults); "preset:<name>" entries are the named presets themselves
+CLOTH_SETTINGS = {
+    "preset:fast": None, "preset:default": None, "preset:accurate": None,
+    "E5e4 dt.02 CG30": dict(young=5e4, timestep=0.02, solver="CG", iterations=30),
+    "E2e5 dt.02 CG30": dict(young=2e5, timestep=0.02, solver="CG", iterations=30),
+    "E1e6 dt.02 CG30": dict(young=1e6, timestep=0.02, solver="CG", iterations=30),
+    "E1e6 dt.01 CG30": dict(young=1e6, timestep=0.01, solver="CG", iterations=30),
+    "E1e6 dt.02 Newton": dict(young=1e6, timestep=0.02, solver="Newton", iterations=30),
+    "E1e6 dt.02 CG30 damp.01": dict(young=1e6, timestep=0.02, solver="CG", iterations=30,
+                                    damping=0.01),
+    "E1e6 dt.02 CG30 selfcollide": dict(young=1e6, timestep=0.02, solver="CG", iterations=30,
+                                        selfcollide=True),
+}
+ROPE_SETTINGS = {
+    "preset:fast": None, "preset:default": None, "preset:accurate": None,
+    "dt.02 CG50": dict(timestep=0.02, solver="CG", iterations=50),
+    "dt.01 CG50": dict(timestep=0.01, solver="CG", iterations=50),
+    "dt.02 Newton": dict(timestep=0.02, solver="Newton", iterations=50),
+    "dt.02 CG50 damp.01": dict(timestep=0.02, solver="CG", iterations=50, damping=0.01),
+}
+
+
+def _config(task: str, name: str, overrides: dict | None, n: int):
+    cls = ClothSceneConfig if task == "cloth" else RopeSceneConfig
+    if overrides is None:
+        return cls.preset(name.split(":", 1)[1], n=n)
+    return replace(cls(n=n), **overrides)
+
+
+def random_actions(task: str, config, actions: int, threads: int, seed: int,
+                   bound: float) -> dict:
+    """``actions`` random pick-and-place actions (two per sequence; half from the flat start,
+    half after folding one corner onto the opposite one): unstable per 1000, strain
+    percentiles, CPU ms per step."""
+    picker = PickerConfig(bound=(bound,) * 3)
+    scene = (make_cloth if task == "cloth" else make_rope)(config, picker)
+    N = scene.n_particles
+    svc = RolloutService(scene.scene, RolloutConfig(threads=threads))
+    # the folded start: the last particle carried onto the first, released
+    far = scene.positions(scene.initial_state)
+    move = np.clip(far[0] - far[-1] + [0, 0, 0.02], -bound, bound)
+    folded = svc.rollout(scene.initial_state, scene.picker.encode([[N - 1]], move[None, None]),
+                         control_spec=CONTROL_SPEC)
+    rng = np.random.default_rng(seed)
+    P = max(1, actions // 4)
+    out = {"unstable": 0, "actions": 0, "steps": 0, "wall_s": 0.0, "strain": [],
+           "penetration": [], "speed": [], "reasons": {}}
+    for start in (scene.initial_state, folded.final_states[0]):
+        particles = rng.integers(0, N, (P, 2))
+        disp = rng.uniform(-bound, bound, (P, 2, 3))
+        U = scene.picker.encode(particles, disp)
+        t0 = time.perf_counter()
+        res = svc.rollout(start, U, control_spec=CONTROL_SPEC)
+        out["wall_s"] += time.perf_counter() - t0
+        st = res.stability
+        out["unstable"] += st.n_unstable
+        out["actions"] += 2 * P
+        out["steps"] += U.shape[0] * U.shape[1]
+        out["strain"] += st.max_strain.tolist()
+        out["penetration"] += st.max_penetration.tolist()
+        out["speed"] += st.max_speed.tolist()
+        for r in st.reason:
+            if r:
+                key = r.split(" ", 1)[0]
+                out["reasons"][key] = out["reasons"].get(key, 0) + 1
+    svc.close()
+    strain = np.array(out["strain"])
+    return {
+        "unstable_per_1000_actions": 1000.0 * out["unstable"] / out["actions"],
+        "actions": out["actions"], "reasons": out["reasons"],
+        "cpu_ms_per_step": 1e3 * out["wall_s"] * svc.threads / out["steps"],
+        "steps_per_action": scene.picker.steps_per_action,
+        "strain_p50": float(np.median(strain)), "strain_p90": float(np.percentile(strain, 90)),
+        "strain_max": float(strain.max()),
+        "penetration_max_mm": 1e3 * float(np.max(out["penetration"])),
+        "speed_max": float(np.max(out["speed"])),
+    }
+
+
+def scripted_goals(task: str, name: str, overrides: dict | None, n: int,
+                   threads: int) -> dict:
+    """The scripted policy on every goal of ``task`` (Fig. 7 settings, one trial): error (mm)
+    and verdict."""
+    out = {}
+    for goal in GOALS[task]:
+        s = replace(PickPlaceSettings.preset(task, goal), n=n, threads=threads)
+        if overrides is None:
+            s = replace(s, physics=name.split(":", 1)[1])
+            problem = make_problem(s)
+        else:
+            problem = make_problem(s, scene_overrides=overrides)
+        res = run_problem(problem, ScriptedPlanner(), method="scripted")
+        out[goal] = {"error_mm": 1e3 * res.metrics["final_cost"], "unstable": res.unstable,
+                     "reason": res.unstable_reason, "wall_s": res.wall_s}
+    return out
+
+
+def bench_physics(task: str, sizes: list[int], settings: list[str] | None, actions: int,
+                  threads: int, seed: int, scripted: bool = True) -> dict:
+    """The sweep: one row per (setting, size)."""
+    table = CLOTH_SETTINGS if task == "cloth" else ROPE_SETTINGS
+    names = settings or list(table)
+    unknown = [s for s in names if s not in table]
+    if unknown:
+        raise ValueError(f"unknown {task} settings {unknown}; choose from {list(table)}")
+    bound = PickPlaceSettings.preset(task, GOALS[task][0]).bound
+    rows = []
+    for n in sizes:
+        for name in names:
+            config = _config(task, name, table[name], n)
+            row = {"setting": name, "n": n, "overrides": table[name],
+                   **random_actions(task, config, actions, threads, seed, bound)}
+            if scripted:
+                row["scripted"] = scripted_goals(task, name, table[name], n, threads)
+            rows.append(row)
+    return {"bench": task, "sizes": sizes, "actions_per_setting": actions, "rows": rows,
+            "provenance": provenance()}

@@ -1,0 +1,154 @@
+"""The stability verdict: each bound against an independent computation, the same verdict on
+every route, a violent pick flagged with its reason and step, normal runs not flagged."""
+
+import mujoco
+import numpy as np
+import pytest
+
+from dopt.rollout import RolloutConfig, RolloutService
+from dopt.scene import Scene
+from dopt.stability import StabilityBounds
+from dopt.tasks.pick.cloth_scene import ClothSceneConfig, make_cloth
+from dopt.tasks.pick.picker import CONTROL_SPEC, PickerConfig
+from dopt.tasks.pick.rope_scene import RopeSceneConfig, make_rope
+
+# a 4 x 4 sheet dropped from 0.3 m onto a tilted plane, next to a motor-driven slider
+DROP = """<mujoco><option integrator="discrete" timestep="0.01" iterations="{it}"/><worldbody>
+  <geom type="plane" size="2 2 .1" euler="5 0 0"/>
+  <flexcomp name="sheet" type="grid" dim="2" count="4 4 1" spacing=".05 .05 .05" radius=".005"
+            pos="0 0 .3" mass=".05">
+    <elasticity young="2e3" poisson="0.2" thickness="1e-3" elastic2d="both"/>
+  </flexcomp>
+  <body name="slider" pos=".5 0 .2"><joint name="s" type="slide" axis="1 0 0"/>
+    <geom type="box" size=".02 .02 .02" contype="0" conaffinity="0"/></body>
+</worldbody><actuator><motor joint="s" gear="1"/></actuator></mujoco>"""
+
+
+def drop_scene(bounds=StabilityBounds(), iterations=100):
+    return Scene.from_xml(DROP.format(it=iterations), stability=bounds)
+
+
+def test_bounds_against_direct_geometry():
+    """Speed, penetration and strain of hand-set states, computed here from the definitions."""
+    sc = drop_scene()
+    m, mon = sc.model, sc.monitor
+    d = mujoco.MjData(m)
+    vert_qpos = sc.qpos_indices("vertex:5")
+    d.qpos[vert_qpos] = [0.01, 0.0, -0.32]          # vertex 5 pushed below the plane
+    d.qvel[sc.dofs("vertex:7")] = [3.0, 4.0, 0.0]    # |v| = 5
+    d.qvel[sc.dofs("joint:s")] = [6.0]               # the slider is faster
+    mujoco.mj_forward(m, d)
+    speed, i = mon.speed(d.qvel[None])
+    assert speed[0] == 6.0 and mon.group_body[i[0]] == m.body("slider").id
+    n = np.empty(9)
+    mujoco.mju_quat2Mat(n, m.geom_quat[0])
+    normal = n.reshape(3, 3)[:, 2]
+    depth = m.flex_radius[0] - d.flexvert_xpos @ normal
+    pen, j = mon.penetration(d.flexvert_xpos[None])
+    assert j[0] == 5 and pen[0] == pytest.approx(depth.max())
+    edges = m.flex_edge.reshape(-1, 2)
+    length = np.linalg.norm(d.flexvert_xpos[edges[:, 0]] - d.flexvert_xpos[edges[:, 1]], axis=1)
+    strain, k = mon.strain(d.flexedge_length[None])
+    expected = np.abs(length / m.flexedge_length0 - 1)
+    assert strain[0] == pytest.approx(expected.max()) and k[0] == np.argmax(expected)
+    assert 5 in edges[k[0]]
+
+
+LOOSE = dict(max_speed=1e3, max_penetration=1.0, max_strain=1e3)
+
+
+@pytest.mark.parametrize("bounds, name", [
+    (StabilityBounds(**{**LOOSE, "max_speed": 1.5}), "speed"),
+    (StabilityBounds(**{**LOOSE, "max_penetration": 2e-3}), "penetration"),
+    (StabilityBounds(**{**LOOSE, "max_strain": 2e-3}), "strain"),
+    (StabilityBounds(**LOOSE, max_capped_steps=3), "capped_steps"),
+])
+def test_same_verdict_on_every_route(bounds, name, c_kernels):
+    """The open-loop rollout (chunked Batch), the lock-step Batch feedback and the C feedback
+    loop flag the same step for the same reason, and agree on the extremes seen."""
+    sc = drop_scene(bounds, iterations=2 if name == "capped_steps" else 100)
+    x0 = sc.state_of(mujoco.MjData(sc.model))
+    T = 60
+    u = np.zeros((2, T, 1))
+    u[1] = 0.5
+    svc = RolloutService(sc, RolloutConfig(threads=2, c_kernels=c_kernels))
+    open_loop = svc.rollout(x0, u).stability
+    ref = np.repeat(x0[None], T, 0)
+    fb = svc.rollout_feedback(x0, u, ref, np.zeros((T, 1, 2)), [0]).stability
+    assert open_loop.unstable.all(), open_loop.reason
+    assert all(r.startswith(name) for r in open_loop.reason), open_loop.reason
+    assert fb.step.tolist() == open_loop.step.tolist()
+    assert fb.reason == open_loop.reason
+    for field in ("max_speed", "max_penetration", "max_strain"):
+        np.testing.assert_allclose(getattr(fb, field), getattr(open_loop, field), rtol=1e-12)
+    assert fb.capped_steps.tolist() == open_loop.capped_steps.tolist()
+
+
+def test_chunked_rollout_equals_one_call(monkeypatch):
+    """Judging chunk by chunk changes nothing: final states and records equal one call."""
+    from dopt import rollout_batch
+    sc = drop_scene()
+    x0 = sc.state_of(mujoco.MjData(sc.model))
+    u = np.random.default_rng(0).normal(size=(3, 40, 1))
+    svc = RolloutService(sc, RolloutConfig(threads=2))
+    whole = svc.rollout(x0, u, record=("qpos", "xpos"))
+    monkeypatch.setattr(rollout_batch, "CHUNK_BYTES", 1)     # one step per call
+    chunked = RolloutService(sc, RolloutConfig(threads=2)).rollout(x0, u, record=("qpos", "xpos"))
+    assert np.array_equal(whole.final_states, chunked.final_states)
+    for item in ("qpos", "xpos"):
+        assert np.array_equal(whole.records[item], chunked.records[item])
+    assert whole.stability.max_strain.tolist() == chunked.stability.max_strain.tolist()
+
+
+def test_violent_pick_is_flagged_with_reason_and_step():
+    """A rope yanked up by a picker commanded to 50 m/s: finite states, no MuJoCo warning,
+    but flagged by the speed bound at the first step of the move, naming a rope body."""
+    picker = PickerConfig(bound=(0.1, 0.1, 0.5), speed=50.0)
+    scene = make_rope(RopeSceneConfig(n=10, length=0.2), picker)
+    svc = RolloutService(scene.scene, RolloutConfig(threads=1))
+    U = scene.picker.encode(np.array([[4]]), np.array([[[0.0, 0.0, 0.5]]]))
+    res = svc.rollout(scene.initial_state, U, control_spec=CONTROL_SPEC)
+    assert np.isfinite(res.final_states).all()
+    st = res.stability
+    assert st.unstable[0] and st.reason[0].startswith("speed") and "rope_" in st.reason[0]
+    move = picker.snap_steps + picker.hold_steps
+    assert move <= st.step[0] < move + scene.picker.move_steps
+    assert st.max_speed[0] > 5.0
+
+
+@pytest.mark.parametrize("goal", ["diagonal", "side"])
+def test_scripted_cloth_folds_are_not_flagged(goal):
+    """False positives: the scripted diagonal and side folds of a 12 x 12 cloth."""
+    from planners.pick_place import PickPlaceSettings, ScriptedPlanner, make_problem, run_problem
+    problem = make_problem(PickPlaceSettings.preset("cloth", goal, quick=True))
+    res = run_problem(problem, ScriptedPlanner(), method="scripted")
+    assert not res.unstable, res.unstable_reason
+    assert res.n_rollouts > 0 and res.n_unstable_rollouts == 0
+
+
+def test_rope_actions_are_not_flagged():
+    """False positives: bounded random pick-and-place actions on the 40-particle rope."""
+    scene = make_rope(RopeSceneConfig())
+    rng = np.random.default_rng(3)
+    P = 16
+    U = scene.picker.encode(rng.integers(0, 40, (P, 2)), rng.uniform(-0.1, 0.1, (P, 2, 3)))
+    res = RolloutService(scene.scene, RolloutConfig(threads=2)).rollout(
+        scene.initial_state, U, control_spec=CONTROL_SPEC)
+    assert not res.stability.unstable.any(), res.stability.reason
+
+
+def test_the_picker_is_not_speed_judged():
+    """The massless picker snaps onto a particle at > 5 m/s; only the cloth is judged."""
+    scene = make_cloth(ClothSceneConfig(n=6))
+    assert scene.scene.stability.unjudged_bodies == ("picker",)
+    picker = scene.model.body("picker").id
+    assert picker not in scene.scene.monitor.group_body
+
+
+def test_bad_bounds():
+    with pytest.raises(ValueError, match="max_speed"):
+        StabilityBounds(max_speed=0)
+    with pytest.raises(ValueError, match="no body 'hand'"):
+        drop_scene(StabilityBounds(unjudged_bodies=("hand",)))
+    with pytest.raises(ValueError, match="on_unstable"):
+        RolloutConfig(on_unstable="ignore")
