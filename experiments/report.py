@@ -97,6 +97,8 @@ class Result:
 
     @property
     def kind(self) -> str:
+        if "experiment" not in self.data and self.data.get("bench") in ("cloth", "rope"):
+            return "physics"          # python -m planners.bench cloth|rope
         return str(self.data.get("experiment", "(none)"))
 
     @property
@@ -275,25 +277,71 @@ def fig7_detail(r: Result, page: Path) -> list[str]:
     lines = [f"### Fig. 7 {_panel(r)}: `{r.name}`", ""]
     if s:
         lines += [f"Settings: {s.get('task')} {s.get('goal')}, n {s.get('n')}, bound "
-                  f"{s.get('bound')} m, self-collision {'on' if s.get('selfcollide') else 'off'};"
+                  f"{s.get('bound')} m, self-collision {'on' if s.get('selfcollide') else 'off'}, "
+                  f"physics preset {s.get('physics', 'default')};"
                   f" CEM population {cem.get('population')}, elites {cem.get('elites')}, "
                   f"{cem.get('iterations')} iterations per stage, horizon {cem.get('horizon')}."
                   + (f" Wall time {num(d.get('wall_s'), 0)} s." if "wall_s" in d else ""), ""]
     rope_ratio = any("end_to_end_ratio_mean" in e for e in d["methods"].values())
     header = ["method", "final cost (mm)", "per seed (mm)", "seeds", "candidates",
-              "s / CEM iteration"] + (["end-to-end / length"] if rope_ratio else [])
+              "s / CEM iteration", "unstable trials", "unstable rollouts"] + (
+        ["end-to-end / length"] if rope_ratio else [])
     rows = []
     for m, e in d["methods"].items():
         row = [_label(m), fig7_cell(e),
                ", ".join(mm(c) for c in e.get("final_costs", [])),
                ", ".join(str(x) for x in e.get("seeds", [])) + f" (n = {e.get('n')})",
-               str(e.get("n_candidates", "?")), num(e.get("s_per_iteration"), 2)]
+               str(e.get("n_candidates", "?")), num(e.get("s_per_iteration"), 2),
+               _unstable_trials(e),
+               f"{e['n_unstable_rollouts']} / {e['n_rollouts']}" if "n_rollouts" in e
+               else "not judged"]
         if rope_ratio:
             row.append(pm(num(e.get("end_to_end_ratio_mean")),
                           num(e.get("end_to_end_ratio_ci95"))))
         rows.append(row)
     lines += table(header, rows)
     return lines + [""] + source_lines([r], page) + failed_lines(r)
+
+
+def _unstable_trials(e: dict) -> str:
+    """Unstable executed plans of a Fig. 7 method (left out of the mean), or "not judged" for
+    a file written before the stability verdict existed."""
+    if "n_unstable_trials" not in e:
+        return "not judged"
+    n = e["n_unstable_trials"]
+    return f"{n} (seeds {', '.join(map(str, e['unstable_seeds']))})" if n else "0"
+
+
+# ------------------------------------------------------------------------ physics presets
+def physics_section(results: list[Result], page: Path) -> list[str]:
+    lines = ["## Physics presets: `python -m planners.bench cloth|rope`", "",
+             "Per setting and size: CPU ms per simulated step (wall x threads / steps of the "
+             "random-action batch), steps per pick-and-place action, rollouts the stability "
+             "verdict flags per 1000 random actions (uniform displacements within the picker "
+             "bound, random particles, half from the flat start and half after a fold) and "
+             "why, the edge strain those actions reach (median / 90th percentile / max), and "
+             "the scripted policy's error on each goal (mm; `!` marks an executed plan the "
+             "verdict flagged). Presets: the `preset:` rows.", ""]
+    for r in sorted(results, key=lambda r: r.data.get("bench", "")):
+        d = r.data
+        goals = list((d["rows"][0].get("scripted") or {}).keys()) if d["rows"] else []
+        header = ["setting", "n", "ms / step", "steps / action", "unstable / 1000 actions",
+                  "why", "strain p50 / p90 / max", *[f"scripted {g}" for g in goals]]
+        rows = []
+        for row in d["rows"]:
+            sc = row.get("scripted") or {}
+            rows.append([f"`{row['setting']}`", str(row["n"]), num(row["cpu_ms_per_step"], 2),
+                         str(row["steps_per_action"]),
+                         num(row["unstable_per_1000_actions"], 0),
+                         ", ".join(f"{k} {v}" for k, v in sorted(row["reasons"].items()))
+                         or "-",
+                         " / ".join(num(row[k], 2) for k in ("strain_p50", "strain_p90",
+                                                              "strain_max")),
+                         *[mm(sc[g]["error_mm"] / 1e3) + (" !" if sc[g]["unstable"] else "")
+                           for g in goals]])
+        lines += [f"### {d.get('bench')}: {d.get('actions_per_setting')} random actions per "
+                  f"setting", "", *table(header, rows), "", *source_lines([r], page)]
+    return lines
 
 
 def fig7_headline(r: Result) -> str:
@@ -481,7 +529,7 @@ def kp_headline(r: Result) -> str:
 
 # ----------------------------------------------------------------------------- pages
 SECTIONS = {"key_particles": kp_section, "fig7": fig7_section, "table1": table1_section,
-            "fig4": fig4_section}
+            "fig4": fig4_section, "physics": physics_section}
 HEADLINES = {"key_particles": kp_headline, "fig7": fig7_headline, "table1": table1_headline,
              "fig4": fig4_headline}
 

@@ -139,5 +139,5 @@ def bench_physics(task: str, sizes: list[int], settings: list[str] | None, actio
             if scripted:
                 row["scripted"] = scripted_goals(task, name, table[name], n, threads)
             rows.append(row)
-    return {"bench": task, "sizes": sizes, "actions_per_setting": actions, "rows": rows,
-            "provenance": provenance()}
+    return {"experiment": "physics", "bench": task, "sizes": sizes,
+            "actions_per_setting": actions, "rows": rows, "provenance": provenance()}
