@@ -22,7 +22,13 @@ def _check_summary(out: Path, goal: str, extra=()):
     assert summary["goal"] == goal
     assert set(summary["methods"]) == {"simple", "original", "random", "scripted"}
     for name, entry in summary["methods"].items():
-        assert 0 < entry["final_cost_mean"] < 1.0                  # metres
+        assert all(0 < c < 1.0 for c in entry["final_costs"])      # metres, every trial
+        # the mean is over the stable trials; none when every trial's plan was unstable
+        assert entry["n_stable"] + entry["n_unstable_trials"] == entry["n"]
+        assert (entry["final_cost_mean"] is None) == (entry["n_stable"] == 0)
+        if entry["n_stable"]:
+            assert 0 < entry["final_cost_mean"] < 1.0
+        assert 0 <= entry["n_unstable_rollouts"] <= entry["n_rollouts"]
         assert "final_cost_ci95" in entry and entry["n_candidates"] >= 1
         for key in extra:
             assert key in entry
