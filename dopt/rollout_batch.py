@@ -52,8 +52,14 @@ def first_unstable(batch: Batch, n: int, states: np.ndarray,
     if not bad.any():
         return None
     i = int(np.argmax(bad))
+    return i, why_unstable(batch, i, states[i], layout)
+
+
+def why_unstable(batch: Batch, i: int, state: np.ndarray, layout: StateLayout) -> str:
+    """Why simulation i of the batch, now in ``state`` (ns,), is unstable: its first MuJoCo
+    warning's name, else the state's fault (``state.fault``)."""
     names = warning_names(batch.warning[i, :, 1])
-    return i, names[0] if names else (fault(layout, states[i]) or "non-finite state")
+    return names[0] if names else (fault(layout, state) or "non-finite state")
 
 
 class BatchRoute:
@@ -123,9 +129,7 @@ class BatchRoute:
                                                                           final)
         for i in np.flatnonzero(warned):
             start = x0 if x0.ndim == 1 else x0[i if len(x0) > 1 else 0]
-            names = warning_names(batch.warning[i, :, 1])
-            fallback = names[0] if names else (fault(self.scene.layout, final[i])
-                                               or "non-finite state")
+            fallback = why_unstable(batch, i, final[i], self.scene.layout)
             step, reason = self._replay(start, u[i], control_spec) or (T - 1, fallback)
             scan.flag(int(i), step, reason)
         return final, rec, scan.result()
@@ -205,9 +209,7 @@ class BatchRoute:
                 warned = (batch.warning[active, :, 1] > 0).any(axis=1)
                 bad = warned | faulty_rows(lay, nxt)
                 for j in np.flatnonzero(bad):
-                    names = warning_names(batch.warning[active[j], :, 1])
-                    scan.flag(int(active[j]), t, names[0] if names else
-                              (fault(lay, nxt[j]) or "non-finite state"))
+                    scan.flag(int(active[j]), t, why_unstable(batch, active[j], nxt[j], lay))
                 ok = active[~bad]
                 scan.update(ok, t, {f: rec[f][~bad] for f in mon.record})
                 stopped = active[scan.unstable[active]]

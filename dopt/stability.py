@@ -94,21 +94,6 @@ class Stability:
         i = int(idx[np.argmin(self.step[idx])])
         return i, int(self.step[i]), self.reason[i]
 
-    def take(self, index) -> Stability:
-        """The verdict of a subset of the rollouts (an index array or a slice)."""
-        r = np.asarray(self.reason, dtype=object)[index]
-        return Stability(self.unstable[index], self.step[index], tuple(np.atleast_1d(r)),
-                         self.max_speed[index], self.max_penetration[index],
-                         self.max_strain[index], self.capped_steps[index])
-
-    def summary(self) -> dict:
-        """JSON-able counts and extremes."""
-        return {"n_rollouts": len(self.unstable), "n_unstable": self.n_unstable,
-                "max_speed": float(self.max_speed.max(initial=0.0)),
-                "max_penetration": float(self.max_penetration.max(initial=0.0)),
-                "max_strain": float(self.max_strain.max(initial=0.0)),
-                "reasons": sorted({r.split(" ", 1)[0] for r in self.reason if r})}
-
 
 class Monitor:
     """The bounds of one model, evaluated on batches of MjData fields (see ``scan``).
