@@ -1,48 +1,76 @@
-"""Time the key-particle reduction per task: ``python -m deformables.bench [--repeats R]``.
+"""Time and compare the key-particle reductions: ``python -m deformables.bench [MODE] ...``.
 
-Prints one JSON object per task: the median wall time of the whole reduction (validation,
-Alg. 1 loop, extraction) over ``repeats`` runs after one warm-up run (the rope's cvxpy problems
-are compiled once per process, the warm-up pays for that and is reported as
-``first_call_seconds``), and the ratio to the paper's reported average (0.125 s per rope task,
-0.73 s per cloth task; Sec. IV-C.1). Ropes have 40 particles, cloths 40 x 40 with MuJoCo's
-triangulation. ``--noise SIGMA`` adds Gaussian goal noise (metres, seed 0), which makes the
-cloth reduction project the goal onto its panels first.
+Modes (JSON on stdout, one object per line; ``--out FILE`` also writes the whole record):
+
+* ``tasks`` (default): per task, the median wall time of the whole reduction (validation,
+  Alg. 1 loop, extraction) over ``--repeats`` runs after one warm-up run (the rope's cvxpy
+  problems are compiled once per process, the warm-up pays for that and is reported as
+  ``first_call_seconds``), and the ratio to the paper's reported average (0.125 s per rope
+  task, 0.73 s per cloth task; Sec. IV-C.1). Ropes have 40 particles, cloths ``--cloth-n``
+  per side (40) with MuJoCo's triangulation. ``--noise SIGMA`` adds Gaussian goal noise
+  (metres, seed 0).
+* ``paper-scale``: the four cloth folds at the paper's resolution, ``--cloth-n`` 100 per side
+  (N = 10,000), each without noise and with ``--noise`` (1 mm), timed over ``--repeats`` runs
+  after one warm-up reduction of a small goal; the mean over the folds per noise level against
+  the paper's 0.73 s.
+* ``compare``: the default pipeline (``ClothConfig()``) and the paper's
+  (``ClothConfig.paper()``) on the same goals: the four folds x ``--resolutions`` x the four
+  triangulations x (no noise, ``--noise``), goal seed 0. Per goal: faces, keys, error,
+  threshold, whether it was reached and seconds; per pipeline and fold: the face and key
+  counts and how many goals hold the reference key count.
+
+Library functions return dicts; only :func:`main` prints.
 """
 from __future__ import annotations
 
 import argparse
 import json
+import platform
 import statistics
+import sys
 import time
+from collections import Counter
+from importlib import metadata
 
 import numpy as np
 
-from .cloth import cloth_key_particles
-from .goals import make_goal
+from .cloth import ClothConfig, cloth_key_particles
+from .goals import TRIANGULATIONS, make_goal
 from .rope import rope_key_particles
 
 PAPER_SECONDS = {"rope": 0.125, "cloth": 0.73}
 TASKS = ("rope_straighten", "rope_fold", "rope_fold_unequal", "cloth_diagonal", "cloth_side",
          "cloth_reflective", "cloth_underneath")
+CLOTH_TASKS = TASKS[3:]
+#: the key counts of the cloth folds (corners and crease ends)
+REFERENCE_KEYS = {"cloth_diagonal": 4, "cloth_side": 6, "cloth_reflective": 8,
+                  "cloth_underneath": 10}
+MODES = ("tasks", "paper-scale", "compare")
 
 
-def _run(task: str, cloth_n: int, noise: float):
-    goal = make_goal(task) if task.startswith("rope") else make_goal(task, n=cloth_n)
-    positions = goal.positions + np.random.default_rng(0).normal(0.0, noise, goal.positions.shape)
+def _run(task: str, cloth_n: int, noise: float, config: ClothConfig | None = None,
+         triangulation: str = "mujoco", seed: int = 0):
+    """(call, N, reference keys) for one goal; the call runs the whole reduction."""
+    rng = np.random.default_rng(seed)
+    goal = (make_goal(task) if task.startswith("rope") else
+            make_goal(task, n=cloth_n, triangulation=triangulation, rng=rng))
+    positions = goal.positions + rng.normal(0.0, noise, goal.positions.shape)
     if task.startswith("rope"):
-        return lambda: rope_key_particles(positions), len(positions)
-    return (lambda: cloth_key_particles(positions, goal.faces,
-                                        rest_positions=goal.rest_positions), len(positions))
+        return lambda: rope_key_particles(positions), len(positions), None
+    config = ClothConfig() if config is None else config
+    return (lambda: cloth_key_particles(positions, goal.faces, rest_positions=goal.rest_positions,
+                                        config=config),
+            len(positions), REFERENCE_KEYS[task])
 
 
 def bench(task: str, repeats: int = 5, cloth_n: int = 40, noise: float = 0.0) -> dict:
-    """Timing record of one task (see the module docstring)."""
-    call, n_particles = _run(task, cloth_n, noise)
+    """Timing record of one task (``tasks`` mode, see the module docstring)."""
+    call, n_particles, _ = _run(task, cloth_n, noise)
     paper = PAPER_SECONDS[task.split("_")[0]]
     start = time.perf_counter()
     try:
         result = call()
-    except ValueError as exc:          # e.g. the threshold is never reached: report, go on
+    except ValueError as exc:          # a bad goal: report, go on
         return {"task": task, "particles": n_particles, "failure": str(exc),
                 "seconds": round(time.perf_counter() - start, 5), "paper_seconds": paper}
     first = time.perf_counter() - start
@@ -53,27 +81,171 @@ def bench(task: str, repeats: int = 5, cloth_n: int = 40, noise: float = 0.0) ->
         times.append(time.perf_counter() - start)
     seconds = statistics.median(times)
     return {"task": task, "particles": n_particles, "noise_m": noise,
-            "n_elements": result.n_elements,
-            "n_keys": result.n_keys, "seconds": round(seconds, 5),
+            "n_elements": result.n_elements, "n_keys": result.n_keys,
+            "reached_threshold": result.reached_threshold, "seconds": round(seconds, 5),
             "first_call_seconds": round(first, 5), "paper_seconds": paper,
             "ratio_to_paper": round(seconds / paper, 4), "speedup": round(paper / seconds, 2)}
 
 
+def paper_scale(cloth_n: int = 100, noise: float = 1e-3, repeats: int = 1) -> dict:
+    """The four cloth folds at ``cloth_n`` per side, without noise and with ``noise``: per
+    goal the median seconds of ``repeats`` runs (after one warm-up reduction of a 12 x 12
+    goal, which loads the decimation back-end), its counts, and per noise level the mean over
+    the folds against the paper's 0.73 s."""
+    warm, _, _ = _run("cloth_side", 12, 0.0)
+    warm()
+    rows = []
+    for sigma in (0.0, noise):
+        for task in CLOTH_TASKS:
+            call, n_particles, reference = _run(task, cloth_n, sigma)
+            times, result = [], None
+            for _ in range(repeats):
+                start = time.perf_counter()
+                result = call()
+                times.append(time.perf_counter() - start)
+            rows.append({"task": task, "particles": n_particles, "noise_m": sigma,
+                         "n_elements": result.n_elements, "n_keys": result.n_keys,
+                         "reference_keys": reference,
+                         "reached_threshold": result.reached_threshold,
+                         "seconds": round(statistics.median(times), 4)})
+    summary = {}
+    for sigma in (0.0, noise):
+        mine = [r["seconds"] for r in rows if r["noise_m"] == sigma]
+        mean = statistics.fmean(mine)
+        summary[f"noise_{sigma:g}"] = {
+            "mean_seconds": round(mean, 4), "paper_seconds": PAPER_SECONDS["cloth"],
+            "ratio_to_paper": round(mean / PAPER_SECONDS["cloth"], 3),
+            "keys_held": sum(r["n_keys"] == r["reference_keys"] for r in rows
+                             if r["noise_m"] == sigma)}
+    return {"mode": "paper-scale", "cloth_n": cloth_n, "repeats": repeats, "goals": rows,
+            "summary": summary, "provenance": _provenance()}
+
+
+def compare(resolutions: tuple[int, ...] = (16, 25, 40), noise: float = 1e-3,
+            triangulations: tuple[str, ...] = TRIANGULATIONS) -> dict:
+    """The default and the paper's pipelines on the same cloth goals (``compare`` mode, see the
+    module docstring)."""
+    pipelines = {"default": ClothConfig(), "paper": ClothConfig.paper()}
+    warm, _, _ = _run("cloth_side", 12, 0.0)
+    warm()
+    rows = []
+    for task in CLOTH_TASKS:
+        for n in resolutions:
+            for triangulation in triangulations:
+                for sigma in (0.0, noise):
+                    row = {"task": task, "n": n, "triangulation": triangulation,
+                           "noise_m": sigma, "reference_keys": REFERENCE_KEYS[task]}
+                    for name, config in pipelines.items():
+                        call, _, _ = _run(task, n, sigma, config, triangulation)
+                        start = time.perf_counter()
+                        result = call()
+                        row[name] = {"n_elements": result.n_elements, "n_keys": result.n_keys,
+                                     "error": result.error, "threshold": result.threshold,
+                                     "reached_threshold": result.reached_threshold,
+                                     "seconds": round(time.perf_counter() - start, 4)}
+                    rows.append(row)
+    return {"mode": "compare", "resolutions": list(resolutions), "noise_m": noise,
+            "triangulations": list(triangulations), "goals": rows,
+            "summary": summarize_comparison(rows, list(pipelines)),
+            "provenance": _provenance()}
+
+
+def summarize_comparison(rows: list[dict], pipelines: list[str]) -> dict:
+    """Per pipeline, noise level and fold: how many goals hold the reference key count, reach
+    the threshold, the face and key counts seen ({count: goals}) and the median seconds."""
+    summary: dict = {}
+    for name in pipelines:
+        for sigma in sorted({r["noise_m"] for r in rows}):
+            for task in CLOTH_TASKS:
+                mine = [r for r in rows if r["task"] == task and r["noise_m"] == sigma]
+                if not mine:
+                    continue
+                results = [r[name] for r in mine]
+                summary.setdefault(name, {}).setdefault(f"noise_{sigma:g}", {})[task] = {
+                    "goals": len(mine),
+                    "keys_held": sum(r[name]["n_keys"] == r["reference_keys"] for r in mine),
+                    "reached_threshold": sum(x["reached_threshold"] for x in results),
+                    "faces": _histogram(x["n_elements"] for x in results),
+                    "keys": _histogram(x["n_keys"] for x in results),
+                    "median_seconds": round(statistics.median(x["seconds"] for x in results), 4)}
+    return summary
+
+
+def _histogram(values) -> dict:
+    return {str(k): v for k, v in sorted(Counter(values).items())}
+
+
+def _provenance() -> dict:
+    versions = {}
+    for package in ("numpy", "scipy", "pymeshlab", "trimesh"):
+        try:
+            versions[package] = metadata.version(package)
+        except metadata.PackageNotFoundError:
+            versions[package] = None
+    return {"command": sys.argv, "python": platform.python_version(),
+            "machine": platform.platform(), "versions": versions,
+            "date": time.strftime("%Y-%m-%dT%H:%M:%S%z")}
+
+
+def _positive_int(text: str) -> int:
+    value = int(text)
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"must be an integer >= 1, got {text}")
+    return value
+
+
+def _resolutions(text: str) -> tuple[int, ...]:
+    try:
+        values = tuple(int(v) for v in text.split(","))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a comma list of integers: {text!r}") from None
+    if not values or min(values) < 2:
+        raise argparse.ArgumentTypeError(f"particles per side must be >= 2, got {text!r}")
+    return values
+
+
 def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--repeats", type=int, default=5,
-                        help="timed runs per task after one warm-up run (median reported)")
-    parser.add_argument("--cloth-n", type=int, default=40,
-                        help="cloth particles per side (the target is set at 40)")
+    parser.add_argument("mode", nargs="?", choices=MODES, default="tasks",
+                        help="tasks (default), paper-scale or compare (see the module doc)")
+    parser.add_argument("--repeats", type=_positive_int, default=None,
+                        help="timed runs per goal (median reported); tasks: 5 after one "
+                             "warm-up run, paper-scale: 1")
+    parser.add_argument("--cloth-n", type=_positive_int, default=None,
+                        help="cloth particles per side (tasks: 40, paper-scale: 100)")
     parser.add_argument("--task", choices=TASKS, action="append",
-                        help="task to time (repeatable); default: all")
-    parser.add_argument("--noise", type=float, default=0.0,
-                        help="Gaussian goal noise per coordinate, metres (default 0)")
+                        help="tasks mode: task to time (repeatable); default: all")
+    parser.add_argument("--noise", type=float, default=None,
+                        help="Gaussian goal noise per coordinate, metres (tasks: 0; "
+                             "paper-scale and compare: the noisy level, 0.001)")
+    parser.add_argument("--resolutions", type=_resolutions, default=(16, 25, 40),
+                        help="compare mode: comma list of particles per side (16,25,40)")
+    parser.add_argument("--out", default=None,
+                        help="also write the whole record as one JSON file here")
     args = parser.parse_args(argv)
-    if not args.noise >= 0:
+    if args.noise is not None and not args.noise >= 0:
         parser.error("--noise must be >= 0")
-    for task in args.task or TASKS:
-        print(json.dumps(bench(task, args.repeats, args.cloth_n, args.noise)), flush=True)
+    if args.cloth_n is not None and args.cloth_n < 2:
+        parser.error("--cloth-n must be >= 2")
+    if args.mode == "tasks":
+        noise = args.noise or 0.0
+        record = [bench(task, args.repeats or 5, args.cloth_n or 40, noise)
+                  for task in args.task or TASKS]
+        for row in record:
+            print(json.dumps(row), flush=True)
+    else:
+        noise = 1e-3 if args.noise is None else args.noise
+        if args.mode == "paper-scale":
+            record = paper_scale(args.cloth_n or 100, noise, args.repeats or 1)
+        else:
+            record = compare(args.resolutions, noise)
+        for row in record["goals"]:
+            print(json.dumps(row), flush=True)
+        print(json.dumps({"summary": record["summary"]}), flush=True)
+    if args.out:
+        with open(args.out, "w") as handle:
+            json.dump(record, handle, indent=1)
+            handle.write("\n")
 
 
 if __name__ == "__main__":

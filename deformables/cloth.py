@@ -10,13 +10,26 @@ mesh, K key particles.
   one-sided distance (simplified -> goal, Eq. 4) is blind to missing parts: two triangles lying
   inside a side-folded sheet are close to it everywhere although they cover half of it. The
   other side (goal particles -> simplified surface) sees them.
-* Both run in a space whose z axis is stretched by ``z_scale``: stacked layers a few mm apart
-  then differ by far more than the rounding of a crease, so the error separates "a layer is
-  missing" from "a crease is drawn as a chord".
+* Both run in a space stretched by ``z_scale`` along the goal's stacking axis (the normal of
+  its layers, :func:`deformables.layers.stacking_axis`; z for a cloth on a table): stacked
+  layers then differ by far more than the rounding of a crease, so the error separates "a layer
+  is missing" from "a crease is drawn as a chord".
+* Threshold: relative to the goal's own layer gap, which is estimated from the goal
+  (:func:`deformables.layers.estimate_layer_gap`) unless ``ClothConfig.layer_gap`` gives it:
+  ``threshold_gaps * gap * z_scale``, the stretch reduced (never below 1) so that the
+  stretched gap is at most ``max_stretched_gap`` of the sheet's shorter side. Nothing in it is
+  in absolute units, so it holds for any gap, particle spacing, sheet size or placement.
 * Extract: the goal particle nearest each simplified vertex (in the stretched space), then a
   greedy filter by geodesic distance on the flat rest sheet: a candidate is dropped if a kept
   one lies within ``geodesic_radius``. Both corners of a fold (close in space, far along the
   cloth) survive; near-duplicates along a crease collapse.
+* A goal no model size up to ``max_faces`` fits within the threshold still gets its key
+  particles: those of the model with the least error, ``reached_threshold=False`` and a logged
+  warning (``ClothConfig.strict`` raises instead).
+
+``ClothConfig.paper()`` is the paper's own pipeline (one-sided error in metres, one decimation
+per size from the goal, no restarts, no panel projection, no re-triangulation) for comparison:
+``python -m deformables.bench compare``.
 """
 from __future__ import annotations
 
@@ -27,13 +40,13 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import dijkstra
-from scipy.spatial import cKDTree
+from scipy.spatial import ConvexHull, cKDTree
 
 from dopt.validation import check_config
 
 from .decimation import BACKENDS, EmptyDecimationError, decimate
-from .distance import SurfaceDistance, hausdorff
-from .goals import CLOTH_LAYER_GAP
+from .distance import SurfaceDistance, hausdorff, sample_surface
+from .layers import estimate_layer_gap, stacking_axis
 from .mesh import canonical_triangulation, edges
 from .panels import project_on_panels
 from .reduction import KeyParticles, grow_until_below
@@ -43,12 +56,14 @@ from .validation import (
     check_positions,
     check_rest_matches,
     check_threshold,
+    triangle_areas,
     warn_non_manifold,
 )
 
 logger = logging.getLogger(__name__)
 
 PANEL_MODES = ("auto", "on", "off")
+ERRORS = ("symmetric", "one-sided")
 
 
 @dataclass(frozen=True)
@@ -57,21 +72,48 @@ class ClothConfig:
 
     Attributes:
         backend: decimation back-end, ``"pymeshlab"`` or ``"trimesh"``.
-        z_scale: stretch of the z axis for decimation and error.
-        layer_gap: the distance the cloth keeps between stacked layers (its thickness, about
-            a particle radius), metres; sets the default threshold.
-        threshold_gaps: the default threshold as a multiple of ``layer_gap * z_scale`` (the
-            error is measured in the stretched space). A model that misses a layer is off by
-            at least ``layer_gap * z_scale``; one that draws a crease joining two layers as a
-            single edge by just under half of it; one with every layer and crease only by
-            in-plane errors, which do not shrink with the particle spacing. Over the 112
-            noise-free goals of the resolution sweep in ``experiments/key_particles.py``
-            (``exact_errors=True``), accepted models are at most 11.8 mm off and the model one
-            size smaller at least 23.0 mm; 0.35 gaps (17.5 mm) sits between at every resolution.
+        error: ``"symmetric"`` Hausdorff distance (default) or the paper's ``"one-sided"``
+            one (simplified -> goal, Eq. 4), which accepts two triangles inside a side fold.
+        z_scale: stretch along the goal's stacking axis (the normal of its layers) for
+            decimation and error ...
+        max_stretched_gap: ... but the stretched gap (``gap * z_scale``) is at most this
+            fraction of the sheet's shorter side (and the stretch at least 1): stretched far
+            beyond the width of a panel, a model whose faces slant from one layer to the next
+            across a narrow flap lies close to both layers and passes the threshold (a 12 x 12
+            side fold with a 45 mm gap and 0.56 mm of noise: 2 faces and 4 keys under a
+            stretch of 10, 6 and 6 under the cap). 1/6 is
+            the stretch 10 of a 5 mm gap on a 0.3 m sheet. On 200 goals of the property tests
+            (tests/deformables/test_key_particles_properties.py, seed 16) 1/12 and 1/6 hold
+            every count, 1/3 loses 13 and no cap (a stretch of 10 whatever the gap) 21; on
+            the 128 library goals of 16-40 per side with 0.02 mm of noise and no projection
+            (``panels="auto"``, seeds 0 and 1), 1/6 and no cap keep 127, 1/12 keeps 122.
+        layer_gap: the distance between the goal's stacked layers (its thickness), metres;
+            sets the default threshold. ``None`` (default): estimated from the goal
+            (:func:`deformables.layers.estimate_layer_gap`; with rest positions and the panel
+            projection, again from the projected goal, which is free of noise).
+        flat_gap_spacings: the gap used, in particle spacings, for a goal without stacked
+            layers (a flat or single-layer goal) when ``layer_gap`` is ``None``; an estimate
+            below a tenth of it (layers that touch) is raised to that tenth.
+        threshold_gaps: the default threshold as a multiple of ``gap * z_scale`` (the error
+            is measured in the stretched space), with ``gap`` the goal's layer gap. A model
+            that misses a layer is off by at least ``gap * z_scale``; one that draws a crease
+            joining two layers as a single edge by just under half of it; one with every layer
+            and crease only by in-plane errors (a crease's bulge, about half a gap, and where
+            QECD puts a vertex along a straight free edge). Over the 112 noise-free goals of
+            the resolution sweep in ``experiments/key_particles.py`` (gap 5 mm,
+            ``exact_errors=True``), accepted models fit the projected goal exactly and the
+            model one size smaller is at least 19.3 mm off; the threshold is 17.5 mm at every
+            resolution. On 200 goals of the property tests
+            (tests/deformables/test_key_particles_properties.py: gaps from a quarter to two
+            spacings, sharp and rounded creases, noise to 1 mm; seed 16) 0.2, 0.25 and 0.35
+            hold every count, 0.5 loses two.
         geodesic_radius: key particles closer than this fraction of the rest sheet's extent
-            (largest side of its bounding box), along the sheet, are merged: the vertices of
-            both layers at a crease end become one key, the ends of creases a quarter of the
-            side apart stay two.
+            (its shorter side, along its principal axes, whatever its placement; without rest
+            positions the goal's largest extent), along the sheet, are merged: the vertices of
+            both layers at a crease end become one key, the ends of creases a quarter of a
+            side apart stay two (a 12 x 40 sheet given the reflective fold across its short
+            side: 8 keys; 6 with a radius from the long side, which merges crease ends 2.75
+            spacings apart).
         geodesic_spacings: ... or this many particle spacings if that is more: the two layers'
             vertices at a crease end lie about a spacing apart on the rest sheet, more than
             0.1 of the extent below 11 per side (8 x 8 side fold: 8 keys without it, 6 with) ...
@@ -83,27 +125,29 @@ class ClothConfig:
             vertices and faces: the given one, then ``restarts - 1`` permutations drawn from
             ``numpy.random.default_rng(restart_seed)``. QECD is greedy and breaks ties between
             equal-cost collapses (every collapse inside a flat panel costs nothing) by that
-            numbering, so one numbering can miss the small model another finds (32 x 32
-            diagonal fold, alternating diagonals: 8 faces and 6 keys with 1 restart, 4 and 4
+            numbering, so one numbering can miss the small model another finds (25 x 25
+            diagonal fold, alternating diagonals: 7 faces and 5 keys with 1 restart, 4 and 4
             with 4). The first model under the threshold is taken; a size's error is the least
             over its restarts. Measured on the 112 noise-free goals of the resolution sweep in
             ``experiments/key_particles.py`` (12-40 per side x 4 triangulations x 4 folds):
-            key counts hold on 107 with 1 restart, on all with 4 (restart seeds 0, 1 and 2
-            alike).
+            key counts hold on 105 with 1 restart, on all with 4 (restart seeds 0, 1 and 2
+            alike for the example).
         restart_seed: seed of the permutations.
         coarse_faces: each numbering is decimated once to this many faces, and every size
             from there: the collapses inside flat panels, nearly all of QECD's work (16 ms of
             it at 40 x 40), are then done once per numbering instead of once per size. The
             quadrics restart from the coarse mesh, whose distance to the goal is far below
             the threshold; measured on the same 112 goals, the counts are those of decimating
-            from the goal every time. Must exceed ``max_faces``.
+            from the goal every time. Must exceed ``max_faces``; ``None`` decimates from the
+            goal at every size (the paper's loop).
         exact_errors: compute every size's error in full. By default the Hausdorff distance
             stops as soon as it reaches the threshold, so the errors recorded for rejected
             sizes are lower bounds (at least the threshold); the accepted model and its error
             are the same either way. The error-vs-NS curves (Fig. 4) need it.
         canonical_triangulation: with rest positions, first set every grid-square diagonal to
-            the one the fold compresses least (:func:`deformables.mesh.canonical_triangulation`),
-            so the result does not depend on how the grid was split into triangles.
+            the one whose length the fold changes least
+            (:func:`deformables.mesh.canonical_triangulation`), so the result does not depend
+            on how the grid was split into triangles.
         panels: with rest positions, project the goal onto its flat panels first
             (:func:`deformables.panels.project_on_panels`): ``"on"`` (default) always,
             ``"auto"`` when the goal's estimated noise exceeds ``panel_noise_floor``, ``"off"``
@@ -115,11 +159,17 @@ class ClothConfig:
             about 1.55 sigma of per-coordinate Gaussian noise, 0 on an exact fold) above which
             ``"auto"`` projects (sigma ~0.03 mm): it skips the projection's boundary fit on
             exact goals.
+        strict: raise ``ValueError`` when no model up to ``max_faces`` reaches the threshold.
+            By default the model with the least error is returned with
+            ``reached_threshold=False`` and a logged warning.
     """
 
     backend: str = "pymeshlab"
+    error: str = "symmetric"
     z_scale: float = 10.0
-    layer_gap: float = CLOTH_LAYER_GAP
+    max_stretched_gap: float = 1 / 6
+    layer_gap: float | None = None
+    flat_gap_spacings: float = 0.5
     threshold_gaps: float = 0.35
     geodesic_radius: float = 0.1
     geodesic_spacings: float = 2.5
@@ -128,28 +178,48 @@ class ClothConfig:
     max_faces: int = 40
     restarts: int = 4
     restart_seed: int = 0
-    coarse_faces: int = 200
+    coarse_faces: int | None = 200
     exact_errors: bool = False
     canonical_triangulation: bool = True
     panels: str = "on"
     panel_noise_floor: float = 5e-5
+    strict: bool = False
 
     def __post_init__(self):
         if self.backend not in BACKENDS:
             raise ValueError(f"unknown decimation backend {self.backend!r}; choose from {BACKENDS}")
         if self.panels not in PANEL_MODES:
             raise ValueError(f"panels must be one of {PANEL_MODES}, got {self.panels!r}")
-        for name in ("z_scale", "layer_gap", "threshold_gaps", "geodesic_radius",
-                     "geodesic_spacings", "geodesic_cap", "sample_spacings", "panel_noise_floor"):
+        if self.error not in ERRORS:
+            raise ValueError(f"ClothConfig.error must be one of {ERRORS}, got {self.error!r}")
+        for name in ("z_scale", "max_stretched_gap", "threshold_gaps", "flat_gap_spacings",
+                     "geodesic_radius", "geodesic_spacings", "geodesic_cap", "sample_spacings",
+                     "panel_noise_floor"):
             check_threshold(getattr(self, name), f"ClothConfig.{name}")
+        if self.layer_gap is not None:
+            check_threshold(self.layer_gap, "ClothConfig.layer_gap")
         check_config(self, minimum={"restart_seed": 0})
         if self.max_faces < 2:
             raise ValueError(f"max_faces must be at least 2, got {self.max_faces}")
         if self.restarts < 1:
             raise ValueError(f"restarts must be at least 1, got {self.restarts}")
-        if self.coarse_faces <= self.max_faces:
+        if self.coarse_faces is not None and self.coarse_faces <= self.max_faces:
             raise ValueError(f"coarse_faces ({self.coarse_faces}) must exceed max_faces "
                              f"({self.max_faces})")
+
+    @classmethod
+    def paper(cls, **overrides) -> ClothConfig:
+        """The paper's pipeline (Sec. III-C, Alg. 1): the one-sided Hausdorff distance from the
+        simplified mesh to the goal (Eq. 4) in plain metres (``z_scale=1``), one QECD per
+        size from the goal itself (no restarts, no coarse mesh), no panel projection and no
+        re-triangulation. The threshold stays ``threshold_gaps`` layer gaps (the paper's is
+        "a parameter set by the user" and not reported), and so do the nearest-particle
+        extraction and the geodesic filter, which the paper describes without their
+        parameters. ``overrides`` replace any field."""
+        fields = dict(error="one-sided", z_scale=1.0, restarts=1, coarse_faces=None,
+                      panels="off", canonical_triangulation=False)
+        fields.update(overrides)
+        return cls(**fields)
 
 
 @dataclass(frozen=True)
@@ -202,10 +272,13 @@ def extract_keys(goal: np.ndarray, faces: np.ndarray, rest: np.ndarray | None,
     """Alg. 1 line 7 for cloth: sorted key particles ``(K,)``.
 
     The goal particle nearest each simplified vertex (both ``(N, 3)`` / ``(M, 3)`` in the
-    stretched space) is a candidate; candidates are visited from the best-matching one and
-    dropped when a kept one lies within ``radius`` geodesically (see :func:`_geodesic`)."""
+    stretched space) is a candidate; candidates are visited from the best-matching one (ties:
+    the lower particle index first) and dropped when a kept one lies within ``radius``
+    geodesically (see :func:`_geodesic`)."""
     dist, nearest = cKDTree(scaled_goal).query(scaled_vertices)
-    order = np.argsort(dist, kind="stable")
+    # best match first; equal matches (to a millionth of the radius) by particle index, so that
+    # the order of the model's vertices does not decide between two equally good particles
+    order = np.lexsort((nearest, np.round(dist / (1e-6 * radius))))
     candidates = np.unique(nearest[order], return_index=True)
     candidates = candidates[0][np.argsort(candidates[1])]     # unique, best match first
     geo = _geodesic(candidates, goal, faces, rest, radius)
@@ -216,24 +289,50 @@ def extract_keys(goal: np.ndarray, faces: np.ndarray, rest: np.ndarray | None,
     return np.sort(candidates[kept])
 
 
+def _stretch(points: np.ndarray, axis: np.ndarray, factor: float) -> np.ndarray:
+    """``points`` ``(P, 3)`` with their component along the unit ``axis`` scaled by ``factor``."""
+    return points + (factor - 1.0) * np.outer(points @ axis, axis)
+
+
+def sheet_sides(rest: np.ndarray, faces: np.ndarray) -> tuple[float, float]:
+    """The sides ``(long, short)`` of the rectangle with the area and the diameter of the flat
+    sheet ``rest`` ``(N, 3)``, ``faces`` ``(F, 3)``: the sides of a rectangular sheet, whatever
+    its rotation (a bounding box would see the diagonal of a sheet turned by 45 degrees, and the
+    principal axes of a square are any two perpendicular directions)."""
+    area = float(triangle_areas(rest, faces).sum())
+    centred = rest - rest.mean(axis=0)
+    plane = centred @ np.linalg.svd(centred, full_matrices=False)[2][:2].T
+    hull = plane[ConvexHull(plane).vertices]
+    diameter2 = float((np.linalg.norm(hull[:, None] - hull[None], axis=2) ** 2).max())
+    total, difference = np.sqrt(diameter2 + 2 * area), np.sqrt(max(diameter2 - 2 * area, 0.0))
+    return (total + difference) / 2, (total - difference) / 2
+
+
 def cloth_key_particles(positions, faces, threshold: float | None = None,
                         rest_positions=None, config: ClothConfig = ClothConfig()) -> KeyParticles:
     """Key particles of a cloth goal by mesh decimation (Alg. 1, cloth branch).
 
     Args:
-        positions: ``(N, 3)`` goal particle positions, metres.
+        positions: ``(N, 3)`` goal particle positions, metres, in any rigid placement.
         faces: ``(F, 3)`` triangles of the cloth mesh. Duplicate faces are removed (logged).
-        threshold: Alg. 1's threshold on the symmetric Hausdorff distance, in metres of the
-            z-stretched space; ``None`` uses ``config.threshold_gaps * layer_gap * z_scale``.
-        rest_positions: ``(N, 3)`` flat rest positions, for the geodesic filter and the particle
-            spacing; ``None`` uses the goal mesh's edges for both. Particle i of the rest shape
-            is particle i of the goal: the goal's edges must keep about their rest length.
+        threshold: Alg. 1's threshold on the Hausdorff distance, in metres of the stretched
+            space; ``None`` uses ``config.threshold_gaps * gap * z``, with ``gap`` the goal's
+            layer gap (``config.layer_gap``, or estimated from the goal) and ``z`` the stretch:
+            ``config.z_scale``, reduced (to no less than 1) so that ``gap * z`` is at most
+            ``config.max_stretched_gap`` times the sheet's shorter side.
+        rest_positions: ``(N, 3)`` flat rest positions, in any rigid placement, for the
+            geodesic filter, the particle spacing, the panel projection and the canonical
+            triangulation; ``None`` uses the goal mesh's edges for the first two and skips the
+            others. Particle i of the rest shape is particle i of the goal: the goal's edges
+            must keep about their rest length.
         config: back-end, stretch and threshold options.
 
     Returns:
         :class:`KeyParticles` with ``vertices`` ``(M, 3)`` (metres, unstretched) and
         ``elements`` ``(NS, 3)`` of the simplified mesh, ``n_elements = NS`` and ``sizes``
-        counted in target faces.
+        counted in target faces. ``reached_threshold`` is False when no size up to
+        ``config.max_faces`` reached the threshold: the model is then the one with the least
+        error (a warning is logged).
 
     A non-manifold mesh (an edge of more than two faces, sheets meeting at a vertex) is
     reduced as it is, with a warning.
@@ -244,8 +343,8 @@ def cloth_key_particles(positions, faces, threshold: float | None = None,
         ValueError: bad positions or faces (NaN/inf, fewer than 3 particles, zero extent,
             indices out of range, particles in no face, zero-area faces), rest positions that
             do not match the goal (edge lengths disagree far beyond what a fold does), a
-            non-positive threshold, or a threshold that no model up to ``config.max_faces``
-            reaches.
+            non-positive threshold, or, with ``config.strict``, a threshold that no model up
+            to ``config.max_faces`` reaches.
     """
     start = time.perf_counter()
     if not isinstance(config, ClothConfig):
@@ -260,52 +359,93 @@ def cloth_key_particles(positions, faces, threshold: float | None = None,
     if rest is not None:
         check_rest_matches(goal, rest, tri)
     check_areas(tri, reference)
-    if rest is not None and config.panels != "off":
-        floor = config.panel_noise_floor if config.panels == "auto" else None
-        goal = project_on_panels(goal, rest, tri, config.layer_gap, min_noise=floor).positions
-    if rest is not None and config.canonical_triangulation:
-        tri = canonical_triangulation(goal, tri, rest)
+    if threshold is not None:
+        threshold = check_threshold(threshold)
     pairs = edges(tri)
     spacing = float(np.median(np.linalg.norm(reference[pairs[:, 0]] - reference[pairs[:, 1]],
                                              axis=1)))
-    stretch = np.array([1.0, 1.0, config.z_scale])
-    thr = (check_threshold(threshold) if threshold is not None
-           else config.threshold_gaps * config.layer_gap * config.z_scale)
-    scaled = goal * stretch
+
+    def layer_gap(points: np.ndarray) -> float | None:
+        found = estimate_layer_gap(points, tri, spacing, stacking_axis(points, tri))
+        if not found.found:
+            return None
+        least = 0.1 * config.flat_gap_spacings * spacing
+        if found.gap < least:
+            logger.info("cloth: layer gap %.3g mm raised to %.3g mm (a tenth of the flat gap)",
+                        found.gap * 1e3, least * 1e3)
+        return max(found.gap, least)
+
+    gap = config.layer_gap if config.layer_gap is not None else layer_gap(goal)
+    if rest is not None and config.panels != "off":
+        floor = config.panel_noise_floor if config.panels == "auto" else None
+        fit = project_on_panels(goal, rest, tri, gap or config.flat_gap_spacings * spacing,
+                                min_noise=floor)
+        if fit.projected.any():
+            goal = fit.positions
+            if config.layer_gap is None:       # again, on the projected goal: free of noise
+                gap = layer_gap(goal) or gap
+    if gap is None:
+        gap = config.flat_gap_spacings * spacing
+        logger.info("cloth: no stacked layers; gap taken as %g spacings (%.4g mm)",
+                    config.flat_gap_spacings, gap * 1e3)
+    if rest is not None and config.canonical_triangulation:
+        tri = canonical_triangulation(goal, tri, rest)
+    axis = stacking_axis(goal, tri)
+    # the rest sheet's shorter side (a fold's panels are fractions of either side); without
+    # rest positions, the goal's largest extent
+    extent = (float(np.ptp(goal @ np.linalg.svd(goal - goal.mean(axis=0))[2].T, axis=0).max())
+              if rest is None else sheet_sides(rest, tri)[1])
+    z_scale = min(config.z_scale, max(1.0, config.max_stretched_gap * extent / gap))
+    thr = threshold if threshold is not None else config.threshold_gaps * gap * z_scale
+    scaled = _stretch(goal, axis, z_scale)
     original = SurfaceDistance(scaled, tri)
     step = config.sample_spacings * spacing
+    meshes = renumberings(scaled, tri, config.restarts, config.restart_seed)
+    if config.coarse_faces is not None:
+        meshes = [decimate(vertices, faces, config.coarse_faces, config.backend)
+                  for vertices, faces in meshes]
 
-    coarse = [decimate(vertices, faces, config.coarse_faces, config.backend)
-              for vertices, faces in renumberings(scaled, tri, config.restarts,
-                                                  config.restart_seed)]
+    def distance(v: np.ndarray, f: np.ndarray, limit: float) -> float:
+        if config.error == "one-sided":
+            return original.max_distance(sample_surface(v, f, step), limit=limit)
+        return float(np.nanmax(hausdorff(original, scaled, v, f, step, limit=limit)))
 
     limit = np.inf if config.exact_errors else thr
 
     def simplify(n_faces: int) -> Mesh:
         best = Mesh(np.empty((0, 3)), np.empty((0, 3), dtype=np.int64), np.inf)
-        for vertices, faces in coarse:
+        for vertices, faces in meshes:
             try:
                 v, f = decimate(vertices, faces, n_faces, config.backend)
             except EmptyDecimationError:
                 logger.debug("restart decimated to nothing at %d faces", n_faces)
                 continue
-            err = float(np.nanmax(hausdorff(original, scaled, v, f, step, limit=limit)))
+            err = distance(v, f, limit)
             if err < best.error:
                 best = Mesh(v, f, err)
             if err < thr:
                 break
         return best
 
-    reduction = grow_until_below(simplify, lambda mesh: mesh.error, thr, config.max_faces)
+    def exact(mesh: Mesh) -> float:
+        if not np.isfinite(mesh.error) or config.exact_errors:
+            return mesh.error
+        return distance(mesh.vertices, mesh.faces, np.inf)
+
+    reduction = grow_until_below(simplify, lambda mesh: mesh.error, thr, config.max_faces,
+                                 strict=config.strict, exact_error=exact)
     mesh = reduction.model
-    extent = float(np.ptp(reference, axis=0).max())
     radius = max(config.geodesic_radius * extent,
                  min(config.geodesic_spacings * spacing, config.geodesic_cap * extent))
     keys = extract_keys(goal, tri, rest, scaled, mesh.vertices, radius)
     result = KeyParticles(
-        indices=keys, n_elements=len(mesh.faces), vertices=mesh.vertices / stretch,
+        indices=keys, n_elements=len(mesh.faces),
+        vertices=_stretch(mesh.vertices, axis, 1.0 / z_scale),
         elements=mesh.faces, sizes=reduction.sizes, errors=reduction.errors,
-        error=reduction.error, threshold=thr, seconds=time.perf_counter() - start)
-    logger.info("cloth (%d particles, %d faces): %d faces, error %.4g < %.4g, %d keys",
-                len(goal), len(tri), result.n_elements, result.error, thr, result.n_keys)
+        error=reduction.error, threshold=thr, seconds=time.perf_counter() - start,
+        reached_threshold=reduction.reached)
+    logger.info("cloth (%d particles, %d faces, layer gap %.4g mm): %d faces, error %.4g "
+                "(threshold %.4g%s), %d keys", len(goal), len(tri), gap * 1e3,
+                result.n_elements, result.error, thr,
+                "" if reduction.reached else ", not reached", result.n_keys)
     return result

@@ -22,25 +22,27 @@ class Reduction(Generic[Model]):
     """Outcome of the Alg. 1 loop.
 
     Attributes:
-        size: the accepted model size (the first one whose error is below the threshold).
+        size: the accepted model size: the first one whose error is below the threshold, or,
+            when none is (``reached`` false), the one with the least error.
         model: the simplified model of that size.
         sizes: ``(S,)`` model sizes tried, in order.
         errors: ``(S,)`` error of each size tried.
+        reached: whether the accepted model's error is below the threshold.
+        error: the accepted model's error.
     """
 
     size: int
     model: Model
     sizes: np.ndarray
     errors: np.ndarray
-
-    @property
-    def error(self) -> float:
-        """Error of the accepted model."""
-        return float(self.errors[-1])
+    reached: bool
+    error: float
 
 
 def grow_until_below(simplify: Callable[[int], Model], error: Callable[[Model], float],
-                     threshold: float, max_size: int, min_size: int = 2) -> Reduction[Model]:
+                     threshold: float, max_size: int, min_size: int = 2, *,
+                     strict: bool = True,
+                     exact_error: Callable[[Model], float] | None = None) -> Reduction[Model]:
     """Alg. 1, lines 1-6: simplify to size ``min_size, min_size + 1, ...`` until the error of the
     simplified model is below ``threshold``.
 
@@ -49,31 +51,47 @@ def grow_until_below(simplify: Callable[[int], Model], error: Callable[[Model], 
         error: simplified model -> its distance to the original goal.
         threshold: accept the first model with ``error < threshold``.
         max_size: the largest size tried.
+        strict: when no size up to ``max_size`` reaches the threshold, raise (True) or return
+            the model with the least error, ``reached=False``, with a logged warning (False).
+        exact_error: when no size reaches the threshold, the models are ranked by this error
+            instead of ``error`` (for an ``error`` that stops early and then gives only a lower
+            bound); its value becomes the accepted model's ``error``.
 
     Raises:
-        ValueError: if no size up to ``max_size`` reaches the threshold (the message gives the
-            best error seen and its size).
+        ValueError: ``max_size < min_size``, or, with ``strict``, no size up to ``max_size``
+            reaches the threshold (the message gives the best error seen and its size).
     """
     if max_size < min_size:
         raise ValueError(f"max_size {max_size} is below the smallest model size {min_size}")
     sizes: list[int] = []
     errors: list[float] = []
+    models: list[Model] = []
+
+    def frozen(values, dtype=None) -> np.ndarray:
+        arr = np.array(values, dtype=dtype)
+        arr.setflags(write=False)
+        return arr
+
     for size in range(min_size, max_size + 1):
         model = simplify(size)
         err = float(error(model))
         sizes.append(size)
         errors.append(err)
+        models.append(model)
         logger.debug("size %d: error %.6g (threshold %.6g)", size, err, threshold)
         if err < threshold:
-            arr_sizes = np.array(sizes, dtype=np.int64)
-            arr_errors = np.array(errors)
-            arr_sizes.setflags(write=False)
-            arr_errors.setflags(write=False)
-            return Reduction(size, model, arr_sizes, arr_errors)
-    best = int(np.nanargmin(errors)) if np.isfinite(errors).any() else 0
-    raise ValueError(f"the error never fell below the threshold {threshold:.6g} for model sizes "
-                     f"{min_size}..{max_size} (best {errors[best]:.6g} at size {sizes[best]}); "
-                     f"raise the threshold or the size cap")
+            return Reduction(size, model, frozen(sizes, np.int64), frozen(errors), True, err)
+    ranking = errors if exact_error is None else [float(exact_error(m)) for m in models]
+    ranking = np.where(np.isfinite(ranking), ranking, np.inf)
+    best = int(np.argmin(ranking))
+    message = (f"the error never fell below the threshold {threshold:.6g} for model sizes "
+               f"{min_size}..{max_size} (best {ranking[best]:.6g} at size {sizes[best]})")
+    if strict:
+        raise ValueError(f"{message}; raise the threshold or the size cap")
+    logger.warning("%s; returning the size-%d model, flagged as not reaching the threshold",
+                   message, sizes[best])
+    return Reduction(sizes[best], models[best], frozen(sizes, np.int64), frozen(errors), False,
+                     float(ranking[best]))
 
 
 @dataclass(frozen=True)
@@ -90,6 +108,11 @@ class KeyParticles:
         error: the accepted model's error.
         threshold: the threshold used, metres (cloth: in the z-scaled space).
         seconds: wall time of the whole reduction, seconds.
+        reached_threshold: whether ``error`` is below ``threshold``. False only when no model
+            size up to the cap reached it and the reduction was not strict: the model is then
+            the one with the least error, and a warning was logged (cloth: its ``error`` is
+            then computed in full, where ``errors`` may hold lower bounds, see
+            ``ClothConfig.exact_errors``).
     """
 
     indices: np.ndarray
@@ -101,6 +124,7 @@ class KeyParticles:
     error: float
     threshold: float
     seconds: float
+    reached_threshold: bool = True
 
     def __post_init__(self):
         for name in ("indices", "vertices", "elements", "sizes", "errors"):

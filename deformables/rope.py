@@ -65,12 +65,16 @@ class RopeConfig:
             a resolved shape (below 1.5 mm on clean goals, about 1.6 sigma under Gaussian noise
             of std sigma) and the error of a missing corner (above 20 mm for the folding goals).
         max_vertices: cap on M; ``None`` means N.
+        strict: raise ``ValueError`` when no model up to the cap reaches the threshold (only
+            possible with a threshold in metres or a cap below N). By default the model with
+            the least error is returned with ``reached_threshold=False`` and a logged warning.
     """
 
     fit: str = "breakpoints"
     n_samples: int = 100
     threshold_spacings: float = 0.5
     max_vertices: int | None = None
+    strict: bool = False
 
     def __post_init__(self):
         if self.fit not in FITS:
@@ -213,7 +217,8 @@ def rope_key_particles(positions, threshold: float | None = None,
         TypeError: non-numeric positions, a threshold that is not a number, a config that is
             not a RopeConfig.
         ValueError: bad positions (NaN/inf, fewer than 3 particles, zero extent), a
-            non-positive threshold, or a threshold that no model up to the cap reaches.
+            non-positive threshold, or, with ``config.strict``, a threshold that no model up
+            to the cap reaches.
     """
     start = time.perf_counter()
     if not isinstance(config, RopeConfig):
@@ -240,7 +245,8 @@ def rope_key_particles(positions, threshold: float | None = None,
         return Polyline(vertices, knots, error)
 
     max_vertices = min(config.max_vertices or len(p), len(p))
-    reduction = grow_until_below(simplify, lambda model: model.error, thr, max_vertices)
+    reduction = grow_until_below(simplify, lambda model: model.error, thr, max_vertices,
+                                 strict=config.strict)
     line = reduction.model
     keys = _key_particles(p, chain, line.vertices, line.knots)
     m = reduction.size
@@ -248,7 +254,9 @@ def rope_key_particles(positions, threshold: float | None = None,
         indices=keys, n_elements=m - 1, vertices=line.vertices,
         elements=np.stack([np.arange(m - 1), np.arange(1, m)], axis=1),
         sizes=reduction.sizes, errors=reduction.errors, error=reduction.error,
-        threshold=thr, seconds=time.perf_counter() - start)
-    logger.info("rope (%d particles, fit=%s): %d vertices, error %.4g m < %.4g m, keys %s",
-                len(p), config.fit, m, result.error, thr, keys.tolist())
+        threshold=thr, seconds=time.perf_counter() - start,
+        reached_threshold=reduction.reached)
+    logger.info("rope (%d particles, fit=%s): %d vertices, error %.4g m (threshold %.4g m%s), "
+                "keys %s", len(p), config.fit, m, result.error, thr,
+                "" if reduction.reached else ", not reached", keys.tolist())
     return result

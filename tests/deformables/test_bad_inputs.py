@@ -15,6 +15,7 @@ from deformables import (
     make_goal,
     rope_key_particles,
 )
+from deformables.layers import estimate_layer_gap
 from deformables.panels import panel_weights, project_on_panels, rigid_fit
 
 
@@ -350,6 +351,12 @@ def test_cloth_arrays_threshold_and_config(kwargs, error, match):
     (dict(coarse_faces=300.0), TypeError, "ClothConfig.coarse_faces must be an int"),
     (dict(exact_errors=1), TypeError, "ClothConfig.exact_errors must be a bool"),
     (dict(canonical_triangulation="yes"), TypeError, "ClothConfig.canonical_triangulation"),
+    (dict(error="two-sided"), ValueError, "ClothConfig.error must be one of"),
+    (dict(layer_gap="5 mm"), TypeError, "ClothConfig.layer_gap must be a number"),
+    (dict(max_stretched_gap=0.0), ValueError, "ClothConfig.max_stretched_gap"),
+    (dict(flat_gap_spacings=-1.0), ValueError, "ClothConfig.flat_gap_spacings"),
+    (dict(coarse_faces=None, max_faces=1), ValueError, "max_faces must be at least 2"),
+    (dict(strict="yes"), TypeError, "ClothConfig.strict must be a bool"),
 ])
 def test_cloth_config_fields(kwargs, error, match):
     with pytest.raises(error, match=match):
@@ -440,6 +447,45 @@ def test_project_on_panels(kwargs, error, match):
         project_on_panels(**args)
 
 
+@pytest.mark.parametrize("kwargs, error, match", [
+    (dict(positions=np.full((64, 3), np.nan)), ValueError, "positions has 64 particles"),
+    (dict(faces=G.faces[:, :2]), ValueError, r"faces must have shape \(F, 3\)"),
+    (dict(spacing=0.0), ValueError, "spacing must be > 0"),
+    (dict(spacing="1"), TypeError, "spacing must be a number"),
+    (dict(axis=np.zeros(3)), ValueError, "axis must be a finite non-zero"),
+    (dict(axis=np.ones(2)), ValueError, "axis must be a finite non-zero"),
+    (dict(rings=0), ValueError, "rings must be >= 1"),
+    (dict(max_gap=-1.0), ValueError, "max_gap must be > 0"),
+    (dict(reach=np.inf), ValueError, "reach must be finite"),
+    (dict(max_tilt_deg=120.0), ValueError, "max_tilt_deg must be <= 90"),
+    (dict(min_stacked=1.5), ValueError, "min_stacked must be <= 1"),
+])
+def test_estimate_layer_gap(kwargs, error, match):
+    args = dict(positions=G.positions, faces=G.faces, spacing=0.04)
+    args.update(kwargs)
+    with pytest.raises(error, match=match):
+        estimate_layer_gap(**args)
+
+
+def test_a_single_layer_has_no_layer_gap_and_reduces_with_the_flat_fallback():
+    flat = goals.cloth_flat(n=12)
+    assert not estimate_layer_gap(flat.positions, flat.faces, 0.3 / 11).found
+    result = cloth_key_particles(flat.positions, flat.faces, rest_positions=flat.rest_positions)
+    assert result.reached_threshold and result.n_elements == 2 and result.n_keys == 4
+    gap = 0.5 * 0.3 / 11                                   # half a spacing
+    assert result.threshold == pytest.approx(0.35 * min(10 * gap, max(gap, 0.3 / 6)))
+
+
+@pytest.mark.parametrize("weights, match", [
+    (np.ones((1, 3)), r"weights must have shape \(1, 4\)"),
+    (-np.ones((1, 4)), "weights must be finite, >= 0 and not all 0"),
+    (np.zeros((1, 4)), "weights must be finite, >= 0 and not all 0"),
+])
+def test_rigid_fit_weights(weights, match):
+    with pytest.raises(ValueError, match=match):
+        rigid_fit(np.eye(4, 3)[None], np.eye(4, 3)[None], weights)
+
+
 def test_project_on_panels_takes_lists():
     fit = project_on_panels(G.positions.tolist(), G.rest_positions.tolist(), G.faces.tolist(),
                             0.005)
@@ -469,6 +515,10 @@ def test_rigid_fit(rest, goal, error, match):
     (dict(width=0.0), ValueError, "width must be > 0"),
     (dict(width=np.nan), ValueError, "width must be finite"),
     (dict(l2=-1.0), ValueError, "l2 must be >= 0"),
+    (dict(fit=np.ones(64)), ValueError, r"fit must be a \(64,\) bool mask"),
+    (dict(fit=np.zeros(64, bool)), ValueError, r"fit must be a \(64,\) bool mask"),
+    (dict(miss=np.ones((3, 64))), ValueError, r"miss must be a finite \(2, 64\) array"),
+    (dict(miss=np.full((2, 64), np.nan)), ValueError, r"miss must be a finite \(2, 64\)"),
 ])
 def test_panel_weights(kwargs, error, match):
     args = dict(rest=G.rest_positions, labels=(G.rest_positions[:, 0] > 0).astype(int),

@@ -1,4 +1,6 @@
 """Rope key particles against the paper's reference counts (Sec. IV-C.1, Fig. 4a-b)."""
+import logging
+
 import numpy as np
 import pytest
 
@@ -87,11 +89,24 @@ def test_bad_rope_input_raises(positions, message):
         rope_key_particles(positions)
 
 
-def test_unreachable_threshold_and_bad_options_raise():
+def test_unreachable_threshold_gives_the_best_model_flagged_or_raises_when_strict(caplog):
     goal = goals.rope_crumpled(np.random.default_rng(0))
+    with caplog.at_level(logging.WARNING, logger="deformables.reduction"):
+        best = rope_key_particles(goal.positions, threshold=1e-6,
+                                  config=RopeConfig(fit="fixed", max_vertices=6))
+    assert "never fell below the threshold 1e-06" in caplog.text
+    assert not best.reached_threshold
+    assert best.error == best.errors.min() > best.threshold
+    assert best.n_elements + 1 == best.sizes[best.errors.argmin()]
+    assert len(best.vertices) == best.n_elements + 1
     with pytest.raises(ValueError, match="never fell below"):
         rope_key_particles(goal.positions, threshold=1e-6,
-                           config=RopeConfig(fit="fixed", max_vertices=6))
+                           config=RopeConfig(fit="fixed", max_vertices=6, strict=True))
+    assert rope_key_particles(goal.positions).reached_threshold
+
+
+def test_bad_options_raise():
+    goal = goals.rope_crumpled(np.random.default_rng(0))
     with pytest.raises(ValueError, match="positive"):
         rope_key_particles(goal.positions, threshold=0.0)
     with pytest.raises(ValueError, match="unknown rope fit"):

@@ -1,0 +1,48 @@
+"""python -m deformables.bench: the paper-scale timing and the paper-vs-default comparison run
+and write what they measured (at a small size here; the timings themselves are not tested)."""
+import json
+
+import pytest
+
+from deformables import bench
+
+
+def test_compare_runs_both_pipelines_on_the_same_goals():
+    record = bench.compare(resolutions=(12,), noise=5e-4, triangulations=("anti",))
+    assert len(record["goals"]) == 8                      # 4 folds x (exact, noisy)
+    for row in record["goals"]:
+        for name in ("default", "paper"):
+            result = row[name]
+            assert result["seconds"] > 0 and result["n_keys"] >= 1
+            assert result["reached_threshold"] == (result["error"] < result["threshold"])
+        assert row["default"]["n_keys"] == row["reference_keys"]
+    summary = record["summary"]
+    assert set(summary) == {"default", "paper"}
+    side = summary["default"]["noise_0"]["cloth_side"]
+    assert side == {**side, "goals": 1, "keys_held": 1, "faces": {"6": 1}, "keys": {"6": 1}}
+
+
+def test_paper_scale_times_the_four_folds_with_and_without_noise():
+    record = bench.paper_scale(cloth_n=12, noise=5e-4)
+    assert [(r["task"], r["noise_m"]) for r in record["goals"]] == [
+        (task, sigma) for sigma in (0.0, 5e-4) for task in bench.CLOTH_TASKS]
+    for level in ("noise_0", "noise_0.0005"):
+        assert record["summary"][level]["keys_held"] == 4
+        assert record["summary"][level]["paper_seconds"] == 0.73
+
+
+def test_main_writes_the_record(tmp_path, capsys):
+    out = tmp_path / "compare.json"
+    bench.main(["paper-scale", "--cloth-n", "12", "--out", str(out)])
+    record = json.loads(out.read_text())
+    assert record["mode"] == "paper-scale" and record["cloth_n"] == 12
+    lines = capsys.readouterr().out.splitlines()
+    assert len(lines) == 9 and "summary" in json.loads(lines[-1])
+
+
+@pytest.mark.parametrize("argv", [["compare", "--resolutions", "1,2"], ["--noise", "-1"],
+                                  ["--cloth-n", "0"], ["sweep"], ["--repeats", "0"]])
+def test_bad_flags_exit_2(argv):
+    with pytest.raises(SystemExit) as exit_:
+        bench.main(argv)
+    assert exit_.value.code == 2
