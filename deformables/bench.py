@@ -25,14 +25,13 @@ from __future__ import annotations
 
 import argparse
 import json
-import platform
 import statistics
-import sys
 import time
 from collections import Counter
-from importlib import metadata
 
 import numpy as np
+
+from dopt.provenance import provenance
 
 from .cloth import ClothConfig, cloth_key_particles
 from .goals import TRIANGULATIONS, make_goal
@@ -117,8 +116,9 @@ def paper_scale(cloth_n: int = 100, noise: float = 1e-3, repeats: int = 1) -> di
             "ratio_to_paper": round(mean / PAPER_SECONDS["cloth"], 3),
             "keys_held": sum(r["n_keys"] == r["reference_keys"] for r in rows
                              if r["noise_m"] == sigma)}
-    return {"mode": "paper-scale", "cloth_n": cloth_n, "repeats": repeats, "goals": rows,
-            "summary": summary, "provenance": _provenance()}
+    return {"bench": "key-particles-paper-scale", "mode": "paper-scale",
+            "cloth_n": cloth_n, "repeats": repeats, "goals": rows,
+            "summary": summary, "provenance": provenance()}
 
 
 def compare(resolutions: tuple[int, ...] = (16, 25, 40), noise: float = 1e-3,
@@ -144,10 +144,11 @@ def compare(resolutions: tuple[int, ...] = (16, 25, 40), noise: float = 1e-3,
                                      "reached_threshold": result.reached_threshold,
                                      "seconds": round(time.perf_counter() - start, 4)}
                     rows.append(row)
-    return {"mode": "compare", "resolutions": list(resolutions), "noise_m": noise,
+    return {"bench": "key-particles-compare", "mode": "compare",
+            "resolutions": list(resolutions), "noise_m": noise,
             "triangulations": list(triangulations), "goals": rows,
             "summary": summarize_comparison(rows, list(pipelines)),
-            "provenance": _provenance()}
+            "provenance": provenance()}
 
 
 def summarize_comparison(rows: list[dict], pipelines: list[str]) -> dict:
@@ -173,18 +174,6 @@ def summarize_comparison(rows: list[dict], pipelines: list[str]) -> dict:
 
 def _histogram(values) -> dict:
     return {str(k): v for k, v in sorted(Counter(values).items())}
-
-
-def _provenance() -> dict:
-    versions = {}
-    for package in ("numpy", "scipy", "pymeshlab", "trimesh"):
-        try:
-            versions[package] = metadata.version(package)
-        except metadata.PackageNotFoundError:
-            versions[package] = None
-    return {"command": sys.argv, "python": platform.python_version(),
-            "machine": platform.platform(), "versions": versions,
-            "date": time.strftime("%Y-%m-%dT%H:%M:%S%z")}
 
 
 def _positive_int(text: str) -> int:

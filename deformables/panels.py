@@ -30,13 +30,11 @@ prediction, so that the noise left is that of one rigid fit over hundreds of par
    decimation extra vertices. The particles within ``crease_width`` spacings of a line all go
    to whichever of its two panels explains them better (:func:`panel_weights`): a crease
    through a row of particles is one straight step, where a linear blend of the two panels'
-   predictions (the previous rule) pulled that row half-way between the layers into a
-   one-spacing fold of its own. On 800 goals of tests/deformables/
-   test_key_particles_properties.py (seeds 16-19), the blend with every label in the fit loses
-   2 counts, fits over the nearest neighbours alone 1, where this module keeps all; the
-   library's 336 goals of 12-40 per side (4 folds, 4 triangulations, 3 seeds) keep every
-   count at 1 and at 2 mm of noise with this module as it is and as it was before both
-   changes.
+   predictions would pull that row half-way between the layers into a one-spacing fold of its
+   own. On 800 goals of tests/deformables/test_key_particles_properties.py (seeds 16-19), a
+   blend with every label in the fit loses 2 counts, fits over the nearest neighbours alone
+   1, this module none; the library's 336 goals of 12-40 per side (4 folds, 4
+   triangulations, 3 seeds) keep every count at 1 and at 2 mm of noise under all three.
 5. Every particle whose prediction lies within ``tolerance`` (default: a layer gap plus
    3 sqrt(3) times the noise estimate) moves to it; the others (a wrinkle, a crumpled region)
    keep their measured position.

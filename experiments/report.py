@@ -57,6 +57,12 @@ KP = "key particles"
 SVR = "state-vector reduction"
 
 
+#: result files of the benchmarks (field "bench") -> the section that renders them
+BENCH_KINDS = {"cloth": "physics", "rope": "physics",          # python -m planners.bench
+               "key-particles-compare": "kp_compare",          # python -m deformables.bench
+               "key-particles-paper-scale": "kp_paper_scale"}
+
+
 @dataclass(frozen=True)
 class Entry:
     """One row of the README's headline table: a paper's figure or table, the command that
@@ -97,8 +103,8 @@ class Result:
 
     @property
     def kind(self) -> str:
-        if "experiment" not in self.data and self.data.get("bench") in ("cloth", "rope"):
-            return "physics"          # python -m planners.bench cloth|rope
+        if "experiment" not in self.data and self.data.get("bench") in BENCH_KINDS:
+            return BENCH_KINDS[self.data["bench"]]
         return str(self.data.get("experiment", "(none)"))
 
     @property
@@ -527,9 +533,73 @@ def kp_headline(r: Result) -> str:
     return "; ".join(parts)
 
 
+def _histogram_text(counts: dict) -> str:
+    """{value: goals} as "value (goals), ..." ("4 (all)" when one value)."""
+    if len(counts) == 1:
+        return f"{next(iter(counts))} (all)"
+    return ", ".join(f"{k} ({v})" for k, v in counts.items())
+
+
+def kp_compare_section(results: list[Result], page: Path) -> list[str]:
+    lines = ["## Key particles: the paper's pipeline against the default", "",
+             "`python -m deformables.bench compare`: the same cloth goals (four folds x "
+             "resolutions x four triangulations, exact and with Gaussian noise) reduced by "
+             "`ClothConfig()` and by `ClothConfig.paper()` (one-sided Hausdorff distance in "
+             "metres, one decimation per size from the goal, no restarts, no panel projection, "
+             "no re-triangulation). Per fold and noise level: goals whose key count is the "
+             "reference (diagonal 4, side 6, reflective 8, underneath 10), goals whose "
+             "reduction reached its threshold, the face and key counts seen (goals), and the "
+             "median seconds per goal.", ""]
+    for r in results:
+        d = r.data
+        lines += [f"Resolutions {', '.join(map(str, d['resolutions']))} per side; triangulations "
+                  f"{', '.join(d['triangulations'])}; noise 0 and {d['noise_m'] * 1e3:g} mm.", ""]
+        rows = []
+        for name, levels in d["summary"].items():
+            for level, folds in levels.items():
+                sigma = float(level.removeprefix("noise_"))
+                for task, c in folds.items():
+                    rows.append([name, _short_task(task), f"{sigma * 1e3:g}",
+                                 f"{c['keys_held']} / {c['goals']}",
+                                 f"{c['reached_threshold']} / {c['goals']}",
+                                 _histogram_text(c["faces"]), _histogram_text(c["keys"]),
+                                 num(c["median_seconds"], 2)])
+        lines += table(["pipeline", "fold", "noise (mm)", "reference keys", "threshold reached",
+                        "faces (goals)", "keys (goals)", "median s"], rows)
+        lines += ["", *source_lines([r], page), ""]
+    return lines[:-1]
+
+
+def kp_paper_scale_section(results: list[Result], page: Path) -> list[str]:
+    lines = ["## Key particles at the paper's resolution", "",
+             "`python -m deformables.bench paper-scale`: the four cloth folds at the paper's "
+             "cloth size, MuJoCo's triangulation, the default pipeline, without noise and with "
+             "Gaussian noise; seconds per reduction (median of the repeats) against the "
+             "paper's 0.73 s average.", ""]
+    for r in results:
+        d = r.data
+        rows = [[_short_task(g["task"]), str(g["particles"]), f"{g['noise_m'] * 1e3:g}",
+                 f"{g['n_keys']} ({g['reference_keys']})", str(g["n_elements"]),
+                 "yes" if g["reached_threshold"] else "no", num(g["seconds"], 2)]
+                for g in d["goals"]]
+        lines += [f"{d['cloth_n']} x {d['cloth_n']} particles, {d['repeats']} timed run(s) "
+                  "per goal.", ""]
+        lines += table(["fold", "particles", "noise (mm)", "keys (reference)", "faces",
+                        "threshold reached", "s"], rows)
+        lines += ["", *table(["noise (mm)", "mean s over the folds", "paper s", "ratio",
+                              "reference keys"],
+                             [[f"{float(k.removeprefix('noise_')) * 1e3:g}",
+                               num(v["mean_seconds"], 2), num(v["paper_seconds"], 2),
+                               num(v["ratio_to_paper"], 2), f"{v['keys_held']} / 4"]
+                              for k, v in d["summary"].items()])]
+        lines += ["", *source_lines([r], page), ""]
+    return lines[:-1]
+
+
 # ----------------------------------------------------------------------------- pages
-SECTIONS = {"key_particles": kp_section, "fig7": fig7_section, "table1": table1_section,
-            "fig4": fig4_section, "physics": physics_section}
+SECTIONS = {"key_particles": kp_section, "kp_compare": kp_compare_section,
+            "kp_paper_scale": kp_paper_scale_section, "fig7": fig7_section,
+            "table1": table1_section, "fig4": fig4_section, "physics": physics_section}
 HEADLINES = {"key_particles": kp_headline, "fig7": fig7_headline, "table1": table1_headline,
              "fig4": fig4_headline}
 
