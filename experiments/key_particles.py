@@ -4,7 +4,8 @@ For each task: run Alg. 1 on the goal (and on each intermediate goal of a multi-
 write the error-vs-size curve as CSV, a PNG with the curve, the goal and the simplified model
 with its key particles, and DIR/summary.json with counts, indices, errors and times (and the
 provenance: command, git commit, versions; --record PATH writes a copy to PATH). Unless
---quick, it also sweeps cloth resolutions x triangulations and goal noise and records the key
+--quick, it also sweeps cloth resolutions x triangulations and goal noise, and reduces goals
+made by the simulator (the scripted fold on the MuJoCo cloth, settled), and records the key
 counts (the robustness tables of docs/RESULTS.md); the noise sweep appends one line per goal to
 DIR/noise.jsonl as it goes, and a rerun resumes it (lines that cannot be read, failed goals and
 goals of another dopt version are recomputed; --fresh moves the journal to
@@ -245,6 +246,52 @@ def noise_sweep(journal: Path, rope_config: RopeConfig, cloth_config: ClothConfi
     return rows, failed
 
 
+def simulated_goals(resolutions: list[int], cloth_config: ClothConfig,
+                    physics: str = "default", settle: float = 1.0) -> tuple[list[dict], dict]:
+    """Key counts of cloth goals made by the simulator: each fold executed by the scripted
+    policy on the MuJoCo cloth (``planners.pick_place``, the experiments' scene and physics
+    preset), then left to settle ``settle`` seconds holding nothing. The reduction sees what a
+    user with a simulator has: the settled particle positions, the flex's own triangles and
+    the settled flat start as the rest sheet. Returns (rows, {goal: error} of the goals that
+    failed); a row holds the scripted fold's distance to the ideal goal, whether the stability
+    verdict flagged its executed plan, the layer gap the reduction estimated and the counts."""
+    from deformables.layers import estimate_layer_gap
+    from planners.pick_place import PickPlaceSettings, make_planner, make_problem, run_problem
+
+    rows, failed = [], {}
+    for task in CLOTH_TASKS:
+        fold = task.removeprefix("cloth_")
+        for n in resolutions:
+            row = {"task": task, "n": n, "physics": physics,
+                   "reference_keys": REFERENCE_KEYS[task]}
+            try:
+                settings = replace(PickPlaceSettings.preset("cloth", fold), n=n, physics=physics)
+                problem = make_problem(settings)
+                result = run_problem(problem, make_planner("scripted", settings),
+                                     method="scripted")
+                scene = problem.scene
+                final = scene.settle(result.final_state, settle)
+                goal, rest = scene.positions(final), scene.positions(scene.initial_state)
+                spacing = settings.side / (n - 1)
+                gap = estimate_layer_gap(goal, scene.elements, spacing)
+                keys = cloth_key_particles(goal, scene.elements, rest_positions=rest,
+                                           config=cloth_config)
+                row.update(selfcollide=settings.selfcollide,
+                           scripted_cost_mm=1e3 * float(np.mean(np.linalg.norm(
+                               goal - problem.final_goal, axis=1))),
+                           unstable=result.unstable, unstable_reason=result.unstable_reason,
+                           layer_gap_mm=(1e3 * gap.gap if gap.found else None),
+                           n_keys=keys.n_keys, n_elements=keys.n_elements,
+                           reached_threshold=keys.reached_threshold,
+                           held=keys.n_keys == REFERENCE_KEYS[task])
+            except Exception as exc:
+                row["error"] = failed[f"simulated/{task}/n{n}"] = one_line(exc)
+                logger.error("simulated %s n=%d failed: %s", task, n, row["error"])
+            rows.append(row)
+            logger.info("simulated %s n=%d: %s", task, n, row)
+    return rows, failed
+
+
 def noise_table(rows: list[dict]) -> dict:
     """Goals whose key count equals the reference, per task kind, panel mode and sigma."""
     table: dict = {}
@@ -294,6 +341,11 @@ def parser() -> argparse.ArgumentParser:
                     help="ClothConfig.panels modes of the noise sweep (comma-separated; "
                          "default: the library default 'on' and the ablation 'off', ~2 s "
                          "per goal that does not converge)")
+    ap.add_argument("--simulated-n", type=number_list(int, 3, "particles per side"),
+                    default=[16, 25, 40],
+                    help="cloth particles per side of the simulated goals (the scripted fold "
+                         "on the MuJoCo cloth, settled; comma-separated, each >= 3; default "
+                         "16,25,40)")
     ap.add_argument("--fresh", action="store_true",
                     help="recompute the noise sweep (DIR/noise.jsonl moves to "
                          "DIR/noise.jsonl.old) instead of resuming it")
@@ -364,9 +416,16 @@ def main(argv=None) -> int:
             failed.update(grid_failed)
         except Exception as exc:
             failed["grid"] = one_line(exc)
-        summary["robustness"] = {"cloth_grid": grid, "noise": noise_table(noise)}
+        simulated = []
+        try:
+            simulated, simulated_failed = simulated_goals(args.simulated_n, cloth_config)
+            failed.update(simulated_failed)
+        except Exception as exc:
+            failed["simulated"] = one_line(exc)
+        summary["robustness"] = {"cloth_grid": grid, "noise": noise_table(noise),
+                                 "simulated": simulated}
         logger.info("noise: %s", summary["robustness"]["noise"])
-        commits[code["commit"]] += sum("error" not in g for g in grid)
+        commits[code["commit"]] += sum("error" not in g for g in grid + simulated)
         for row in noise:
             if "error" not in row:
                 c = str((row.get("code") or {}).get("commit") or "unknown")

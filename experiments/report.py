@@ -486,6 +486,8 @@ def kp_section(results: list[Result], page: Path) -> list[str]:
             lines += ["", *kp_grid(rob["cloth_grid"])]
         if rob.get("noise"):
             lines += ["", *kp_noise(rob["noise"])]
+        if rob.get("simulated"):
+            lines += ["", *kp_simulated(rob["simulated"])]
         lines += ["", *source_lines([r], page), ""]
     return lines[:-1]
 
@@ -515,6 +517,30 @@ def kp_noise(noise: dict) -> list[str]:
             + table(["goals", *sigmas],
                     [[kind, *[cells.get(s, "-") for s in sigmas]]
                      for kind, cells in noise.items()]))
+
+
+def kp_simulated(rows: list[dict]) -> list[str]:
+    """Key counts of the goals the simulator made (the scripted fold, settled)."""
+    out = ["Goals made by the simulator: the scripted fold on the MuJoCo cloth (physics preset "
+           "as given), settled; the reduction gets the settled positions, the flex's "
+           "triangles and the settled flat start as rest sheet. Scripted error: mean particle "
+           "distance to the ideal fold; `!` marks an executed plan the stability verdict "
+           "flagged.", ""]
+    body = []
+    for r in rows:
+        if "error" in r:
+            body.append([_short_task(r["task"]), str(r["n"]), r.get("physics", "-"), "-", "-",
+                         "-", "failed: " + cell(r["error"]), "-", "-"])
+            continue
+        body.append([_short_task(r["task"]), str(r["n"]), r["physics"],
+                     "yes" if r["selfcollide"] else "no",
+                     num(r["scripted_cost_mm"], 1) + (" !" if r["unstable"] else ""),
+                     "none found" if r["layer_gap_mm"] is None else num(r["layer_gap_mm"], 2),
+                     f"{r['n_keys']} ({r['reference_keys']})", str(r["n_elements"]),
+                     "yes" if r["reached_threshold"] else "no"])
+    return out + table(["goal", "n", "physics", "self-collision", "scripted error (mm)",
+                        "layer gap (mm)", "keys (reference)", "faces", "threshold reached"],
+                       body)
 
 
 def kp_headline(r: Result) -> str:

@@ -243,3 +243,42 @@ def test_a_malformed_result_file_is_named(site, capsys):
     assert "fig7_broken.json" in capsys.readouterr().err
     (site["results"] / "garbage.json").write_text("{not json")
     assert run(site) == 2
+
+
+def test_key_particle_benches_and_simulated_goals(site):
+    """deformables.bench compare / paper-scale files and the simulated-goal rows of the key
+    particle experiment render with the numbers they hold."""
+    cell = {"goals": 12, "keys_held": 4, "reached_threshold": 3, "faces": {"2": 1, "37": 11},
+            "keys": {"4": 4, "9": 8}, "median_seconds": 0.6}
+    write(site["results"], "kp-compare.json",
+          {"bench": "key-particles-compare", "mode": "compare", "resolutions": [16, 25],
+           "noise_m": 0.001, "triangulations": ["mujoco", "anti"], "goals": [],
+           "summary": {"paper": {"noise_0": {"cloth_diagonal": cell}}},
+           "provenance": provenance("python -m deformables.bench compare")})
+    goal = {"task": "cloth_side", "particles": 10000, "noise_m": 0.001, "n_elements": 6,
+            "n_keys": 6, "reference_keys": 6, "reached_threshold": True, "seconds": 3.456}
+    write(site["results"], "kp-scale.json",
+          {"bench": "key-particles-paper-scale", "mode": "paper-scale", "cloth_n": 100,
+           "repeats": 1, "goals": [goal],
+           "summary": {"noise_0.001": {"mean_seconds": 3.456, "paper_seconds": 0.73,
+                                       "ratio_to_paper": 4.734, "keys_held": 1}},
+           "provenance": provenance("python -m deformables.bench paper-scale")})
+    simulated = [{"task": "cloth_diagonal", "n": 16, "physics": "default", "reference_keys": 4,
+                  "selfcollide": False, "scripted_cost_mm": 14.66, "unstable": True,
+                  "unstable_reason": "strain", "layer_gap_mm": None, "n_keys": 4,
+                  "n_elements": 10, "reached_threshold": True, "held": True},
+                 {"task": "cloth_side", "n": 40, "physics": "default", "reference_keys": 6,
+                  "error": "RuntimeError: boom"}]
+    write(site["results"], "key_particles.json",
+          {"experiment": "key_particles", "seed": 0, "quick": False,
+           "cloth_particles_per_side": 12, "paper": {}, "tasks": {},
+           "robustness": {"simulated": simulated},
+           "provenance": provenance("python experiments/key_particles.py --task all")})
+    assert run(site) == 0
+    md = site["md"].read_text()
+    assert "| paper | cloth diagonal | 0 | 4 / 12 | 3 / 12 | 2 (1), 37 (11) | 4 (4), 9 (8) " \
+           "| 0.60 |" in md
+    assert "| cloth side | 10000 | 1 | 6 (6) | 6 | yes | 3.46 |" in md
+    assert "| 1 | 3.46 | 0.73 | 4.73 | 1 / 4 |" in md
+    assert "| cloth diagonal | 16 | default | no | 14.7 ! | none found | 4 (4) | 10 | yes |" in md
+    assert "| cloth side | 40 | default | - | - | - | failed: RuntimeError: boom | - | - |" in md

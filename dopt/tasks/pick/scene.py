@@ -92,7 +92,8 @@ class DeformableScene:
 
     Attributes:
         scene: the ``dopt.Scene``; picker: the ``Picker``; radius: particle radius (m);
-        initial_state: (ns,) the settled start state; n_particles: N.
+        initial_state: (ns,) the settled start state; n_particles: N; elements: (E, d + 1)
+        the flex's elements in particle indices (cloth: triangles, rope: segments).
     """
 
     def __init__(self, model: mujoco.MjModel, flex: str, picker: PickerConfig,
@@ -116,6 +117,10 @@ class DeformableScene:
             raise ValueError(f"model has no flex named {flex!r}")
         self.n_particles = int(model.flex_vertnum[f])
         self.radius = float(model.flex_radius[f])
+        corners = int(model.flex_dim[f]) + 1
+        start = int(model.flex_elemdataadr[f])
+        self.elements = model.flex_elem[start:start + corners * int(model.flex_elemnum[f])] \
+            .reshape(-1, corners).astype(np.int64)
         bodies = model.flex_vertbodyid[model.flex_vertadr[f]:][:self.n_particles]
         self._qpos = np.stack([self.scene.qpos_indices(f"vertex:{model.flex_vertadr[f] + i}")
                                for i in range(self.n_particles)])                     # (N, 3)

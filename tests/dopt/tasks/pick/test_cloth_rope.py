@@ -54,6 +54,16 @@ def test_cloth_numbering_matches_deformables(cloth):
     assert np.allclose(p[:, 2], cloth.radius, atol=1e-3)
 
 
+def test_elements_are_the_flex_triangles_and_segments(cloth, rope):
+    """scene.elements: the cloth's triangles are those of deformables' "mujoco" triangulation
+    (each a set of particle indices), the rope's segments join consecutive particles."""
+    goal = cloth_diagonal(N_SIDE, triangulation="mujoco")
+    assert cloth.elements.shape == goal.faces.shape
+    assert {frozenset(f) for f in cloth.elements.tolist()} == \
+        {frozenset(f) for f in goal.faces.tolist()}
+    assert sorted(map(sorted, rope.elements.tolist())) == [[i, i + 1] for i in range(11)]
+
+
 def test_rope_rests_straight_along_x(rope):
     p = rope.positions(rope.initial_state)
     assert np.allclose(p[:, 0], np.linspace(-0.1, 0.1, 12), atol=1e-3)
