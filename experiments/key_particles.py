@@ -56,6 +56,7 @@ from deformables import (
 from deformables.cloth import PANEL_MODES
 from deformables.goals import TRIANGULATIONS
 from dopt.provenance import code_version
+from dopt.tasks.pick.cloth_scene import PHYSICS_PRESETS
 
 ROPE_TASKS = ["rope_straighten", "rope_fold", "rope_fold_unequal"]
 CLOTH_TASKS = ["cloth_diagonal", "cloth_side", "cloth_reflective", "cloth_underneath"]
@@ -247,48 +248,49 @@ def noise_sweep(journal: Path, rope_config: RopeConfig, cloth_config: ClothConfi
 
 
 def simulated_goals(resolutions: list[int], cloth_config: ClothConfig,
-                    physics: str = "default", settle: float = 1.0) -> tuple[list[dict], dict]:
+                    physics: tuple[str, ...] = ("default",),
+                    settle: float = 1.0) -> tuple[list[dict], dict]:
     """Key counts of cloth goals made by the simulator: each fold executed by the scripted
-    policy on the MuJoCo cloth (``planners.pick_place``, the experiments' scene and physics
-    preset), then left to settle ``settle`` seconds holding nothing. The reduction sees what a
-    user with a simulator has: the settled particle positions, the flex's own triangles and
-    the settled flat start as the rest sheet. Returns (rows, {goal: error} of the goals that
-    failed); a row holds the scripted fold's distance to the ideal goal, whether the stability
-    verdict flagged its executed plan, the layer gap the reduction estimated and the counts."""
+    policy on the MuJoCo cloth (``planners.pick_place``, the experiments' scene, under each
+    of the ``physics`` presets), then left to settle ``settle`` seconds holding nothing. The
+    reduction sees what a user with a simulator has: the settled particle positions, the
+    flex's own triangles and the settled flat start as the rest sheet. Returns (rows, {goal:
+    error} of the goals that failed); a row holds the scripted fold's distance to the ideal
+    goal, whether the stability verdict flagged its executed plan, the layer gap the
+    reduction estimated and the counts."""
     from deformables.layers import estimate_layer_gap
     from planners.pick_place import PickPlaceSettings, make_planner, make_problem, run_problem
 
     rows, failed = [], {}
-    for task in CLOTH_TASKS:
+    for task, preset, n in itertools.product(CLOTH_TASKS, physics, resolutions):
         fold = task.removeprefix("cloth_")
-        for n in resolutions:
-            row = {"task": task, "n": n, "physics": physics,
-                   "reference_keys": REFERENCE_KEYS[task]}
-            try:
-                settings = replace(PickPlaceSettings.preset("cloth", fold), n=n, physics=physics)
-                problem = make_problem(settings)
-                result = run_problem(problem, make_planner("scripted", settings),
-                                     method="scripted")
-                scene = problem.scene
-                final = scene.settle(result.final_state, settle)
-                goal, rest = scene.positions(final), scene.positions(scene.initial_state)
-                spacing = settings.side / (n - 1)
-                gap = estimate_layer_gap(goal, scene.elements, spacing)
-                keys = cloth_key_particles(goal, scene.elements, rest_positions=rest,
-                                           config=cloth_config)
-                row.update(selfcollide=settings.selfcollide,
-                           scripted_cost_mm=1e3 * float(np.mean(np.linalg.norm(
-                               goal - problem.final_goal, axis=1))),
-                           unstable=result.unstable, unstable_reason=result.unstable_reason,
-                           layer_gap_mm=(1e3 * gap.gap if gap.found else None),
-                           n_keys=keys.n_keys, n_elements=keys.n_elements,
-                           reached_threshold=keys.reached_threshold,
-                           held=keys.n_keys == REFERENCE_KEYS[task])
-            except Exception as exc:
-                row["error"] = failed[f"simulated/{task}/n{n}"] = one_line(exc)
-                logger.error("simulated %s n=%d failed: %s", task, n, row["error"])
-            rows.append(row)
-            logger.info("simulated %s n=%d: %s", task, n, row)
+        row = {"task": task, "n": n, "physics": preset,
+               "reference_keys": REFERENCE_KEYS[task]}
+        try:
+            settings = replace(PickPlaceSettings.preset("cloth", fold), n=n, physics=preset)
+            problem = make_problem(settings)
+            result = run_problem(problem, make_planner("scripted", settings),
+                                 method="scripted")
+            scene = problem.scene
+            final = scene.settle(result.final_state, settle)
+            goal, rest = scene.positions(final), scene.positions(scene.initial_state)
+            spacing = settings.side / (n - 1)
+            gap = estimate_layer_gap(goal, scene.elements, spacing)
+            keys = cloth_key_particles(goal, scene.elements, rest_positions=rest,
+                                       config=cloth_config)
+            row.update(selfcollide=settings.selfcollide,
+                       scripted_cost_mm=1e3 * float(np.mean(np.linalg.norm(
+                           goal - problem.final_goal, axis=1))),
+                       unstable=result.unstable, unstable_reason=result.unstable_reason,
+                       layer_gap_mm=(1e3 * gap.gap if gap.found else None),
+                       n_keys=keys.n_keys, n_elements=keys.n_elements,
+                       reached_threshold=keys.reached_threshold,
+                       held=keys.n_keys == REFERENCE_KEYS[task])
+        except Exception as exc:
+            row["error"] = failed[f"simulated/{task}/n{n}/{preset}"] = one_line(exc)
+            logger.error("simulated %s n=%d %s failed: %s", task, n, preset, row["error"])
+        rows.append(row)
+        logger.info("simulated %s n=%d %s: %s", task, n, preset, row)
     return rows, failed
 
 
@@ -346,6 +348,12 @@ def parser() -> argparse.ArgumentParser:
                     help="cloth particles per side of the simulated goals (the scripted fold "
                          "on the MuJoCo cloth, settled; comma-separated, each >= 3; default "
                          "16,25,40)")
+    ap.add_argument("--simulated-physics", type=choices_type(tuple(PHYSICS_PRESETS),
+                                                             "physics presets"),
+                    default=["default", "accurate"],
+                    help="cloth physics presets the simulated goals are made under "
+                         "(comma-separated, of " + ", ".join(PHYSICS_PRESETS) + "; default "
+                         "default,accurate)")
     ap.add_argument("--fresh", action="store_true",
                     help="recompute the noise sweep (DIR/noise.jsonl moves to "
                          "DIR/noise.jsonl.old) instead of resuming it")
@@ -418,7 +426,8 @@ def main(argv=None) -> int:
             failed["grid"] = one_line(exc)
         simulated = []
         try:
-            simulated, simulated_failed = simulated_goals(args.simulated_n, cloth_config)
+            simulated, simulated_failed = simulated_goals(args.simulated_n, cloth_config,
+                                                          tuple(args.simulated_physics))
             failed.update(simulated_failed)
         except Exception as exc:
             failed["simulated"] = one_line(exc)

@@ -12,7 +12,7 @@ verdict. Lives in planners.bench, not dopt.bench, because the scripted folds nee
 from __future__ import annotations
 
 import time
-from dataclasses import replace
+from dataclasses import fields, replace
 
 import numpy as np
 
@@ -60,6 +60,14 @@ def _config(task: str, name: str, overrides: dict | None, n: int):
     if overrides is None:
         return cls.preset(name.split(":", 1)[1], n=n)
     return replace(cls(n=n), **overrides)
+
+
+def _differing_fields(config) -> dict:
+    """The fields of a scene config that differ from its class defaults (a preset row then
+    says what the preset was when it was measured), besides the size."""
+    default = type(config)(n=config.n)
+    return {f.name: getattr(config, f.name) for f in fields(config)
+            if getattr(config, f.name) != getattr(default, f.name)}
 
 
 def random_actions(task: str, config, actions: int, threads: int, seed: int,
@@ -144,6 +152,7 @@ def bench_physics(task: str, sizes: list[int], settings: list[str] | None, actio
         for name in names:
             config = _config(task, name, table[name], n)
             row = {"setting": name, "n": n, "overrides": table[name],
+                   "fields": _differing_fields(config),
                    **random_actions(task, config, actions, threads, seed, bound)}
             if scripted:
                 row["scripted"] = scripted_goals(task, name, table[name], n, threads)

@@ -33,7 +33,7 @@ FLEX = "cloth"
 PHYSICS_PRESETS: dict[str, dict] = {
     "fast": {},
     "default": {},
-    "accurate": {"timestep": 0.01},
+    "accurate": {"young": 2e5, "timestep": 0.005},
 }
 
 

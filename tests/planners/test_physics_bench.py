@@ -1,0 +1,27 @@
+"""python -m planners.bench cloth|rope at a toy size: each row says which physics it measured
+(a preset row its resolved fields), and its counts are consistent with the actions run."""
+import pytest
+
+from dopt.tasks.pick.cloth_scene import PHYSICS_PRESETS
+from planners.bench.physics import bench_physics
+
+
+def test_rows_name_their_physics_and_count_the_actions():
+    out = bench_physics("cloth", [4], ["preset:accurate", "E5e4 dt.02 CG30"], actions=8,
+                        threads=1, seed=0, scripted=False)
+    accurate, plain = out["rows"]
+    assert accurate["fields"] == PHYSICS_PRESETS["accurate"]
+    assert plain["fields"] == {}                     # the class defaults
+    for row in out["rows"]:
+        assert row["actions"] == 8 and 0 <= row["unstable_per_1000_actions"] <= 1000
+        assert sum(row["reasons"].values()) == row["unstable_per_1000_actions"] * 8 / 1000
+        assert 0 <= row["strain_p50"] <= row["strain_p90"] <= row["strain_max"]
+    # about the same seconds per action at a quarter of the step (the picker's phases round
+    # up to whole steps): close to four times the steps
+    ratio = accurate["steps_per_action"] / plain["steps_per_action"]
+    assert ratio == pytest.approx(0.02 / PHYSICS_PRESETS["accurate"]["timestep"], rel=0.1)
+
+
+def test_unknown_setting_is_named():
+    with pytest.raises(ValueError, match="unknown cloth settings"):
+        bench_physics("cloth", [4], ["E9 nothing"], actions=4, threads=1, seed=0)
