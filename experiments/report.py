@@ -336,7 +336,12 @@ def physics_section(results: list[Result], page: Path) -> list[str]:
         rows = []
         for row in d["rows"]:
             sc = row.get("scripted") or {}
-            rows.append([f"`{row['setting']}`", str(row["n"]), num(row["cpu_ms_per_step"], 2),
+            setting = f"`{row['setting']}`"
+            if row["setting"].startswith("preset:") and row.get("fields") is not None:
+                setting += " (" + (", ".join(f"{k} {v:g}" if isinstance(v, float) else
+                                             f"{k} {v}" for k, v in row["fields"].items())
+                                   or "the config's defaults") + ")"
+            rows.append([setting, str(row["n"]), num(row["cpu_ms_per_step"], 2),
                          str(row["steps_per_action"]),
                          num(row["unstable_per_1000_actions"], 0),
                          ", ".join(f"{k} {v}" for k, v in sorted(row["reasons"].items()))
