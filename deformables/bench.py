@@ -34,16 +34,13 @@ import numpy as np
 from dopt.provenance import provenance
 
 from .cloth import ClothConfig, cloth_key_particles
-from .goals import TRIANGULATIONS, make_goal
+from .goals import CLOTH_REFERENCE_KEYS, TRIANGULATIONS, make_goal
 from .rope import rope_key_particles
 
 PAPER_SECONDS = {"rope": 0.125, "cloth": 0.73}
 TASKS = ("rope_straighten", "rope_fold", "rope_fold_unequal", "cloth_diagonal", "cloth_side",
          "cloth_reflective", "cloth_underneath")
 CLOTH_TASKS = TASKS[3:]
-#: the key counts of the cloth folds (corners and crease ends)
-REFERENCE_KEYS = {"cloth_diagonal": 4, "cloth_side": 6, "cloth_reflective": 8,
-                  "cloth_underneath": 10}
 MODES = ("tasks", "paper-scale", "compare")
 
 
@@ -59,7 +56,7 @@ def _run(task: str, cloth_n: int, noise: float, config: ClothConfig | None = Non
     config = ClothConfig() if config is None else config
     return (lambda: cloth_key_particles(positions, goal.faces, rest_positions=goal.rest_positions,
                                         config=config),
-            len(positions), REFERENCE_KEYS[task])
+            len(positions), CLOTH_REFERENCE_KEYS[task])
 
 
 def bench(task: str, repeats: int = 5, cloth_n: int = 40, noise: float = 0.0) -> dict:
@@ -134,7 +131,7 @@ def compare(resolutions: tuple[int, ...] = (16, 25, 40), noise: float = 1e-3,
             for triangulation in triangulations:
                 for sigma in (0.0, noise):
                     row = {"task": task, "n": n, "triangulation": triangulation,
-                           "noise_m": sigma, "reference_keys": REFERENCE_KEYS[task]}
+                           "noise_m": sigma, "reference_keys": CLOTH_REFERENCE_KEYS[task]}
                     for name, config in pipelines.items():
                         call, _, _ = _run(task, n, sigma, config, triangulation)
                         start = time.perf_counter()

@@ -366,7 +366,7 @@ def cloth_key_particles(positions, faces, threshold: float | None = None,
                                              axis=1)))
 
     def layer_gap(points: np.ndarray) -> float | None:
-        found = estimate_layer_gap(points, tri, spacing, stacking_axis(points, tri))
+        found = estimate_layer_gap(points, tri, spacing)          # on its own stacking axis
         if not found.found:
             return None
         least = 0.1 * config.flat_gap_spacings * spacing

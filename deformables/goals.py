@@ -32,6 +32,11 @@ CLOTH_PARTICLES_PER_SIDE = 40
 CLOTH_SIDE = 0.3
 #: vertical distance between stacked cloth layers, about one particle radius
 CLOTH_LAYER_GAP = 0.005
+#: key particles of each cloth fold at any resolution: its corners and both ends of every
+#: crease (4 = the paper's; the others are ours, docs/DESIGN-NOTES.md "Key particles"); the
+#: reference the sweeps and benchmarks count against
+CLOTH_REFERENCE_KEYS = {"cloth_diagonal": 4, "cloth_side": 6, "cloth_reflective": 8,
+                        "cloth_underneath": 10}
 
 TRIANGULATIONS = ("mujoco", "anti", "alternating", "random")
 

@@ -54,7 +54,7 @@ from deformables import (
     rope_key_particles,
 )
 from deformables.cloth import PANEL_MODES
-from deformables.goals import TRIANGULATIONS
+from deformables.goals import CLOTH_REFERENCE_KEYS, TRIANGULATIONS
 from dopt.provenance import code_version
 from dopt.tasks.pick.cloth_scene import PHYSICS_PRESETS
 
@@ -66,10 +66,6 @@ PAPER = {"rope_straighten": {"keys": 2}, "rope_fold": {"keys": 4},
          "rope_fold_unequal": {"keys": 4}, "cloth_diagonal": {"triangles": 4, "keys": 4},
          "cloth_side": {"triangles": 6}, "cloth_reflective": {"triangles": 12},
          "cloth_underneath": {"triangles": 16}}
-#: noise-free key counts of the cloth folds at every resolution (4 = the paper's; the others
-#: are ours, docs/DESIGN-NOTES.md "Key particles"): the reference of the noise sweep
-REFERENCE_KEYS = {"cloth_diagonal": 4, "cloth_side": 6, "cloth_reflective": 8,
-                  "cloth_underneath": 10}
 
 #: the smallest cloth the goals are defined for (particles per side)
 MIN_CLOTH_N = 2
@@ -208,7 +204,7 @@ def noise_sweep(journal: Path, rope_config: RopeConfig, cloth_config: ClothConfi
             done[key] = row
     reference = {task: reduce_goal(make_goal(task), rope_config, cloth_config).n_keys
                  for task in ROPE_TASKS}
-    reference.update({task: REFERENCE_KEYS[task] for task in CLOTH_TASKS})
+    reference.update({task: CLOTH_REFERENCE_KEYS[task] for task in CLOTH_TASKS})
     cells = [(task, n, triangulation, sigma, seed, panels)
              for task in TASKS
              for n, triangulation, modes in (
@@ -256,8 +252,9 @@ def simulated_goals(resolutions: list[int], cloth_config: ClothConfig,
     reduction sees what a user with a simulator has: the settled particle positions, the
     flex's own triangles and the settled flat start as the rest sheet. Returns (rows, {goal:
     error} of the goals that failed); a row holds the scripted fold's distance to the ideal
-    goal, whether the stability verdict flagged its executed plan, the layer gap the
-    reduction estimated and the counts."""
+    goal, whether the stability verdict flagged its executed plan, the layer gap
+    ``estimate_layer_gap`` finds in the settled goal (before the reduction's panel projection)
+    and the counts."""
     from deformables.layers import estimate_layer_gap
     from planners.pick_place import PickPlaceSettings, make_planner, make_problem, run_problem
 
@@ -265,7 +262,7 @@ def simulated_goals(resolutions: list[int], cloth_config: ClothConfig,
     for task, preset, n in itertools.product(CLOTH_TASKS, physics, resolutions):
         fold = task.removeprefix("cloth_")
         row = {"task": task, "n": n, "physics": preset,
-               "reference_keys": REFERENCE_KEYS[task]}
+               "reference_keys": CLOTH_REFERENCE_KEYS[task]}
         try:
             settings = replace(PickPlaceSettings.preset("cloth", fold), n=n, physics=preset)
             problem = make_problem(settings)
@@ -285,7 +282,7 @@ def simulated_goals(resolutions: list[int], cloth_config: ClothConfig,
                        layer_gap_mm=(1e3 * gap.gap if gap.found else None),
                        n_keys=keys.n_keys, n_elements=keys.n_elements,
                        reached_threshold=keys.reached_threshold,
-                       held=keys.n_keys == REFERENCE_KEYS[task])
+                       held=keys.n_keys == CLOTH_REFERENCE_KEYS[task])
         except Exception as exc:
             row["error"] = failed[f"simulated/{task}/n{n}/{preset}"] = one_line(exc)
             logger.error("simulated %s n=%d %s failed: %s", task, n, preset, row["error"])

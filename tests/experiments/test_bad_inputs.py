@@ -316,7 +316,7 @@ def test_key_particles_noise_sweep_failures_and_resume(tmp_path, monkeypatch, ca
             raise RuntimeError("decimation crashed")
         if goal.name == "rope_fold" and not np.array_equal(goal.positions, clean_fold):
             return SimpleNamespace(n_keys=7, reached_threshold=False)
-        return SimpleNamespace(n_keys=key_particles.REFERENCE_KEYS.get(goal.name, 2),
+        return SimpleNamespace(n_keys=key_particles.CLOTH_REFERENCE_KEYS.get(goal.name, 2),
                                reached_threshold=True)
 
     monkeypatch.setattr(key_particles, "reduce_goal", reduce_goal)

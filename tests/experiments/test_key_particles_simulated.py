@@ -12,7 +12,7 @@ def test_simulated_goals_rows_are_consistent():
     assert [r["task"] for r in rows] == list(key_particles.CLOTH_TASKS)
     for r in rows:
         assert r["n"] == 8 and r["physics"] == "default"
-        assert r["held"] == (r["n_keys"] == key_particles.REFERENCE_KEYS[r["task"]])
+        assert r["held"] == (r["n_keys"] == key_particles.CLOTH_REFERENCE_KEYS[r["task"]])
         assert 1 <= r["n_keys"] <= 64 and r["n_elements"] >= 2
         assert np.isfinite(r["scripted_cost_mm"]) and r["scripted_cost_mm"] > 0
         assert r["layer_gap_mm"] is None or r["layer_gap_mm"] > 0
