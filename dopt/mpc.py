@@ -11,6 +11,16 @@ The heavy work of both threads runs in MuJoCo (``mj_step``, ``mujoco.batch``) an
 release the GIL; the agent sleeps between steps. The synchronous mode (the agent waits for the
 optimiser, ``steps_per_plan`` steps per optimisation) is deterministic, for tests and debugging.
 
+Clocks (``MPCConfig.clock``): ``real`` is the above. ``virtual`` and ``model`` run the same
+schedule in one thread on a virtual time line: the agent takes step k at virtual time
+k dt slowdown; an optimisation that starts at virtual time c from the agent's state then lasts
+its measured CPU time (``time.process_time``: all threads of the process, which runs nothing
+else meanwhile) divided by ``threads`` (``virtual``), or ``a + b |C|`` ms (``model``, a fixed
+cost model, so the same seed gives the same episode bit for bit); the agent executes the old
+plan for the steps that fall before c + duration, and the new plan lands shifted by them.
+Lag then is what the algorithm costs, immune to other processes on the machine, so trials can
+run in parallel.
+
 dopt knows no planner: the optimiser is any object with ``optimise(state, plan) -> Plan``.
 """
 
@@ -34,6 +44,7 @@ from dopt.state import INTEGRATION, check_states, fault
 from dopt.validation import check_config, check_int, float_array, index_array
 
 log = logging.getLogger(__name__)
+CLOCKS = ("real", "virtual", "model")
 _BAD = (mujoco.mjtWarning.mjWARN_BADQPOS, mujoco.mjtWarning.mjWARN_BADQVEL,
         mujoco.mjtWarning.mjWARN_BADQACC, mujoco.mjtWarning.mjWARN_BADCTRL)
 
@@ -110,7 +121,10 @@ class MPCConfig:
     ``steps_per_plan`` steps per optimisation. feedback: add K (x - x_nominal) on the measured
     state to the executed control (the paper's authors did not). control_noise: standard
     deviation of Gaussian noise on executed controls, as a fraction of each control's range.
-    warmup: optimiser iterations before the agent starts."""
+    warmup: optimiser iterations before the agent starts. clock: ``real``, ``virtual`` or
+    ``model`` (module docstring); threads: the nominal thread count a virtual duration divides
+    the CPU time by (2: this project's reference machine); model_ms: (a, b) of the model
+    clock, ms per optimisation = a + b |C|."""
 
     timeout: int
     slowdown: float = 1.0
@@ -119,11 +133,25 @@ class MPCConfig:
     feedback: bool = False
     control_noise: float = 0.0
     warmup: int = 0
+    clock: str = "real"
+    threads: float = 2.0
+    model_ms: tuple[float, float] | None = None
 
     def __post_init__(self):
-        check_config(self, positive=("slowdown",),
+        check_config(self, positive=("slowdown", "threads"),
                      minimum={"timeout": 1, "steps_per_plan": 1, "control_noise": 0,
                               "warmup": 0})
+        if self.clock not in CLOCKS:
+            raise ValueError(f"clock must be one of {CLOCKS}, got {self.clock!r}")
+        if self.synchronous and self.clock != "real":
+            raise ValueError("synchronous runs have no clock: use clock='real' with it")
+        if self.clock == "model":
+            ms = self.model_ms
+            if (not isinstance(ms, tuple) or len(ms) != 2
+                    or not all(isinstance(v, (int, float)) and np.isfinite(v) and v >= 0
+                               for v in ms) or not sum(ms) > 0):
+                raise ValueError(f"clock='model' needs model_ms=(a, b): ms per optimisation "
+                                 f"= a + b |C|, finite, >= 0, not both 0; got {ms!r}")
 
 
 @dataclass(frozen=True)
@@ -133,7 +161,9 @@ class MPCResult:
     success condition was met. opt_seconds: wall time of each optimisation; opt_step: the agent
     step each optimisation started from; n_dofs: |C| of each; dofs: the active set of each;
     lag_steps: agent steps elapsed during each optimisation; late_steps: agent steps that
-    started behind schedule; stability: the verdict on the executed episode (one rollout,
+    started behind schedule (real clock); cpu_seconds: process CPU time of each optimisation;
+    opt_seconds is its duration on the clock the episode ran on (wall, CPU / threads, or the
+    cost model); stability: the verdict on the executed episode (one rollout,
     judged by the scene's ``StabilityBounds`` after every agent step; a broken bound is
     reported here, MuJoCo warnings and non-finite states raise)."""
 
@@ -147,6 +177,7 @@ class MPCResult:
     lag_steps: list
     late_steps: int
     stability: Stability
+    cpu_seconds: list = field(default_factory=list)
 
 
 class MPC:
@@ -187,7 +218,9 @@ class MPC:
         self._reset(x0, check_plan(plan, self.scene))
         for _ in range(self.config.warmup):
             self._optimise_once()
-        if self.config.synchronous:
+        if self.config.clock != "real":
+            self._virtual_loop()
+        elif self.config.synchronous:
             while not self._done:
                 self._optimise_once()
                 for _ in range(self.config.steps_per_plan):
@@ -213,7 +246,7 @@ class MPC:
         return MPCResult(np.array(self._states[:n + 1]), np.array(self._controls[:n]),
                          self._succeeded, self._log["seconds"], self._log["step"],
                          self._log["n_dofs"], self._log["dofs"], self._log["lag"], self._late,
-                         self._scan.result())
+                         self._scan.result(), self._log["cpu"])
 
     # ---------------------------------------------------------------- internals
     def _reset(self, x0: np.ndarray, plan: Plan) -> None:
@@ -225,20 +258,33 @@ class MPC:
         self._states, self._controls = [x0.copy()], []
         self._succeeded, self._error = False, None
         self._stop = threading.Event()
-        self._log = {"seconds": [], "step": [], "n_dofs": [], "dofs": [], "lag": []}
+        self._log = {"seconds": [], "step": [], "n_dofs": [], "dofs": [], "lag": [], "cpu": []}
         self._scan = self.scene.monitor.start(1)
 
     @property
     def _done(self) -> bool:
         return self._succeeded or self._step >= self.config.timeout or self._stop.is_set()
 
-    def _optimise_once(self) -> None:
+    def _optimise_once(self, clock: float | None = None) -> float:
+        """One optimisation from the agent's current state; the new plan lands at once (real
+        clock: shifted by the steps the agent took meanwhile). ``clock``: the virtual time it
+        starts at; the agent steps that fall before its end are taken first. Returns its
+        duration on the episode's clock (s)."""
         with self._lock:
             state, plan, start = self._states[-1].copy(), self._plan, self._step
-        t0 = time.perf_counter()
+        t0, c0 = time.perf_counter(), time.process_time()
         new = check_plan(self.optimiser.optimise(state, plan), self.scene,
                          "plan returned by the optimiser: plan")
-        seconds = time.perf_counter() - t0
+        seconds, cpu = time.perf_counter() - t0, time.process_time() - c0
+        dofs = new.dofs if new.dofs is not None else np.arange(self.scene.nv)
+        if clock is not None:
+            if self.config.clock == "model":
+                a, b = self.config.model_ms
+                seconds = (a + b * len(dofs)) / 1e3
+            else:
+                seconds = cpu / self.config.threads
+            while not self._done and self._step * self._period < clock + seconds:
+                self._agent_step()
         with self._lock:
             # controls the agent has taken since `start` (it takes one before stepping, so
             # this can be one ahead of _step): row 0 of the new plan is for step `start`
@@ -248,9 +294,16 @@ class MPC:
             lg["seconds"].append(seconds)
             lg["step"].append(start)
             lg["lag"].append(lag)
-            dofs = new.dofs if new.dofs is not None else np.arange(self.scene.nv)
+            lg["cpu"].append(cpu)
             lg["n_dofs"].append(len(dofs))
             lg["dofs"].append(np.asarray(dofs).tolist())
+        return seconds
+
+    def _virtual_loop(self) -> None:
+        """Optimisations back to back on the virtual time line (module docstring)."""
+        clock = 0.0
+        while not self._done:
+            clock += self._optimise_once(clock)
 
     def _agent_step(self) -> None:
         m, d = self.scene.model, self._data

@@ -1,33 +1,41 @@
 """Table 1 of the state-vector-reduction paper: asynchronous MPC with iLQR-SVR and baselines.
 
-Each trial is one real-time MPC episode of one method on one task instance (seed), run by
-``planners.svr_mpc.run_svr_mpc``; every finished trial is written to OUT/trials/<key>.json at
-once and a rerun skips it. Trials run inline (--workers 1, the default: on a 2-core machine
-parallel real-time trials would steal each other's cores and distort the very timing the paper
-measures), on a local process pool (--workers N), or on Ray (--ray [ADDRESS]; a local
-instance without ADDRESS).
+Each trial is one MPC episode of one Table 1 row (a method with its theta and rho) on one task
+instance (seed), run by ``planners.svr_mpc.run_svr_mpc``; every finished trial is written to
+OUT/trials/<key>.json at once and a rerun skips it. ``--preset paper`` is the authors'
+protocol and runs the nine rows of the paper's Table 1 by name (``--rows`` picks some); its
+virtual clock makes a trial's lag its CPU time, so trials may run in parallel. Trials run
+inline (--workers 1, the default; with the real clock keep it so: parallel real-time trials
+steal each other's cores and distort the very timing the paper measures), on a local process
+pool (--workers N), or on Ray (--ray [ADDRESS]; a local instance without ADDRESS).
 
-Writes OUT/summary.json ({"task", "methods": {name: {"mpc_cost_normalised_mean",
-"mpc_cost_normalised_ci90", "opt_ms_mean", "dofs_mean", "trials", ...}}, "failed",
-"provenance"}), OUT/table1.md and OUT/table1.csv, and the plots of the first seed of each
-method: OUT/mpc_dofs.png (|C| per optimisation over the episode), OUT/mpc_goal_distance.png
-(the goal object's distance to the goal per step) and OUT/final_<method>.png (the final
-scene; MUJOCO_GL=egl, skipped with --no-render). summary.json also holds "trial_commits"
+Writes OUT/summary.json ({"task", the protocol's settings, "row_settings", "methods": {row:
+{"mpc_cost_normalised_mean", "mpc_cost_normalised_ci90", "mpc_cost_normalised_median",
+"mpc_cost_median_ratio", "opt_ms_mean", "n_dofs_mean", "lag_steps_mean", "success_rate",
+"outliers", "n_trials", ...}}, "paired": {row: geometric mean and CI90 of cost / baseline on
+the same seed}, "failed", "provenance"}), OUT/table1.md and OUT/table1.csv, and the plots of the
+first seed of each row: OUT/mpc_dofs.png (|C| per optimisation over the episode),
+OUT/mpc_goal_distance.png (the goal object's distance to the goal) and OUT/final_<row>.png (the
+final scene; MUJOCO_GL=egl, skipped with --no-render). summary.json also holds "trial_commits"
 (the code commits of the trial results: more than one when a resumed sweep mixes code). Exits 1
 if a trial failed (summary.json lists it under "failed") or the run failed (one line on
 stderr); 2 on a bad flag.
 
     python experiments/mpc.py --task clutter --trials 20 --out results/mpc_clutter
+    python experiments/mpc.py --task clutter --preset paper --trials 100 --workers 2 \\
+        --out results/table1-clutter
 """
 
 from __future__ import annotations
 
 import argparse
 import csv
+import functools
 import importlib.util
 import logging
 import os
 import sys
+from dataclasses import asdict, replace
 from pathlib import Path
 
 import numpy as np
@@ -48,13 +56,17 @@ from cli_args import (
     write_summary,
 )
 
+from dopt.mpc import CLOCKS
 from dopt.sweep import SweepResult, Trial, run_sweep
 from dopt.tasks import PUSH_TASKS
+from dopt.tasks.push.costs import COST_PRESETS
 from planners.svr import METHODS, paper_theta
 from planners.svr_mpc import (
     OUTLIER_DISTANCE,
+    TABLE1_ROWS,
     SVRMPCSettings,
     feedback_effect,
+    paired,
     row_label,
     run_trial,
     summarize,
@@ -68,9 +80,13 @@ FEEDBACK = {"off": (False,), "on": (True,), "both": (False, True)}
 def parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(prog="mpc.py", description=__doc__, epilog=EPILOG,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--rows", type=choices_type(tuple(TABLE1_ROWS), "row(s)"), default=None,
+                    help="comma-separated Table 1 rows by name (" + ", ".join(TABLE1_ROWS)
+                    + "); default with --preset paper: all nine")
     ap.add_argument("--methods", type=choices_type(METHODS, "method(s)"),
                     default=",".join(METHODS),
-                    help="comma-separated DoF-selection methods (default: all five)")
+                    help="comma-separated DoF-selection methods, with --rho and --theta, "
+                         "when no --rows are given (default: all five)")
     ap.add_argument("--rho", type=nonneg_float, default=1.0,
                     help="SVR importance threshold: DoFs below it leave the active set "
                          "(default %(default)s, the paper's)")
@@ -88,6 +104,24 @@ def add_run_arguments(ap: argparse.ArgumentParser) -> None:
     timing, feedback, workers, output."""
     ap.add_argument("--task", default="clutter", choices=list(PUSH_TASKS),
                     help="the pushing task (default %(default)s)")
+    ap.add_argument("--preset", default="ours", choices=["ours", "paper"],
+                    help="paper: the authors' protocol (Eq. 2 cost without the end-effector "
+                         "term, their set-up motion and initial push plan, 5%% control noise, "
+                         "virtual clock); ours: cost with the end-effector term, zero initial "
+                         "plan, real clock (default %(default)s). Flags below override it")
+    ap.add_argument("--cost", default=None, choices=list(COST_PRESETS),
+                    help="the cost: paper (Eq. 2) or ee (with the end-effector term)")
+    ap.add_argument("--warm-start", default=None, choices=["on", "off"],
+                    help="start from the authors' set-up state and push plan")
+    ap.add_argument("--clock", default=None, choices=list(CLOCKS),
+                    help="real (wall time), virtual (CPU time / --nominal-threads) or model "
+                         "(ms = a + b |C|, deterministic)")
+    ap.add_argument("--nominal-threads", type=positive_float, default=2.0,
+                    help="threads a virtual duration divides the CPU time by (default "
+                         "%(default)s, this machine)")
+    ap.add_argument("--fd", default="forward", choices=["forward", "central"],
+                    help="finite differences: forward eps 1e-3 (default) or the authors' "
+                         "central eps 1e-6")
     ap.add_argument("--trials", type=positive_int, default=20,
                     help="task instances (seeds) per method (default %(default)s)")
     ap.add_argument("--seed", type=nonneg_int, default=0,
@@ -101,8 +135,9 @@ def add_run_arguments(ap: argparse.ArgumentParser) -> None:
                     help="execute u + K (x - x_nom) on the measured state (authors: off); "
                          "'both' runs every trial open-loop and with feedback back to back, "
                          "so the pair sees the same machine load (rows 'METHOD +fb')")
-    ap.add_argument("--control-noise", type=nonneg_float, default=0.0,
-                    help="Gaussian noise on executed controls, fraction of range (authors: 0.05)")
+    ap.add_argument("--control-noise", type=nonneg_float, default=None,
+                    help="Gaussian noise on executed controls, fraction of range (authors and "
+                         "--preset paper: 0.05; ours: 0)")
     ap.add_argument("--workers", type=positive_int, default=1,
                     help="local worker processes (default %(default)s)")
     ap.add_argument("--ray", nargs="?", const="local", default=None, metavar="ADDRESS",
@@ -125,39 +160,52 @@ def parse_args(argv=None, ap: argparse.ArgumentParser | None = None) -> argparse
     args = ap.parse_args(argv)
     if args.ray is not None and importlib.util.find_spec("ray") is None:
         ap.error("--ray needs the ray package (pip install 'dopt[cluster]')")
-    try:               # the pipeline's own checks of the settings, as usage errors
-        for method in getattr(args, "methods", ["baseline"]):
-            settings = SVRMPCSettings(
-                task=args.task, method=method, rho=getattr(args, "rho", 1.0),
-                theta=getattr(args, "theta", None), slowdown=args.slowdown,
-                timeout=args.timeout, feedback=args.feedback == "on",
-                control_noise=args.control_noise, threads=args.threads or 0)
-            _ = settings.selection
-    except (ValueError, TypeError) as e:
-        ap.error(str(e))
-    if record_problem(args.record, args.out):
-        ap.error(record_problem(args.record, args.out))
     if args.quick:
         args.trials, args.timeout = 1, args.timeout or 100
     if args.threads is None:
         args.threads = 1 if (args.workers > 1 or args.ray) else 0
+    try:               # the pipeline's own checks of the settings, as usage errors
+        make_trials(args)
+    except (ValueError, TypeError) as e:
+        ap.error(str(e))
+    if record_problem(args.record, args.out):
+        ap.error(record_problem(args.record, args.out))
     return args
 
 
+def settings_of(args, method: str, theta: int, rho: float, feedback: bool) -> SVRMPCSettings:
+    """The settings of one row under the flags: the preset's, then the flags that override it."""
+    preset = SVRMPCSettings.paper(args.task) if args.preset == "paper" else SVRMPCSettings()
+    over = {"cost": args.cost, "control_noise": args.control_noise, "clock": args.clock}
+    over = {k: v for k, v in over.items() if v is not None}
+    if args.warm_start is not None:
+        over["warm_start"] = args.warm_start == "on"
+    if args.fd == "central":
+        over.update(fd_centered=True, fd_eps=1e-6)
+    return replace(preset, task=args.task, method=method, theta=theta, rho=float(rho),
+                   slowdown=args.slowdown or _task_slowdown(args.task), timeout=args.timeout,
+                   threads=args.threads or 0, feedback=feedback,
+                   nominal_threads=float(args.nominal_threads), **over)
+
+
 def make_trials(args, methods=None, rhos=None, thetas=None) -> list[Trial]:
-    """Every (seed, method, rho, theta, feedback) trial of the flags."""
-    slowdown = args.slowdown or _task_slowdown(args.task)
+    """Every (seed, row, feedback) trial of the flags: the rows of --rows (default with
+    --preset paper: the nine of Table 1), else every (method, rho, theta) of the arguments or
+    flags."""
+    rows = getattr(args, "rows", None)
+    if rows is None and methods is None and args.preset == "paper" and hasattr(args, "rows"):
+        rows = list(TABLE1_ROWS)
+    if rows:
+        grid = [TABLE1_ROWS[r] for r in rows]
+    else:
+        grid = [(m, t, rho) for m in methods or args.methods for rho in rhos or [args.rho]
+                for t in thetas or [_theta(args.theta, m)]]
     out = []
     for seed in range(args.seed, args.seed + args.trials):
-        for method in methods or args.methods:
-            for rho in rhos or [args.rho]:
-                for theta in thetas or [_theta(args.theta, method)]:
-                    for feedback in FEEDBACK[args.feedback]:
-                        p = dict(task=args.task, method=method, rho=rho, theta=theta,
-                                 seed=seed, slowdown=slowdown, timeout=args.timeout,
-                                 threads=args.threads, feedback=feedback,
-                                 control_noise=args.control_noise)
-                        out.append(Trial(trial_key(p), p))
+        for method, theta, rho in grid:
+            for feedback in FEEDBACK[args.feedback]:
+                p = {**asdict(settings_of(args, method, theta, rho, feedback)), "seed": seed}
+                out.append(Trial(trial_key(p), p))
     return out
 
 
@@ -166,8 +214,8 @@ def _theta(theta: int | None, method: str) -> int:
     return paper_theta(method) if theta is None else theta
 
 
+@functools.cache
 def _task_slowdown(task: str) -> float:
-    import numpy as np
     return float(PUSH_TASKS[task](np.random.default_rng(0)).slowdown)
 
 
@@ -188,9 +236,9 @@ def run(args, trials) -> tuple[list, SweepResult]:
 
 
 def write_table(out: Path, task: str, methods: dict, feedback: dict | None = None) -> None:
-    rows = [("method", "MPC cost (normalised) mean", "CI90 +-", "median (all)",
-             "opt. time (ms)", "DoFs", "lag (steps)", "success", "goal dist. (m, median)",
-             "outliers", "trials")]
+    rows = [("row", "MPC cost (normalised) mean", "CI90 +-", "median (all)",
+             "median ratio", "opt. time (ms)", "DoFs", "lag (steps)", "success",
+             "goal dist. (m, median)", "outliers", "trials")]
 
     def num(x, digits=2):
         """A number to the table, or n/a when there is none (no baseline for the pairing)."""
@@ -199,10 +247,11 @@ def write_table(out: Path, task: str, methods: dict, feedback: dict | None = Non
     for name, m in methods.items():
         rows.append((name, num(m["mpc_cost_normalised_mean"]),
                      num(m["mpc_cost_normalised_ci90"]),
-                     num(m["mpc_cost_normalised_median"]), f"{m['opt_ms_mean']:.0f}",
-                     f"{m['dofs_mean']:.1f}", f"{m['lag_steps_mean']:.0f}",
-                     f"{m['success_rate']:.2f}", f"{m['goal_distance_end_median']:.3f}",
-                     str(m["outliers"]), str(m["trials"])))
+                     num(m["mpc_cost_normalised_median"]), num(m["mpc_cost_median_ratio"]),
+                     f"{m['opt_ms_mean']:.0f}", f"{m['n_dofs_mean']:.1f}",
+                     f"{m['lag_steps_mean']:.0f}", f"{m['success_rate']:.2f}",
+                     f"{m['goal_distance_end_median']:.3f}", str(m["outliers"]),
+                     str(m["n_trials"])))
     with open(out / "table1.csv", "w", newline="") as f:
         csv.writer(f).writerows(rows)
     lines = [f"Task: {task}. Normalised by baseline on the same instance; mean and 90% CI "
@@ -266,7 +315,9 @@ def write_plots(out: Path, task: str, records: list[dict], rows, render: bool = 
     for row, r in first.items():
         d = r.get("goal_distance") or []
         if d:
-            ax.plot(np.arange(len(d)), d, **style[row],
+            stride = r.get("goal_distance_stride", 1)
+            x = [min(i * stride, r["steps"]) for i in range(len(d))]
+            ax.plot(x, d, **style[row],
                     label=f"{row}: {'success' if r['success'] else 'no success'}, "
                           f"end {d[-1]:.3f} m")
     ax.axhline(PushWeights().success_radius, color="k", ls="--", lw=1,
@@ -377,20 +428,26 @@ def main(argv=None) -> int:
     trials = make_trials(args)
     records, res = run(args, trials)
     failed = res.failed
-    methods = summarize(records, baseline="baseline +fb" if args.feedback == "on"
-                        else "baseline")
-    order = {m: i for i, m in enumerate(METHODS)}
-    methods = dict(sorted(methods.items(),
-                          key=lambda kv: (order.get(kv[0].split()[0], 99), kv[0])))
-    summary = {"experiment": "table1", "task": args.task, "rho": args.rho,
-               "theta": {m: _theta(args.theta, m) for m in args.methods},
-               "slowdown": trials[0].params["slowdown"], "methods": methods,
+    baseline = "baseline +fb" if args.feedback == "on" else "baseline"
+    rows = summarize(records, baseline=baseline)
+    order = {name: i for i, name in enumerate(TABLE1_ROWS)}
+    rows = dict(sorted(rows.items(), key=lambda kv: (order.get(kv[0].split()[0], 99), kv[0])))
+    first = trials[0].params
+    summary = {"experiment": "table1", "task": args.task, "preset": args.preset,
+               "cost": first["cost"], "warm_start": first["warm_start"],
+               "clock": first["clock"], "nominal_threads": first["nominal_threads"],
+               "control_noise": first["control_noise"], "fd": args.fd,
+               "slowdown": first["slowdown"],
+               "row_settings": {row: {"method": t.params["method"], "theta": t.params["theta"],
+                              "rho": t.params["rho"]}
+                        for t in trials for row in [row_label(t.params)]},
+               "methods": rows, "paired": paired(records, baseline=baseline),
                "failed": failed, "trial_commits": res.commits}
     if args.feedback == "both":
         summary["feedback_effect"] = feedback_effect(records)
     write_summary(summary, args.out, args.record, "experiments/mpc.py", argv)
-    write_table(args.out, args.task, methods, summary.get("feedback_effect"))
-    write_plots(args.out, args.task, records, list(methods), render=not args.no_render)
+    write_table(args.out, args.task, rows, summary.get("feedback_effect"))
+    write_plots(args.out, args.task, records, list(rows), render=not args.no_render)
     print((args.out / "table1.md").read_text())
     return 1 if failed else 0
 

@@ -377,9 +377,9 @@ MPC_HEADER = ["MPC cost / baseline (mean ± CI90)", "median (all)", "opt. time (
 def mpc_cells(m: dict) -> list[str]:
     return [pm(num(m.get("mpc_cost_normalised_mean")), num(m.get("mpc_cost_normalised_ci90"))),
             num(m.get("mpc_cost_normalised_median")), num(m.get("opt_ms_mean"), 0),
-            num(m.get("dofs_mean"), 1), num(m.get("lag_steps_mean"), 1),
+            num(m.get("n_dofs_mean", m.get("dofs_mean")), 1), num(m.get("lag_steps_mean"), 1),
             num(m.get("success_rate")), num(m.get("goal_distance_end_median"), 3),
-            str(m.get("outliers", "?")), str(m.get("trials", "?"))]
+            str(m.get("outliers", "?")), str(m.get("n_trials", m.get("trials", "?")))]
 
 
 def table1_section(results: list[Result], page: Path) -> list[str]:
@@ -416,10 +416,10 @@ def table1_headline(r: Result) -> str:
     parts = []
     trials = 0
     for name, m in r.data["methods"].items():
-        trials = max(trials, m.get("trials") or 0)
+        trials = max(trials, m.get("n_trials", m.get("trials")) or 0)
         cost = pm(num(m.get("mpc_cost_normalised_mean")), num(m.get("mpc_cost_normalised_ci90")))
         parts.append(f"{name} {cost} ({num(m.get('opt_ms_mean'), 0)} ms, "
-                     f"{num(m.get('dofs_mean'), 1)} DoFs)")
+                     f"{num(m.get('n_dofs_mean', m.get('dofs_mean')), 1)} DoFs)")
     return ("MPC cost / baseline (opt. time, DoFs): " + "; ".join(parts)
             + f" ({trials} trial{'s' if trials != 1 else ''} each)")
 

@@ -20,7 +20,7 @@ import sys
 import mpc as table1
 from cli_args import EPILOG, guarded, number_list, write_summary
 
-from planners.svr_mpc import summarize
+from planners.svr_mpc import row_name, summarize
 
 
 def parser() -> argparse.ArgumentParser:
@@ -57,7 +57,7 @@ def main(argv=None) -> int:
             if group:
                 rows.append(dict(rho=rho, theta=theta,
                                  **summarize(base + group, baseline="baseline" + fb)[
-                                     args.method + fb]))
+                                     row_name(args.method, theta, rho) + fb]))
     write_summary({"experiment": "fig4", "task": args.task, "method": args.method,
                    "points": rows, "failed": failed, "trial_commits": res.commits},
                   args.out, args.record, "experiments/rho_sweep.py", argv)

@@ -10,7 +10,10 @@ returns an ``SVRMPCResult``::
     result.mpc_cost, result.success, result.dofs_mean
 
 ``summarize`` turns many finished trials of one task into the rows of Table 1 (costs normalised
-by baseline on the same task instance).
+by baseline on the same task instance), ``paired`` compares each row with baseline seed by
+seed. ``SVRMPCSettings.paper(task, row)`` is the paper's protocol for one of its nine Table 1
+rows (``TABLE1_ROWS``): the paper's cost (Eq. 2, no end-effector term), the authors' initial
+plan (``dopt.tasks.push.warm_start``), their 5 % control noise, and the virtual clock.
 
 Shapes: T horizon, nu controls, ns state row, c = |C| active DoFs.
 """
@@ -22,16 +25,44 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
-from dopt.mpc import MPC, MPCConfig, Plan, mpc_cost
-from dopt.rollout import RolloutConfig, RolloutService
+from dopt.mpc import CLOCKS, MPC, MPCConfig, Plan, mpc_cost
+from dopt.rollout import FDConfig, RolloutConfig, RolloutService
 from dopt.scene import Scene
 from dopt.stats import mean_ci
 from dopt.tasks import get_task
-from dopt.tasks.push.costs import PushWeights, goal_distance, push_cost
+from dopt.tasks.push import warm_start
+from dopt.tasks.push.costs import COST_PRESETS, PushWeights, goal_distance, push_cost
 from dopt.tasks.push.task_model import TaskModel
 from dopt.validation import check_config, check_int
 from planners.ilqr import ILQR, ILQRConfig
 from planners.svr import METHODS, DofSelector, SelectionConfig, SVROptimiser, paper_theta
+
+#: the nine rows of the paper's Table 1 by name: (method, theta, rho)
+TABLE1_ROWS = {
+    "baseline": ("baseline", 0, 1.0),
+    "rand-t5": ("rand", 5, 1.0),
+    "naive": ("naive", 0, 1.0),
+    "svd-t10-r1": ("svr-svd", 10, 1.0),
+    "svd-t10-r500": ("svr-svd", 10, 500.0),
+    "svd-t5-r1": ("svr-svd", 5, 1.0),
+    "sum-t10-r1": ("svr-sum", 10, 1.0),
+    "sum-t10-r500": ("svr-sum", 10, 500.0),
+    "sum-t5-r1": ("svr-sum", 5, 1.0),
+}
+
+#: the model clock per task, ms per optimisation = a + b |C| on the nominal 2 threads: fitted
+#: by ``python -m planners.bench clock`` (docs/results/clock-model.json)
+CLOCK_MODEL_MS = {"clutter": (0.0, 0.0), "soft": (0.0, 0.0), "soft_rigid": (0.0, 0.0)}
+
+
+def row_name(method: str, theta: int, rho: float) -> str:
+    """A trial's Table 1 row: ``baseline``, ``naive``, ``rand-t<theta>``,
+    ``sum-t<theta>-r<rho>`` or ``svd-t<theta>-r<rho>`` (``TABLE1_ROWS`` names nine)."""
+    if method in ("baseline", "naive"):
+        return method
+    if method == "rand":
+        return f"rand-t{theta}"
+    return f"{method[4:]}-t{theta}-r{rho:g}"
 
 
 @dataclass(frozen=True)
@@ -49,6 +80,15 @@ class SVRMPCSettings:
         control_noise: Gaussian noise on executed controls, fraction of each control's range.
         synchronous: the agent waits for the optimiser (deterministic; tests, debugging).
         threads: simulation threads (0: one per core).
+        cost: a name of ``dopt.tasks.push.costs.COST_PRESETS``: ``ee`` (with the end-effector
+            term, ours) or ``paper`` (Eq. 2 alone).
+        warm_start: start from the authors' set-up state and initial push plan
+            (``dopt.tasks.push.warm_start``) instead of the task's start and zero controls.
+        clock: ``real``, ``virtual`` or ``model`` (``dopt.mpc``); nominal_threads: the thread
+            count a virtual duration divides the CPU time by; the model clock's coefficients
+            are the task's ``CLOCK_MODEL_MS``.
+        fd_centered, fd_eps: the finite differences (default forward 1e-3; the authors:
+            centred 1e-6).
     """
 
     task: str = "clutter"
@@ -61,16 +101,43 @@ class SVRMPCSettings:
     control_noise: float = 0.0
     synchronous: bool = False
     threads: int = 0
+    cost: str = "ee"
+    warm_start: bool = False
+    clock: str = "real"
+    nominal_threads: float = 2.0
+    fd_centered: bool = False
+    fd_eps: float = 1e-3
 
     def __post_init__(self):
         get_task(self.task)                       # ValueError naming the known tasks
         if self.method not in METHODS:
             raise ValueError(f"unknown method {self.method!r}; choose from {METHODS}")
+        if self.cost not in COST_PRESETS:
+            raise ValueError(f"unknown cost {self.cost!r}; choose from {tuple(COST_PRESETS)}")
+        if self.clock not in CLOCKS:
+            raise ValueError(f"unknown clock {self.clock!r}; choose from {CLOCKS}")
         # rho, control_noise finite >= 0; theta an int >= 0 or None; slowdown finite > 0 or
         # None; timeout an int >= 1 or None; feedback, synchronous bools; threads an int >= 0
-        check_config(self, positive=("slowdown",),
+        check_config(self, positive=("slowdown", "nominal_threads", "fd_eps"),
                      minimum={"rho": 0.0, "theta": 0, "timeout": 1, "control_noise": 0.0,
                               "threads": 0})
+        if self.synchronous and self.clock != "real":
+            raise ValueError("synchronous runs have no clock: use clock='real' with it")
+
+    @classmethod
+    def paper(cls, task: str, row: str = "sum-t10-r1", **overrides) -> SVRMPCSettings:
+        """The paper's protocol for ``row`` (a name of ``TABLE1_ROWS``) on ``task``: Eq. 2
+        cost, the authors' initial plan, 5 % control noise, the virtual clock."""
+        if row not in TABLE1_ROWS:
+            raise ValueError(f"unknown Table 1 row {row!r}; choose from {tuple(TABLE1_ROWS)}")
+        method, theta, rho = TABLE1_ROWS[row]
+        return cls(**{"task": task, "method": method, "theta": theta, "rho": rho,
+                      "cost": "paper", "warm_start": True, "control_noise": 0.05,
+                      "clock": "virtual", **overrides})
+
+    @property
+    def fd(self) -> FDConfig:
+        return FDConfig(eps=float(self.fd_eps), centered=bool(self.fd_centered))
 
     @property
     def selection(self) -> SelectionConfig:
@@ -102,11 +169,12 @@ class SVRController:
 
 
 def build_controller(task: TaskModel, selection: SelectionConfig, rng: np.random.Generator,
-                     threads: int = 0, ilqr: ILQRConfig = ILQRConfig()) -> SVRController:
-    """Wire ``task`` to its push cost, a rollout service with ``threads`` threads, iLQR and a
-    DoF selector drawing from ``rng``."""
+                     threads: int = 0, ilqr: ILQRConfig = ILQRConfig(),
+                     weights: PushWeights = PushWeights()) -> SVRController:
+    """Wire ``task`` to its push cost (``weights``), a rollout service with ``threads``
+    threads, iLQR and a DoF selector drawing from ``rng``."""
     scene = Scene(task.model)
-    cost = push_cost(task, scene)
+    cost = push_cost(task, scene, weights)
     service = RolloutService(scene, RolloutConfig(threads=threads))
     selector = DofSelector(scene.nv, task.robot_dofs, cost.costed_dofs, selection, rng)
     return SVRController(task, scene, cost, service,
@@ -114,16 +182,22 @@ def build_controller(task: TaskModel, selection: SelectionConfig, rng: np.random
                          goal_distance(task, scene))
 
 
+#: the goal distance is kept every this many executed steps (and at the last)
+GOAL_DISTANCE_STRIDE = 10
+
+
 @dataclass(frozen=True)
 class SVRMPCResult:
     """One MPC episode: its MPC cost (Eq. 5), whether the goal object reached the goal, the
     executed steps, the goal object's distance to the goal at start and end (m), per
-    optimisation its wall time (ms), |C|, start step and active set, mean lag (agent steps per
-    optimisation), steps that started late, and the slowdown and timeout it ran with; the goal
-    object's distance to the goal after every executed step (m, S + 1 values, the start
-    first), the final state row (ns,) as a list, the line-search rollouts the stability
-    verdict flagged, and whether the executed episode broke a stability bound (the reason
-    names the step and bound)."""
+    optimisation its duration on the episode's clock (ms), its process CPU time (ms), |C|,
+    start step, lag (agent steps) and active set (a hex bit mask, bit j = DoF j:
+    ``active_dofs``), mean lag, steps that started late (real clock), and the slowdown,
+    timeout and clock it ran with; the goal object's distance to the goal every
+    ``goal_distance_stride`` executed steps and at the last (m, the start first), the final
+    state row (ns,) as a list, the line-search rollouts the stability verdict flagged, and
+    whether the executed episode broke a stability bound (the reason names the step and
+    bound). Lists are rounded (0.01 ms, 10 um, 1e-7) to keep trial files small."""
 
     mpc_cost: float
     success: bool
@@ -133,7 +207,7 @@ class SVRMPCResult:
     opt_ms: list
     n_dofs: list
     opt_step: list
-    active_dofs: list
+    active_sets: list
     lag_steps_mean: float
     late_steps: int
     slowdown: float
@@ -143,6 +217,10 @@ class SVRMPCResult:
     n_unstable_rollouts: int = 0
     unstable: bool = False
     unstable_reason: str = ""
+    clock: str = "real"
+    cpu_ms: list = field(default_factory=list)
+    lag_steps: list = field(default_factory=list)
+    goal_distance_stride: int = GOAL_DISTANCE_STRIDE
 
     @property
     def opt_ms_mean(self) -> float:
@@ -152,10 +230,29 @@ class SVRMPCResult:
     def dofs_mean(self) -> float:
         return float(np.mean(self.n_dofs))
 
+    def active_dofs(self, i: int) -> np.ndarray:
+        """The active DoF set of optimisation ``i``: (c,) sorted indices."""
+        return dofs_of_mask(self.active_sets[i])
+
     def to_dict(self) -> dict:
         """JSON-able form, with the means and the optimisation count."""
         return {**asdict(self), "opt_ms_mean": self.opt_ms_mean, "dofs_mean": self.dofs_mean,
                 "n_optimisations": len(self.opt_ms)}
+
+
+def dofs_mask(dofs) -> str:
+    """A DoF set as a hex bit mask (bit j set: DoF j in the set)."""
+    return hex(sum(1 << int(j) for j in np.unique(np.asarray(dofs, dtype=int))))
+
+
+def dofs_of_mask(mask: str) -> np.ndarray:
+    """The sorted DoF indices (c,) of a hex bit mask written by ``dofs_mask``."""
+    bits, out = int(mask, 16), []
+    while bits:
+        low = bits & -bits
+        out.append(low.bit_length() - 1)
+        bits ^= low
+    return np.array(out, dtype=int)
 
 
 def run_svr_mpc(settings: SVRMPCSettings = SVRMPCSettings(), seed: int = 0) -> SVRMPCResult:
@@ -163,8 +260,9 @@ def run_svr_mpc(settings: SVRMPCSettings = SVRMPCSettings(), seed: int = 0) -> S
 
     The seed builds the task layout (the same for every method, so costs pair up against
     baseline), the DoF selector's draws ([seed, 1]) and the control noise ([seed, 2]). The
-    plan starts at zero controls; the episode runs in real time times the slowdown unless
-    ``synchronous``.
+    episode starts at the task's initial state with zero controls, or (``warm_start``) at the
+    state the authors' set-up motion ends in with their push plan; it runs on the settings'
+    clock (real: real time times the slowdown) unless ``synchronous``.
     """
     import torch
 
@@ -176,32 +274,45 @@ def run_svr_mpc(settings: SVRMPCSettings = SVRMPCSettings(), seed: int = 0) -> S
     seed = int(seed)
     task = get_task(settings.task)(np.random.default_rng(seed))
     ctl = build_controller(task, settings.selection, np.random.default_rng([seed, 1]),
-                           settings.threads)
+                           settings.threads, ILQRConfig(fd=settings.fd),
+                           COST_PRESETS[settings.cost])
     radius = PushWeights().success_radius
     config = MPCConfig(timeout=int(settings.timeout or task.timeout),
                        slowdown=float(settings.slowdown or task.slowdown),
                        synchronous=settings.synchronous, feedback=settings.feedback,
-                       control_noise=float(settings.control_noise))
+                       control_noise=float(settings.control_noise), clock=settings.clock,
+                       threads=float(settings.nominal_threads),
+                       model_ms=(CLOCK_MODEL_MS[settings.task] if settings.clock == "model"
+                                 else None))
     mpc = MPC(ctl.scene, ctl.optimiser, config, np.random.default_rng([seed, 2]),
               success=lambda x: ctl.goal_distance(x) < radius)
+    if settings.warm_start:
+        start = warm_start.setup(task).final_state
+        plan = Plan(warm_start.push(task, start, task.horizon).controls)
+    else:
+        start, plan = task.initial_state, Plan(np.zeros((task.horizon, ctl.scene.nu)))
     try:
-        res = mpc.run(task.initial_state, Plan(np.zeros((task.horizon, ctl.scene.nu))))
+        res = mpc.run(start, plan)
     finally:
         ctl.service.close()
+    S = len(res.controls)
+    kept = sorted(set(range(0, S + 1, GOAL_DISTANCE_STRIDE)) | {S})
     return SVRMPCResult(
-        mpc_cost=mpc_cost(ctl.cost, res), success=bool(res.success), steps=len(res.controls),
-        goal_distance_start=ctl.goal_distance(task.initial_state),
+        mpc_cost=mpc_cost(ctl.cost, res), success=bool(res.success), steps=S,
+        goal_distance_start=ctl.goal_distance(start),
         goal_distance_end=ctl.goal_distance(res.states[-1]),
-        opt_ms=[1e3 * s for s in res.opt_seconds], n_dofs=list(res.n_dofs),
-        opt_step=list(res.opt_step), active_dofs=[np.asarray(d).tolist() for d in res.dofs],
+        opt_ms=[round(1e3 * s, 2) for s in res.opt_seconds], n_dofs=list(res.n_dofs),
+        opt_step=list(res.opt_step), active_sets=[dofs_mask(d) for d in res.dofs],
         lag_steps_mean=float(np.mean(res.lag_steps)), late_steps=int(res.late_steps),
         slowdown=config.slowdown, timeout=config.timeout,
-        goal_distance=[round(ctl.goal_distance(x), 6) for x in res.states],
-        final_state=np.asarray(res.states[-1], dtype=float).tolist(),
+        goal_distance=[round(ctl.goal_distance(res.states[t]), 5) for t in kept],
+        final_state=[float(v) for v in np.round(res.states[-1], 7)],
         n_unstable_rollouts=ctl.optimiser.n_unstable_rollouts,
         unstable=bool(res.stability.unstable[0]),
         unstable_reason=(f"step {res.stability.step[0]}: {res.stability.reason[0]}"
-                         if res.stability.unstable[0] else ""))
+                         if res.stability.unstable[0] else ""),
+        clock=config.clock, cpu_ms=[round(1e3 * s, 2) for s in res.cpu_seconds],
+        lag_steps=[int(v) for v in res.lag_steps])
 
 
 # ----------------------------------------------------------------------- many trials
@@ -215,13 +326,21 @@ def run_trial(params: dict) -> dict:
 
 def trial_key(p: dict) -> str:
     """File-name key of a trial's params: everything that changes its outcome (timeout None,
-    the task's own, is Y0)."""
+    the task's own, is Y0; settings at their defaults add nothing)."""
     parts = [p["task"], p["method"], f"rho{p['rho']:g}", f"theta{p['theta']}",
              f"slow{p['slowdown']:g}", f"Y{p['timeout'] or 0}", f"seed{p['seed']}"]
     if p.get("feedback"):
         parts.append("fb")
     if p.get("control_noise"):
         parts.append(f"noise{p['control_noise']:g}")
+    if p.get("cost", "ee") != "ee":
+        parts.append(f"cost{p['cost']}")
+    if p.get("warm_start"):
+        parts.append("ws")
+    if p.get("clock", "real") != "real":
+        parts.append(f"clock{p['clock']}{p.get('nominal_threads', 2.0):g}")
+    if p.get("fd_centered") or p.get("fd_eps", 1e-3) != 1e-3:
+        parts.append(f"fd{'c' if p.get('fd_centered') else 'f'}{p.get('fd_eps', 1e-3):g}")
     return "-".join(parts)
 
 
@@ -231,74 +350,111 @@ OUTLIER_DISTANCE = 0.5
 
 
 def row_label(p: dict) -> str:
-    """Table row of a trial: its method, ' +fb' when it executed the K feedback term."""
-    return p["method"] + (" +fb" if p.get("feedback") else "")
+    """Table row of a trial (``row_name`` of its method, theta and rho), ' +fb' when it
+    executed the K feedback term."""
+    return (row_name(p["method"], p["theta"], p["rho"])
+            + (" +fb" if p.get("feedback") else ""))
 
 
 def summarize(records: list[dict], baseline: str = "baseline", level: float = 0.90) -> dict:
-    """Per row (``row_label``): MPC cost normalised by the ``baseline`` row's on the same task
-    instance (seed), mean and CI half-width at ``level`` over the trials that are not outliers,
-    and the median over all; optimisation time, DoFs, success rate, trial and outlier counts.
+    """Per row (``row_label``), over the trials of one task:
+
+    - ``mpc_cost_normalised_mean``, ``_ci90``: MPC cost over the ``baseline`` row's on the
+      same task instance (seed), mean and Student-t half-width at ``level`` over the trials
+      that are not outliers (goal object ending > ``OUTLIER_DISTANCE`` from the goal; counted
+      in ``outliers``), as the paper's clutter means do;
+    - ``mpc_cost_normalised_median``: median of the same per-seed ratios over all trials;
+    - ``mpc_cost_median_ratio``: median cost of the row over median cost of baseline (all
+      trials, unpaired): the statistic the authors' own data reproduce their Table 1 with;
+    - ``opt_ms_mean`` (duration on the episode's clock), ``n_dofs_mean``, ``lag_steps_mean``,
+      ``success_rate``, ``goal_distance_end_median``, ``n_trials``, ``n_unstable_trials``,
+      ``n_unstable_rollouts``.
 
     records: {"params", "result"} of finished trials of one task.
     """
     by: dict = {}
     for r in records:
-        by.setdefault(row_label(r["params"]), {})[
-            (r["params"]["seed"], r["params"]["rho"], r["params"]["theta"])] = r["result"]
+        by.setdefault(row_label(r["params"]), {})[r["params"]["seed"]] = r["result"]
 
     def outlier(v):
         return v["goal_distance_end"] > OUTLIER_DISTANCE
 
-    base = {k[0]: v["mpc_cost"] for k, v in by.get(baseline, {}).items() if not outlier(v)}
+    base_all = {k: v["mpc_cost"] for k, v in by.get(baseline, {}).items()}
+    base = {k: c for k, c in base_all.items() if not outlier(by[baseline][k])}
     out = {}
-    for method, trials in by.items():
+    for row, trials in by.items():
         res = list(trials.values())
-        paired = {k: v for k, v in trials.items() if k[0] in base}
-        norm_all = [v["mpc_cost"] / base[k[0]] for k, v in paired.items()]
-        norm = [v["mpc_cost"] / base[k[0]] for k, v in paired.items() if not outlier(v)]
+        norm_all = [v["mpc_cost"] / base_all[k] for k, v in trials.items() if k in base_all]
+        norm = [v["mpc_cost"] / base[k] for k, v in trials.items()
+                if k in base and not outlier(v)]
         mean, ci = mean_ci(norm, level) if norm else (float("nan"), float("nan"))
-        out[method] = {
+        costs = [v["mpc_cost"] for v in res]
+        out[row] = {
             "mpc_cost_normalised_mean": mean,
             "mpc_cost_normalised_ci90": ci,
             "mpc_cost_normalised_median": float(np.median(norm_all)) if norm_all else None,
+            "mpc_cost_median_ratio": (float(np.median(costs) / np.median(list(base_all.values())))
+                                      if base_all else None),
+            "mpc_cost_median": float(np.median(costs)),
             "opt_ms_mean": float(np.mean([v["opt_ms_mean"] for v in res])),
-            "dofs_mean": float(np.mean([v["dofs_mean"] for v in res])),
+            "n_dofs_mean": float(np.mean([v["dofs_mean"] for v in res])),
             "success_rate": float(np.mean([v["success"] for v in res])),
             "goal_distance_end_median": float(np.median([v["goal_distance_end"] for v in res])),
+            "goal_distance_end_mean": float(np.mean([v["goal_distance_end"] for v in res])),
             "lag_steps_mean": float(np.mean([v["lag_steps_mean"] for v in res])),
             "outliers": int(sum(outlier(v) for v in res)),
-            "trials": len(res),
+            "n_trials": len(res),
             "n_unstable_trials": int(sum(v.get("unstable", False) for v in res)),
             "n_unstable_rollouts": int(sum(v.get("n_unstable_rollouts", 0) for v in res)),
         }
     return out
 
 
-def feedback_effect(records: list[dict], level: float = 0.90) -> dict:
-    """Per method with both variants: MPC cost with feedback over open loop on the same seed.
+def paired_ratio(numerator: dict, denominator: dict, level: float = 0.90) -> dict:
+    """Cost ratios on the same seeds: {seed: cost} x 2 -> {"ratio_geomean", "ratio_ci90":
+    [lo, hi], "better", "pairs"}: the geometric mean of the per-seed ratios with a t-interval
+    on their logs (cost ratios are skewed), and the pairs where the numerator cost less."""
+    seeds = sorted(set(numerator) & set(denominator))
+    logs = [np.log(numerator[k] / denominator[k]) for k in seeds]
+    if not logs:
+        return {"ratio_geomean": None, "ratio_ci90": None, "better": 0, "pairs": 0}
+    mean, ci = mean_ci(logs, level)
+    return {"ratio_geomean": float(np.exp(mean)),
+            "ratio_ci90": [float(np.exp(mean - ci)), float(np.exp(mean + ci))],
+            "better": int(sum(x < 0 for x in logs)), "pairs": len(logs)}
 
-    Returns {method: {"ratio_geomean", "ratio_ci90": [lo, hi], "better", "pairs",
-    "success_open_loop", "success_feedback"}}: the geometric mean of the paired ratios with a
-    t-interval on their logs (cost ratios are skewed), and how many pairs feedback won.
+
+def paired(records: list[dict], baseline: str = "baseline", level: float = 0.90) -> dict:
+    """Per row other than ``baseline``: ``paired_ratio`` of its MPC costs over baseline's on
+    the same seeds (all trials, outliers included)."""
+    by: dict = {}
+    for r in records:
+        by.setdefault(row_label(r["params"]), {})[r["params"]["seed"]] = r["result"]["mpc_cost"]
+    return {row: paired_ratio(costs, by.get(baseline, {}), level)
+            for row, costs in by.items() if row != baseline}
+
+
+def feedback_effect(records: list[dict], level: float = 0.90) -> dict:
+    """Per row with both variants: MPC cost with feedback over open loop on the same seed.
+
+    Returns {row: {"ratio_geomean", "ratio_ci90": [lo, hi], "better", "pairs",
+    "success_open_loop", "success_feedback"}} (``paired_ratio``; "better": pairs where
+    feedback cost less).
     """
     by: dict = {}
     for r in records:
         p = r["params"]
-        by.setdefault(p["method"], {}).setdefault(p["seed"], {})[bool(p.get("feedback"))] = \
-            r["result"]
+        by.setdefault(row_name(p["method"], p["theta"], p["rho"]), {}).setdefault(
+            p["seed"], {})[bool(p.get("feedback"))] = r["result"]
     out = {}
-    for method, seeds in by.items():
-        pairs = [v for v in seeds.values() if len(v) == 2]
+    for row, seeds in by.items():
+        pairs = {k: v for k, v in seeds.items() if len(v) == 2}
         if not pairs:
             continue
-        logs = [np.log(v[True]["mpc_cost"] / v[False]["mpc_cost"]) for v in pairs]
-        mean, ci = mean_ci(logs, level)
-        out[method] = {
-            "ratio_geomean": float(np.exp(mean)),
-            "ratio_ci90": [float(np.exp(mean - ci)), float(np.exp(mean + ci))],
-            "better": int(sum(x < 0 for x in logs)), "pairs": len(pairs),
-            "success_open_loop": int(sum(v[False]["success"] for v in pairs)),
-            "success_feedback": int(sum(v[True]["success"] for v in pairs)),
+        out[row] = {
+            **paired_ratio({k: v[True]["mpc_cost"] for k, v in pairs.items()},
+                           {k: v[False]["mpc_cost"] for k, v in pairs.items()}, level),
+            "success_open_loop": int(sum(v[False]["success"] for v in pairs.values())),
+            "success_feedback": int(sum(v[True]["success"] for v in pairs.values())),
         }
     return out

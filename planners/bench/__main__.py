@@ -1,4 +1,4 @@
-"""python -m planners.bench {ilqr,cem,cloth,rope} [options]: print timings as JSON."""
+"""python -m planners.bench {ilqr,clock,cem,cloth,rope} [options]: print timings as JSON."""
 
 from __future__ import annotations
 
@@ -22,6 +22,17 @@ def main(argv=None) -> int:
                         "default: the paper's Table 1 value per method (rand 5, svr 10)")
     p.add_argument("--iterations", type=int, default=5, help="timed iterations per method")
     p.add_argument("--warmup", type=int, default=3, help="untimed iterations per method first")
+
+    p = sub.add_parser("clock", help="CPU time of an MPC optimisation against |C| per push "
+                                     "task, and the model clock's fit ms = a + b |C|")
+    p.add_argument("--tasks", default="clutter,soft,soft_rigid",
+                   help="comma-separated push tasks (default %(default)s)")
+    p.add_argument("--sizes", type=int, default=6, help="DoF counts per task, 7 to nv")
+    p.add_argument("--iterations", type=int, default=8, help="timed optimisations per count")
+    p.add_argument("--warmup", type=int, default=2, help="untimed optimisations first")
+    p.add_argument("--nominal-threads", type=float, default=2.0,
+                   help="threads the CPU time is divided by (default %(default)s)")
+    p.add_argument("--seed", type=int, default=0, help="seed of the task instances")
 
     p = sub.add_parser("cem", help="one CEM iteration of the cloth or rope pick-and-place task")
     add_common_args(p, task="cloth")
@@ -51,6 +62,10 @@ def main(argv=None) -> int:
         from planners.bench.ilqr import bench_ilqr
         out = bench_ilqr(args.task, args.methods.split(","), args.rho, args.theta,
                          args.iterations, args.warmup, args.threads, args.seed)
+    elif args.bench == "clock":
+        from planners.bench.clock import bench_clock
+        out = bench_clock(args.tasks.split(","), args.sizes, args.iterations, args.warmup,
+                          args.nominal_threads, args.seed)
     elif args.bench == "cem":
         from planners.bench.cem import bench_cem
         out = bench_cem(args.task, args.n, args.P, args.H, args.bound, args.threads,

@@ -134,3 +134,61 @@ def test_bad_config(slider):
     with pytest.raises(ValueError, match="plan.controls"):
         MPC(scene, _ConstantOptimiser(), MPCConfig(timeout=3), np.random.default_rng(0)).run(
             x0, Plan(np.zeros((5, 2))))
+
+
+class BusyOptimiser:
+    """Burns ``cpu`` s of process CPU time, then returns the plan with the DoF set (0..c-1)."""
+
+    def __init__(self, cpu, c=1):
+        self.cpu, self.c = cpu, c
+
+    def optimise(self, state, plan):
+        t0 = time.process_time()
+        while time.process_time() - t0 < self.cpu:
+            pass
+        return Plan(controls=plan.controls, dofs=np.arange(self.c))
+
+
+def test_virtual_clock_lag_is_the_cpu_time_over_the_threads(slider):
+    """Each optimisation lets the agent take the steps that fall in its CPU time / threads:
+    within one step of cpu / threads / (dt x slowdown); all steps are accounted for."""
+    scene, x0 = slider
+    cfg = MPCConfig(timeout=120, slowdown=2.0, clock="virtual", threads=2.0)
+    res = MPC(scene, BusyOptimiser(0.05), cfg, np.random.default_rng(0)).run(
+        x0, Plan(np.zeros((20, 1))))
+    period = scene.model.opt.timestep * cfg.slowdown
+    assert len(res.controls) == 120 and len(res.cpu_seconds) == len(res.lag_steps)
+    for cpu, lag, seconds in zip(res.cpu_seconds, res.lag_steps, res.opt_seconds, strict=True):
+        assert seconds == pytest.approx(cpu / 2.0)
+        assert abs(lag - cpu / 2.0 / period) <= 1
+    assert sum(res.lag_steps) == 120
+    assert np.mean(res.lag_steps) == pytest.approx(0.05 / 2 / period, abs=1)
+
+
+def test_model_clock_is_deterministic_and_follows_the_cost_model(slider):
+    """ms = a + b |C|: the lag is that over dt x slowdown (within a step), and two runs with
+    the same seed and control noise give the same episode bit for bit, whatever the CPU
+    time."""
+    scene, x0 = slider
+    cfg = MPCConfig(timeout=90, clock="model", model_ms=(4.0, 3.0), control_noise=0.1)
+    runs = [MPC(scene, BusyOptimiser(cpu, c=2), cfg, np.random.default_rng(7)).run(
+        x0, Plan(np.full((20, 1), 5.0))) for cpu in (0.0, 0.02)]
+    period = scene.model.opt.timestep
+    for res in runs:
+        assert all(abs(lag - 0.010 / period) <= 1 for lag in res.lag_steps)
+        assert res.opt_seconds == pytest.approx([0.010] * len(res.opt_seconds))
+    np.testing.assert_array_equal(runs[0].states, runs[1].states)
+    np.testing.assert_array_equal(runs[0].lag_steps, runs[1].lag_steps)
+
+
+@pytest.mark.parametrize("kwargs, match", [
+    ({"clock": "wall"}, "clock must be one of"),
+    ({"clock": "model"}, "model_ms"),
+    ({"clock": "model", "model_ms": (0.0, 0.0)}, "model_ms"),
+    ({"clock": "model", "model_ms": (1.0, float("nan"))}, "model_ms"),
+    ({"clock": "virtual", "synchronous": True}, "synchronous"),
+    ({"clock": "virtual", "threads": 0}, "threads"),
+])
+def test_clock_config_errors(kwargs, match):
+    with pytest.raises(ValueError, match=match):
+        MPCConfig(timeout=10, **kwargs)

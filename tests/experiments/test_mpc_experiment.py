@@ -26,21 +26,22 @@ def test_quick_run_writes_table_and_resumes(tmp_path):
     run("--quick", "--methods", "baseline,svr-sum", "--out", str(out))
     summary = json.loads((out / "summary.json").read_text())
     assert summary["task"] == "clutter"
-    assert set(summary["methods"]) == {"baseline", "svr-sum"}
+    assert set(summary["methods"]) == {"baseline", "sum-t10-r1"}
     base = summary["methods"]["baseline"]
-    assert base["mpc_cost_normalised_mean"] == 1.0 and base["trials"] == 1
-    assert base["dofs_mean"] == 55.0 and base["opt_ms_mean"] > 0
-    assert "| svr-sum |" in (out / "table1.md").read_text()
+    assert base["mpc_cost_normalised_mean"] == 1.0 and base["n_trials"] == 1
+    assert base["n_dofs_mean"] == 55.0 and base["opt_ms_mean"] > 0
+    assert "| sum-t10-r1 |" in (out / "table1.md").read_text()
     assert (out / "table1.csv").exists()
     for name in ("mpc_dofs.png", "mpc_goal_distance.png", "final_baseline.png",
-                 "final_svr-sum.png"):
+                 "final_sum-t10-r1.png"):
         assert (out / name).stat().st_size > 10_000, name
     files = sorted((out / "trials").glob("*.json"))
     assert len(files) == 2
     result = json.loads(files[0].read_text())["result"]
-    assert len(result["goal_distance"]) == result["steps"] + 1
-    assert result["goal_distance"][0] == pytest.approx(result["goal_distance_start"], abs=1e-6)
-    assert result["goal_distance"][-1] == pytest.approx(result["goal_distance_end"], abs=1e-6)
+    stride = result["goal_distance_stride"]
+    assert len(result["goal_distance"]) == -(-result["steps"] // stride) + 1
+    assert result["goal_distance"][0] == pytest.approx(result["goal_distance_start"], abs=1e-5)
+    assert result["goal_distance"][-1] == pytest.approx(result["goal_distance_end"], abs=1e-5)
     assert len(result["final_state"]) > 0
     stamps = [f.stat().st_mtime_ns for f in files]
     run("--quick", "--methods", "baseline,svr-sum", "--out", str(out))
@@ -52,7 +53,7 @@ def test_ray_path(tmp_path):
     out = tmp_path / "ray"
     run("--quick", "--methods", "naive", "--ray", "--out", str(out), "--no-render")
     summary = json.loads((out / "summary.json").read_text())
-    assert summary["methods"]["naive"]["trials"] == 1
+    assert summary["methods"]["naive"]["n_trials"] == 1
     # no baseline in this sweep: nothing to normalise by, said so in the table
     assert "| naive | n/a |" in (out / "table1.md").read_text()
     assert (out / "mpc_dofs.png").exists() and not list(out.glob("final_*.png"))
@@ -61,6 +62,9 @@ def test_ray_path(tmp_path):
 @pytest.mark.parametrize("args, message", [
     (["--task", "nope"], "argument --task: invalid choice: 'nope'"),
     (["--methods", "baseline,svr"], "unknown method"),
+    (["--rows", "baseline,sum-t7"], "sum-t7"),
+    (["--clock", "wall"], "argument --clock: invalid choice"),
+    (["--preset", "authors"], "argument --preset: invalid choice"),
     (["--rho", "-1"], "argument --rho: must be >= 0, got -1"),
     (["--rho", "nan"], "argument --rho: must be >= 0, got nan"),
     (["--theta", "-2"], "argument --theta: must be >= 0, got -2"),
@@ -87,3 +91,29 @@ def test_trials_of_the_default_flags_are_valid_settings(tmp_path, flags):
         p = {k: v for k, v in t.params.items() if k != "seed"}
         SVRMPCSettings(**p)
         assert ("-Y7-" if flags else "-Y0-") in t.key
+
+
+def test_paper_preset_runs_the_nine_rows_by_name(tmp_path):
+    """--preset paper makes the nine Table 1 rows with the authors' protocol; flags override
+    it; --rows picks rows; the trial keys say what differs from the defaults."""
+    import mpc
+
+    from planners.svr_mpc import TABLE1_ROWS, row_label
+
+    args = mpc.parse_args(["--preset", "paper", "--trials", "2", "--out", str(tmp_path / "p")])
+    trials = mpc.make_trials(args)
+    assert len(trials) == 18 and len({t.key for t in trials}) == 18
+    assert [row_label(t.params) for t in trials[:9]] == list(TABLE1_ROWS)
+    for t in trials:
+        p = t.params
+        assert (p["cost"], p["warm_start"], p["clock"], p["control_noise"]) == \
+            ("paper", True, "virtual", 0.05)
+        assert "-costpaper-ws-clockvirtual2" in t.key
+    args = mpc.parse_args(["--preset", "paper", "--rows", "rand-t5,svd-t5-r1", "--cost", "ee",
+                           "--trials", "1",
+                           "--clock", "model", "--fd", "central", "--out", str(tmp_path / "q")])
+    trials = mpc.make_trials(args)
+    assert [row_label(t.params) for t in trials] == ["rand-t5", "svd-t5-r1"]
+    assert trials[0].params["cost"] == "ee" and trials[0].params["clock"] == "model"
+    assert trials[0].params["fd_centered"] and trials[0].params["fd_eps"] == 1e-6
+    assert trials[0].key.endswith("fdc1e-06")

@@ -1,10 +1,22 @@
 """planners.svr_mpc: Table 1 aggregation (pairing with baseline by seed, outliers, CI) and
 one synchronous MPC episode from Python."""
 
+import numpy as np
 import pytest
 
-from planners.svr_mpc import SVRMPCSettings, feedback_effect, run_svr_mpc
+from planners.svr_mpc import (
+    TABLE1_ROWS,
+    SVRMPCSettings,
+    dofs_mask,
+    dofs_of_mask,
+    feedback_effect,
+    paired,
+    row_name,
+    run_svr_mpc,
+)
 from planners.svr_mpc import summarize as aggregate
+
+SUM = "sum-t10-r1"     # the row of svr-sum at theta 10, rho 1
 
 
 def rec(method, seed, cost, dist=0.01):
@@ -19,11 +31,13 @@ def test_pairs_by_seed_and_excludes_outliers():
                rec("svr-sum", 2, 5000.0, dist=1.8)]          # rolled away: an outlier
     out = aggregate(records)
     assert out["baseline"]["mpc_cost_normalised_mean"] == 1.0
-    svr = out["svr-sum"]
+    svr = out[SUM]
     assert svr["mpc_cost_normalised_mean"] == pytest.approx((0.5 + 0.75) / 2)
-    assert svr["outliers"] == 1 and svr["trials"] == 3
+    assert svr["outliers"] == 1 and svr["n_trials"] == 3
     assert svr["mpc_cost_normalised_median"] == pytest.approx(0.75)   # over all three
     assert svr["mpc_cost_normalised_ci90"] > 0
+    # the authors' statistic: median cost over baseline's median cost, unpaired
+    assert svr["mpc_cost_median_ratio"] == pytest.approx(150.0 / 100.0)
 
 
 def test_outlier_baseline_seed_is_not_a_reference():
@@ -39,11 +53,11 @@ def test_feedback_trials_get_their_own_rows_normalised_by_open_loop_baseline():
     records[2]["params"]["feedback"] = True
     records[3]["params"]["feedback"] = True
     out = aggregate(records)
-    assert set(out) == {"baseline", "baseline +fb", "svr-sum", "svr-sum +fb"}
-    assert out["svr-sum +fb"]["mpc_cost_normalised_mean"] == pytest.approx(0.4)
+    assert set(out) == {"baseline", "baseline +fb", SUM, SUM + " +fb"}
+    assert out[SUM + " +fb"]["mpc_cost_normalised_mean"] == pytest.approx(0.4)
     assert out["baseline +fb"]["mpc_cost_normalised_mean"] == pytest.approx(1.2)
     on = aggregate(records[2:], baseline="baseline +fb")
-    assert on["svr-sum +fb"]["mpc_cost_normalised_mean"] == pytest.approx(40 / 120)
+    assert on[SUM + " +fb"]["mpc_cost_normalised_mean"] == pytest.approx(40 / 120)
 
 
 def test_feedback_both_pairs_every_trial_back_to_back():
@@ -67,8 +81,8 @@ def test_feedback_effect_is_the_paired_ratio():
         records[-1]["params"]["feedback"] = True
     records.append(rec("naive", 0, 10.0))                  # no pair: no entry
     out = feedback_effect(records)
-    assert set(out) == {"rand"}
-    r = out["rand"]
+    assert set(out) == {"rand-t10"}
+    r = out["rand-t10"]
     assert r["ratio_geomean"] == pytest.approx((0.5 * 2.0 * 0.5) ** (1 / 3))
     assert r["ratio_ci90"][0] < r["ratio_geomean"] < r["ratio_ci90"][1]
     assert (r["better"], r["pairs"]) == (2, 3)
@@ -90,3 +104,43 @@ def test_settings_reject_unknown_names():
         SVRMPCSettings(task="nope")
     with pytest.raises(ValueError, match="unknown method"):
         SVRMPCSettings(method="svr")
+
+
+def test_paired_is_the_geometric_mean_of_per_seed_ratios():
+    records = [rec("baseline", 0, 100.0), rec("baseline", 1, 100.0), rec("baseline", 2, 10.0),
+               rec("svr-sum", 0, 50.0), rec("svr-sum", 1, 400.0), rec("svr-sum", 2, 5.0),
+               rec("svr-sum", 3, 1.0)]                        # no baseline on seed 3
+    r = paired(records)[SUM]
+    assert r["pairs"] == 3 and r["better"] == 2
+    assert r["ratio_geomean"] == pytest.approx((0.5 * 4.0 * 0.5) ** (1 / 3))
+    assert r["ratio_ci90"][0] < r["ratio_geomean"] < r["ratio_ci90"][1]
+    assert "baseline" not in paired(records)
+
+
+def test_the_nine_table1_rows_parse_and_name_themselves():
+    assert len(TABLE1_ROWS) == 9
+    for name, (method, theta, rho) in TABLE1_ROWS.items():
+        assert row_name(method, theta, rho) == name
+        s = SVRMPCSettings.paper("clutter", name)
+        assert (s.method, s.theta, s.rho) == (method, theta, rho)
+        assert s.cost == "paper" and s.warm_start and s.clock == "virtual"
+        assert s.control_noise == 0.05
+    with pytest.raises(ValueError, match="unknown Table 1 row"):
+        SVRMPCSettings.paper("clutter", "sum-t7-r3")
+
+
+def test_dof_masks_round_trip():
+    rng = np.random.default_rng(0)
+    for nv in (1, 55, 154):
+        dofs = np.sort(rng.choice(nv, size=rng.integers(1, nv + 1), replace=False))
+        np.testing.assert_array_equal(dofs_of_mask(dofs_mask(dofs)), dofs)
+
+
+def test_model_clock_episode_is_deterministic():
+    """The model clock's lag does not depend on the machine: the same seed gives the same
+    MPC cost bit for bit (control noise included)."""
+    settings = SVRMPCSettings.paper("clutter", "sum-t10-r1", clock="model", timeout=40,
+                                    threads=1)
+    a, b = run_svr_mpc(settings, seed=2), run_svr_mpc(settings, seed=2)
+    assert a.mpc_cost == b.mpc_cost and a.lag_steps == b.lag_steps and a.steps == 40
+    assert a.active_sets == b.active_sets and a.clock == "model"

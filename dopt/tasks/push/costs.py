@@ -1,6 +1,7 @@
 """The pushing tasks' costs (Eq. 2-3 of the state-vector-reduction paper) and success tests.
 
-Every cost is diagonal-quadratic in the full tangent state plus one end-effector term:
+Every cost is diagonal-quadratic in the full tangent state, plus (``PushWeights()``, not
+``PushWeights.paper()``) one end-effector term:
 
 - the goal object's x, y to the goal (for the soft body: every vertex to its place in the
   block translated onto the goal), running weight ``goal`` and terminal ``goal_f``;
@@ -13,6 +14,9 @@ Every cost is diagonal-quadratic in the full tangent state plus one end-effector
   the paper's 9 naive DoFs (a term on the block's centroid made all 94 vertex x, y "costed").
 
 The weights are ours (the paper does not give its W, R, W_f); they are in ``PushWeights``.
+``COST_PRESETS`` names the two costs: ``paper`` (Eq. 2, no end-effector term; the pushing then
+relies on the initial plan of ``dopt.tasks.push.warm_start`` to bring the pusher into contact)
+and ``ee`` (with the term).
 """
 
 from __future__ import annotations
@@ -45,9 +49,19 @@ class PushWeights:
     ee_f: float = 10.0
     success_radius: float = 0.02     # m: goal object centre within this of the goal ends the task
 
+    @classmethod
+    def paper(cls, **overrides) -> PushWeights:
+        """The paper's Eq. 2 cost: these weights without the end-effector term (ee = ee_f =
+        0); the authors' task files weight their "reach" residual 0 as well."""
+        return cls(**{"ee": 0.0, "ee_f": 0.0, **overrides})
+
     def __post_init__(self):
         check_config(self, minimum=dict.fromkeys((f.name for f in fields(self)), 0),
                      positive=("success_radius",))
+
+
+#: the pushing costs by name: the paper's Eq. 2, and ours with the end-effector term
+COST_PRESETS = {"paper": PushWeights.paper(), "ee": PushWeights()}
 
 
 def _xy(scene: Scene, bodies: list[int]) -> tuple[np.ndarray, np.ndarray]:
@@ -96,6 +110,8 @@ def push_cost(tm: TaskModel, scene: Scene, weights: PushWeights = PushWeights())
     arm = tm.robot_dofs
     w[nv + arm], w_f[nv + arm] = W.arm_velocity, W.arm_velocity_f
     r = W.torque / TAU_MAX ** 2
+    if W.ee == 0 and W.ee_f == 0:          # the paper's Eq. 2: no end-effector term
+        return QuadraticCost(scene, q_ref, w, w_f, r)
 
     from dopt.tasks.push.panda import ee_chain
     chain = ee_chain()

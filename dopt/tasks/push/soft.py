@@ -177,6 +177,7 @@ def _finish(name: str, spec: mujoco.MjSpec, block: _Block, goal: np.ndarray, goa
         dt=DT,
         timeout=TIMEOUT,
         slowdown=slowdown,
+        pushed_object_name=SOFT_BODY,
     )
 
 

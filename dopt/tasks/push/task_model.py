@@ -33,6 +33,9 @@ class TaskModel:
         dt: the model time step (s), equal to ``model.opt.timestep``.
         timeout: Y, the number of agent time steps until the task ends.
         slowdown: how many times slower than real time the paper ran the agent thread.
+        pushed_object_name: what the pusher touches first, a body or flex name (the soft block in
+            soft_rigid, which carries the cylinder); None: ``goal_object``. The initial plans
+            of ``dopt.tasks.push.warm_start`` push it.
         robot_joints: the arm's 7 hinge joints, in the order of the actuators (``ctrl[i]`` is
             the torque of ``robot_joints[i]``, N m).
         robot_bodies: the arm's bodies, base first, pusher tool last.
@@ -50,9 +53,15 @@ class TaskModel:
     dt: float
     timeout: int
     slowdown: int
+    pushed_object_name: str | None = None
     robot_joints: tuple[str, ...] = JOINT_NAMES
     robot_bodies: tuple[str, ...] = BODY_NAMES
     ee_site: str = EE_SITE
+
+    @property
+    def pushed_object(self) -> str:
+        """The name of what the pusher touches first (``goal_object`` unless set)."""
+        return self.pushed_object_name or self.goal_object
 
     @property
     def robot_dofs(self) -> np.ndarray:
