@@ -52,7 +52,7 @@ TABLE1_ROWS = {
 
 #: the model clock per task, ms per optimisation = a + b |C| on the nominal 2 threads: fitted
 #: by ``python -m planners.bench clock`` (docs/results/clock-model.json)
-CLOCK_MODEL_MS = {"clutter": (0.0, 0.0), "soft": (0.0, 0.0), "soft_rigid": (0.0, 0.0)}
+CLOCK_MODEL_MS = {"clutter": (38.9, 2.05), "soft": (146.7, 9.29), "soft_rigid": (289.6, 30.92)}
 
 
 def row_name(method: str, theta: int, rho: float) -> str:
