@@ -86,8 +86,9 @@ CATALOGUE = (
              f"python experiments/{'cloth_fold' if task == 'cloth' else 'rope'}.py "
              f"--goal {goal}", "fig7", {"task": task, "goal": goal})
        for (task, goal), panel in FIG7_PANELS.items()]
-    + [Entry(SVR, f"Table 1: {task}", f"python experiments/mpc.py --task {task}", "table1",
-             {"task": task}) for task in ("clutter", "soft", "soft_rigid")]
+    + [Entry(SVR, f"Table 1: {task}", f"python experiments/mpc.py --task {task} --preset paper "
+             f"--trials {n} --workers 2", "table1", {"task": task})
+       for task, n in (("clutter", 100), ("soft", 20), ("soft_rigid", 20))]
     + [Entry(SVR, "Fig. 4: rho, theta sweep",
              "python experiments/rho_sweep.py --task clutter --rhos 0.1,0.3,1,3,10,30,100,300,"
              "1000 --thetas 0,5,10,20 --trials 5", "fig4")])
@@ -393,8 +394,9 @@ def table1_section(results: list[Result], page: Path) -> list[str]:
         theta_text = (", ".join(f"{k} {v}" for k, v in theta.items())
                       if isinstance(theta, dict) else str(theta))
         lines += [f"### Table 1, {d.get('task')}: `{r.name}`"
-                  + (" (quick)" if r.quick else ""), "",
-                  f"rho {d.get('rho')}; theta: {theta_text}; slowdown {d.get('slowdown')}.", ""]
+                  + (" (quick)" if r.quick else ""), "", protocol_line(d), ""]
+        if "row_settings" not in d:
+            lines[-2] += f" rho {d.get('rho')}; theta: {theta_text}; slowdown {d.get('slowdown')}."
         lines += table(["method", *MPC_HEADER],
                        [[name, *mpc_cells(m)] for name, m in d["methods"].items()])
         fb = d.get("feedback_effect")
@@ -410,6 +412,21 @@ def table1_section(results: list[Result], page: Path) -> list[str]:
                             for name, f in fb.items()])
         lines += ["", *source_lines([r], page), *failed_lines(r), ""]
     return lines[:-1]
+
+
+def protocol_line(d: dict) -> str:
+    """How a Table 1 file's trials ran (files without a "preset" ran ours, the only one then)."""
+    if "preset" not in d:
+        return ("Protocol `ours`: cost with the end-effector term, zero initial plan, real "
+                "clock, no control noise.")
+    return (f"Protocol `{d['preset']}`: cost `{d.get('cost')}`"
+            + (", the authors' set-up motion and push plan" if d.get("warm_start")
+               else ", zero initial plan")
+            + f", {d.get('clock')} clock"
+            + (f" ({num(d.get('nominal_threads'), 0)} nominal threads)"
+               if d.get("clock") == "virtual" else "")
+            + f", control noise {d.get('control_noise')}, {d.get('fd')} differences, "
+              f"slowdown {d.get('slowdown')}.")
 
 
 def table1_headline(r: Result) -> str:
@@ -627,10 +644,27 @@ def kp_paper_scale_section(results: list[Result], page: Path) -> list[str]:
     return lines[:-1]
 
 
+def clock_model_section(results: list[Result], page: Path) -> list[str]:
+    lines = ["## The model clock: CPU time of an MPC optimisation against |C|", "",
+             "One optimisation of `rand` at theta random DoFs (|C| = 7 + theta) per point, the "
+             "paper's protocol, one simulation thread; ms = CPU time / nominal threads. "
+             "`planners.svr_mpc.CLOCK_MODEL_MS` holds the fits.", ""]
+    for r in results:
+        d = r.data
+        lines += table(["task", "points (|C|: ms)", "a (ms)", "b (ms per DoF)", "R^2"],
+                       [[task, ", ".join(f"{row['n_dofs']}: {row['ms']:.0f}"
+                                         for row in d["rows"] if row["task"] == task),
+                         num(f["a_ms"], 1), num(f["b_ms"], 2), num(f["r2"], 3)]
+                        for task, f in d["fits"].items()])
+        lines += ["", *source_lines([r], page), ""]
+    return lines[:-1]
+
+
 # ----------------------------------------------------------------------------- pages
 SECTIONS = {"key_particles": kp_section, "kp_compare": kp_compare_section,
             "kp_paper_scale": kp_paper_scale_section, "fig7": fig7_section,
-            "table1": table1_section, "fig4": fig4_section, "physics": physics_section}
+            "table1": table1_section, "fig4": fig4_section, "physics": physics_section,
+            "clock_model": clock_model_section}
 HEADLINES = {"key_particles": kp_headline, "fig7": fig7_headline, "table1": table1_headline,
              "fig4": fig4_headline}
 
