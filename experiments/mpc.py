@@ -214,6 +214,15 @@ def _theta(theta: int | None, method: str) -> int:
     return paper_theta(method) if theta is None else theta
 
 
+def protocol(args, params: dict) -> dict:
+    """The protocol a summary records: preset, cost, warm start, clock, nominal threads,
+    control noise, finite differences and slowdown of a trial's params under the flags."""
+    return {"preset": args.preset, "cost": params["cost"], "warm_start": params["warm_start"],
+            "clock": params["clock"], "nominal_threads": params["nominal_threads"],
+            "control_noise": params["control_noise"], "fd": args.fd,
+            "slowdown": params["slowdown"]}
+
+
 @functools.cache
 def _task_slowdown(task: str) -> float:
     return float(PUSH_TASKS[task](np.random.default_rng(0)).slowdown)
@@ -432,12 +441,7 @@ def main(argv=None) -> int:
     rows = summarize(records, baseline=baseline)
     order = {name: i for i, name in enumerate(TABLE1_ROWS)}
     rows = dict(sorted(rows.items(), key=lambda kv: (order.get(kv[0].split()[0], 99), kv[0])))
-    first = trials[0].params
-    summary = {"experiment": "table1", "task": args.task, "preset": args.preset,
-               "cost": first["cost"], "warm_start": first["warm_start"],
-               "clock": first["clock"], "nominal_threads": first["nominal_threads"],
-               "control_noise": first["control_noise"], "fd": args.fd,
-               "slowdown": first["slowdown"],
+    summary = {"experiment": "table1", "task": args.task, **protocol(args, trials[0].params),
                "row_settings": {row: {"method": t.params["method"], "theta": t.params["theta"],
                               "rho": t.params["rho"]}
                         for t in trials for row in [row_label(t.params)]},

@@ -11,7 +11,8 @@ versions, date, machine). This script reads them all and writes
   alone, with a note, when it has no such markers).
 
 Result kinds (the file's "experiment" field): "fig7" (experiments/cloth_fold.py, rope.py),
-"table1" (experiments/mpc.py), "fig4" (experiments/rho_sweep.py), "key_particles"
+"table1" (experiments/mpc.py), "fig4" (experiments/rho_sweep.py), "svr_explain"
+(experiments/svr_explain.py), "clock_model" (python -m planners.bench clock), "key_particles"
 (experiments/key_particles.py). Files of other kinds are listed by name.
 
     python experiments/report.py            # regenerate both files
@@ -644,6 +645,29 @@ def kp_paper_scale_section(results: list[Result], page: Path) -> list[str]:
     return lines[:-1]
 
 
+def svr_explain_section(results: list[Result], page: Path) -> list[str]:
+    lines = ["## State-vector reduction: which DoFs each method holds, and what rho cuts", "",
+             "Per row: mean |C| and the share of the goal object's x, y DoFs in C per "
+             "optimisation (over the episode, then over seeds); for SVR, the importances of "
+             "the non-robot DoFs in C before the cut, pooled over optimisations and seeds.", ""]
+    for r in sorted(results, key=lambda r: (str(r.data.get("task")), r.name)):
+        d = r.data
+        lines += [f"### {d.get('task')}: `{r.name}`", "", protocol_line(d), ""]
+        rows = []
+        for name, row in d["rows"].items():
+            share = row.get("importance_share") or {}
+            n_dofs = [v for v in row["n_dofs"] if v is not None]
+            rows.append([name, str(row["n_trials"]), num(sum(n_dofs) / len(n_dofs) if n_dofs
+                                                         else None, 1),
+                         num(row["goal_share_mean"]), num(share.get("zero")),
+                         num(share.get("lt_1")), num(share.get("1_to_500")),
+                         num(share.get("ge_500")), str(row["importance"]["n"])])
+        lines += table(["row", "trials", "mean size of C", "goal DoFs in C", "importance = 0",
+                        "< 1", "[1, 500)", ">= 500", "values"], rows)
+        lines += ["", *source_lines([r], page), ""]
+    return lines[:-1]
+
+
 def clock_model_section(results: list[Result], page: Path) -> list[str]:
     lines = ["## The model clock: CPU time of an MPC optimisation against |C|", "",
              "One optimisation of `rand` at theta random DoFs (|C| = 7 + theta) per point, the "
@@ -664,7 +688,7 @@ def clock_model_section(results: list[Result], page: Path) -> list[str]:
 SECTIONS = {"key_particles": kp_section, "kp_compare": kp_compare_section,
             "kp_paper_scale": kp_paper_scale_section, "fig7": fig7_section,
             "table1": table1_section, "fig4": fig4_section, "physics": physics_section,
-            "clock_model": clock_model_section}
+            "clock_model": clock_model_section, "svr_explain": svr_explain_section}
 HEADLINES = {"key_particles": kp_headline, "fig7": fig7_headline, "table1": table1_headline,
              "fig4": fig4_headline}
 

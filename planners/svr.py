@@ -169,9 +169,11 @@ class SVROptimiser:
         selector: the DofSelector of this run.
 
     ``n_unstable_rollouts`` counts the line-search rollouts the stability verdict flagged.
+    With ``keep_history``, ``history`` gets one entry per optimisation: {"dofs": the set it
+    optimised (c,), "importance": the importance of each of them (c,) for SVR, else None}.
     """
 
-    def __init__(self, ilqr, selector: DofSelector):
+    def __init__(self, ilqr, selector: DofSelector, keep_history: bool = False):
         if not callable(getattr(ilqr, "iterate", None)):
             raise TypeError(f"ilqr must be a planners.ilqr.ILQR (with iterate), got "
                             f"{type(ilqr).__name__}")
@@ -179,12 +181,18 @@ class SVROptimiser:
             raise TypeError(f"selector must be a DofSelector, got {type(selector).__name__}")
         self.ilqr, self.selector = ilqr, selector
         self.n_unstable_rollouts = 0
+        self.keep_history, self.history = bool(keep_history), []
 
     def optimise(self, state: np.ndarray, plan: Plan) -> Plan:
         C = self.selector.before()
         step = self.ilqr.iterate(state, plan.controls, C)
         self.selector.after(step.K, step.dofs)
         self.n_unstable_rollouts += step.n_unstable
+        if self.keep_history:
+            imp = self.selector.importance
+            self.history.append({"dofs": np.asarray(step.dofs).tolist(),
+                                 "importance": None if imp is None or len(imp) != len(step.dofs)
+                                 else np.asarray(imp, dtype=float).tolist()})
         info = dict(step.seconds, cost=step.cost_after, alpha=step.alpha, n_dofs=len(C))
         return Plan(controls=step.controls, states=step.states, K=step.K.numpy(),
                     dofs=step.dofs, info=info)

@@ -255,14 +255,16 @@ def dofs_of_mask(mask: str) -> np.ndarray:
     return np.array(out, dtype=int)
 
 
-def run_svr_mpc(settings: SVRMPCSettings = SVRMPCSettings(), seed: int = 0) -> SVRMPCResult:
+def run_svr_mpc(settings: SVRMPCSettings = SVRMPCSettings(), seed: int = 0,
+                history: list | None = None) -> SVRMPCResult:
     """One MPC episode of ``settings.method`` on the task instance of ``seed``.
 
     The seed builds the task layout (the same for every method, so costs pair up against
     baseline), the DoF selector's draws ([seed, 1]) and the control noise ([seed, 2]). The
     episode starts at the task's initial state with zero controls, or (``warm_start``) at the
     state the authors' set-up motion ends in with their push plan; it runs on the settings'
-    clock (real: real time times the slowdown) unless ``synchronous``.
+    clock (real: real time times the slowdown) unless ``synchronous``. ``history``: a list
+    that receives ``SVROptimiser.history`` (each optimisation's set and importances).
     """
     import torch
 
@@ -284,6 +286,7 @@ def run_svr_mpc(settings: SVRMPCSettings = SVRMPCSettings(), seed: int = 0) -> S
                        threads=float(settings.nominal_threads),
                        model_ms=(CLOCK_MODEL_MS[settings.task] if settings.clock == "model"
                                  else None))
+    ctl.optimiser.keep_history = history is not None
     mpc = MPC(ctl.scene, ctl.optimiser, config, np.random.default_rng([seed, 2]),
               success=lambda x: ctl.goal_distance(x) < radius)
     if settings.warm_start:
@@ -295,6 +298,8 @@ def run_svr_mpc(settings: SVRMPCSettings = SVRMPCSettings(), seed: int = 0) -> S
         res = mpc.run(start, plan)
     finally:
         ctl.service.close()
+    if history is not None:
+        history.extend(ctl.optimiser.history)
     S = len(res.controls)
     kept = sorted(set(range(0, S + 1, GOAL_DISTANCE_STRIDE)) | {S})
     return SVRMPCResult(

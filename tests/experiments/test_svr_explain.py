@@ -1,0 +1,56 @@
+"""experiments/svr_explain.py: the importance counts and the timelines it reports, and one
+short episode end to end."""
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+import svr_explain
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def test_importance_counts_split_at_the_rho_cuts_and_decades():
+    values = [0.0, 0.0, 1e-9, 0.5, 1.0, 499.0, 500.0, 3e7]
+    c = svr_explain.importance_counts(values)
+    assert c["n"] == 8 and c["zero"] == 2 and c["below"] == 1 and c["above"] == 1
+    assert (c["lt_1"], c["1_to_500"], c["ge_500"]) == (4, 2, 2)
+    assert c["decades"]["-1"] == 1 and c["decades"]["0"] == 1 and c["decades"]["2"] == 2
+    assert sum(c["decades"].values()) + c["zero"] + c["below"] + c["above"] == c["n"]
+
+
+def test_timelines_average_over_seeds_per_bin():
+    def rec(seed, steps, n_dofs, share):
+        return {"params": {"method": "svr-sum", "theta": 10, "rho": 1.0, "seed": seed},
+                "result": {"steps": 100, "opt_step": steps, "n_dofs": n_dofs,
+                           "goal_share": share,
+                           "importance": svr_explain.importance_counts([0.0, 2.0])}}
+    rows = svr_explain.summarize_rows(
+        [rec(0, [0, 60], [55, 20], [1.0, 0.0]), rec(1, [10, 90], [45, 10], [0.5, 0.5])], bins=2)
+    r = rows["sum-t10-r1"]
+    assert r["bin_edges"] == [0.0, 50.0, 100.0]
+    assert r["n_dofs"] == pytest.approx([50.0, 15.0])
+    assert r["goal_share"] == pytest.approx([0.75, 0.25])
+    assert r["importance_share"]["zero"] == pytest.approx(0.5)
+    assert r["n_trials"] == 2
+
+
+def test_short_run_writes_summary_and_plot(tmp_path):
+    out = tmp_path / "ex"
+    env = dict(os.environ, PYTHONPATH=str(ROOT))
+    proc = subprocess.run([sys.executable, str(ROOT / "experiments" / "svr_explain.py"),
+                           "--preset", "paper", "--rows", "rand-t5,sum-t10-r1", "--trials", "1",
+                           "--timeout", "60", "--bins", "3", "--out", str(out)],
+                          capture_output=True, text=True, env=env, timeout=300)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    d = json.loads((out / "summary.json").read_text())
+    assert d["experiment"] == "svr_explain" and set(d["rows"]) == {"rand-t5", "sum-t10-r1"}
+    assert d["rows"]["rand-t5"]["importance_share"] is None        # rand has no importance
+    svr = d["rows"]["sum-t10-r1"]
+    assert svr["importance"]["n"] > 0 and 0 <= svr["goal_share_mean"] <= 1
+    assert np.isclose(sum(svr["importance_share"][k] for k in ("lt_1", "1_to_500", "ge_500")), 1)
+    assert (out / "svr_explain.png").stat().st_size > 10_000
