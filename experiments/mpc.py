@@ -122,6 +122,14 @@ def add_run_arguments(ap: argparse.ArgumentParser) -> None:
     ap.add_argument("--fd", default="forward", choices=["forward", "central"],
                     help="finite differences: forward eps 1e-3 (default) or the authors' "
                          "central eps 1e-6")
+    ap.add_argument("--fd-skip", type=positive_int, default=1,
+                    help="finite differences every K-th timestep, A and B linear between "
+                         "(default %(default)s: every timestep)")
+    ap.add_argument("--keypoints", default=None, choices=["adaptive"],
+                    help="adaptive key timesteps for the finite differences "
+                         "(planners.keypoints) instead of --fd-skip")
+    ap.add_argument("--box-qp", action="store_true",
+                    help="control limits in iLQR's backward pass (mju_boxQP)")
     ap.add_argument("--trials", type=positive_int, default=20,
                     help="task instances (seeds) per method (default %(default)s)")
     ap.add_argument("--seed", type=nonneg_int, default=0,
@@ -182,6 +190,12 @@ def settings_of(args, method: str, theta: int, rho: float, feedback: bool) -> SV
         over["warm_start"] = args.warm_start == "on"
     if args.fd == "central":
         over.update(fd_centered=True, fd_eps=1e-6)
+    if args.keypoints == "adaptive":
+        over["keypoints"] = "adaptive"
+    elif args.fd_skip > 1:
+        over.update(keypoints="skip", fd_skip=args.fd_skip)
+    if args.box_qp:
+        over["box_qp"] = True
     return replace(preset, task=args.task, method=method, theta=theta, rho=float(rho),
                    slowdown=args.slowdown or _task_slowdown(args.task), timeout=args.timeout,
                    threads=args.threads or 0, feedback=feedback,
@@ -220,7 +234,8 @@ def protocol(args, params: dict) -> dict:
     return {"preset": args.preset, "cost": params["cost"], "warm_start": params["warm_start"],
             "clock": params["clock"], "nominal_threads": params["nominal_threads"],
             "control_noise": params["control_noise"], "fd": args.fd,
-            "slowdown": params["slowdown"]}
+            "keypoints": params["keypoints"], "fd_skip": params["fd_skip"],
+            "box_qp": params["box_qp"], "slowdown": params["slowdown"]}
 
 
 @functools.cache

@@ -21,6 +21,7 @@ import torch
 from dopt.costs import QuadraticCost
 from dopt.rollout import FDConfig, RolloutService
 from dopt.validation import check_config, check_int, check_real, float_array
+from planners.keypoints import KeypointConfig, interpolate, key_steps
 
 log = logging.getLogger(__name__)
 
@@ -33,11 +34,17 @@ def _default_alphas() -> tuple[float, ...]:
 @dataclass(frozen=True)
 class ILQRConfig:
     """fd: finite differences of the dynamics (default: FDConfig's forward eps 1e-3, where its
-    docstring says why not the authors' centred 1e-6).
+    docstring says why not the authors' centred 1e-6). keypoints: the timesteps the finite
+    differences cover (``planners.keypoints``; default every one), A and B linear in between.
+    box_qp: the backward pass solves a box-constrained QP per step for the control limits
+    (``mujoco.mju_boxQP``; the gains of clamped controls are 0, as in MuJoCo MPC's iLQG),
+    instead of leaving the limits to the clamping of the simulator.
     mu_init/mu_min/mu_max/mu_factor: Levenberg-Marquardt regularisation of Q_uu (authors:
     0.1, 1e-4..10, x10). alphas: line-search step sizes tried in parallel."""
 
     fd: FDConfig = FDConfig()
+    keypoints: KeypointConfig = KeypointConfig()
+    box_qp: bool = False
     mu_init: float = 0.1
     mu_min: float = 1e-4
     mu_max: float = 10.0
@@ -47,6 +54,9 @@ class ILQRConfig:
     def __post_init__(self):
         if not isinstance(self.fd, FDConfig):
             raise TypeError(f"ILQRConfig.fd must be an FDConfig, got {self.fd!r}")
+        if not isinstance(self.keypoints, KeypointConfig):
+            raise TypeError(f"ILQRConfig.keypoints must be a KeypointConfig, got "
+                            f"{self.keypoints!r}")
         check_config(self)
         if not 0 <= self.mu_min <= self.mu_init <= self.mu_max:
             raise ValueError("need 0 <= mu_min <= mu_init <= mu_max")
@@ -63,7 +73,8 @@ class ILQRStep:
     (c,): the active set; cost_before/cost_after: J of the old and new nominal; alpha: the
     accepted step (0 if rejected); mu: the regularisation used; seconds: wall time of
     'derivatives', 'backward', 'forward'; n_unstable: line-search rollouts the stability
-    verdict flagged (scored +inf, never accepted)."""
+    verdict flagged (scored +inf, never accepted); fd_steps: the timesteps the finite
+    differences covered (T unless key points are chosen)."""
 
     controls: np.ndarray
     states: np.ndarray
@@ -76,6 +87,7 @@ class ILQRStep:
     mu: float
     seconds: dict
     n_unstable: int = 0
+    fd_steps: int = 0
 
     @property
     def accepted(self) -> bool:
@@ -140,13 +152,15 @@ class ILQR:
         J0 = float(self.cost.total(X, U))
 
         t0 = time.perf_counter()
-        D = svc.derivatives(X[:-1], C, self.config.fd)
+        keys = key_steps(self.config.keypoints, scene, X, C)
+        D = svc.derivatives(X[keys], C, self.config.fd)
         t1 = time.perf_counter()
         cd = self.cost.derivatives(X, U, C)
-        F = torch.from_numpy(D.F)
+        limits = _limits(scene.model, U) if self.config.box_qp else None
         with torch.inference_mode():   # no autograd bookkeeping: ~20 % of a small op's cost
+            F = interpolate(torch.from_numpy(D.F), keys, len(U))
             while True:
-                gains = backward_pass(F, cd.lx, cd.lxx, cd.lu, cd.luu, self.mu)
+                gains = backward_pass(F, cd.lx, cd.lxx, cd.lu, cd.luu, self.mu, limits)
                 if gains is not None or self.mu >= self.config.mu_max:
                     break
                 self.mu = min(self.mu * self.config.mu_factor, self.config.mu_max)
@@ -155,7 +169,8 @@ class ILQR:
             log.warning("backward pass failed at mu=%g; keeping the nominal", self.mu)
             return ILQRStep(U, X, torch.zeros(len(U), scene.nu, 2 * len(C)),
                             torch.zeros(len(U), scene.nu), C, J0, J0, 0.0, self.mu,
-                            {"derivatives": t1 - t0, "backward": t2 - t1, "forward": 0.0})
+                            {"derivatives": t1 - t0, "backward": t2 - t1, "forward": 0.0},
+                            0, len(keys))
         K, k = gains
         ff = U[None] + self._alphas[:, None, None] * k.numpy()[None]     # (A, T, nu)
         trial = svc.rollout_feedback(x0, ff, X[:-1], K.numpy(), C)
@@ -172,9 +187,10 @@ class ILQR:
             self.mu = max(self.mu / self.config.mu_factor, self.config.mu_min)
             return ILQRStep(trial.controls[best], trial.states[best], K, k, C, J0,
                             float(costs[best]), float(self._alphas[best]), self.mu, seconds,
-                            int(flagged.sum()))
+                            int(flagged.sum()), len(keys))
         self.mu = min(self.mu * self.config.mu_factor, self.config.mu_max)
-        return ILQRStep(U, X, K, k, C, J0, J0, 0.0, self.mu, seconds, int(flagged.sum()))
+        return ILQRStep(U, X, K, k, C, J0, J0, 0.0, self.mu, seconds, int(flagged.sum()),
+                        len(keys))
 
     def solve(self, x0: np.ndarray, controls: np.ndarray, dofs=None, max_iterations: int = 50,
               rtol: float = 1e-6) -> ILQRResult:
@@ -200,12 +216,16 @@ class ILQR:
 
 
 def backward_pass(F: torch.Tensor, lx: torch.Tensor, lxx: torch.Tensor, lu: torch.Tensor,
-                  luu: torch.Tensor, mu: float):
+                  luu: torch.Tensor, mu: float, limits=None):
     """Riccati recursion (Eq. 8-10) on the reduced state with Q_uu + mu I.
 
     F (T, n, n+nu) = [A B] (``Derivatives.F``), lx (T+1, n), lxx (T+1, n, n), lu (T, nu),
     luu (T, nu, nu). Returns (K (T, nu, n), k (T, nu)), or None if some Q_uu + mu I is not
     positive definite.
+
+    limits: None, or (lower, upper) (T, nu) bounds on the control step du = k + K dx: then k
+    minimises the step's quadratic model within them (``mujoco.mju_boxQP``) and K is the
+    unconstrained gain on the controls the QP leaves free, 0 on the clamped ones.
 
     Each step forms all Q blocks at once: Q = blkdiag(lxx, luu) + F^T V' F and
     q = [lx; lu] + F^T V'_x (l_ux = 0), with F^T as a view (no transposed copy of F), which
@@ -230,13 +250,51 @@ def backward_pass(F: torch.Tensor, lx: torch.Tensor, lxx: torch.Tensor, lu: torc
         if info.item():
             return None
         rhs = torch.cat([q[n:, None], Qux], dim=1)                 # [Qu | Qux]
-        Gt = torch.cholesky_solve(rhs, chol, out=G[t]).neg_()
+        if limits is None:
+            Gt = torch.cholesky_solve(rhs, chol, out=G[t]).neg_()
+        else:
+            Gt = _box_step(Quu + mu_eye, rhs, limits[0][t], limits[1][t], out=G[t])
+            if Gt is None:
+                return None
         k, K = Gt[:, 0], Gt[:, 1:]
         W = torch.addmm(rhs, Quu, Gt)                              # [Quu k + Qu | Quu K + Qux]
         Vx = torch.addmv(torch.addmv(q[:n], K.T, W[:, 0]), Qux.T, k)
         Vxx = torch.addmm(torch.addmm(Q[:n, :n], K.T, W[:, 1:]), Qux.T, K)
         Vxx = 0.5 * (Vxx + Vxx.T)
     return G[:, :, 1:].contiguous(), G[:, :, 0].contiguous()
+
+
+def _box_step(H: torch.Tensor, rhs: torch.Tensor, lower: np.ndarray, upper: np.ndarray,
+              out: torch.Tensor) -> torch.Tensor | None:
+    """[k | K] (nu, 1+n) of one step under box limits: k = argmin 0.5 du' H du + Qu' du on
+    lower <= du <= upper (``mju_boxQP``), K = -H_ff^-1 Qux_f on the free controls f, 0 on the
+    clamped ones. rhs = [Qu | Qux]. None if H is not positive definite."""
+    import mujoco
+
+    nu = H.shape[0]
+    Hn = np.ascontiguousarray(H.numpy())
+    g = np.ascontiguousarray(rhs[:, 0].numpy())
+    res, R = np.zeros(nu), np.zeros((nu, nu + 7))
+    index = np.zeros(nu, dtype=np.int32)
+    rank = mujoco.mju_boxQP(res, R, index, Hn, g, lower, upper)
+    if rank < 0:
+        return None
+    out.zero_()
+    out[:, 0] = torch.from_numpy(res)
+    free = torch.from_numpy(index[:rank].astype(np.int64))
+    if rank:
+        Hf = H[free][:, free]
+        out[free, 1:] = -torch.linalg.solve(Hf, rhs[free, 1:])
+    return out
+
+
+def _limits(model, U: np.ndarray):
+    """(lower, upper) (T, nu) bounds on the control step from the actuators' ctrlrange
+    around the controls U (T, nu); unlimited actuators get +-inf."""
+    limited = model.actuator_ctrllimited.astype(bool)
+    lo = np.where(limited, model.actuator_ctrlrange[:, 0], -np.inf)
+    hi = np.where(limited, model.actuator_ctrlrange[:, 1], np.inf)
+    return np.ascontiguousarray(lo - U), np.ascontiguousarray(hi - U)
 
 
 def _controls(controls, nu: int) -> np.ndarray:

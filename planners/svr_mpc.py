@@ -35,6 +35,7 @@ from dopt.tasks.push.costs import COST_PRESETS, PushWeights, goal_distance, push
 from dopt.tasks.push.task_model import TaskModel
 from dopt.validation import check_config, check_int
 from planners.ilqr import ILQR, ILQRConfig
+from planners.keypoints import KeypointConfig
 from planners.svr import METHODS, DofSelector, SelectionConfig, SVROptimiser, paper_theta
 
 #: the nine rows of the paper's Table 1 by name: (method, theta, rho)
@@ -89,6 +90,9 @@ class SVRMPCSettings:
             are the task's ``CLOCK_MODEL_MS``.
         fd_centered, fd_eps: the finite differences (default forward 1e-3; the authors:
             centred 1e-6).
+        keypoints, fd_skip: the timesteps the finite differences cover (``every``, ``skip``
+            every fd_skip-th, ``adaptive``; ``planners.keypoints``), A and B linear between.
+        box_qp: control limits in the backward pass (``ILQRConfig.box_qp``).
     """
 
     task: str = "clutter"
@@ -107,6 +111,9 @@ class SVRMPCSettings:
     nominal_threads: float = 2.0
     fd_centered: bool = False
     fd_eps: float = 1e-3
+    keypoints: str = "every"
+    fd_skip: int = 1
+    box_qp: bool = False
 
     def __post_init__(self):
         get_task(self.task)                       # ValueError naming the known tasks
@@ -120,7 +127,8 @@ class SVRMPCSettings:
         # None; timeout an int >= 1 or None; feedback, synchronous bools; threads an int >= 0
         check_config(self, positive=("slowdown", "nominal_threads", "fd_eps"),
                      minimum={"rho": 0.0, "theta": 0, "timeout": 1, "control_noise": 0.0,
-                              "threads": 0})
+                              "threads": 0, "fd_skip": 1})
+        _ = self.ilqr                              # ValueError naming a bad keypoint method
         if self.synchronous and self.clock != "real":
             raise ValueError("synchronous runs have no clock: use clock='real' with it")
 
@@ -136,8 +144,11 @@ class SVRMPCSettings:
                       "clock": "virtual", **overrides})
 
     @property
-    def fd(self) -> FDConfig:
-        return FDConfig(eps=float(self.fd_eps), centered=bool(self.fd_centered))
+    def ilqr(self) -> ILQRConfig:
+        """iLQR's config: the finite differences, their key timesteps, the box QP."""
+        return ILQRConfig(fd=FDConfig(eps=float(self.fd_eps), centered=bool(self.fd_centered)),
+                          keypoints=KeypointConfig(self.keypoints, skip=int(self.fd_skip)),
+                          box_qp=bool(self.box_qp))
 
     @property
     def selection(self) -> SelectionConfig:
@@ -276,7 +287,7 @@ def run_svr_mpc(settings: SVRMPCSettings = SVRMPCSettings(), seed: int = 0,
     seed = int(seed)
     task = get_task(settings.task)(np.random.default_rng(seed))
     ctl = build_controller(task, settings.selection, np.random.default_rng([seed, 1]),
-                           settings.threads, ILQRConfig(fd=settings.fd),
+                           settings.threads, settings.ilqr,
                            COST_PRESETS[settings.cost])
     radius = PushWeights().success_radius
     config = MPCConfig(timeout=int(settings.timeout or task.timeout),
@@ -346,6 +357,11 @@ def trial_key(p: dict) -> str:
         parts.append(f"clock{p['clock']}{p.get('nominal_threads', 2.0):g}")
     if p.get("fd_centered") or p.get("fd_eps", 1e-3) != 1e-3:
         parts.append(f"fd{'c' if p.get('fd_centered') else 'f'}{p.get('fd_eps', 1e-3):g}")
+    if p.get("keypoints", "every") != "every":
+        parts.append("kpadaptive" if p["keypoints"] == "adaptive"
+                     else f"skip{p.get('fd_skip', 1)}")
+    if p.get("box_qp"):
+        parts.append("boxqp")
     return "-".join(parts)
 
 

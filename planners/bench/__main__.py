@@ -20,6 +20,11 @@ def main(argv=None) -> int:
     p.add_argument("--theta", type=int, default=None,
                    help="random DoFs re-added per iteration (rand: DoFs besides the robot); "
                         "default: the paper's Table 1 value per method (rand 5, svr 10)")
+    p.add_argument("--keypoints", default="every",
+                   help="comma-separated derivative variants: every, skip<K>, adaptive "
+                        "(default %(default)s)")
+    p.add_argument("--box-qp", action="store_true",
+                   help="control limits in the backward pass (mju_boxQP)")
     p.add_argument("--iterations", type=int, default=5, help="timed iterations per method")
     p.add_argument("--warmup", type=int, default=3, help="untimed iterations per method first")
 
@@ -61,7 +66,8 @@ def main(argv=None) -> int:
     if args.bench == "ilqr":
         from planners.bench.ilqr import bench_ilqr
         out = bench_ilqr(args.task, args.methods.split(","), args.rho, args.theta,
-                         args.iterations, args.warmup, args.threads, args.seed)
+                         args.iterations, args.warmup, args.threads, args.seed,
+                         tuple(args.keypoints.split(",")), args.box_qp)
     elif args.bench == "clock":
         from planners.bench.clock import bench_clock
         out = bench_clock(args.tasks.split(","), args.sizes, args.iterations, args.warmup,

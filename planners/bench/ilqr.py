@@ -1,4 +1,5 @@
-"""Bench of one iLQR(-SVR) iteration per DoF-selection method on a pushing task."""
+"""Bench of one iLQR(-SVR) iteration per DoF-selection method and derivative variant (finite
+differences at every timestep, every K-th, or adaptive key points) on a pushing task."""
 
 from __future__ import annotations
 
@@ -8,17 +9,25 @@ import numpy as np
 import torch
 
 from dopt.tasks import get_task
+from planners.ilqr import ILQRConfig
+from planners.keypoints import KeypointConfig, interpolate, key_steps
 from planners.svr import SelectionConfig, paper_theta
 from planners.svr_mpc import build_controller
 
 
 def bench_ilqr(task: str, methods: list[str], rho: float, theta: int | None, iterations: int,
-               warmup: int, threads: int, seed: int) -> list[dict]:
-    """Mean wall time of an iteration per method, from the same state and warm controls.
+               warmup: int, threads: int, seed: int, variants: tuple[str, ...] = ("every",),
+               box_qp: bool = False) -> list[dict]:
+    """Mean wall time of an iteration per method and derivative variant, from the same state
+    and warm controls.
 
-    Each method first runs ``warmup`` iterations (SVR settles its DoF set there), then
-    ``iterations`` timed ones; ``vs_baseline`` is its time over baseline's, same run.
-    theta None: the paper's Table 1 value per method (planners.svr.paper_theta).
+    Each (method, variant) first runs ``warmup`` iterations (SVR settles its DoF set there),
+    then ``iterations`` timed ones; ``vs_baseline`` is its time over baseline's (every
+    timestep), ``vs_every`` over the same method's with every timestep, same run. For key-point
+    variants, ``fd_steps`` is the mean number of timesteps differenced and ``interp_error`` the
+    relative Frobenius error of the interpolated [A B] against finite differences at every
+    timestep on the last nominal, mean over t. theta None: the paper's Table 1 value per
+    method (planners.svr.paper_theta).
     """
     torch.set_num_threads(1)
     tm = get_task(task)(np.random.default_rng(seed))
@@ -26,31 +35,56 @@ def bench_ilqr(task: str, methods: list[str], rho: float, theta: int | None, ite
     U0 = np.zeros((tm.horizon, tm.model.nu))
     out = []
     for method in methods:
-        th = paper_theta(method) if theta is None else theta
-        ctl = build_controller(tm, SelectionConfig(method, rho=rho, theta=th),
-                               np.random.default_rng(seed), threads)
-        svc, ilqr, sel = ctl.service, ctl.ilqr, ctl.selector
-        U, walls, splits, sizes = U0, [], [], []
-        for i in range(warmup + iterations):
-            C = sel.before()
-            t0 = time.perf_counter()
-            step = ilqr.iterate(x0, U, C)
-            wall = time.perf_counter() - t0
-            sel.after(step.K, step.dofs)
-            U = step.controls
-            if i >= warmup:
-                walls.append(wall)
-                splits.append(step.seconds)
-                sizes.append(len(C))
-        split = {k: 1e3 * float(np.mean([s[k] for s in splits])) for k in splits[0]}
-        ms = 1e3 * float(np.mean(walls))
-        split["other"] = ms - sum(split.values())
-        out.append({"bench": "ilqr", "task": task, "method": method, "ms_per_iteration": ms,
-                    "n_dofs": float(np.mean(sizes)), "split_ms": split, "threads": svc.threads,
-                    "route": "c-kernels" if svc.uses_c_kernels else "batch",
-                    "rho": rho, "theta": th, "final_cost": step.cost_after})
-        svc.close()
-    base = next((r["ms_per_iteration"] for r in out if r["method"] == "baseline"), None)
+        for variant in variants:
+            out.append(_one(tm, x0, U0, method, rho, theta, KeypointConfig.parse(variant),
+                            box_qp, iterations, warmup, threads, seed))
+    base = next((r["ms_per_iteration"] for r in out
+                 if r["method"] == "baseline" and r["keypoints"] == "every"), None)
+    every = {r["method"]: r["ms_per_iteration"] for r in out if r["keypoints"] == "every"}
     for r in out:
         r["vs_baseline"] = None if base is None else r["ms_per_iteration"] / base
+        r["vs_every"] = (r["ms_per_iteration"] / every[r["method"]] if r["method"] in every
+                         else None)
     return out
+
+
+def _one(tm, x0, U0, method, rho, theta, keypoints, box_qp, iterations, warmup, threads,
+         seed) -> dict:
+    th = paper_theta(method) if theta is None else theta
+    ctl = build_controller(tm, SelectionConfig(method, rho=rho, theta=th),
+                           np.random.default_rng(seed), threads,
+                           ILQRConfig(keypoints=keypoints, box_qp=box_qp))
+    svc, ilqr, sel = ctl.service, ctl.ilqr, ctl.selector
+    U, walls, splits, sizes, fd_steps = U0, [], [], [], []
+    for i in range(warmup + iterations):
+        C = sel.before()
+        t0 = time.perf_counter()
+        step = ilqr.iterate(x0, U, C)
+        wall = time.perf_counter() - t0
+        sel.after(step.K, step.dofs)
+        U = step.controls
+        if i >= warmup:
+            walls.append(wall)
+            splits.append(step.seconds)
+            sizes.append(len(C))
+            fd_steps.append(step.fd_steps)
+    split = {k: 1e3 * float(np.mean([s[k] for s in splits])) for k in splits[0]}
+    ms = 1e3 * float(np.mean(walls))
+    split["other"] = ms - sum(split.values())
+    error = None
+    if keypoints.method != "every":
+        X, C = step.states, step.dofs
+        full = torch.from_numpy(svc.derivatives(X[:-1], C).F)
+        keys = key_steps(keypoints, ilqr.service.scene, X, C)
+        approx = interpolate(torch.from_numpy(svc.derivatives(X[keys], C).F), keys, len(full))
+        norms = torch.linalg.matrix_norm(full).clamp_min(1e-300)
+        error = float((torch.linalg.matrix_norm(approx - full) / norms).mean())
+    row = {"bench": "ilqr", "task": tm.name, "method": method, "keypoints": keypoints.name,
+           "box_qp": box_qp, "ms_per_iteration": ms, "n_dofs": float(np.mean(sizes)),
+           "split_ms": split, "derivative_share": split["derivatives"] / ms,
+           "fd_steps": float(np.mean(fd_steps)), "horizon": tm.horizon,
+           "interp_error": error, "threads": svc.threads,
+           "route": "c-kernels" if svc.uses_c_kernels else "batch", "rho": rho, "theta": th,
+           "final_cost": step.cost_after}
+    svc.close()
+    return row

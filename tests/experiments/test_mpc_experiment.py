@@ -117,3 +117,17 @@ def test_paper_preset_runs_the_nine_rows_by_name(tmp_path):
     assert trials[0].params["cost"] == "ee" and trials[0].params["clock"] == "model"
     assert trials[0].params["fd_centered"] and trials[0].params["fd_eps"] == 1e-6
     assert trials[0].key.endswith("fdc1e-06")
+
+
+def test_derivative_options_reach_the_trials(tmp_path):
+    import mpc
+
+    args = mpc.parse_args(["--preset", "paper", "--rows", "sum-t10-r1", "--trials", "1",
+                           "--fd-skip", "5", "--box-qp", "--out", str(tmp_path / "a")])
+    (t,) = mpc.make_trials(args)
+    assert (t.params["keypoints"], t.params["fd_skip"], t.params["box_qp"]) == ("skip", 5, True)
+    assert t.key.endswith("-skip5-boxqp")
+    args = mpc.parse_args(["--rows", "sum-t10-r1", "--trials", "1", "--keypoints", "adaptive",
+                           "--out", str(tmp_path / "b")])
+    (t,) = mpc.make_trials(args)
+    assert t.params["keypoints"] == "adaptive" and t.key.endswith("-kpadaptive")
