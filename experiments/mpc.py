@@ -173,7 +173,8 @@ def parse_args(argv=None, ap: argparse.ArgumentParser | None = None) -> argparse
     if args.threads is None:
         args.threads = 1 if (args.workers > 1 or args.ray) else 0
     try:               # the pipeline's own checks of the settings, as usage errors
-        make_trials(args)
+        for method, theta, rho in grid(args):
+            settings_of(args, method, theta, rho, args.feedback == "on")
     except (ValueError, TypeError) as e:
         ap.error(str(e))
     if record_problem(args.record, args.out):
@@ -202,21 +203,24 @@ def settings_of(args, method: str, theta: int, rho: float, feedback: bool) -> SV
                    nominal_threads=float(args.nominal_threads), **over)
 
 
-def make_trials(args, methods=None, rhos=None, thetas=None) -> list[Trial]:
-    """Every (seed, row, feedback) trial of the flags: the rows of --rows (default with
-    --preset paper: the nine of Table 1), else every (method, rho, theta) of the arguments or
-    flags."""
+def grid(args, methods=None, rhos=None, thetas=None) -> list[tuple]:
+    """The (method, theta, rho) rows of the flags: those of --rows (default with --preset
+    paper: the nine of Table 1), else every (method, rho, theta) of the arguments or flags."""
     rows = getattr(args, "rows", None)
     if rows is None and methods is None and args.preset == "paper" and hasattr(args, "rows"):
         rows = list(TABLE1_ROWS)
     if rows:
-        grid = [TABLE1_ROWS[r] for r in rows]
-    else:
-        grid = [(m, t, rho) for m in methods or args.methods for rho in rhos or [args.rho]
-                for t in thetas or [_theta(args.theta, m)]]
+        return [TABLE1_ROWS[r] for r in rows]
+    return [(m, t, rho) for m in methods or getattr(args, "methods", ["baseline"])
+            for rho in rhos or [getattr(args, "rho", 1.0)]
+            for t in thetas or [_theta(getattr(args, "theta", None), m)]]
+
+
+def make_trials(args, methods=None, rhos=None, thetas=None) -> list[Trial]:
+    """Every (seed, row, feedback) trial of the flags (``grid``)."""
     out = []
     for seed in range(args.seed, args.seed + args.trials):
-        for method, theta, rho in grid:
+        for method, theta, rho in grid(args, methods, rhos, thetas):
             for feedback in FEEDBACK[args.feedback]:
                 p = {**asdict(settings_of(args, method, theta, rho, feedback)), "seed": seed}
                 out.append(Trial(trial_key(p), p))

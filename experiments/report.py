@@ -88,7 +88,8 @@ CATALOGUE = (
              f"--goal {goal}", "fig7", {"task": task, "goal": goal})
        for (task, goal), panel in FIG7_PANELS.items()]
     + [Entry(SVR, f"Table 1: {task}", f"python experiments/mpc.py --task {task} --preset paper "
-             f"--trials {n} --workers 2", "table1", {"task": task})
+             f"--trials {n} --workers 2 --no-render --out docs/results/runs/table1-{task} "
+             f"--record docs/results/table1-{task}.json", "table1", {"task": task})
        for task, n in (("clutter", 100), ("soft", 20), ("soft_rigid", 20))]
     + [Entry(SVR, "Fig. 4: rho, theta sweep",
              "python experiments/rho_sweep.py --task clutter --rhos 0.1,0.3,1,3,10,30,100,300,"
@@ -668,6 +669,27 @@ def svr_explain_section(results: list[Result], page: Path) -> list[str]:
     return lines[:-1]
 
 
+def ilqr_bench_section(results: list[Result], page: Path) -> list[str]:
+    lines = ["## iLQR iteration: derivatives over time and the box-QP backward pass", "",
+             "One iLQR(-SVR) iteration per method and derivative variant, same run: finite "
+             "differences at every timestep, every K-th (skipK) or at adaptive key points, A "
+             "and B linear between; `vs every`: time over the same method's at every timestep; "
+             "error: relative Frobenius error of the interpolated [A B] against every-timestep "
+             "differences on the last nominal, mean over t.", ""]
+    for r in sorted(results, key=lambda r: (str(r.data.get("task")), r.name)):
+        lines += [f"### {r.data.get('task')}: `{r.name}`", ""]
+        lines += table(["method", "derivatives", "box QP", "ms / iteration", "vs every",
+                        "derivative share", "FD timesteps", "error", "DoFs"],
+                       [[row["method"], row["keypoints"], "yes" if row["box_qp"] else "no",
+                         num(row["ms_per_iteration"], 0), num(row.get("vs_every")),
+                         num(row["derivative_share"]),
+                         f"{num(row['fd_steps'], 1)} / {row['horizon']}",
+                         num(row["interp_error"], 4), num(row["n_dofs"], 1)]
+                        for row in r.data["rows"]])
+        lines += ["", *source_lines([r], page), ""]
+    return lines[:-1]
+
+
 def clock_model_section(results: list[Result], page: Path) -> list[str]:
     lines = ["## The model clock: CPU time of an MPC optimisation against |C|", "",
              "One optimisation of `rand` at theta random DoFs (|C| = 7 + theta) per point, the "
@@ -688,7 +710,8 @@ def clock_model_section(results: list[Result], page: Path) -> list[str]:
 SECTIONS = {"key_particles": kp_section, "kp_compare": kp_compare_section,
             "kp_paper_scale": kp_paper_scale_section, "fig7": fig7_section,
             "table1": table1_section, "fig4": fig4_section, "physics": physics_section,
-            "clock_model": clock_model_section, "svr_explain": svr_explain_section}
+            "clock_model": clock_model_section, "svr_explain": svr_explain_section,
+            "ilqr_bench": ilqr_bench_section}
 HEADLINES = {"key_particles": kp_headline, "fig7": fig7_headline, "table1": table1_headline,
              "fig4": fig4_headline}
 

@@ -25,6 +25,9 @@ def main(argv=None) -> int:
                         "(default %(default)s)")
     p.add_argument("--box-qp", action="store_true",
                    help="control limits in the backward pass (mju_boxQP)")
+    p.add_argument("--record", default=None, metavar="PATH",
+                   help="also write the rows with their provenance to PATH (a result file, "
+                        "experiment \"ilqr_bench\")")
     p.add_argument("--iterations", type=int, default=5, help="timed iterations per method")
     p.add_argument("--warmup", type=int, default=3, help="untimed iterations per method first")
 
@@ -68,6 +71,13 @@ def main(argv=None) -> int:
         out = bench_ilqr(args.task, args.methods.split(","), args.rho, args.theta,
                          args.iterations, args.warmup, args.threads, args.seed,
                          tuple(args.keypoints.split(",")), args.box_qp)
+        if args.record:
+            import json
+
+            from dopt.provenance import provenance
+            with open(args.record, "w") as f:
+                json.dump({"experiment": "ilqr_bench", "task": args.task, "rows": out,
+                           "provenance": provenance()}, f, indent=1)
     elif args.bench == "clock":
         from planners.bench.clock import bench_clock
         out = bench_clock(args.tasks.split(","), args.sizes, args.iterations, args.warmup,
