@@ -443,7 +443,7 @@ def cloth_key_particles(positions, faces, threshold: float | None = None,
         vertices=_stretch(mesh.vertices, axis, 1.0 / z_scale),
         elements=mesh.faces, sizes=reduction.sizes, errors=reduction.errors,
         error=reduction.error, threshold=thr, seconds=time.perf_counter() - start,
-        reached_threshold=reduction.reached)
+        reached_threshold=reduction.reached, layer_gap=float(gap))
     logger.info("cloth (%d particles, %d faces, layer gap %.4g mm): %d faces, error %.4g "
                 "(threshold %.4g%s), %d keys", len(goal), len(tri), gap * 1e3,
                 result.n_elements, result.error, thr,

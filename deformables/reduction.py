@@ -113,6 +113,9 @@ class KeyParticles:
             the one with the least error, and a warning was logged (cloth: its ``error`` is
             then computed in full, where ``errors`` may hold lower bounds, see
             ``ClothConfig.exact_errors``).
+        layer_gap: cloth: the layer gap the threshold is relative to, metres (given by
+            ``ClothConfig.layer_gap``, estimated from the goal after any panel projection, or
+            the flat default); None for rope.
     """
 
     indices: np.ndarray
@@ -125,6 +128,7 @@ class KeyParticles:
     threshold: float
     seconds: float
     reached_threshold: bool = True
+    layer_gap: float | None = None
 
     def __post_init__(self):
         for name in ("indices", "vertices", "elements", "sizes", "errors"):

@@ -253,8 +253,9 @@ def simulated_goals(resolutions: list[int], cloth_config: ClothConfig,
     flex's own triangles and the settled flat start as the rest sheet. Returns (rows, {goal:
     error} of the goals that failed); a row holds the scripted fold's distance to the ideal
     goal, whether the stability verdict flagged its executed plan, the layer gap
-    ``estimate_layer_gap`` finds in the settled goal (before the reduction's panel projection)
-    and the counts."""
+    ``estimate_layer_gap`` finds in the settled goal (before the reduction's panel projection),
+    the gap the reduction's threshold is relative to (``KeyParticles.layer_gap``) and the
+    counts."""
     from deformables.layers import estimate_layer_gap
     from planners.pick_place import PickPlaceSettings, make_planner, make_problem, run_problem
 
@@ -280,6 +281,7 @@ def simulated_goals(resolutions: list[int], cloth_config: ClothConfig,
                            goal - problem.final_goal, axis=1))),
                        unstable=result.unstable, unstable_reason=result.unstable_reason,
                        layer_gap_mm=(1e3 * gap.gap if gap.found else None),
+                       reduction_layer_gap_mm=1e3 * keys.layer_gap,
                        n_keys=keys.n_keys, n_elements=keys.n_elements,
                        reached_threshold=keys.reached_threshold,
                        held=keys.n_keys == CLOTH_REFERENCE_KEYS[task])

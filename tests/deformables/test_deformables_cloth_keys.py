@@ -407,3 +407,15 @@ def test_bad_options_raise():
         ClothConfig(restarts=0)
     with pytest.raises(ValueError, match="coarse_faces"):
         ClothConfig(coarse_faces=40)
+
+
+@pytest.mark.parametrize("name", ["cloth_diagonal", "cloth_underneath"])
+def test_the_layer_gap_the_threshold_uses_is_reported(name):
+    """KeyParticles.layer_gap: the given gap when ClothConfig gives one, else the estimate,
+    which on the library's goals is their 5 mm stacking (within a tenth); the threshold is
+    0.35 of it times the stretch, so it can never be below 0.35 of the gap."""
+    g, given = _reduce(name, layer_gap=0.008)
+    assert given.layer_gap == 0.008
+    _, found = _reduce(name)
+    assert found.layer_gap == pytest.approx(goals.CLOTH_LAYER_GAP, rel=0.1)
+    assert found.threshold >= 0.35 * found.layer_gap - 1e-12

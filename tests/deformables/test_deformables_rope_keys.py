@@ -111,3 +111,11 @@ def test_bad_options_raise():
         rope_key_particles(goal.positions, threshold=0.0)
     with pytest.raises(ValueError, match="unknown rope fit"):
         RopeConfig(fit="spline")
+
+
+def test_rope_reports_no_layer_gap():
+    from deformables import rope_key_particles
+    from deformables.goals import make_goal
+
+    g = make_goal("rope_fold", n=40)
+    assert rope_key_particles(g.positions).layer_gap is None
