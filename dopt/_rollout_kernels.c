@@ -291,6 +291,8 @@ typedef struct {
   const mjtNum* length0; int nedge;     /* (nedge,) flex edge rest lengths (<= 0: skipped) */
   int iteration_cap, max_capped;        /* max_capped < 0: capped steps are only counted */
   mjtNum max_speed, max_penetration, max_strain;
+  const int* edge_grasps; int grasp_width;  /* (nedge, grasp_width) equality ids at each
+                                               edge's vertices, -1 pad: skipped while active */
 } bounds_t;
 
 /* one MjData's fields, read in place: flexvert_xpos (nvert, 3), flexedge_length (nedge),
@@ -300,6 +302,7 @@ typedef struct {
   const mjtNum* edge_length;
   const int* niter;
   int nisland;
+  const unsigned char* eq_active;      /* (neq,) mjtByte */
 } probe_t;
 
 /* running extremes of one rollout: max speed, penetration, strain, capped steps; and the
@@ -334,6 +337,12 @@ static int judge(const bounds_t* B, const probe_t* p, const mjtNum* qvel, mjtNum
   }
   for (int e = 0; e < B->nedge; e++) {
     if (B->length0[e] <= 0) continue;
+    int held = 0;
+    for (int j = 0; j < B->grasp_width; j++) {
+      const int q = B->edge_grasps[e * B->grasp_width + j];
+      if (q >= 0 && p->eq_active[q]) held = 1;
+    }
+    if (held) continue;
     const mjtNum r = fabs(p->edge_length[e] / B->length0[e] - 1.0);
     if (r > strain) { strain = r; ei = e; }
   }

@@ -77,20 +77,23 @@ class Bounds(ctypes.Structure):
                 ("length0", ctypes.c_void_p), ("nedge", ctypes.c_int),
                 ("iteration_cap", ctypes.c_int), ("max_capped", ctypes.c_int),
                 ("max_speed", ctypes.c_double), ("max_penetration", ctypes.c_double),
-                ("max_strain", ctypes.c_double)]
+                ("max_strain", ctypes.c_double),
+                ("edge_grasps", ctypes.c_void_p), ("grasp_width", ctypes.c_int)]
 
     @classmethod
     def of(cls, monitor: Monitor) -> Bounds:
         keep = [np.ascontiguousarray(monitor.groups, dtype=np.int32),
                 np.ascontiguousarray(monitor.planes, dtype=np.float64),
                 np.ascontiguousarray(monitor.radius, dtype=np.float64),
-                np.ascontiguousarray(monitor.length0, dtype=np.float64)]
+                np.ascontiguousarray(monitor.length0, dtype=np.float64),
+                np.ascontiguousarray(monitor.edge_grasps, dtype=np.int32)]
         b = monitor.bounds
         out = cls(keep[0].ctypes.data, len(keep[0]), keep[1].ctypes.data, len(keep[1]),
                   keep[2].ctypes.data, len(keep[2]), keep[3].ctypes.data, len(keep[3]),
                   monitor.iteration_cap,
                   -1 if b.max_capped_steps is None else b.max_capped_steps,
-                  b.max_speed, b.max_penetration, b.max_strain)
+                  b.max_speed, b.max_penetration, b.max_strain, keep[4].ctypes.data,
+                  keep[4].shape[1])
         out._keep = keep
         return out
 
@@ -99,7 +102,8 @@ class Probe(ctypes.Structure):
     """probe_t of the C file: the fields of one MjData the bounds read, in place."""
 
     _fields_ = [("vert_xpos", ctypes.c_void_p), ("edge_length", ctypes.c_void_p),
-                ("niter", ctypes.c_void_p), ("nisland", ctypes.c_int)]
+                ("niter", ctypes.c_void_p), ("nisland", ctypes.c_int),
+                ("eq_active", ctypes.c_void_p)]
 
     @classmethod
     def of(cls, data: mujoco.MjData) -> Probe:
@@ -109,8 +113,11 @@ class Probe(ctypes.Structure):
         for f in (data.flexvert_xpos, data.flexedge_length):
             if f.size and not f.flags.c_contiguous:
                 raise RuntimeError("unexpected layout of mjData flex fields")
+        eq = data.eq_active
+        if eq.size and (eq.itemsize != 1 or not eq.flags.c_contiguous):
+            raise RuntimeError("unexpected layout of mjData.eq_active")
         return cls(data.flexvert_xpos.ctypes.data, data.flexedge_length.ctypes.data,
-                   niter.ctypes.data, len(niter))
+                   niter.ctypes.data, len(niter), eq.ctypes.data)
 
 
 #: the columns of the C file's per-rollout stats (NSTAT)

@@ -10,7 +10,9 @@ through the floor and be thrown a metre up at 22 m/s with every state finite and
   flexcomp's and the picker's are);
 - penetration: the deepest flex vertex below a static plane (the floor), counting the
   vertex radius, r - n.(x - p) (m);
-- strain: the largest relative length change of a flex edge, |l / l0 - 1|;
+- strain: the largest relative length change of a flex edge, |l / l0 - 1|, over the edges
+  none of whose vertices an active equality holds (a picker's grasp of one particle is a point
+  load whose local stretch belongs to the grasp model; ``strain_at_grasps`` judges them too);
 - capped steps: steps whose constraint solver stopped at its iteration cap (counted; a bound
   only if ``max_capped_steps`` is set: CG at 30 iterations caps on cloth often and harmlessly).
 
@@ -49,6 +51,8 @@ class StabilityBounds:
             and reported, never unstable).
         unjudged_bodies: names of bodies whose speed is not judged: virtual actuators such as
             the pick scenes' massless picker, which snaps onto a particle at up to 15 m/s.
+        strain_at_grasps: judge the strain of edges at a vertex an active equality holds (a
+            grasped particle) too; by default they are left out.
     """
 
     max_speed: float = 5.0
@@ -56,6 +60,7 @@ class StabilityBounds:
     max_strain: float = 0.5
     max_capped_steps: int | None = None
     unjudged_bodies: tuple[str, ...] = ()
+    strain_at_grasps: bool = False
 
     def __post_init__(self):
         check_config(self, positive=("max_speed", "max_penetration", "max_strain"),
@@ -101,7 +106,9 @@ class Monitor:
     Attributes (read by the C loops too): groups (G, 3) int32 qvel indices of each body's
     linear DoFs, -1 padded; group_body (G,) their bodies; planes (nplane, 4) unit normal and
     offset n.p of each static plane geom; radius (V,) flex vertex radii; length0 (E,) rest
-    lengths of the flex edges; iteration_cap: the solver's iteration limit.
+    lengths of the flex edges; edge_grasps (E, w) int32 the equality constraints attaching a
+    body to either vertex of each edge, -1 padded (w = 0: none, or ``strain_at_grasps``);
+    iteration_cap: the solver's iteration limit.
     """
 
     def __init__(self, model: mujoco.MjModel, bounds: StabilityBounds = StabilityBounds()):
@@ -116,6 +123,8 @@ class Monitor:
         self.iteration_cap = int(model.opt.iterations)
         self.has_flex = model.nflexvert > 0
         self.has_edges = bool((self.length0 > 0).any())
+        self.edge_grasps = (np.zeros((len(self.length0), 0), np.int32)
+                            if bounds.strain_at_grasps else _edge_equalities(model))
         self._safe_length0 = np.where(self.length0 > 0, self.length0, 1.0)
 
     @property
@@ -124,6 +133,8 @@ class Monitor:
         items = ["qvel", "solver_niter"]
         if self.has_flex:
             items += ["flexvert_xpos", "flexedge_length"]
+        if self.edge_grasps.shape[1]:
+            items.append("eq_active")
         return tuple(items)
 
     # ---------------------------------------------------------------- per step values
@@ -152,13 +163,19 @@ class Monitor:
         i = depth.argmax(axis=-1)
         return np.take_along_axis(depth, i[..., None], -1)[..., 0], i
 
-    def strain(self, length: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """(..., E) edge lengths -> largest |l / l0 - 1| (...) and which edge."""
+    def strain(self, length: np.ndarray, eq_active: np.ndarray | None = None
+               ) -> tuple[np.ndarray, np.ndarray]:
+        """(..., E) edge lengths -> largest |l / l0 - 1| (...) and which edge; with eq_active
+        (..., neq), edges at a vertex an active equality holds are left out."""
         if not self.has_edges:
             z = np.zeros(length.shape[:-1])
             return z, z.astype(int)
         e = np.abs(length / self._safe_length0 - 1.0)
         e = np.where((self.length0 > 0) & ~np.isnan(e), e, -np.inf)
+        if eq_active is not None and self.edge_grasps.shape[1]:
+            active = np.concatenate([np.asarray(eq_active, bool),
+                                     np.zeros(eq_active.shape[:-1] + (1,), bool)], axis=-1)
+            e = np.where(active[..., self.edge_grasps].any(axis=-1), -np.inf, e)
         i = e.argmax(axis=-1)
         return np.take_along_axis(e, i[..., None], -1)[..., 0], i
 
@@ -217,7 +234,7 @@ class Scan:
         speed, sp_i = mon.speed(fields["qvel"])                             # (n, K)
         if mon.has_flex:
             pen, pen_i = mon.penetration(fields["flexvert_xpos"])
-            strain, st_i = mon.strain(fields["flexedge_length"])
+            strain, st_i = mon.strain(fields["flexedge_length"], fields.get("eq_active"))
         else:
             pen = strain = np.zeros_like(speed)
             pen_i = st_i = np.zeros(speed.shape, int)
@@ -303,6 +320,29 @@ def _linear_groups(model: mujoco.MjModel, skip: set[int]) -> tuple[np.ndarray, n
             bodies.append(b)
     return (np.array(groups, dtype=np.int32).reshape(-1, 3),
             np.array(bodies, dtype=np.int32))
+
+
+def _edge_equalities(model: mujoco.MjModel) -> np.ndarray:
+    """(E, w) int32: the equality constraints (between bodies) that attach a body to either
+    vertex of each flex edge, -1 padded; w is the most any edge has (0: none)."""
+    by_body: dict[int, list[int]] = {}
+    for i in range(model.neq):
+        if model.eq_objtype[i] != mujoco.mjtObj.mjOBJ_BODY:
+            continue
+        for body in (int(model.eq_obj1id[i]), int(model.eq_obj2id[i])):
+            if body > 0:                       # the world holds nothing by an equality
+                by_body.setdefault(body, []).append(i)
+    rows = []
+    for f in range(model.nflex):
+        a, n, v0 = model.flex_edgeadr[f], model.flex_edgenum[f], model.flex_vertadr[f]
+        for v in model.flex_edge[a:a + n]:
+            bodies = {int(model.flex_vertbodyid[v0 + int(k)]) for k in v}
+            rows.append(sorted({q for b in bodies for q in by_body.get(b, [])}))
+    width = max((len(r) for r in rows), default=0)
+    out = np.full((len(rows), width), -1, np.int32)
+    for e, r in enumerate(rows):
+        out[e, :len(r)] = r
+    return out
 
 
 def _static_planes(model: mujoco.MjModel) -> np.ndarray:
