@@ -292,9 +292,13 @@ def fig7_detail(r: Result, page: Path) -> list[str]:
                   f"{cem.get('iterations')} iterations per stage, horizon {cem.get('horizon')}."
                   + (f" Wall time {num(d.get('wall_s'), 0)} s." if "wall_s" in d else ""), ""]
     rope_ratio = any("end_to_end_ratio_mean" in e for e in d["methods"].values())
+    # the paper's rope metrics (m in the file): name in the summary -> column
+    extra = {k: c for k, c in (("straighten_error", "|end-to-end - length| (mm)"),
+                               ("matching_distance", "matching distance (mm)"))
+             if any(f"{k}_mean" in e for e in d["methods"].values())}
     header = ["method", "final cost (mm)", "per seed (mm)", "seeds", "candidates",
               "s / CEM iteration", "unstable trials", "unstable rollouts"] + (
-        ["end-to-end / length"] if rope_ratio else [])
+        ["end-to-end / length"] if rope_ratio else []) + list(extra.values())
     rows = []
     for m, e in d["methods"].items():
         row = [_label(m), fig7_cell(e),
@@ -307,6 +311,10 @@ def fig7_detail(r: Result, page: Path) -> list[str]:
         if rope_ratio:
             row.append(pm(num(e.get("end_to_end_ratio_mean")),
                           num(e.get("end_to_end_ratio_ci95"))))
+        for k in extra:
+            mean, ci = e.get(f"{k}_mean"), e.get(f"{k}_ci95")
+            row.append(pm(num(None if mean is None else 1e3 * mean, 1),
+                          num(None if ci is None else 1e3 * ci, 1)))
         rows.append(row)
     lines += table(header, rows)
     return lines + [""] + source_lines([r], page) + failed_lines(r)

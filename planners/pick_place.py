@@ -38,7 +38,13 @@ from dopt.stats import mean_ci
 from dopt.tasks.pick.cloth_scene import PHYSICS_PRESETS, ClothSceneConfig, make_cloth
 from dopt.tasks.pick.picker import PickerConfig
 from dopt.tasks.pick.rope_scene import RopeSceneConfig, make_rope
-from dopt.tasks.pick.scene import DeformableScene, PickPlaceTask, end_to_end, mean_distance
+from dopt.tasks.pick.scene import (
+    DeformableScene,
+    PickPlaceTask,
+    end_to_end,
+    matching_distance,
+    mean_distance,
+)
 from dopt.validation import check_config, check_int
 from planners.cem import CEM, CEMConfig
 from planners.scripted import ScriptedConfig, scripted
@@ -201,17 +207,31 @@ class Problem:
 
     @property
     def metric_names(self) -> tuple[str, ...]:
-        """The keys of ``metrics``: final_cost, and end_to_end_ratio for rope straightening."""
+        """The keys of ``metrics``: final_cost; rope straightening also end_to_end_ratio and
+        straighten_error, rope folding also matching_distance (the paper's Sec. IV-B
+        metrics)."""
         s = self.settings
-        return ("final_cost",) + (("end_to_end_ratio",) if s.goal == "straighten" else ())
+        if s.task == "rope" and s.goal == "straighten":
+            return ("final_cost", "end_to_end_ratio", "straighten_error")
+        if s.task == "rope":
+            return ("final_cost", "matching_distance")
+        return ("final_cost",)
 
     def metrics(self, state: np.ndarray) -> dict:
         """Metrics of a final state (ns,): ``final_cost`` the mean particle distance to the
-        final goal (m, Eq. 2); rope straightening also ``end_to_end_ratio`` (Sec. IV-B)."""
+        final goal (m, Eq. 2; the paper's cloth metric); rope straightening also
+        ``end_to_end_ratio`` (end-to-end distance over the rope's length) and
+        ``straighten_error`` = |end-to-end distance - length| (m, the paper's); rope folding
+        also ``matching_distance``, the mean distance under the best particle-to-goal
+        matching (m, the paper's bipartite-matching distance)."""
         p = self.scene.positions(state)
         out = {"final_cost": float(mean_distance(p, self.final_goal))}
-        if "end_to_end_ratio" in self.metric_names:
+        names = self.metric_names
+        if "end_to_end_ratio" in names:
             out["end_to_end_ratio"] = float(end_to_end(p) / self.settings.length)
+            out["straighten_error"] = float(abs(end_to_end(p) - self.settings.length))
+        if "matching_distance" in names:
+            out["matching_distance"] = matching_distance(p, self.final_goal)
         return out
 
 

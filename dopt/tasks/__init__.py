@@ -32,7 +32,13 @@ import numpy as np
 from dopt.tasks.pick.cloth_scene import ClothSceneConfig, make_cloth
 from dopt.tasks.pick.picker import NONE, PickerConfig
 from dopt.tasks.pick.rope_scene import RopeSceneConfig, make_rope
-from dopt.tasks.pick.scene import DeformableScene, PickPlaceTask, end_to_end, mean_distance
+from dopt.tasks.pick.scene import (
+    DeformableScene,
+    PickPlaceTask,
+    end_to_end,
+    matching_distance,
+    mean_distance,
+)
 from dopt.tasks.push.clutter import build_clutter
 from dopt.tasks.push.soft import build_soft, build_soft_rigid
 from dopt.tasks.push.task_model import TaskModel, planar_dofs, require_generator
@@ -64,5 +70,5 @@ def get_task(name: str) -> TaskBuilder:
 
 __all__ = ["NONE", "PICK_SCENES", "PUSH_TASKS", "ClothSceneConfig", "DeformableScene",
            "PickPlaceTask", "PickerConfig", "RopeSceneConfig", "SceneBuilder", "TaskBuilder",
-           "TaskModel", "end_to_end", "get_task", "make_cloth", "make_rope", "mean_distance",
-           "planar_dofs", "require_generator"]
+           "TaskModel", "end_to_end", "get_task", "make_cloth", "make_rope", "matching_distance",
+           "mean_distance", "planar_dofs", "require_generator"]

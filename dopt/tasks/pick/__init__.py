@@ -3,7 +3,7 @@
     picker.py       the picker (slide joints, grasp equalities), actions <-> control rows
     scene.py        floor_scene_xml, DeformableScene (particles <-> state rows), PickPlaceTask
                     (Eq. 2 of a population of action sequences in one rollout call),
-                    mean_distance, end_to_end
+                    mean_distance, end_to_end, matching_distance (the paper's metrics)
     cloth_scene.py  ClothSceneConfig, make_cloth; rope_scene.py: RopeSceneConfig, make_rope
 
 The scene builders are registered by name in ``dopt.tasks.PICK_SCENES``.

@@ -182,6 +182,21 @@ def end_to_end(positions: np.ndarray) -> np.ndarray:
     return np.linalg.norm(p[..., -1, :] - p[..., 0, :], axis=-1)
 
 
+def matching_distance(positions: np.ndarray, goal: np.ndarray) -> float:
+    """Mean particle distance under the best one-to-one matching of particles to goal
+    positions (the paper's rope-folding metric: bipartite matching, scipy's
+    ``linear_sum_assignment``): (N, 3), (N, 3) -> m. At most ``mean_distance``."""
+    from scipy.optimize import linear_sum_assignment
+
+    p, g = np.asarray(positions, dtype=float), np.asarray(goal, dtype=float)
+    if p.shape != g.shape or p.ndim != 2 or p.shape[1] != 3 or not len(p):
+        raise ValueError(f"positions and goal must both be (N, 3) with N >= 1, got {p.shape} "
+                         f"and {g.shape}")
+    d = np.linalg.norm(p[:, None] - g[None], axis=-1)
+    rows, cols = linear_sum_assignment(d)
+    return float(d[rows, cols].mean())
+
+
 class PickPlaceTask:
     """Bring a scene's object from a start state to a goal shape with pick-and-place actions.
 
