@@ -698,6 +698,32 @@ def ilqr_bench_section(results: list[Result], page: Path) -> list[str]:
     return lines[:-1]
 
 
+def clock_check_section(results: list[Result], page: Path) -> list[str]:
+    lines = ["## The virtual clock against the real clock", "",
+             "The same trials under both clocks: real (alone, in real time, on the machine's "
+             "threads) and virtual (one thread, CPU time / nominal threads). Ratios are "
+             "virtual / real; the lag should be within 10 % and the MPC cost intervals (90 %) "
+             "should overlap.", ""]
+    for r in results:
+        d = r.data
+        lines += [f"### {d.get('task')}: `{r.name}`", "", protocol_line(d), ""]
+        rows = []
+        for name, row in d["rows"].items():
+            real, virt = row.get("real", {}), row.get("virtual", {})
+            rows.append([name, str(real.get("n_trials")), num(real.get("lag_steps_mean"), 1),
+                         num(virt.get("lag_steps_mean"), 1), num(row.get("lag_ratio")),
+                         num(row.get("opt_ms_ratio")),
+                         pm(num(real.get("mpc_cost_mean"), 0), num(real.get("mpc_cost_ci90"), 0)),
+                         pm(num(virt.get("mpc_cost_mean"), 0), num(virt.get("mpc_cost_ci90"), 0)),
+                         "yes" if row.get("lag_within_10_percent") else "no",
+                         "yes" if row.get("cost_intervals_overlap") else "no"])
+        lines += table(["row", "trials", "lag real", "lag virtual", "lag ratio",
+                        "opt. time ratio", "cost real", "cost virtual", "lag within 10 %",
+                        "costs overlap"], rows)
+        lines += ["", *source_lines([r], page), ""]
+    return lines[:-1]
+
+
 def clock_model_section(results: list[Result], page: Path) -> list[str]:
     lines = ["## The model clock: CPU time of an MPC optimisation against |C|", "",
              "One optimisation of `rand` at theta random DoFs (|C| = 7 + theta) per point, the "
@@ -719,7 +745,7 @@ SECTIONS = {"key_particles": kp_section, "kp_compare": kp_compare_section,
             "kp_paper_scale": kp_paper_scale_section, "fig7": fig7_section,
             "table1": table1_section, "fig4": fig4_section, "physics": physics_section,
             "clock_model": clock_model_section, "svr_explain": svr_explain_section,
-            "ilqr_bench": ilqr_bench_section}
+            "ilqr_bench": ilqr_bench_section, "clock_check": clock_check_section}
 HEADLINES = {"key_particles": kp_headline, "fig7": fig7_headline, "table1": table1_headline,
              "fig4": fig4_headline}
 

@@ -1,0 +1,114 @@
+"""The virtual clock against the real one: the same trials (rows x seeds) under both clocks.
+
+The real clock runs each trial alone in real time on ``--real-threads`` simulation threads
+(default 2, this machine's cores: run it on an idle machine); the virtual clock runs each trial
+on one thread and divides its CPU time by ``--nominal-threads`` (default 2). Both use the rest
+of mpc.py's flags (``--preset paper`` for the authors' protocol). Trials are resumable files
+under OUT/real/trials and OUT/virtual/trials.
+
+Writes OUT/summary.json (experiment "clock_check"): per row and clock the mean lag (agent steps
+per optimisation), mean optimisation time, MPC cost mean and 90 % CI; the ratios virtual / real
+of the mean lag and of the mean optimisation time; whether the lag ratio is within 10 % of 1
+and whether the two cost intervals overlap. Exits 1 if a trial failed, 2 on a bad flag.
+
+    python experiments/clock_check.py --task clutter --preset paper \\
+        --rows baseline,rand-t5,sum-t10-r1 --trials 10 --out results/clock_check \\
+        --record docs/results/clock-check-clutter.json
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from dataclasses import asdict, replace
+
+import mpc as table1
+import numpy as np
+from cli_args import EPILOG, choices_type, guarded, positive_int, write_summary
+
+from dopt.stats import mean_ci
+from dopt.sweep import Trial, run_sweep
+from planners.svr_mpc import TABLE1_ROWS, row_label, run_trial, trial_key
+
+DEFAULT_ROWS = ("baseline", "rand-t5", "sum-t10-r1")
+
+
+def parser() -> argparse.ArgumentParser:
+    ap = argparse.ArgumentParser(prog="clock_check.py", description=__doc__, epilog=EPILOG,
+                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--rows", type=choices_type(tuple(TABLE1_ROWS), "row(s)"),
+                    default=",".join(DEFAULT_ROWS),
+                    help="comma-separated Table 1 rows (default %(default)s)")
+    ap.add_argument("--real-threads", type=positive_int, default=2,
+                    help="simulation threads of the real-clock trials (default %(default)s)")
+    table1.add_run_arguments(ap)
+    return ap
+
+
+def clock_trials(args, clock: str) -> list[Trial]:
+    """Every (seed, row) trial under ``clock`` (real: --real-threads threads; virtual: one)."""
+    out = []
+    for seed in range(args.seed, args.seed + args.trials):
+        for row in args.rows:
+            method, theta, rho = TABLE1_ROWS[row]
+            s = table1.settings_of(args, method, theta, rho, args.feedback == "on")
+            s = replace(s, clock=clock, threads=args.real_threads if clock == "real" else 1)
+            p = {**asdict(s), "seed": seed}
+            out.append(Trial(trial_key(p) + f"-threads{s.threads}", p))
+    return out
+
+
+def compare(records: dict[str, list[dict]]) -> dict:
+    """Per row: each clock's lag, optimisation time and cost statistics, and the ratios."""
+    out: dict = {}
+    for clock, recs in records.items():
+        for r in recs:
+            out.setdefault(row_label(r["params"]), {}).setdefault(clock, []).append(r["result"])
+    rows = {}
+    for row, by in out.items():
+        stats = {}
+        for clock, res in by.items():
+            cost_mean, cost_ci = mean_ci([v["mpc_cost"] for v in res], 0.90)
+            stats[clock] = {"n_trials": len(res),
+                            "lag_steps_mean": float(np.mean([v["lag_steps_mean"] for v in res])),
+                            "opt_ms_mean": float(np.mean([v["opt_ms_mean"] for v in res])),
+                            "mpc_cost_mean": cost_mean, "mpc_cost_ci90": cost_ci}
+        if {"real", "virtual"} <= set(stats):
+            r, v = stats["real"], stats["virtual"]
+            lag = v["lag_steps_mean"] / r["lag_steps_mean"]
+            stats["lag_ratio"] = lag
+            stats["opt_ms_ratio"] = v["opt_ms_mean"] / r["opt_ms_mean"]
+            stats["lag_within_10_percent"] = bool(abs(lag - 1) <= 0.10)
+            stats["cost_intervals_overlap"] = bool(
+                abs(v["mpc_cost_mean"] - r["mpc_cost_mean"])
+                <= v["mpc_cost_ci90"] + r["mpc_cost_ci90"])
+        rows[row] = stats
+    return rows
+
+
+@guarded("clock_check.py")
+def main(argv=None) -> int:
+    ap = parser()
+    args = table1.parse_args(argv, ap)
+    if args.feedback == "both":
+        ap.error("--feedback both is for experiments/mpc.py; give on or off here")
+    records, failed, commits = {}, {}, {}
+    for clock in ("real", "virtual"):
+        trials = clock_trials(args, clock)
+        res = run_sweep(run_trial, trials, args.out / clock, workers=1, fresh=args.fresh)
+        for key, err in res.failed.items():
+            print(f"FAILED {key}: {err}", file=sys.stderr)
+        wanted = {t.key for t in trials}
+        records[clock] = [r for k, r in res.records.items() if k in wanted]
+        failed.update(res.failed)
+        commits[clock] = res.commits
+    write_summary({"experiment": "clock_check", "task": args.task,
+                   **table1.protocol(args, clock_trials(args, "virtual")[0].params),
+                   "real_threads": args.real_threads, "rows": compare(records),
+                   "failed": failed, "trial_commits": commits},
+                  args.out, args.record, "experiments/clock_check.py", argv)
+    return 1 if failed else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
