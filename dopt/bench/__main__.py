@@ -1,4 +1,4 @@
-"""python -m dopt.bench {rollout,derivatives} [options]: print timings as JSON.
+"""python -m dopt.bench {rollout,derivatives,cloth-steps} [options]: print timings as JSON.
 
 The planner benches (ilqr, cem) are ``python -m planners.bench``."""
 
@@ -26,6 +26,16 @@ def main(argv=None) -> int:
                    help="objects in the active set besides the robot (2 -> |C| = 7 + 12 = 19)")
     p.add_argument("--centered", action="store_true", help="centred differences")
 
+    p = sub.add_parser("cloth-steps", help="ms per cloth step by MuJoCo stage and the warnings, "
+                                           "per physics preset and resolution")
+    p.add_argument("--sizes", default="12,25,40,64,100",
+                   help="comma-separated particles per side (default %(default)s)")
+    p.add_argument("--presets", default="default,accurate",
+                   help="comma-separated cloth physics presets (default %(default)s)")
+    p.add_argument("--record", default=None, metavar="PATH",
+                   help="also write the rows with their provenance to PATH (experiment "
+                        "\"cloth_steps\")")
+
     args = ap.parse_args(argv)
     if args.bench == "rollout":
         from dopt.bench.rollout import bench_rollout
@@ -34,6 +44,17 @@ def main(argv=None) -> int:
         from dopt.bench.rollout import bench_derivatives
         out = bench_derivatives(args.task, args.objects, args.T, args.threads, args.repeats,
                                 args.centered, args.seed)
+    elif args.bench == "cloth-steps":
+        from dopt.bench.cloth_steps import bench_cloth_steps
+        out = bench_cloth_steps([int(n) for n in args.sizes.split(",")],
+                                args.presets.split(","))
+        if args.record:
+            import json
+
+            from dopt.provenance import provenance
+            with open(args.record, "w") as f:
+                json.dump({"experiment": "cloth_steps", "rows": out,
+                           "provenance": provenance()}, f, indent=1)
     print_json(out)
     return 0
 

@@ -1,0 +1,83 @@
+"""Bench of a cloth step across resolutions: where MuJoCo spends it (its own timers), per
+physics preset, and the warnings each size prints.
+
+Per (preset, n): the scene is built and settled (``make_cloth``), then one pick-and-place
+action (the corner particle 0 lifted and moved 10 cm toward the sheet's centre) is stepped
+with ``mj_step``; MuJoCo's timers give ms per step for the step and its stages (position: of
+which kinematics, inertia, collision, constraint making; velocity; actuation; constraint solve;
+"other": the rest of the step, which holds the discrete integrator's implicit solve), and the
+warnings are listed: MuJoCo's counters of the stepped MjData by name, and every message
+MuJoCo's warning hook received while the scene was built, settled and stepped (e.g. "Flex
+stiffness is too ill-conditioned ...") with its count.
+"""
+
+from __future__ import annotations
+
+import time
+from collections import Counter
+
+import mujoco
+import numpy as np
+
+from dopt.state import INTEGRATION
+
+#: MuJoCo timer -> the name in the result (ms per step)
+TIMERS = {"mjTIMER_STEP": "step", "mjTIMER_POSITION": "position",
+          "mjTIMER_POS_KINEMATICS": "kinematics", "mjTIMER_POS_INERTIA": "inertia",
+          "mjTIMER_POS_COLLISION": "collision", "mjTIMER_POS_MAKE": "make_constraint",
+          "mjTIMER_VELOCITY": "velocity", "mjTIMER_ACTUATION": "actuation",
+          "mjTIMER_CONSTRAINT": "constraint_solve"}
+
+
+def bench_cloth_steps(sizes: list[int], presets: list[str]) -> list[dict]:
+    """One row per (preset, size): ms per step by stage, steps and ms per action, warnings."""
+    from dopt.tasks.pick.cloth_scene import ClothSceneConfig, make_cloth
+    from dopt.tasks.pick.picker import CONTROL_SPEC
+
+    rows = []
+    for preset in presets:
+        for n in sizes:
+            messages: Counter = Counter()
+            mujoco.set_mju_user_warning(lambda text, seen=messages: seen.update([text.strip()]))
+            try:
+                t0 = time.perf_counter()
+                scene = make_cloth(ClothSceneConfig.preset(preset, n=n))
+                build = time.perf_counter() - t0
+                row = _step_action(scene, CONTROL_SPEC)
+            finally:
+                mujoco.set_mju_user_warning(None)
+            config = ClothSceneConfig.preset(preset, n=n)
+            rows.append({"preset": preset, "n": n, "particles": n * n,
+                         "fields": {k: getattr(config, k) for k in
+                                    ("young", "timestep", "solver", "iterations",
+                                     "selfcollide")},
+                         **row, "build_s": build, "messages": dict(messages)})
+    return rows
+
+
+def _step_action(scene, control_spec) -> dict:
+    """ms per step by stage, steps and ms per action and warning counters of one action."""
+    m = scene.model
+    d = mujoco.MjData(m)
+    mujoco.mj_setState(m, d, scene.initial_state, INTEGRATION)
+    mujoco.mj_forward(m, d)
+    start = scene.positions(scene.initial_state)
+    toward = -start[0, :2] / max(float(np.linalg.norm(start[0, :2])), 1e-9)
+    rows_u = scene.picker.encode(np.array([[0]]), np.array([[[*(0.1 * toward), 0.05]]]))[0]
+    for i in range(len(d.timer)):
+        d.timer[i].duration, d.timer[i].number = 0.0, 0
+    for u in rows_u:
+        mujoco.mj_setState(m, d, u, control_spec)
+        mujoco.mj_step(m, d)
+    ms = {name: _ms(d, timer) for timer, name in TIMERS.items()}
+    ms["other"] = ms["step"] - (ms["position"] + ms["velocity"] + ms["actuation"]
+                                + ms["constraint_solve"])
+    return {"ms_per_step": ms, "steps_per_action": len(rows_u),
+            "ms_per_action": ms["step"] * len(rows_u),
+            "warnings": {mujoco.mjtWarning(i).name: int(w.number)
+                         for i, w in enumerate(d.warning) if w.number}}
+
+
+def _ms(d: mujoco.MjData, timer: str) -> float:
+    t = d.timer[getattr(mujoco.mjtTimer, timer)]
+    return 1e3 * t.duration / max(t.number, 1)
