@@ -92,8 +92,10 @@ CATALOGUE = (
              f"--record docs/results/table1-{task}.json", "table1", {"task": task})
        for task, n in (("clutter", 100), ("soft", 20), ("soft_rigid", 20))]
     + [Entry(SVR, "Fig. 4: rho, theta sweep",
-             "python experiments/rho_sweep.py --task clutter --rhos 0.1,0.3,1,3,10,30,100,300,"
-             "1000 --thetas 0,5,10,20 --trials 5", "fig4")])
+             "python experiments/rho_sweep.py --task clutter --preset paper --rhos "
+             "0,0.1,0.5,1,5,10,20,50,100,500,1e6 --thetas 0,5,10 --trials 20 --workers 2 "
+             "--paper-reference docs/results/paper-svr.json --out docs/results/runs/fig4-clutter "
+             "--record docs/results/fig4-clutter.json", "fig4")])
 
 
 # ------------------------------------------------------------------------------ loading

@@ -3,21 +3,27 @@
 Runs svr-sum (or --method svr-svd) for every (rho, theta) and baseline once per seed for the
 normalisation, all as resumable trials under OUT/trials (the MPC flags are experiments/mpc.py's).
 Writes OUT/summary.json, OUT/rho_sweep.csv and OUT/rho_sweep.png (normalised MPC cost and mean
-|C| vs rho, one line per theta; summary.json also holds "trial_commits", the code commits of
-the trial results). Exits 1 if a trial failed (listed under "failed" in summary.json) or the run
-failed (one line on stderr); 2 on a bad flag.
+|C| vs rho, one line per theta, with the authors' curves from --paper-reference; summary.json
+also holds "trial_commits", the code commits of the trial results). Exits 1 if a trial failed
+(listed under "failed" in summary.json) or the run failed (one line on stderr); 2 on a bad
+flag. The authors' grid under their protocol:
 
-    python experiments/rho_sweep.py --task clutter --rhos 0.1,1,10,100 --thetas 0,5,10 \\
-        --trials 5 --out results/rho
+    python experiments/rho_sweep.py --task clutter --preset paper \\
+        --rhos 0,0.1,0.5,1,5,10,20,50,100,500,1e6 --thetas 0,5,10 --trials 20 --workers 2 \\
+        --paper-reference docs/results/paper-svr.json --out docs/results/runs/fig4-clutter \\
+        --record docs/results/fig4-clutter.json
 """
 
 from __future__ import annotations
 
 import argparse
 import csv
+import json
 import sys
+from pathlib import Path
 
 import mpc as table1
+import numpy as np
 from cli_args import EPILOG, guarded, number_list, write_summary
 
 from planners.svr_mpc import row_name, summarize
@@ -32,6 +38,9 @@ def parser() -> argparse.ArgumentParser:
                     help="comma-separated theta values, integers >= 0 (default %(default)s)")
     ap.add_argument("--method", default="svr-sum", choices=["svr-sum", "svr-svd"],
                     help="SVR importance method (default %(default)s)")
+    ap.add_argument("--paper-reference", type=Path, default=None, metavar="PATH",
+                    help="the authors' data (experiments/paper_reference.py's file, e.g. "
+                         "docs/results/paper-svr.json) drawn beside ours")
     table1.add_run_arguments(ap)
     return ap
 
@@ -66,27 +75,45 @@ def main(argv=None) -> int:
             w = csv.DictWriter(f, fieldnames=list(rows[0]))
             w.writeheader()
             w.writerows(rows)
-        plot(rows, args.thetas, args.out / "rho_sweep.png", args.task, args.method)
+        paper = (json.loads(args.paper_reference.read_text())["tasks"]
+                 if args.paper_reference else None)
+        plot(rows, args.thetas, args.out / "rho_sweep.png", args.task, args.method, paper)
     return 1 if failed else 0
 
 
-def plot(rows, thetas, path, task, method) -> None:
+def plot(rows, thetas, path, task, method, paper: dict | None = None) -> None:
+    """Cost / baseline and mean |C| against rho, one colour per theta: our mean with its 90 %
+    CI band and our median ratio (dotted); with ``paper`` (the "tasks" of
+    experiments/paper_reference.py's file) the authors' median ratio and DoFs (dashed)."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    fig, (a, b) = plt.subplots(1, 2, figsize=(9, 3.5))
-    for theta in thetas:
+    fig, (a, b) = plt.subplots(1, 2, figsize=(11, 4))
+    theirs = (paper or {}).get(task, {}).get("fig4", [])
+    for i, theta in enumerate(thetas):
+        colour = plt.get_cmap("tab10")(i)
         pts = sorted((r for r in rows if r["theta"] == theta), key=lambda r: r["rho"])
-        x = [r["rho"] for r in pts]
-        y = [r["mpc_cost_normalised_mean"] for r in pts]
-        e = [r["mpc_cost_normalised_ci90"] for r in pts]
-        a.errorbar(x, y, yerr=e, marker="o", capsize=3, label=f"theta={theta}")
-        b.plot(x, [r["dofs_mean"] for r in pts], marker="o", label=f"theta={theta}")
+        x = np.array([r["rho"] for r in pts], dtype=float)
+        y = np.array([r["mpc_cost_normalised_mean"] for r in pts], dtype=float)
+        e = np.array([r["mpc_cost_normalised_ci90"] for r in pts], dtype=float)
+        a.plot(x, y, marker="o", color=colour, label=f"theta {theta}: mean, 90 % CI")
+        a.fill_between(x, y - e, y + e, color=colour, alpha=0.15)
+        a.plot(x, [r["mpc_cost_median_ratio"] for r in pts], ls=":", marker=".",
+               color=colour, label=f"theta {theta}: median ratio")
+        b.plot(x, [r["n_dofs_mean"] for r in pts], marker="o", color=colour,
+               label=f"theta {theta}")
+        ref = sorted((p for p in theirs if p["theta"] == theta), key=lambda p: p["rho"])
+        if ref:
+            a.plot([p["rho"] for p in ref], [p["median_ratio"] for p in ref], ls="--",
+                   color=colour, label=f"theta {theta}: authors' median ratio")
+            b.plot([p["rho"] for p in ref], [p["avg_dofs"] for p in ref], ls="--",
+                   color=colour, label=f"theta {theta}: authors'")
     for ax, label in ((a, "MPC cost / baseline"), (b, "mean |C|")):
-        ax.set_xscale("log")
+        ax.set_xscale("symlog", linthresh=0.1)
         ax.set_xlabel("rho")
         ax.set_ylabel(label)
-        ax.legend()
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=7)
     a.axhline(1.0, color="k", lw=0.5)
     fig.suptitle(f"{task}: {method}")
     fig.tight_layout()
