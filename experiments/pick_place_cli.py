@@ -90,6 +90,9 @@ def parser(task: str, doc: str, help_: dict) -> argparse.ArgumentParser:
     ap.add_argument("--physics", choices=tuple(PHYSICS_PRESETS), default="default",
                     help="physics preset of the scene (default %(default)s; the table: "
                          "docs/RESULTS.md, physics presets)")
+    ap.add_argument("--planning-physics", choices=tuple(PHYSICS_PRESETS), default=None,
+                    help="physics preset of CEM's sampled rollouts only (a cheaper planning "
+                         "model); executed plans and reported costs stay on --physics")
     ap.add_argument("--threads", type=nonneg_int, default=0,
                     help="simulation threads (0: one per core, the default)")
     ap.add_argument("--no-render", action="store_true",
@@ -108,7 +111,8 @@ def parse(ap: argparse.ArgumentParser, task: str, argv) -> tuple[argparse.Namesp
         cem = {k: getattr(args, k) for k in ("population", "elites", "iterations", "horizon")
                if getattr(args, k) is not None}
         s = replace(s, cem=replace(s.cem, **cem), threads=args.threads,
-                    n=args.n or s.n, bound=args.bound or s.bound, physics=args.physics)
+                    n=args.n or s.n, bound=args.bound or s.bound, physics=args.physics,
+                    planning_physics=args.planning_physics)
     except (ValueError, TypeError) as e:
         ap.error(str(e))
     if args.out is None:
@@ -125,6 +129,8 @@ def trial_key(method: str, seed: int, settings: PickPlaceSettings) -> str:
     """<method>-seed<seed>-<hash of the settings that change results (not threads)>."""
     d = settings.to_dict()
     d.pop("threads")
+    if d.get("planning_physics") is None:      # no planning model: the key leaves it out
+        d.pop("planning_physics", None)
     digest = hashlib.sha1(json.dumps(d, sort_keys=True).encode()).hexdigest()[:8]
     return f"{method}-seed{seed}-{digest}"
 

@@ -78,6 +78,8 @@ class PickPlaceSettings:
         side: cloth edge length (m); length: rope length (m).
         physics: the scene's physics preset (``ClothSceneConfig.preset`` /
             ``RopeSceneConfig.preset``: "fast", "default", "accurate").
+        planning_physics: a preset for CEM's sampled rollouts only (a cheaper planning model);
+            every executed plan and every reported cost stays on ``physics``. None: the same.
         threads: simulation threads (0: one per core); not part of a trial's identity.
     """
 
@@ -92,6 +94,7 @@ class PickPlaceSettings:
     length: float = 0.5
     physics: str = "default"
     threads: int = 0
+    planning_physics: str | None = None
 
     def __post_init__(self):
         if not isinstance(self.task, str) or self.task not in GOALS:
@@ -109,6 +112,9 @@ class PickPlaceSettings:
         check_config(self, positive=("bound", "side", "length"),
                      minimum={"n": 3, "threads": 0},
                      choices={"physics": tuple(PHYSICS_PRESETS)})
+        if self.planning_physics is not None and self.planning_physics not in PHYSICS_PRESETS:
+            raise ValueError(f"PickPlaceSettings.planning_physics must be None or one of "
+                             f"{sorted(PHYSICS_PRESETS)}, got {self.planning_physics!r}")
         for name in ("n", "threads"):          # numpy scalars -> Python (JSON-able to_dict)
             object.__setattr__(self, name, int(getattr(self, name)))
         for name in ("bound", "side", "length"):
@@ -193,12 +199,14 @@ class Stage:
 @dataclass(frozen=True)
 class Problem:
     """What a trial plans on: the scene, the start state (ns,), the stages in order; the last
-    stage's goal is what ``metrics`` measures against."""
+    stage's goal is what ``metrics`` measures against. planning_scene: the cheaper model CEM's
+    samples run on (``PickPlaceSettings.planning_physics``), or None."""
 
     settings: PickPlaceSettings
     scene: DeformableScene
     start_state: np.ndarray
     stages: Sequence[Stage]
+    planning_scene: DeformableScene | None = None
 
     @property
     def final_goal(self) -> np.ndarray:
@@ -257,13 +265,16 @@ def _cloth_problem(s: PickPlaceSettings, overrides: dict) -> Problem:
     fields = {"n": s.n, "side": s.side, "selfcollide": s.selfcollide, **overrides}
     scene = make_cloth(ClothSceneConfig.preset(s.physics, **fields),
                        PickerConfig(bound=(s.bound,) * 3))
+    planning = (make_cloth(ClothSceneConfig.preset(s.planning_physics, **fields),
+                           PickerConfig(bound=(s.bound,) * 3))
+                if s.planning_physics not in (None, s.physics) else None)
     lift = np.array([0.0, 0.0, scene.radius])          # the cloth rests at z = radius
     stages = []
     for goal in goal_sequence(f"cloth_{s.goal}", n=s.n, side=s.side):
         keys = cloth_key_particles(goal.positions, goal.faces,
                                    rest_positions=goal.rest_positions).indices
         stages.append(Stage(goal.name, goal.positions + lift, np.asarray(keys, dtype=int)))
-    return Problem(s, scene, scene.initial_state, stages)
+    return Problem(s, scene, scene.initial_state, stages, planning)
 
 
 def _rope_problem(s: PickPlaceSettings, seed: int, overrides: dict) -> Problem:
@@ -273,23 +284,31 @@ def _rope_problem(s: PickPlaceSettings, seed: int, overrides: dict) -> Problem:
     from deformables.rope import rope_key_particles
 
     config = RopeSceneConfig.preset(s.physics, **{"n": s.n, "length": s.length, **overrides})
+    planning_config = (RopeSceneConfig.preset(s.planning_physics, **{"n": s.n, "length": s.length,
+                                                                     **overrides})
+                       if s.planning_physics not in (None, s.physics) else None)
     picker = PickerConfig(bound=(s.bound,) * 3)
+    planning = None
     if s.goal == "straighten":
         start = rope_crumpled(np.random.default_rng(seed), s.n, s.length,
                               turn=CRUMPLE_TURN).positions.copy()
         start[:, 2] = config.radius + 1e-4
         scene = make_rope(config, picker, positions=start)
+        if planning_config is not None:
+            planning = make_rope(planning_config, picker, positions=start)
         p0 = scene.positions(scene.initial_state)
         direction = p0[-1] - p0[0]
         goal = rope_straight(s.n, s.length, float(np.arctan2(direction[1], direction[0])))
         goal = replace(goal, positions=goal.positions + [*(0.5 * (p0[0] + p0[-1]))[:2], 0.0])
     else:
         scene = make_rope(config, picker)
+        if planning_config is not None:
+            planning = make_rope(planning_config, picker)
         goal = rope_crossed_triangle(s.n, s.length)
     keys = np.asarray(rope_key_particles(goal.positions).indices, dtype=int)
     positions = goal.positions.copy()
     positions[:, 2] = config.radius                     # the goal rests on the floor
-    return Problem(s, scene, scene.initial_state, [Stage(goal.name, positions, keys)])
+    return Problem(s, scene, scene.initial_state, [Stage(goal.name, positions, keys)], planning)
 
 
 # ------------------------------------------------------------------------------ planners
@@ -356,7 +375,10 @@ class CEMPlanner:
         cand = self.candidate_particles(keys, task.n_particles)
         res = self.cem.plan(task, cand, self.generator, on_iteration)
         done = task.execute(res.particles, res.displacements)
-        return StagePlan(res.particles, res.displacements, done.state, float(res.cost),
+        # the executed plan's cost, on the task's own scene (CEM may have planned on a cheaper
+        # model; without one the two are the same rollout)
+        return StagePlan(res.particles, res.displacements, done.state,
+                         float(task.cost(done.state)),
                          res.cost_history.tolist(), len(cand),
                          res.seconds_per_iteration.tolist(), res.n_evaluated + 1,
                          res.n_nonfinite + int(done.unstable), done.unstable, done.reason)
@@ -443,13 +465,17 @@ def run_problem(problem: Problem, planner: PickPlanner, *, method: str = "", see
     own = service is None
     svc = service or RolloutService(problem.scene.scene,
                                     RolloutConfig(threads=problem.settings.threads))
+    plan_svc = (RolloutService(problem.planning_scene.scene,
+                               RolloutConfig(threads=problem.settings.threads))
+                if problem.planning_scene is not None else None)
     try:
         state = problem.start_state
         history, stage_of, n_cand, seconds, actions, stage_costs = [], [], [], [], [], []
         n_rollouts = n_unstable = 0
         reasons = []
         for k, stage in enumerate(problem.stages):
-            task = PickPlaceTask(problem.scene, stage.goal, state, svc)
+            task = PickPlaceTask(problem.scene, stage.goal, state, svc,
+                                 problem.planning_scene, plan_svc)
             plan = planner.plan(task, stage.keys, on_iteration)
             state = plan.final_state
             history += plan.cost_history
@@ -472,6 +498,8 @@ def run_problem(problem: Problem, planner: PickPlanner, *, method: str = "", see
     finally:
         if own and hasattr(svc, "close"):
             svc.close()
+        if plan_svc is not None:
+            plan_svc.close()
     return PickPlaceResult(method, int(seed), problem.metrics(state), history, stage_of,
                            stage_costs, n_cand, float(np.mean(seconds)) if seconds else None,
                            actions, np.asarray(state), time.perf_counter() - start,

@@ -208,11 +208,18 @@ class PickPlaceTask:
         goal: (N, 3) goal particle positions (m).
         start_state: (ns,) state to plan from (default: the scene's initial state).
         rollout: the rollout service (default: a new one on every core).
+        planning_scene: a cheaper model of the same object (e.g. another physics preset of the
+            same resolution) on which ``evaluate`` simulates the population; ``execute``, and
+            every cost reported of an executed plan, stay on ``scene``. Its states must have
+            the layout of ``scene``'s (the start state carries over).
+        planning_rollout: the planning scene's rollout service.
     """
 
     def __init__(self, scene: DeformableScene, goal: np.ndarray,
                  start_state: np.ndarray | None = None,
-                 rollout: RolloutService | None = None):
+                 rollout: RolloutService | None = None,
+                 planning_scene: DeformableScene | None = None,
+                 planning_rollout: RolloutService | None = None):
         if not isinstance(scene, DeformableScene):
             raise TypeError(f"scene must be a DeformableScene, got {type(scene).__name__}")
         if rollout is not None and not callable(getattr(rollout, "rollout", None)):
@@ -226,6 +233,19 @@ class PickPlaceTask:
         self.picker = scene.picker
         self.n_evaluated = 0
         self.n_unstable = 0
+        self.planning = None
+        if planning_scene is not None:
+            if not isinstance(planning_scene, DeformableScene):
+                raise TypeError(f"planning_scene must be a DeformableScene, got "
+                                f"{type(planning_scene).__name__}")
+            if (planning_scene.n_particles != scene.n_particles
+                    or planning_scene.scene.nstate != scene.scene.nstate):
+                raise ValueError(
+                    f"planning_scene must model the same object: {planning_scene.n_particles} "
+                    f"particles and {planning_scene.scene.nstate} state entries against "
+                    f"{scene.n_particles} and {scene.scene.nstate}")
+            self.planning = PickPlaceTask(planning_scene, self.goal, self.start_state,
+                                          planning_rollout)
 
     @property
     def n_particles(self) -> int:
@@ -256,9 +276,11 @@ class PickPlaceTask:
     def evaluate(self, particles, displacements):
         """Costs of a population: (P, H) ints (NONE = -1), (P, H, 3) metres -> (P,) torch
         float64 tensor (numpy in, numpy out). An unstable rollout (``dopt.stability``) costs
-        +inf; ``n_evaluated`` and ``n_unstable`` count them over the task's life."""
-        res = self.rollout(particles, displacements)
-        costs = np.where(res.stability.unstable, np.inf, self.cost(res.final_states))
+        +inf; ``n_evaluated`` and ``n_unstable`` count them over the task's life. With a
+        planning scene, the population is simulated there."""
+        model = self.planning or self
+        res = model.rollout(particles, displacements)
+        costs = np.where(res.stability.unstable, np.inf, model.cost(res.final_states))
         self.n_evaluated += len(costs)
         self.n_unstable += res.stability.n_unstable
         if _is_torch(particles) or _is_torch(displacements):
