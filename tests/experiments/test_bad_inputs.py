@@ -16,6 +16,7 @@ from pathlib import Path
 from types import SimpleNamespace
 
 import cli_args
+import clock_check
 import cloth_fold
 import key_particles
 import mpc
@@ -25,11 +26,13 @@ import pytest
 import report
 import rho_sweep
 import rope
+import svr_explain
 
 ROOT = Path(__file__).resolve().parents[2]
 EXPERIMENTS = ROOT / "experiments"
 SCRIPTS = {"cloth_fold": cloth_fold, "rope": rope, "mpc": mpc, "rho_sweep": rho_sweep,
-           "key_particles": key_particles, "report": report}
+           "key_particles": key_particles, "report": report, "svr_explain": svr_explain,
+           "clock_check": clock_check}
 
 
 @pytest.fixture
@@ -110,6 +113,16 @@ BAD = [
     ("mpc", ["--methods", ""], "argument --methods: unknown method(s) ['']"),
     ("mpc", ["--methods", "naive,naive"], "argument --methods: method(s) naive given twice"),
     ("rho_sweep", ["--method", "rand"], "argument --method: invalid choice: 'rand'"),
+    # the paper protocol's flags, and the scripts built on mpc.py's run flags
+    ("mpc", ["--preset", "authors"], "argument --preset: invalid choice: 'authors'"),
+    ("mpc", ["--fd-skip", "0"], "argument --fd-skip: must be >= 1, got 0"),
+    ("mpc", ["--nominal-threads", "0"], "argument --nominal-threads: must be > 0"),
+    ("mpc", ["--keypoints", "often"], "argument --keypoints: invalid choice: 'often'"),
+    ("svr_explain", ["--rows", "sum-t7"], "argument --rows: unknown row(s) ['sum-t7']"),
+    ("svr_explain", ["--bins", "0"], "argument --bins: must be >= 1, got 0"),
+    ("svr_explain", ["--feedback", "both"], "--feedback both is for experiments/mpc.py"),
+    ("clock_check", ["--real-threads", "0"], "argument --real-threads: must be >= 1, got 0"),
+    ("clock_check", ["--clock", "wall"], "argument --clock: invalid choice: 'wall'"),
 ]
 
 
@@ -401,7 +414,8 @@ def _parsers() -> dict:
     return {"cloth_fold": pick_place_cli.parser("cloth", "", cloth_fold.HELP),
             "rope": pick_place_cli.parser("rope", "", rope.HELP), "mpc": mpc.parser(),
             "rho_sweep": rho_sweep.parser(), "key_particles": key_particles.parser(),
-            "report": report.parser()}
+            "report": report.parser(), "svr_explain": svr_explain.parser(),
+            "clock_check": clock_check.parser()}
 
 
 def _flags(ap) -> set:
