@@ -449,7 +449,8 @@ def table1_headline(r: Result) -> str:
         cost = pm(num(m.get("mpc_cost_normalised_mean")), num(m.get("mpc_cost_normalised_ci90")))
         parts.append(f"{name} {cost} ({num(m.get('opt_ms_mean'), 0)} ms, "
                      f"{num(m.get('n_dofs_mean', m.get('dofs_mean')), 1)} DoFs)")
-    return ("MPC cost / baseline (opt. time, DoFs): " + "; ".join(parts)
+    return (f"protocol `{r.data.get('preset', 'ours')}`; MPC cost / baseline (opt. time, "
+            f"DoFs): " + "; ".join(parts)
             + f" ({trials} trial{'s' if trials != 1 else ''} each)")
 
 
