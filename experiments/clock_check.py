@@ -20,15 +20,14 @@ from __future__ import annotations
 
 import argparse
 import sys
-from dataclasses import asdict, replace
 
 import mpc as table1
 import numpy as np
-from cli_args import EPILOG, choices_type, guarded, positive_int, write_summary
+from cli_args import EPILOG, guarded, positive_int, write_summary
 
 from dopt.stats import mean_ci
-from dopt.sweep import Trial, run_sweep
-from planners.svr_mpc import TABLE1_ROWS, row_label, run_trial, trial_key
+from dopt.sweep import Trial
+from planners.svr_mpc import row_label
 
 DEFAULT_ROWS = ("baseline", "rand-t5", "sum-t10-r1")
 
@@ -36,9 +35,7 @@ DEFAULT_ROWS = ("baseline", "rand-t5", "sum-t10-r1")
 def parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(prog="clock_check.py", description=__doc__, epilog=EPILOG,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--rows", type=choices_type(tuple(TABLE1_ROWS), "row(s)"),
-                    default=",".join(DEFAULT_ROWS),
-                    help="comma-separated Table 1 rows (default %(default)s)")
+    table1.add_rows_argument(ap, DEFAULT_ROWS)
     ap.add_argument("--real-threads", type=positive_int, default=2,
                     help="simulation threads of the real-clock trials (default %(default)s)")
     table1.add_run_arguments(ap)
@@ -47,15 +44,9 @@ def parser() -> argparse.ArgumentParser:
 
 def clock_trials(args, clock: str) -> list[Trial]:
     """Every (seed, row) trial under ``clock`` (real: --real-threads threads; virtual: one)."""
-    out = []
-    for seed in range(args.seed, args.seed + args.trials):
-        for row in args.rows:
-            method, theta, rho = TABLE1_ROWS[row]
-            s = table1.settings_of(args, method, theta, rho, args.feedback == "on")
-            s = replace(s, clock=clock, threads=args.real_threads if clock == "real" else 1)
-            p = {**asdict(s), "seed": seed}
-            out.append(Trial(trial_key(p) + f"-threads{s.threads}", p))
-    return out
+    threads = args.real_threads if clock == "real" else 1
+    return [Trial(t.key + f"-threads{threads}", t.params)
+            for t in table1.make_trials(args, clock=clock, threads=threads)]
 
 
 def compare(records: dict[str, list[dict]]) -> dict:
@@ -89,17 +80,11 @@ def compare(records: dict[str, list[dict]]) -> dict:
 @guarded("clock_check.py")
 def main(argv=None) -> int:
     ap = parser()
-    args = table1.parse_args(argv, ap)
-    if args.feedback == "both":
-        ap.error("--feedback both is for experiments/mpc.py; give on or off here")
+    args = table1.parse_args(argv, ap, one_feedback=True)
     records, failed, commits = {}, {}, {}
     for clock in ("real", "virtual"):
-        trials = clock_trials(args, clock)
-        res = run_sweep(run_trial, trials, args.out / clock, workers=1, fresh=args.fresh)
-        for key, err in res.failed.items():
-            print(f"FAILED {key}: {err}", file=sys.stderr)
-        wanted = {t.key for t in trials}
-        records[clock] = [r for k, r in res.records.items() if k in wanted]
+        records[clock], res = table1.run(args, clock_trials(args, clock), out=args.out / clock,
+                                         workers=1)
         failed.update(res.failed)
         commits[clock] = res.commits
     write_summary({"experiment": "clock_check", "task": args.task,

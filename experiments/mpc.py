@@ -80,9 +80,7 @@ FEEDBACK = {"off": (False,), "on": (True,), "both": (False, True)}
 def parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(prog="mpc.py", description=__doc__, epilog=EPILOG,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--rows", type=choices_type(tuple(TABLE1_ROWS), "row(s)"), default=None,
-                    help="comma-separated Table 1 rows by name (" + ", ".join(TABLE1_ROWS)
-                    + "); default with --preset paper: all nine")
+    add_rows_argument(ap, None)
     ap.add_argument("--methods", type=choices_type(METHODS, "method(s)"),
                     default=",".join(METHODS),
                     help="comma-separated DoF-selection methods, with --rho and --theta, "
@@ -97,6 +95,15 @@ def parser() -> argparse.ArgumentParser:
     ap.add_argument("--no-render", action="store_true",
                     help="skip the renders of the final scenes (final_<method>.png)")
     return ap
+
+
+def add_rows_argument(ap: argparse.ArgumentParser, default: tuple[str, ...] | None) -> None:
+    """--rows: Table 1 rows by name (``default``; None: all nine with --preset paper)."""
+    ap.add_argument("--rows", type=choices_type(tuple(TABLE1_ROWS), "row(s)"),
+                    default=None if default is None else ",".join(default),
+                    help="comma-separated Table 1 rows by name (" + ", ".join(TABLE1_ROWS)
+                    + "); default " + ("with --preset paper: all nine" if default is None
+                                       else ",".join(default)))
 
 
 def add_run_arguments(ap: argparse.ArgumentParser) -> None:
@@ -163,9 +170,14 @@ def add_run_arguments(ap: argparse.ArgumentParser) -> None:
                     help="also write the summary to PATH (docs/results/...)")
 
 
-def parse_args(argv=None, ap: argparse.ArgumentParser | None = None) -> argparse.Namespace:
+def parse_args(argv=None, ap: argparse.ArgumentParser | None = None,
+               one_feedback: bool = False) -> argparse.Namespace:
+    """The flags of ``ap`` (default: this script's) checked as usage errors; ``one_feedback``:
+    the script runs one feedback setting, so --feedback both is refused."""
     ap = ap or parser()
     args = ap.parse_args(argv)
+    if one_feedback and args.feedback == "both":
+        ap.error(f"--feedback both is for experiments/mpc.py; give on or off to {ap.prog}")
     if args.ray is not None and importlib.util.find_spec("ray") is None:
         ap.error("--ray needs the ray package (pip install 'dopt[cluster]')")
     if args.quick:
@@ -216,13 +228,15 @@ def grid(args, methods=None, rhos=None, thetas=None) -> list[tuple]:
             for t in thetas or [_theta(getattr(args, "theta", None), m)]]
 
 
-def make_trials(args, methods=None, rhos=None, thetas=None) -> list[Trial]:
-    """Every (seed, row, feedback) trial of the flags (``grid``)."""
+def make_trials(args, methods=None, rhos=None, thetas=None, **override) -> list[Trial]:
+    """Every (seed, row, feedback) trial of the flags (``grid``); ``override``: settings
+    fields replaced in every trial (e.g. clock="real")."""
     out = []
     for seed in range(args.seed, args.seed + args.trials):
         for method, theta, rho in grid(args, methods, rhos, thetas):
             for feedback in FEEDBACK[args.feedback]:
-                p = {**asdict(settings_of(args, method, theta, rho, feedback)), "seed": seed}
+                s = replace(settings_of(args, method, theta, rho, feedback), **override)
+                p = {**asdict(s), "seed": seed}
                 out.append(Trial(trial_key(p), p))
     return out
 
@@ -247,13 +261,17 @@ def _task_slowdown(task: str) -> float:
     return float(PUSH_TASKS[task](np.random.default_rng(0)).slowdown)
 
 
-def run(args, trials) -> tuple[list, SweepResult]:
-    """Run (or resume; ``args.fresh``: recompute) the trials; returns their records and the
-    sweep's result (``failed``: {key: error}, ``commits``: code commits of the records)."""
+def run(args, trials, fn=None, out: Path | None = None,
+        workers: int | None = None) -> tuple[list, SweepResult]:
+    """Run (or resume; ``args.fresh``: recompute) the trials with ``fn`` (default one MPC
+    episode) under ``out`` (default --out), on ``workers`` processes (default --workers, or
+    Ray with --ray); returns their records and the sweep's result (``failed``: {key: error},
+    ``commits``: code commits of the records)."""
     from tqdm import tqdm
 
     bar = tqdm(total=len(trials), desc=f"{args.task} trials", unit="trial")
-    res = run_sweep(run_trial, trials, args.out, workers=args.workers, ray_address=args.ray,
+    res = run_sweep(fn or run_trial, trials, out or args.out, workers=workers or args.workers,
+                    ray_address=None if workers else args.ray,
                     progress=lambda key, rec: bar.update(1), fresh=args.fresh)
     bar.update(len(res.skipped))
     bar.close()

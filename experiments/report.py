@@ -232,6 +232,16 @@ def failed_lines(r: Result) -> list[str]:
         f"- `{k}`: {cell(v)}" for k, v in sorted(failed.items())]
 
 
+def section(title: str, intro: str | None, results: list[Result], page: Path, body,
+            key=lambda r: (str(r.data.get("task")), r.name)) -> list[str]:
+    """A page section: "## title", its intro, then per result file (in ``key`` order) the
+    lines ``body(r)`` gives (its heading, settings and tables), its source and failed trials."""
+    lines = [f"## {title}", ""] + ([intro, ""] if intro else [])
+    for r in sorted(results, key=key):
+        lines += [*body(r), "", *source_lines([r], page), *failed_lines(r), ""]
+    return lines[:-1]
+
+
 def _label(method: str) -> str:
     return FIG7_LABELS.get(method, method)
 
@@ -333,15 +343,7 @@ def _unstable_trials(e: dict) -> str:
 
 # ------------------------------------------------------------------------ physics presets
 def physics_section(results: list[Result], page: Path) -> list[str]:
-    lines = ["## Physics presets: `python -m planners.bench cloth|rope`", "",
-             "Per setting and size: CPU ms per simulated step (wall x threads / steps of the "
-             "random-action batch), steps per pick-and-place action, rollouts the stability "
-             "verdict flags per 1000 random actions (uniform displacements within the picker "
-             "bound, random particles, half from the flat start and half after a fold) and "
-             "why, the edge strain those actions reach (median / 90th percentile / max), and "
-             "the scripted policy's error on each goal (mm; `!` marks an executed plan the "
-             "verdict flagged). Presets: the `preset:` rows.", ""]
-    for r in sorted(results, key=lambda r: r.data.get("bench", "")):
+    def body(r: Result) -> list[str]:
         d = r.data
         goals = list((d["rows"][0].get("scripted") or {}).keys()) if d["rows"] else []
         header = ["setting", "n", "ms / step", "steps / action", "unstable / 1000 actions",
@@ -363,9 +365,19 @@ def physics_section(results: list[Result], page: Path) -> list[str]:
                                                               "strain_max")),
                          *[mm(sc[g]["error_mm"] / 1e3) + (" !" if sc[g]["unstable"] else "")
                            for g in goals]])
-        lines += [f"### {d.get('bench')}: {d.get('actions_per_setting')} random actions per "
-                  f"setting", "", *table(header, rows), "", *source_lines([r], page)]
-    return lines
+        return [f"### {d.get('bench')}: {d.get('actions_per_setting')} random actions per "
+                f"setting", "", *table(header, rows)]
+
+    return section("Physics presets: `python -m planners.bench cloth|rope`",
+                   "Per setting and size: CPU ms per simulated step (wall x threads / steps of "
+                   "the random-action batch), steps per pick-and-place action, rollouts the "
+                   "stability verdict flags per 1000 random actions (uniform displacements "
+                   "within the picker bound, random particles, half from the flat start and "
+                   "half after a fold) and why, the edge strain those actions reach (median / "
+                   "90th percentile / max), and the scripted policy's error on each goal (mm; "
+                   "`!` marks an executed plan the verdict flagged). Presets: the `preset:` "
+                   "rows.", results, page, body, key=lambda r: r.data.get("bench", ""))
+
 
 
 def fig7_headline(r: Result) -> str:
@@ -396,18 +408,14 @@ def mpc_cells(m: dict) -> list[str]:
 
 
 def table1_section(results: list[Result], page: Path) -> list[str]:
-    lines = ["## State-vector reduction, Table 1: iLQR-SVR in asynchronous MPC", "",
-             "MPC cost normalised by the baseline's on the same task instance; mean and 90 % CI "
-             "over the trials that are not outliers (goal object too far from the goal at the "
-             "end), median over all.", ""]
-    for r in sorted(results, key=lambda r: (str(r.data.get("task")), r.name)):
+    def body(r: Result) -> list[str]:
         d = r.data
-        theta = d.get("theta")
-        theta_text = (", ".join(f"{k} {v}" for k, v in theta.items())
-                      if isinstance(theta, dict) else str(theta))
-        lines += [f"### Table 1, {d.get('task')}: `{r.name}`"
-                  + (" (quick)" if r.quick else ""), "", protocol_line(d), ""]
+        lines = [f"### Table 1, {d.get('task')}: `{r.name}`" + (" (quick)" if r.quick else ""),
+                 "", protocol_line(d), ""]
         if "row_settings" not in d:
+            theta = d.get("theta")
+            theta_text = (", ".join(f"{k} {v}" for k, v in theta.items())
+                          if isinstance(theta, dict) else str(theta))
             lines[-2] += f" rho {d.get('rho')}; theta: {theta_text}; slowdown {d.get('slowdown')}."
         lines += table(["method", *MPC_HEADER],
                        [[name, *mpc_cells(m)] for name, m in d["methods"].items()])
@@ -422,8 +430,12 @@ def table1_section(results: list[Result], page: Path) -> list[str]:
                              f"{f.get('better')}/{f.get('pairs')}",
                              f"{f.get('success_open_loop')} -> {f.get('success_feedback')}"]
                             for name, f in fb.items()])
-        lines += ["", *source_lines([r], page), *failed_lines(r), ""]
-    return lines[:-1]
+        return lines
+
+    return section("State-vector reduction, Table 1: iLQR-SVR in asynchronous MPC",
+                   "MPC cost normalised by the baseline's on the same task instance; mean and "
+                   "90 % CI over the trials that are not outliers (goal object too far from the "
+                   "goal at the end), median over all.", results, page, body)
 
 
 def protocol_line(d: dict) -> str:
@@ -456,21 +468,19 @@ def table1_headline(r: Result) -> str:
 
 # --------------------------------------------------------------------------- fig4 (SVR)
 def fig4_section(results: list[Result], page: Path) -> list[str]:
-    lines = ["## State-vector reduction, Fig. 4: importance threshold rho and random DoFs "
-             "theta", ""]
-    for r in sorted(results, key=lambda r: (str(r.data.get("task")), r.name)):
+    def body(r: Result) -> list[str]:
         d = r.data
         points = sorted(d.get("points") or [], key=lambda p: (p.get("theta"), p.get("rho")))
-        lines += [f"### Fig. 4, {d.get('task')}, {d.get('method')}: `{r.name}`"
-                  + (" (quick)" if r.quick else ""), ""]
-        if points:
-            lines += table(["rho", "theta", *MPC_HEADER],
-                           [[str(p.get("rho")), str(p.get("theta")), *mpc_cells(p)]
-                            for p in points])
-        else:
-            lines += ["No points (every trial failed?)."]
-        lines += ["", *source_lines([r], page), *failed_lines(r), ""]
-    return lines[:-1]
+        lines = [f"### Fig. 4, {d.get('task')}, {d.get('method')}: `{r.name}`"
+                 + (" (quick)" if r.quick else ""), ""]
+        if not points:
+            return lines + ["No points (every trial failed?)."]
+        return lines + table(["rho", "theta", *MPC_HEADER],
+                             [[str(p.get("rho")), str(p.get("theta")), *mpc_cells(p)]
+                              for p in points])
+
+    return section("State-vector reduction, Fig. 4: importance threshold rho and random DoFs "
+                   "theta", None, results, page, body)
 
 
 def fig4_headline(r: Result) -> str:
@@ -492,16 +502,12 @@ def _short_task(task: str) -> str:
 
 
 def kp_section(results: list[Result], page: Path) -> list[str]:
-    lines = ["## Key particles, Fig. 4 and Sec. IV-C.1: key particles of each goal", "",
-             "Alg. 1 on each goal: the simplified model's elements (rope: segments; cloth: "
-             "triangles), its key particles, its error and threshold (cloth: in the z-stretched "
-             "space) and the wall time; paper: the counts the paper reports.", ""]
-    for r in results:
+    def body(r: Result) -> list[str]:
         d = r.data
         paper = d.get("paper") or {}
-        lines += [f"### Key particles: `{r.name}`" + (" (quick)" if r.quick else ""), "",
-                  f"Cloth {d.get('cloth_particles_per_side')} x "
-                  f"{d.get('cloth_particles_per_side')} particles; seed {d.get('seed')}.", ""]
+        lines = [f"### Key particles: `{r.name}`" + (" (quick)" if r.quick else ""), "",
+                 f"Cloth {d.get('cloth_particles_per_side')} x "
+                 f"{d.get('cloth_particles_per_side')} particles; seed {d.get('seed')}.", ""]
         rows = []
         for task, e in (d.get("tasks") or {}).items():
             p = paper.get(task, {})
@@ -523,8 +529,13 @@ def kp_section(results: list[Result], page: Path) -> list[str]:
             lines += ["", *kp_noise(rob["noise"])]
         if rob.get("simulated"):
             lines += ["", *kp_simulated(rob["simulated"])]
-        lines += ["", *source_lines([r], page), ""]
-    return lines[:-1]
+        return lines
+
+    return section("Key particles, Fig. 4 and Sec. IV-C.1: key particles of each goal",
+                   "Alg. 1 on each goal: the simplified model's elements (rope: segments; cloth: "
+                   "triangles), its key particles, its error and threshold (cloth: in the "
+                   "z-stretched space) and the wall time; paper: the counts the paper reports.",
+                   results, page, body)
 
 
 def kp_grid(rows: list[dict]) -> list[str]:
@@ -602,19 +613,8 @@ def _histogram_text(counts: dict) -> str:
 
 
 def kp_compare_section(results: list[Result], page: Path) -> list[str]:
-    lines = ["## Key particles: the paper's pipeline against the default", "",
-             "`python -m deformables.bench compare`: the same cloth goals (four folds x "
-             "resolutions x four triangulations, exact and with Gaussian noise) reduced by "
-             "`ClothConfig()` and by `ClothConfig.paper()` (one-sided Hausdorff distance in "
-             "metres, one decimation per size from the goal, no restarts, no panel projection, "
-             "no re-triangulation). Per fold and noise level: goals whose key count is the "
-             "reference (diagonal 4, side 6, reflective 8, underneath 10), goals whose "
-             "reduction reached its threshold, the face and key counts seen (goals), and the "
-             "median seconds per goal.", ""]
-    for r in results:
+    def body(r: Result) -> list[str]:
         d = r.data
-        lines += [f"Resolutions {', '.join(map(str, d['resolutions']))} per side; triangulations "
-                  f"{', '.join(d['triangulations'])}; noise 0 and {d['noise_m'] * 1e3:g} mm.", ""]
         rows = []
         for name, levels in d["summary"].items():
             for level, folds in levels.items():
@@ -625,46 +625,50 @@ def kp_compare_section(results: list[Result], page: Path) -> list[str]:
                                  f"{c['reached_threshold']} / {c['goals']}",
                                  _histogram_text(c["faces"]), _histogram_text(c["keys"]),
                                  num(c["median_seconds"], 2)])
-        lines += table(["pipeline", "fold", "noise (mm)", "reference keys", "threshold reached",
-                        "faces (goals)", "keys (goals)", "median s"], rows)
-        lines += ["", *source_lines([r], page), ""]
-    return lines[:-1]
+        return [f"Resolutions {', '.join(map(str, d['resolutions']))} per side; triangulations "
+                f"{', '.join(d['triangulations'])}; noise 0 and {d['noise_m'] * 1e3:g} mm.", "",
+                *table(["pipeline", "fold", "noise (mm)", "reference keys", "threshold reached",
+                        "faces (goals)", "keys (goals)", "median s"], rows)]
+
+    return section("Key particles: the paper's pipeline against the default",
+                   "`python -m deformables.bench compare`: the same cloth goals (four folds x "
+                   "resolutions x four triangulations, exact and with Gaussian noise) reduced by "
+                   "`ClothConfig()` and by `ClothConfig.paper()` (one-sided Hausdorff distance in "
+                   "metres, one decimation per size from the goal, no restarts, no panel "
+                   "projection, no re-triangulation). Per fold and noise level: goals whose key "
+                   "count is the reference (diagonal 4, side 6, reflective 8, underneath 10), "
+                   "goals whose reduction reached its threshold, the face and key counts seen "
+                   "(goals), and the median seconds per goal.", results, page, body)
 
 
 def kp_paper_scale_section(results: list[Result], page: Path) -> list[str]:
-    lines = ["## Key particles at the paper's resolution", "",
-             "`python -m deformables.bench paper-scale`: the four cloth folds at the paper's "
-             "cloth size, MuJoCo's triangulation, the default pipeline, without noise and with "
-             "Gaussian noise; seconds per reduction (median of the repeats) against the "
-             "paper's 0.73 s average.", ""]
-    for r in results:
+    def body(r: Result) -> list[str]:
         d = r.data
         rows = [[_short_task(g["task"]), str(g["particles"]), f"{g['noise_m'] * 1e3:g}",
                  f"{g['n_keys']} ({g['reference_keys']})", str(g["n_elements"]),
                  "yes" if g["reached_threshold"] else "no", num(g["seconds"], 2)]
                 for g in d["goals"]]
-        lines += [f"{d['cloth_n']} x {d['cloth_n']} particles, {d['repeats']} timed run(s) "
-                  "per goal.", ""]
-        lines += table(["fold", "particles", "noise (mm)", "keys (reference)", "faces",
-                        "threshold reached", "s"], rows)
-        lines += ["", *table(["noise (mm)", "mean s over the folds", "paper s", "ratio",
-                              "reference keys"],
-                             [[f"{float(k.removeprefix('noise_')) * 1e3:g}",
-                               num(v["mean_seconds"], 2), num(v["paper_seconds"], 2),
-                               num(v["ratio_to_paper"], 2), f"{v['keys_held']} / 4"]
-                              for k, v in d["summary"].items()])]
-        lines += ["", *source_lines([r], page), ""]
-    return lines[:-1]
+        return [f"{d['cloth_n']} x {d['cloth_n']} particles, {d['repeats']} timed run(s) "
+                "per goal.", "",
+                *table(["fold", "particles", "noise (mm)", "keys (reference)", "faces",
+                        "threshold reached", "s"], rows), "",
+                *table(["noise (mm)", "mean s over the folds", "paper s", "ratio",
+                        "reference keys"],
+                       [[f"{float(k.removeprefix('noise_')) * 1e3:g}",
+                         num(v["mean_seconds"], 2), num(v["paper_seconds"], 2),
+                         num(v["ratio_to_paper"], 2), f"{v['keys_held']} / 4"]
+                        for k, v in d["summary"].items()])]
+
+    return section("Key particles at the paper's resolution",
+                   "`python -m deformables.bench paper-scale`: the four cloth folds at the "
+                   "paper's cloth size, MuJoCo's triangulation, the default pipeline, without "
+                   "noise and with Gaussian noise; seconds per reduction (median of the repeats) "
+                   "against the paper's 0.73 s average.", results, page, body)
 
 
 def svr_explain_section(results: list[Result], page: Path) -> list[str]:
-    lines = ["## State-vector reduction: which DoFs each method holds, and what rho cuts", "",
-             "Per row: mean |C| and the share of the goal object's x, y DoFs in C per "
-             "optimisation (over the episode, then over seeds); for SVR, the importances of "
-             "the non-robot DoFs in C before the cut, pooled over optimisations and seeds.", ""]
-    for r in sorted(results, key=lambda r: (str(r.data.get("task")), r.name)):
+    def body(r: Result) -> list[str]:
         d = r.data
-        lines += [f"### {d.get('task')}: `{r.name}`", "", protocol_line(d), ""]
         rows = []
         for name, row in d["rows"].items():
             share = row.get("importance_share") or {}
@@ -674,43 +678,42 @@ def svr_explain_section(results: list[Result], page: Path) -> list[str]:
                          num(row["goal_share_mean"]), num(share.get("zero")),
                          num(share.get("lt_1")), num(share.get("1_to_500")),
                          num(share.get("ge_500")), str(row["importance"]["n"])])
-        lines += table(["row", "trials", "mean size of C", "goal DoFs in C", "importance = 0",
-                        "< 1", "[1, 500)", ">= 500", "values"], rows)
-        lines += ["", *source_lines([r], page), ""]
-    return lines[:-1]
+        return [f"### {d.get('task')}: `{r.name}`", "", protocol_line(d), "",
+                *table(["row", "trials", "mean size of C", "goal DoFs in C", "importance = 0",
+                        "< 1", "[1, 500)", ">= 500", "values"], rows)]
+
+    return section("State-vector reduction: which DoFs each method holds, and what rho cuts",
+                   "Per row: mean |C| and the share of the goal object's x, y DoFs in C per "
+                   "optimisation (over the episode, then over seeds); for SVR, the importances "
+                   "of the non-robot DoFs in C before the cut, pooled over optimisations and "
+                   "seeds.", results, page, body)
 
 
 def ilqr_bench_section(results: list[Result], page: Path) -> list[str]:
-    lines = ["## iLQR iteration: derivatives over time and the box-QP backward pass", "",
-             "One iLQR(-SVR) iteration per method and derivative variant, same run: finite "
-             "differences at every timestep, every K-th (skipK) or at adaptive key points, A "
-             "and B linear between; `vs every`: time over the same method's at every timestep; "
-             "error: relative Frobenius error of the interpolated [A B] against every-timestep "
-             "differences on the last nominal, mean over t.", ""]
-    for r in sorted(results, key=lambda r: (str(r.data.get("task")), r.name)):
-        lines += [f"### {r.data.get('task')}: `{r.name}`", ""]
-        lines += table(["method", "derivatives", "box QP", "ms / iteration", "vs every",
+    def body(r: Result) -> list[str]:
+        return [f"### {r.data.get('task')}: `{r.name}`", "",
+                *table(["method", "derivatives", "box QP", "ms / iteration", "vs every",
                         "derivative share", "FD timesteps", "error", "DoFs"],
                        [[row["method"], row["keypoints"], "yes" if row["box_qp"] else "no",
                          num(row["ms_per_iteration"], 0), num(row.get("vs_every")),
                          num(row["derivative_share"]),
                          f"{num(row['fd_steps'], 1)} / {row['horizon']}",
                          num(row["interp_error"], 4), num(row["n_dofs"], 1)]
-                        for row in r.data["rows"]])
-        lines += ["", *source_lines([r], page), ""]
-    return lines[:-1]
+                        for row in r.data["rows"]])]
+
+    return section("iLQR iteration: derivatives over time and the box-QP backward pass",
+                   "One iLQR(-SVR) iteration per method and derivative variant, same run: "
+                   "finite differences at every timestep, every K-th (skipK) or at adaptive key "
+                   "points, A and B linear between; `vs every`: time over the same method's at "
+                   "every timestep; error: relative Frobenius error of the interpolated [A B] "
+                   "against every-timestep differences on the last nominal, mean over t.",
+                   results, page, body)
 
 
 def paper_svr_section(results: list[Result], page: Path) -> list[str]:
-    lines = ["## The state-vector-reduction authors' own data", "",
-             "Their run summaries (`experiments/paper_reference.py`): per Table 1 row the runs, "
-             "the median final cost over the baseline's (their Table 1's statistic), mean "
-             "final goal distance, mean DoFs and optimisation time. Rows their data does not "
-             "name (rand, naive) are absent; a second plain iLQR run per task is not "
-             "identified in it.", ""]
-    for r in results:
+    def body(r: Result) -> list[str]:
+        lines: list[str] = []
         for task, t in r.data["tasks"].items():
-            lines += [f"### {task}", ""]
             # plain iLQR runs record 0 DoFs in their data (not tracked): shown as "-"
             rows = [[name, str(v["n_runs"]), num(v["median_ratio"]),
                      num(v["final_dist_mean"], 3), num(v["avg_dofs"], 1) if v["avg_dofs"]
@@ -718,22 +721,22 @@ def paper_svr_section(results: list[Result], page: Path) -> list[str]:
             rows += [["(unidentified iLQR run)", str(v["n_runs"]), num(v["median_ratio"]),
                       num(v["final_dist_mean"], 3), "-", num(v["opt_ms"], 0)]
                      for v in t.get("unidentified", [])]
-            lines += table(["row", "runs", "median cost / baseline", "final goal distance (m)",
-                            "DoFs", "opt. time (ms)"], rows)
-            lines += [""]
-        lines += [*source_lines([r], page), ""]
-    return lines[:-1]
+            lines += [f"### {task}", "",
+                      *table(["row", "runs", "median cost / baseline",
+                              "final goal distance (m)", "DoFs", "opt. time (ms)"], rows), ""]
+        return lines[:-1]
+
+    return section("The state-vector-reduction authors' own data",
+                   "Their run summaries (`experiments/paper_reference.py`): per Table 1 row the "
+                   "runs, the median final cost over the baseline's (their Table 1's statistic), "
+                   "mean final goal distance, mean DoFs and optimisation time. Rows their data "
+                   "does not name (rand, naive) are absent; a second plain iLQR run per task is "
+                   "not identified in it.", results, page, body)
 
 
 def clock_check_section(results: list[Result], page: Path) -> list[str]:
-    lines = ["## The virtual clock against the real clock", "",
-             "The same trials under both clocks: real (alone, in real time, on the machine's "
-             "threads) and virtual (one thread, CPU time / nominal threads). Ratios are "
-             "virtual / real; the lag should be within 10 % and the MPC cost intervals (90 %) "
-             "should overlap.", ""]
-    for r in results:
+    def body(r: Result) -> list[str]:
         d = r.data
-        lines += [f"### {d.get('task')}: `{r.name}`", "", protocol_line(d), ""]
         rows = []
         for name, row in d["rows"].items():
             real, virt = row.get("real", {}), row.get("virtual", {})
@@ -744,27 +747,33 @@ def clock_check_section(results: list[Result], page: Path) -> list[str]:
                          pm(num(virt.get("mpc_cost_mean"), 0), num(virt.get("mpc_cost_ci90"), 0)),
                          "yes" if row.get("lag_within_10_percent") else "no",
                          "yes" if row.get("cost_intervals_overlap") else "no"])
-        lines += table(["row", "trials", "lag real", "lag virtual", "lag ratio",
+        return [f"### {d.get('task')}: `{r.name}`", "", protocol_line(d), "",
+                *table(["row", "trials", "lag real", "lag virtual", "lag ratio",
                         "opt. time ratio", "cost real", "cost virtual", "lag within 10 %",
-                        "costs overlap"], rows)
-        lines += ["", *source_lines([r], page), ""]
-    return lines[:-1]
+                        "costs overlap"], rows)]
+
+    return section("The virtual clock against the real clock",
+                   "The same trials under both clocks: real (alone, in real time, on the "
+                   "machine's threads) and virtual (one thread, CPU time / nominal threads). "
+                   "Ratios are virtual / real; the lag should be within 10 % and the MPC cost "
+                   "intervals (90 %) should overlap.", results, page, body)
 
 
 def clock_model_section(results: list[Result], page: Path) -> list[str]:
-    lines = ["## The model clock: CPU time of an MPC optimisation against |C|", "",
-             "One optimisation of `rand` at theta random DoFs (|C| = 7 + theta) per point, the "
-             "paper's protocol, one simulation thread; ms = CPU time / nominal threads. "
-             "`planners.svr_mpc.CLOCK_MODEL_MS` holds the fits.", ""]
-    for r in results:
+    def body(r: Result) -> list[str]:
         d = r.data
-        lines += table(["task", "points (|C|: ms)", "a (ms)", "b (ms per DoF)", "R^2"],
-                       [[task, ", ".join(f"{row['n_dofs']}: {row['ms']:.0f}"
-                                         for row in d["rows"] if row["task"] == task),
-                         num(f["a_ms"], 1), num(f["b_ms"], 2), num(f["r2"], 3)]
-                        for task, f in d["fits"].items()])
-        lines += ["", *source_lines([r], page), ""]
-    return lines[:-1]
+        return table(["task", "points (|C|: ms)", "a (ms)", "b (ms per DoF)", "R^2"],
+                     [[task, ", ".join(f"{row['n_dofs']}: {row['ms']:.0f}"
+                                       for row in d["rows"] if row["task"] == task),
+                       num(f["a_ms"], 1), num(f["b_ms"], 2), num(f["r2"], 3)]
+                      for task, f in d["fits"].items()])
+
+    return section("The model clock: CPU time of an MPC optimisation against |C|",
+                   "One optimisation of `rand` at theta random DoFs (|C| = 7 + theta) per point, "
+                   "the paper's protocol, one simulation thread; ms = CPU time / nominal "
+                   "threads. `planners.svr_mpc.CLOCK_MODEL_MS` holds the fits.",
+                   results, page, body)
+
 
 
 # ----------------------------------------------------------------------------- pages

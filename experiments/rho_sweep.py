@@ -48,9 +48,7 @@ def parser() -> argparse.ArgumentParser:
 @guarded("rho_sweep.py")
 def main(argv=None) -> int:
     ap = parser()
-    args = table1.parse_args(argv, ap)
-    if args.feedback == "both":
-        ap.error("--feedback both is for experiments/mpc.py; give on or off here")
+    args = table1.parse_args(argv, ap, one_feedback=True)
     args.rho, args.theta = 1.0, None          # make_trials' defaults; the grid overrides them
     fb = " +fb" if args.feedback == "on" else ""
     trials = table1.make_trials(args, methods=["baseline"]) + table1.make_trials(

@@ -21,14 +21,12 @@ from __future__ import annotations
 
 import argparse
 import sys
-from dataclasses import asdict
 
 import mpc as table1
 import numpy as np
-from cli_args import EPILOG, choices_type, guarded, positive_int, write_summary
+from cli_args import EPILOG, guarded, positive_int, write_summary
 
-from dopt.sweep import Trial, run_sweep
-from planners.svr_mpc import TABLE1_ROWS, SVRMPCSettings, row_label, run_svr_mpc, trial_key
+from planners.svr_mpc import SVRMPCSettings, row_label, run_svr_mpc
 
 DEFAULT_ROWS = ("rand-t5", "sum-t10-r1", "sum-t10-r500", "svd-t10-r1")
 #: importance decades counted: 10^k <= v < 10^(k+1) for k in DECADES (and the ends beyond)
@@ -39,9 +37,7 @@ RHO_CUTS = (1.0, 500.0)
 def parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(prog="svr_explain.py", description=__doc__, epilog=EPILOG,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--rows", type=choices_type(tuple(TABLE1_ROWS), "row(s)"),
-                    default=",".join(DEFAULT_ROWS),
-                    help="comma-separated Table 1 rows (default %(default)s)")
+    table1.add_rows_argument(ap, DEFAULT_ROWS)
     ap.add_argument("--bins", type=positive_int, default=10,
                     help="bins of the episode's agent steps for the timelines (default "
                          "%(default)s)")
@@ -164,21 +160,9 @@ def plot(rows: dict, path, task: str) -> None:
 @guarded("svr_explain.py")
 def main(argv=None) -> int:
     ap = parser()
-    args = table1.parse_args(argv, ap)
-    if args.feedback == "both":
-        ap.error("--feedback both is for experiments/mpc.py; give on or off here")
-    trials = []
-    for seed in range(args.seed, args.seed + args.trials):
-        for row in args.rows:
-            method, theta, rho = TABLE1_ROWS[row]
-            p = {**asdict(table1.settings_of(args, method, theta, rho,
-                                             args.feedback == "on")), "seed": seed}
-            trials.append(Trial(trial_key(p), p))
-    res = run_sweep(explain_trial, trials, args.out, workers=1, fresh=args.fresh)
-    for key, err in res.failed.items():
-        print(f"FAILED {key}: {err}", file=sys.stderr)
-    wanted = {t.key for t in trials}
-    records = [r for k, r in res.records.items() if k in wanted]
+    args = table1.parse_args(argv, ap, one_feedback=True)
+    trials = table1.make_trials(args)
+    records, res = table1.run(args, trials, fn=explain_trial, workers=1)
     rows = summarize_rows(records, args.bins)
     write_summary({"experiment": "svr_explain", "task": args.task,
                    **table1.protocol(args, trials[0].params), "rows": rows,
