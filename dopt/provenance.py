@@ -65,11 +65,29 @@ def provenance(argv: list[str] | None = None) -> dict:
     """{"command", "git_commit", "versions", "date", "machine"} of this process; ``argv``
     defaults to ``sys.argv``."""
     argv = sys.argv if argv is None else argv
-    return {"command": shlex.join(["python", *argv]),
+    return {"command": command_line(argv),
             "git_commit": git_commit(),
             "versions": versions(),
             "date": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
             "machine": {"platform": platform.platform(), "cpus": _cpus()}}
+
+
+def command_line(argv: list[str]) -> str:
+    """The command a user types to rerun ``argv`` from the checkout's root: a script inside
+    the checkout by its relative path, a package's ``__main__.py`` (``python -m``) by its
+    module name, anything else as given."""
+    if not argv:
+        return "python"
+    script = Path(argv[0])
+    try:
+        rel = script.resolve().relative_to(_ROOT) if script.is_absolute() else None
+    except ValueError:
+        rel = None
+    if rel is not None:
+        if rel.name == "__main__.py" and len(rel.parts) > 1:
+            return shlex.join(["python", "-m", ".".join(rel.parts[:-1]), *argv[1:]])
+        return shlex.join(["python", rel.as_posix(), *argv[1:]])
+    return shlex.join(["python", *argv])
 
 
 def _cpus() -> int:
