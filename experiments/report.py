@@ -466,6 +466,127 @@ def table1_headline(r: Result) -> str:
             + f" ({trials} trial{'s' if trials != 1 else ''} each)")
 
 
+# ------------------------------------------------------------- table1 beside the paper
+def paper_table1(results: list[Result]) -> tuple[Result | None, dict]:
+    """The authors' reference file with the paper's published Table 1 (the newest), and that
+    table ({task: {row: {"mpc_cost", "mpc_cost_ci90", ...}}}); (None, {}) without one."""
+    refs = [r for r in results if r.kind == "paper_svr" and r.data.get("published")]
+    return (refs[-1], refs[-1].data["published"]) if refs else (None, {})
+
+
+def paper_preset_table1(results: list[Result], task: str) -> Result | None:
+    """The Table 1 file of ``task`` run under the authors' protocol (not quick), if any."""
+    chosen = [r for r in results if r.kind == "table1" and r.data.get("task") == task
+              and r.data.get("preset") == "paper" and not r.quick]
+    return chosen[-1] if chosen else None
+
+
+def orderings(paper: dict, ours: dict) -> dict:
+    """How two Table 1 columns order the same rows by MPC cost. ``paper``, ``ours``: {row:
+    (mean, CI90 half-width)} (rows without both left out). Returns {"rows": the common rows,
+    "paper_order", "our_order" (cheapest first), "kendall_tau", "reversed": [(a, b)] pairs the
+    paper puts a below b and we put b below a, "reversed_separate": those of them whose
+    intervals are separate in both columns}."""
+    rows = [k for k in paper if k in ours and _finite(paper[k][0]) and _finite(ours[k][0])]
+    rev, sep = [], []
+    for i, a in enumerate(rows):
+        for b in rows[i + 1:]:
+            (pa, pca), (pb, pcb) = paper[a], paper[b]
+            (oa, oca), (ob, ocb) = ours[a], ours[b]
+            if (pa - pb) * (oa - ob) < 0:
+                lo, hi = (a, b) if pa < pb else (b, a)
+                rev.append((lo, hi))
+                if (abs(pa - pb) > (pca or 0) + (pcb or 0)
+                        and abs(oa - ob) > (oca or 0) + (ocb or 0)):
+                    sep.append((lo, hi))
+    tau = kendall_tau_b([paper[k][0] for k in rows], [ours[k][0] for k in rows])
+    return {"rows": rows, "paper_order": sorted(rows, key=lambda k: paper[k][0]),
+            "our_order": sorted(rows, key=lambda k: ours[k][0]), "kendall_tau": tau,
+            "reversed": rev, "reversed_separate": sep}
+
+
+def kendall_tau_b(x: list[float], y: list[float]) -> float | None:
+    """Kendall's tau-b rank correlation of two equally long lists (ties in either count as
+    neither concordant nor discordant); None with fewer than two values or all tied."""
+    n = len(x)
+    c = d = tx = ty = 0
+    for i in range(n):
+        for j in range(i + 1, n):
+            sx, sy = (x[i] > x[j]) - (x[i] < x[j]), (y[i] > y[j]) - (y[i] < y[j])
+            if sx == 0 or sy == 0:
+                tx, ty = tx + (sx == 0), ty + (sy == 0)
+            elif sx == sy:
+                c += 1
+            else:
+                d += 1
+    pairs = n * (n - 1) // 2
+    denom = math.sqrt((pairs - tx) * (pairs - ty))
+    return (c - d) / denom if denom else None
+
+
+def _table1_columns(pub: dict, d: dict) -> tuple[dict, dict]:
+    paper = {row: (v["mpc_cost"], v.get("mpc_cost_ci90")) for row, v in pub.items()}
+    ours = {row: (m.get("mpc_cost_normalised_mean"), m.get("mpc_cost_normalised_ci90"))
+            for row, m in d["methods"].items()}
+    return paper, ours
+
+
+def ordering_sentence(o: dict) -> str:
+    """One line on how our rows order against the paper's."""
+    sep = "; ".join(f"{a} < {b}" for a, b in o["reversed_separate"]) or "none"
+    return (f"Kendall tau {num(o['kendall_tau'])} over {len(o['rows'])} rows; "
+            f"{len(o['reversed'])} of {len(o['rows']) * (len(o['rows']) - 1) // 2} pairs in "
+            f"the opposite order, {len(o['reversed_separate'])} of them with separate 90 % "
+            f"intervals in both (paper's order: {sep})")
+
+
+def table1_vs_paper_section(results: list[Result], page: Path) -> list[str]:
+    """Each task's Table 1 under the authors' protocol beside the paper's printed Table 1 and
+    the authors' data, with the orderings compared (empty without both files)."""
+    ref, published = paper_table1(results)
+    ours = {t: paper_preset_table1(results, t) for t in published}
+    if ref is None or not any(ours.values()):
+        return []
+    lines = ["## State-vector reduction, Table 1 beside the paper", "",
+             "Per row: the paper's printed MPC cost (normalised by its baseline's; mean ± 90 % "
+             "CI, clutter without outliers), ours under `--preset paper` (mean ± 90 % CI of the "
+             "per-seed cost / baseline, outliers left out; the median of the per-seed ratios; "
+             "the geometric mean of the per-seed ratios with its 90 % CI), the authors' data's "
+             "median final cost over baseline's (absent for rand and naive), DoFs and "
+             "optimisation time. Paired ratios and medians are ours only: the paper prints "
+             "means.", ""]
+    for task, r in ours.items():
+        if r is None:
+            continue
+        d = r.data
+        pub, data_rows = published[task], ref.data["tasks"].get(task, {}).get("rows", {})
+        paired_ = d.get("paired") or {}
+        rows = []
+        for row, p in pub.items():
+            m = d["methods"].get(row, {})
+            pr = paired_.get(row) or {}
+            ci = pr.get("ratio_ci90") or []
+            rows.append([row, pm(num(p["mpc_cost"]), num(p.get("mpc_cost_ci90"), 3)),
+                         pm(num(m.get("mpc_cost_normalised_mean")),
+                            num(m.get("mpc_cost_normalised_ci90"))),
+                         num(m.get("mpc_cost_median_ratio")),
+                         num(pr.get("ratio_geomean")) + (f" [{num(ci[0])}, {num(ci[1])}]"
+                                                         if len(ci) == 2 else ""),
+                         num((data_rows.get(row) or {}).get("median_ratio")),
+                         f"{num(p.get('n_dofs'), 1)} / "
+                         f"{num(m.get('n_dofs_mean', m.get('dofs_mean')), 1)}",
+                         f"{num(p.get('opt_ms'), 0)} / {num(m.get('opt_ms_mean'), 0)}"])
+        o = orderings(*_table1_columns(pub, d))
+        lines += [f"### {task}: `{r.name}` beside the paper", "",
+                  *table(["row", "paper MPC cost", "ours mean", "ours median ratio",
+                          "ours paired geomean [CI90]", "authors' data median ratio",
+                          "DoFs paper / ours", "opt. ms paper / ours"], rows), "",
+                  f"Cheapest first, paper: {', '.join(o['paper_order'])}; ours: "
+                  f"{', '.join(o['our_order'])}.", "", ordering_sentence(o) + ".", "",
+                  *source_lines([r, ref], page), ""]
+    return lines[:-1]
+
+
 # --------------------------------------------------------------------------- fig4 (SVR)
 def fig4_section(results: list[Result], page: Path) -> list[str]:
     def body(r: Result) -> list[str]:
@@ -826,6 +947,9 @@ def results_md(results: list[Result], results_dir: Path, page: Path) -> str:
             for r in chosen:                # a malformed file: an error that names it
                 _rendered(r, section, [r], page)
             lines += ["", *section(chosen, page)]
+    beside = table1_vs_paper_section(results, page)
+    if beside:
+        lines += ["", *beside]
     other = [r for r in results if r.kind not in SECTIONS]
     if other:
         lines += ["", "## Other result files", "",
@@ -856,6 +980,8 @@ def readme_block(results: list[Result], readme: Path, results_md_path: Path) -> 
             rows.append(["-", f"{r.kind}: {r.data.get('task', '')} {r.data.get('goal', '')}"
                          .strip(), f"`{r.command}`",
                          f"{_rendered(r, HEADLINES[r.kind], r)}; {source(r, readme)}"])
+    ref, published = paper_table1(results)
+    beside = [(t, r) for t in published if (r := paper_preset_table1(results, t))]
     rel = Path(os.path.relpath(results_md_path, Path(readme).parent)).as_posix()
     lines = [f"<!-- generated by experiments/report.py from the result files; edit those, "
              f"then run `{REGENERATE}` -->",
@@ -863,6 +989,14 @@ def readme_block(results: list[Result], readme: Path, results_md_path: Path) -> 
                      "commit)"], rows), "",
              f"Every table, per-seed number and setting: [{rel}]({rel}), generated like this "
              f"table from the result files by `{REGENERATE}`."]
+    if beside:
+        lines += ["", f"Table 1 under `--preset paper` against the paper's printed Table 1 "
+                      f"(MPC cost / baseline, means; [{rel}]({rel}) has the rows side by side):",
+                  ""]
+        lines += [f"- {task}: paper cheapest first {', '.join(o['paper_order'][:3])}; ours "
+                  f"{', '.join(o['our_order'][:3])}. {ordering_sentence(o)}; {source(r, readme)}."
+                  for task, r in beside
+                  for o in [orderings(*_table1_columns(published[task], r.data))]]
     return "\n".join(lines)
 
 

@@ -7,6 +7,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 import report
 
@@ -282,3 +283,63 @@ def test_key_particle_benches_and_simulated_goals(site):
     assert "| 1 | 3.46 | 0.73 | 4.73 | 1 / 4 |" in md
     assert "| cloth diagonal | 16 | default | no | 14.7 ! | none found | 4 (4) | 10 | yes |" in md
     assert "| cloth side | 40 | default | - | - | - | failed: RuntimeError: boom | - | - |" in md
+
+
+# ------------------------------------------------------------- Table 1 beside the paper
+@pytest.mark.parametrize("seed", range(20))
+def test_kendall_tau_b_equals_scipys(seed):
+    from scipy.stats import kendalltau
+
+    rng = np.random.default_rng(seed)
+    n = int(rng.integers(2, 12))
+    x = rng.integers(0, 5, n).astype(float).tolist()      # ties in both lists
+    y = rng.integers(0, 5, n).astype(float).tolist()
+    want = kendalltau(x, y).statistic
+    got = report.kendall_tau_b(x, y)
+    if np.isnan(want):
+        assert got is None
+    else:
+        assert got == pytest.approx(want)
+
+
+def test_orderings_name_reversed_pairs_and_those_with_separate_intervals():
+    paper = {"a": (0.80, 0.02), "b": (0.90, 0.02), "c": (1.00, 0.02), "d": (0.85, None)}
+    ours = {"a": (0.95, 0.01), "b": (0.70, 0.01), "c": (0.96, 0.10), "e": (0.1, 0.1)}
+    o = report.orderings(paper, ours)
+    assert o["rows"] == ["a", "b", "c"]                    # d, e: in one column only
+    assert o["paper_order"] == ["a", "b", "c"] and o["our_order"] == ["b", "a", "c"]
+    assert o["reversed"] == [("a", "b")]
+    assert o["reversed_separate"] == [("a", "b")]          # 0.1 > 0.04 and 0.25 > 0.02
+    ours["b"] = (0.94, 0.01)                               # ours now within the intervals
+    assert report.orderings(paper, ours)["reversed_separate"] == []
+    assert report.orderings(paper, ours)["kendall_tau"] == pytest.approx(1 / 3)
+
+
+def test_table1_of_the_paper_protocol_is_shown_beside_the_published_table(site):
+    data = table1()
+    data.update(preset="paper", methods={"baseline": mpc_row(1.0, 0.0, 130.0, 55.0),
+                                         "sum-t10-r1": mpc_row(0.70, 0.02, 50.0, 17.0),
+                                         "rand-t5": mpc_row(0.95, 0.02, 40.0, 12.0)},
+                paired={"sum-t10-r1": {"ratio_geomean": 0.68, "ratio_ci90": [0.6, 0.75]}})
+    write(site["results"], "table1-clutter.json", data)
+    assert run(site) == 0
+    assert "beside the paper" not in site["md"].read_text()     # no published table yet
+    pub = {"clutter": {"baseline": {"mpc_cost": 1.0, "mpc_cost_ci90": 0.034, "opt_ms": 485.7,
+                                    "n_dofs": 55.0},
+                       "sum-t10-r1": {"mpc_cost": 0.86, "mpc_cost_ci90": 0.032, "opt_ms": 287.0,
+                                      "n_dofs": 29.8},
+                       "rand-t5": {"mpc_cost": 0.94, "mpc_cost_ci90": 0.033, "opt_ms": 148.9,
+                                   "n_dofs": 12.0}}}
+    write(site["results"], "paper-svr.json",
+          {"experiment": "paper_svr", "tasks": {"clutter": {"rows": {
+              "sum-t10-r1": {"n_runs": 100, "median_ratio": 0.87, "final_dist_mean": 0.2,
+                             "avg_dofs": 29.8, "opt_ms": 287.0}}}},
+           "published": pub, "provenance": provenance("python experiments/paper_reference.py")})
+    assert run(site) == 0
+    md = site["md"].read_text()
+    assert ("| sum-t10-r1 | 0.86 ± 0.032 | 0.70 ± 0.02 | n/a | 0.68 [0.60, 0.75] | 0.87 | "
+            "29.8 / 17.0 | 287 / 50 |") in md
+    assert "Cheapest first, paper: sum-t10-r1, rand-t5, baseline; ours: sum-t10-r1, rand-t5, " \
+           "baseline." in md
+    assert "Kendall tau 1.00 over 3 rows; 0 of 3 pairs in the opposite order" in block(
+        site["readme"])
