@@ -36,6 +36,7 @@ import torch
 from dopt.rollout import RolloutConfig, RolloutService
 from dopt.stats import mean_ci
 from dopt.tasks.pick.cloth_scene import PHYSICS_PRESETS, ClothSceneConfig, make_cloth
+from dopt.tasks.pick.constraints import ActionConstraint
 from dopt.tasks.pick.picker import PickerConfig
 from dopt.tasks.pick.rope_scene import RopeSceneConfig, make_rope
 from dopt.tasks.pick.scene import (
@@ -138,6 +139,15 @@ class PickPlaceSettings:
                           horizon=2 if task == "rope" else cem.horizon)
             n = 8 if task == "cloth" else 20
         return cls(task, goal, n, p.bound, cem, ScriptedConfig(), p.selfcollide)
+
+    def constraint(self) -> ActionConstraint:
+        """C(a_t) of the task (``dopt.tasks.pick.constraints``): SoftGym's workspace, the
+        object's size on each side of its centre (cloth: side, rope: length), 0.5 m high."""
+        return ActionConstraint.table(self.side if self.task == "cloth" else self.length)
+
+    def picker(self) -> PickerConfig:
+        """The picker of the task's scenes: the bound per axis, limited to ``constraint()``."""
+        return PickerConfig(bound=(self.bound,) * 3, workspace=self.constraint())
 
     def to_dict(self) -> dict:
         """JSON-able form (nested configs as dicts); ``from_dict`` inverts it."""
@@ -263,10 +273,8 @@ def _cloth_problem(s: PickPlaceSettings, overrides: dict) -> Problem:
     from deformables.goals import goal_sequence
 
     fields = {"n": s.n, "side": s.side, "selfcollide": s.selfcollide, **overrides}
-    scene = make_cloth(ClothSceneConfig.preset(s.physics, **fields),
-                       PickerConfig(bound=(s.bound,) * 3))
-    planning = (make_cloth(ClothSceneConfig.preset(s.planning_physics, **fields),
-                           PickerConfig(bound=(s.bound,) * 3))
+    scene = make_cloth(ClothSceneConfig.preset(s.physics, **fields), s.picker())
+    planning = (make_cloth(ClothSceneConfig.preset(s.planning_physics, **fields), s.picker())
                 if s.planning_physics not in (None, s.physics) else None)
     lift = np.array([0.0, 0.0, scene.radius])          # the cloth rests at z = radius
     stages = []
@@ -287,7 +295,7 @@ def _rope_problem(s: PickPlaceSettings, seed: int, overrides: dict) -> Problem:
     planning_config = (RopeSceneConfig.preset(s.planning_physics, **{"n": s.n, "length": s.length,
                                                                      **overrides})
                        if s.planning_physics not in (None, s.physics) else None)
-    picker = PickerConfig(bound=(s.bound,) * 3)
+    picker = s.picker()
     planning = None
     if s.goal == "straighten":
         start = rope_crumpled(np.random.default_rng(seed), s.n, s.length,

@@ -81,7 +81,9 @@ def scripted(task: ScriptedTask, keys, config: ScriptedConfig = ScriptedConfig()
     """Run the scripted policy over the key particles ``keys`` (K,), in the given order.
 
     A key particle within ``tolerance`` of its goal (in xy) is left alone; any other is carried
-    towards (goal + lift) and released, in several actions if the bound clips the displacement
+    towards (goal + lift), its place point clipped into the task's workspace (``constraint``,
+    C(a_t), when the task has one), and released, in several actions if the bound clips the
+    displacement
     (at most ``per_particle`` per key particle and ``max_actions`` in all). Where it lands is
     not corrected. An action whose simulation goes unstable ends the run, flagged in the result.
 
@@ -97,6 +99,7 @@ def scripted(task: ScriptedTask, keys, config: ScriptedConfig = ScriptedConfig()
     goal = float_array(task.goal, "task.goal", (None, 3))
     keys = particle_indices(keys, "keys", len(goal))
     lift = np.array([0.0, 0.0, config.lift])
+    constraint = getattr(task, "constraint", None)
     state = float_array(task.start_state, "task.start_state", ndim=1)
     particles, disps, reason = [], [], ""
     for k in keys:
@@ -110,6 +113,8 @@ def scripted(task: ScriptedTask, keys, config: ScriptedConfig = ScriptedConfig()
             if np.linalg.norm(target[:2] - p[:2]) < config.tolerance:
                 break
             d = np.clip(target - p, -bound, bound)
+            if constraint is not None:       # C(a_t): the place point inside the workspace
+                d = constraint.project(task.positions(state), np.int64(k), d)
             done = task.step(state, int(k), d)
             state = done.state
             particles.append(int(k))

@@ -27,6 +27,7 @@ import mujoco
 import numpy as np
 
 from dopt.state import StateLayout, check_model
+from dopt.tasks.pick.constraints import ActionConstraint
 from dopt.validation import as_array, check_config, check_int, float_array
 
 #: particle index of the None action (hold nothing)
@@ -52,6 +53,9 @@ class PickerConfig:
         mass: picker mass (kg); tiny, so that snapping does not drag the particle.
         solref: solref of the grasp equalities.
         start: initial picker position (m), above the object.
+        workspace: the action constraint whose box limits the picker's slide joints (every
+            step of every rollout keeps the grasped particle inside it, as SoftGym clips its
+            pickers; ``dopt.tasks.pick.constraints``); None: no box, only the floor stop.
     """
 
     bound: tuple[float, float, float] = (0.1, 0.1, 0.1)
@@ -63,10 +67,18 @@ class PickerConfig:
     mass: float = 1e-6
     solref: tuple[float, float] = (0.002, 1.0)
     start: tuple[float, float, float] = (0.0, 0.0, 0.3)
+    workspace: ActionConstraint | None = None
 
     def __post_init__(self):
         check_config(self, positive=("bound", "speed", "settle", "kv", "mass"),
                      minimum={"snap_steps": 1, "hold_steps": 0})
+        if self.workspace is not None:
+            if not isinstance(self.workspace, ActionConstraint):
+                raise TypeError(f"PickerConfig.workspace must be an ActionConstraint or None, "
+                                f"got {type(self.workspace).__name__}")
+            if not self.workspace.contains(self.start):
+                raise ValueError(f"PickerConfig.start {tuple(self.start)} lies outside the "
+                                 f"workspace box {self.workspace.low} .. {self.workspace.high}")
 
 
 def picker_mjcf(flex_name: str, particles: Iterable[int],
@@ -83,9 +95,18 @@ def picker_mjcf(flex_name: str, particles: Iterable[int],
     actions), as SoftGym's pickers are clipped above the floor. The compiled model must go
     through :func:`fix_grasp_anchors`.
     """
-    x, y, z = config.start
-    limit = ["", "", "" if lowest is None else
-             f' limited="true" range="{float(lowest) - z:.6g} {max(1.0, 10 * z):.6g}"']
+    start = np.asarray(config.start, dtype=float)
+    lo, hi = np.full(3, -np.inf), np.full(3, np.inf)
+    if config.workspace is not None:
+        lo, hi = np.array(config.workspace.low), np.array(config.workspace.high)
+    if lowest is not None:
+        lo[2] = max(lo[2], float(lowest))
+        hi[2] = (max(hi[2], lo[2] + 1e-3) if np.isfinite(hi[2])
+                 else start[2] + max(1.0, 10 * start[2]))
+    limit = ["" if not (np.isfinite(lo[a]) or np.isfinite(hi[a])) else
+             f' limited="true" range="{lo[a] - start[a]:.6g} {hi[a] - start[a]:.6g}"'
+             for a in range(3)]
+    x, y, z = start
     body = (f'<body name="picker" pos="{x} {y} {z}" gravcomp="1">'
             + "".join(f'<joint name="picker_{a}" type="slide" axis="{axis}"{lim}/>'
                       for a, axis, lim in zip(_AXES, ("1 0 0", "0 1 0", "0 0 1"), limit,

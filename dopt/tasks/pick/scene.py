@@ -21,6 +21,7 @@ from dopt.rollout import RolloutConfig, RolloutResult, RolloutService
 from dopt.scene import Scene
 from dopt.stability import StabilityBounds
 from dopt.state import check_model, check_states
+from dopt.tasks.pick.constraints import ActionConstraint
 from dopt.tasks.pick.picker import CONTROL_SPEC, Picker, PickerConfig, fix_grasp_anchors
 from dopt.validation import check_real, float_array, index_array, is_int
 
@@ -233,6 +234,7 @@ class PickPlaceTask:
         self.picker = scene.picker
         self.n_evaluated = 0
         self.n_unstable = 0
+        self.n_infeasible = 0
         self.planning = None
         if planning_scene is not None:
             if not isinstance(planning_scene, DeformableScene):
@@ -256,6 +258,12 @@ class PickPlaceTask:
         """(3,) largest displacement per axis (m)."""
         return self.picker.bound
 
+    @property
+    def constraint(self) -> ActionConstraint | None:
+        """C(a_t): the workspace box the picker's joints keep every action in, and the stretch
+        limit ``evaluate`` judges (``dopt.tasks.pick.constraints``); None: unconstrained."""
+        return self.picker.config.workspace
+
     def rollout(self, particles, displacements, start: np.ndarray | None = None
                 ) -> RolloutResult:
         """A population of action sequences, (P, H), (P, H, 3), simulated from ``start`` (ns,)
@@ -276,13 +284,18 @@ class PickPlaceTask:
     def evaluate(self, particles, displacements):
         """Costs of a population: (P, H) ints (NONE = -1), (P, H, 3) metres -> (P,) torch
         float64 tensor (numpy in, numpy out). An unstable rollout (``dopt.stability``) costs
-        +inf; ``n_evaluated`` and ``n_unstable`` count them over the task's life. With a
-        planning scene, the population is simulated there."""
+        +inf, and so does one that breaks the constraint's stretch limit (infeasible);
+        ``n_evaluated``, ``n_unstable`` and ``n_infeasible`` count them over the task's life.
+        With a planning scene, the population is simulated there."""
         model = self.planning or self
         res = model.rollout(particles, displacements)
-        costs = np.where(res.stability.unstable, np.inf, model.cost(res.final_states))
+        st = res.stability
+        stretched = (self.constraint.stretched(st.max_strain) if self.constraint is not None
+                     else np.zeros(len(st.unstable), bool)) & ~st.unstable
+        costs = np.where(st.unstable | stretched, np.inf, model.cost(res.final_states))
         self.n_evaluated += len(costs)
-        self.n_unstable += res.stability.n_unstable
+        self.n_unstable += st.n_unstable
+        self.n_infeasible += int(stretched.sum())
         if _is_torch(particles) or _is_torch(displacements):
             import torch
             return torch.from_numpy(costs)
