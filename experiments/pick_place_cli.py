@@ -93,6 +93,10 @@ def parser(task: str, doc: str, help_: dict) -> argparse.ArgumentParser:
     ap.add_argument("--planning-physics", choices=tuple(PHYSICS_PRESETS), default=None,
                     help="physics preset of CEM's sampled rollouts only (a cheaper planning "
                          "model); executed plans and reported costs stay on --physics")
+    ap.add_argument("--max-stretch", type=positive_float, default=None,
+                    help="stretch limit of the action constraint C(a_t): a sampled rollout "
+                         "whose edge strain away from the grasp passes it is infeasible "
+                         "(default: not judged; SoftGym's two-picker limit is 0.2)")
     ap.add_argument("--threads", type=nonneg_int, default=0,
                     help="simulation threads (0: one per core, the default)")
     ap.add_argument("--no-render", action="store_true",
@@ -112,7 +116,7 @@ def parse(ap: argparse.ArgumentParser, task: str, argv) -> tuple[argparse.Namesp
                if getattr(args, k) is not None}
         s = replace(s, cem=replace(s.cem, **cem), threads=args.threads,
                     n=args.n or s.n, bound=args.bound or s.bound, physics=args.physics,
-                    planning_physics=args.planning_physics)
+                    planning_physics=args.planning_physics, max_stretch=args.max_stretch)
     except (ValueError, TypeError) as e:
         ap.error(str(e))
     if args.out is None:
@@ -129,8 +133,9 @@ def trial_key(method: str, seed: int, settings: PickPlaceSettings) -> str:
     """<method>-seed<seed>-<hash of the settings that change results (not threads)>."""
     d = settings.to_dict()
     d.pop("threads")
-    if d.get("planning_physics") is None:      # no planning model: the key leaves it out
-        d.pop("planning_physics", None)
+    for name in ("planning_physics", "max_stretch"):    # unset: the key leaves them out
+        if d.get(name) is None:
+            d.pop(name, None)
     digest = hashlib.sha1(json.dumps(d, sort_keys=True).encode()).hexdigest()[:8]
     return f"{method}-seed{seed}-{digest}"
 

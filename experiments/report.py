@@ -308,8 +308,10 @@ def fig7_detail(r: Result, page: Path) -> list[str]:
     extra = {k: c for k, c in (("straighten_error", "|end-to-end - length| (mm)"),
                                ("matching_distance", "matching distance (mm)"))
              if any(f"{k}_mean" in e for e in d["methods"].values())}
+    infeasible = any(e.get("n_infeasible_rollouts") for e in d["methods"].values())
     header = ["method", "final cost (mm)", "per seed (mm)", "seeds", "candidates",
               "s / CEM iteration", "unstable trials", "unstable rollouts"] + (
+        ["infeasible rollouts (stretch)"] if infeasible else []) + (
         ["end-to-end / length"] if rope_ratio else []) + list(extra.values())
     rows = []
     for m, e in d["methods"].items():
@@ -320,6 +322,8 @@ def fig7_detail(r: Result, page: Path) -> list[str]:
                _unstable_trials(e),
                f"{e['n_unstable_rollouts']} / {e['n_rollouts']}" if "n_rollouts" in e
                else "not judged"]
+        if infeasible:
+            row.append(f"{e.get('n_infeasible_rollouts', 0)} / {e.get('n_rollouts', '?')}")
         if rope_ratio:
             row.append(pm(num(e.get("end_to_end_ratio_mean")),
                           num(e.get("end_to_end_ratio_ci95"))))

@@ -82,6 +82,9 @@ class PickPlaceSettings:
         planning_physics: a preset for CEM's sampled rollouts only (a cheaper planning model);
             every executed plan and every reported cost stays on ``physics``. None: the same.
         threads: simulation threads (0: one per core); not part of a trial's identity.
+        max_stretch: the stretch limit of C(a_t) (relative edge elongation away from the grasp;
+            a sampled rollout beyond it is infeasible, +inf); None: not judged
+            (``dopt.tasks.pick.constraints``).
     """
 
     task: str
@@ -96,6 +99,7 @@ class PickPlaceSettings:
     physics: str = "default"
     threads: int = 0
     planning_physics: str | None = None
+    max_stretch: float | None = None
 
     def __post_init__(self):
         if not isinstance(self.task, str) or self.task not in GOALS:
@@ -110,7 +114,7 @@ class PickPlaceSettings:
                             f"{self.scripted!r}")
         # n an int >= 3, bound / side / length finite > 0 (m), threads an int >= 0 (0: one
         # per core), selfcollide a bool; TypeError or ValueError naming the field
-        check_config(self, positive=("bound", "side", "length"),
+        check_config(self, positive=("bound", "side", "length", "max_stretch"),
                      minimum={"n": 3, "threads": 0},
                      choices={"physics": tuple(PHYSICS_PRESETS)})
         if self.planning_physics is not None and self.planning_physics not in PHYSICS_PRESETS:
@@ -143,7 +147,8 @@ class PickPlaceSettings:
     def constraint(self) -> ActionConstraint:
         """C(a_t) of the task (``dopt.tasks.pick.constraints``): SoftGym's workspace, the
         object's size on each side of its centre (cloth: side, rope: length), 0.5 m high."""
-        return ActionConstraint.table(self.side if self.task == "cloth" else self.length)
+        return ActionConstraint.table(self.side if self.task == "cloth" else self.length,
+                                      max_stretch=self.max_stretch)
 
     def picker(self) -> PickerConfig:
         """The picker of the task's scenes: the bound per axis, limited to ``constraint()``."""
@@ -325,9 +330,9 @@ class StagePlan:
     """A planner's answer for one stage: the actions particles (H,) / displacements (H, 3),
     the state (ns,) after executing them, its cost (m), the best cost after each iteration
     (one entry for the scripted policy), the candidates planned over, the seconds of
-    each CEM iteration (empty for the scripted policy), the rollouts simulated while planning
-    and how many of them the stability verdict flagged, and whether the executed plan was
-    unstable (with the reason)."""
+    each CEM iteration (empty for the scripted policy), the rollouts simulated while planning,
+    how many of them the stability verdict flagged and how many broke the stretch limit of
+    C(a_t), and whether the executed plan was unstable (with the reason)."""
 
     particles: np.ndarray
     displacements: np.ndarray
@@ -340,6 +345,7 @@ class StagePlan:
     n_unstable_rollouts: int = 0
     unstable: bool = False
     unstable_reason: str = ""
+    n_infeasible_rollouts: int = 0
 
 
 class PickPlanner(Protocol):
@@ -389,7 +395,8 @@ class CEMPlanner:
                          float(task.cost(done.state)),
                          res.cost_history.tolist(), len(cand),
                          res.seconds_per_iteration.tolist(), res.n_evaluated + 1,
-                         res.n_nonfinite + int(done.unstable), done.unstable, done.reason)
+                         res.n_nonfinite - task.n_infeasible + int(done.unstable),
+                         done.unstable, done.reason, task.n_infeasible)
 
 
 class ScriptedPlanner:
@@ -446,6 +453,7 @@ class PickPlaceResult:
     n_unstable_rollouts: int = 0
     unstable: bool = False
     unstable_reason: str = ""
+    n_infeasible_rollouts: int = 0
 
     def to_dict(self) -> dict:
         """JSON-able form: the metrics at the top level, the final state as a list."""
@@ -479,7 +487,7 @@ def run_problem(problem: Problem, planner: PickPlanner, *, method: str = "", see
     try:
         state = problem.start_state
         history, stage_of, n_cand, seconds, actions, stage_costs = [], [], [], [], [], []
-        n_rollouts = n_unstable = 0
+        n_rollouts = n_unstable = n_infeasible = 0
         reasons = []
         for k, stage in enumerate(problem.stages):
             task = PickPlaceTask(problem.scene, stage.goal, state, svc,
@@ -493,6 +501,7 @@ def run_problem(problem: Problem, planner: PickPlanner, *, method: str = "", see
             stage_costs.append(plan.cost)
             n_rollouts += plan.n_rollouts
             n_unstable += plan.n_unstable_rollouts
+            n_infeasible += plan.n_infeasible_rollouts
             if plan.unstable:
                 reasons.append(f"stage {stage.name}: {plan.unstable_reason}")
                 log.warning("%s seed %d stage %s: the executed plan went unstable (%s)", method,
@@ -511,7 +520,8 @@ def run_problem(problem: Problem, planner: PickPlanner, *, method: str = "", see
     return PickPlaceResult(method, int(seed), problem.metrics(state), history, stage_of,
                            stage_costs, n_cand, float(np.mean(seconds)) if seconds else None,
                            actions, np.asarray(state), time.perf_counter() - start,
-                           n_rollouts, n_unstable, bool(reasons), "; ".join(reasons))
+                           n_rollouts, n_unstable, bool(reasons), "; ".join(reasons),
+                           n_infeasible)
 
 
 def solve(settings: PickPlaceSettings, method: str = "simple", seed: int = 0,
@@ -570,6 +580,8 @@ def summarize(results: Sequence[dict], methods: Sequence[str],
         entry["unstable_seeds"] = [r["seed"] for r in runs if r["unstable"]]
         entry["n_rollouts"] = int(sum(r["n_rollouts"] for r in runs))
         entry["n_unstable_rollouts"] = int(sum(r["n_unstable_rollouts"] for r in runs))
+        entry["n_infeasible_rollouts"] = int(sum(r.get("n_infeasible_rollouts", 0)
+                                                 for r in runs))
         out[m] = entry
     return out
 

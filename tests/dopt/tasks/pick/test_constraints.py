@@ -2,6 +2,8 @@
 box (against a brute-force reference), its projection, the picker's joint limits that enforce
 it in simulation, the stretch limit, and bad inputs."""
 
+from dataclasses import replace
+
 import mujoco
 import numpy as np
 import pytest
@@ -188,3 +190,15 @@ def test_settings_give_softgyms_workspace():
     assert c.low == (-s.side, -s.side, 0.0) and c.high == (s.side, s.side, 0.5)
     assert PickPlaceSettings.preset("rope", "fold").constraint().high[0] == 0.5
     assert s.picker().workspace == c and s.picker().bound == (s.bound,) * 3
+
+
+def test_a_trial_counts_the_rollouts_beyond_the_stretch_limit():
+    """solve() with SoftGym's stretch limit: the rollouts CEM sampled beyond it are counted
+    apart from the unstable ones; without a limit none is."""
+    from planners.pick_place import solve
+
+    s = PickPlaceSettings.preset("cloth", "diagonal", quick=True)
+    assert solve(s, "simple", seed=0).n_infeasible_rollouts == 0
+    tight = solve(replace(s, max_stretch=0.2), "simple", seed=0)
+    assert 0 < tight.n_infeasible_rollouts
+    assert tight.n_infeasible_rollouts + tight.n_unstable_rollouts < tight.n_rollouts
