@@ -131,5 +131,6 @@ def make_cloth(config: ClothSceneConfig = ClothSceneConfig(),
                picker: PickerConfig = PickerConfig(),
                pickable: Sequence[int] | None = None) -> DeformableScene:
     """The flat cloth at rest on the floor, with the picker above it."""
-    model = mujoco.MjModel.from_xml_string(cloth_xml(config, picker, pickable))
-    return DeformableScene(model, FLEX, picker, settle=config.settle)
+    xml = cloth_xml(config, picker, pickable)
+    return DeformableScene(mujoco.MjModel.from_xml_string(xml), FLEX, picker,
+                           settle=config.settle, xml=xml)

@@ -114,5 +114,6 @@ def make_rope(config: RopeSceneConfig = RopeSceneConfig(),
               positions: np.ndarray | None = None) -> DeformableScene:
     """The rope at rest on the floor: straight, or placed at ``positions`` (N, 3) first (e.g.
     a crumpled shape from ``deformables.goals.rope_crumpled``) and settled."""
-    model = mujoco.MjModel.from_xml_string(rope_xml(config, picker, pickable))
-    return DeformableScene(model, FLEX, picker, settle=config.settle, positions=positions)
+    xml = rope_xml(config, picker, pickable)
+    return DeformableScene(mujoco.MjModel.from_xml_string(xml), FLEX, picker,
+                           settle=config.settle, positions=positions, xml=xml)

@@ -94,13 +94,15 @@ class DeformableScene:
     Attributes:
         scene: the ``dopt.Scene``; picker: the ``Picker``; radius: particle radius (m);
         initial_state: (ns,) the settled start state; n_particles: N; elements: (E, d + 1)
-        the flex's elements in particle indices (cloth: triangles, rope: segments).
+        the flex's elements in particle indices (cloth: triangles, rope: segments); xml: the
+        MJCF the model was compiled from, when given (what other models are built on, e.g.
+        the arm's in ``panda_gripper``).
     """
 
     def __init__(self, model: mujoco.MjModel, flex: str, picker: PickerConfig,
                  settle: float = 0.2,
                  positions: np.ndarray | None = None,
-                 stability: StabilityBounds = StabilityBounds()):
+                 stability: StabilityBounds = StabilityBounds(), xml: str | None = None):
         check_model(model)
         if not isinstance(stability, StabilityBounds):
             raise TypeError(f"stability must be a StabilityBounds, got "
@@ -127,6 +129,7 @@ class DeformableScene:
                                for i in range(self.n_particles)])                     # (N, 3)
         self._origin = model.body_pos[bodies] - model.qpos0[self._qpos]               # (N, 3)
         self.picker = Picker(model, self.n_particles, picker)
+        self.xml = xml
         state = self.scene.state_of(mujoco.MjData(model))
         if positions is not None:
             state = self.with_positions(state, positions)

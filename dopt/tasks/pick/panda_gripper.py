@@ -1,0 +1,336 @@
+"""A Franka Panda with a parallel gripper that executes pick-and-place plans on the cloth or
+rope open-loop through inverse kinematics, as the key-particle paper's Sec. IV-D did on
+hardware; the floating picker is what the plans were made with.
+
+The arm is ``dopt.tasks.push.panda``'s (7 torque-driven joints, gravity compensated, joint
+damping 100 / 10 N m s/rad) with the pusher replaced by a hand: two fingers on slide joints
+(position actuators, 0-4 cm each) and the site ``PINCH`` between the fingertips, 0.1034 m from
+the flange (Franka's hand). It stands on the floor at ``base``, facing +x, beside the object.
+
+One action (i, d) becomes a pinch-site path (``PandaExecutor``): above particle i
+(``approach`` m), down to it, close the fingers and grasp, carry it by d along the picker's
+smooth profile in the picker's move time, release and open, lift, and wait the picker's
+settle time. Every step, damped-least-squares IK of the path point (hand pointing down, warm
+started) gives the joint reference, and computed-torque control (the arm's mass matrix times
+the reference acceleration plus PD, the joints' own damping cancelled) gives the torques,
+clipped to the datasheet's. The grasp itself is a connect equality between the hand and the
+particle, switched on when the pinch site is within ``grasp_tolerance`` of it: the same hold
+the picker has, so that a comparison with the picker measures the arm's motion, not a grasp
+model. The fingers close for the picture and do not collide with anything.
+
+Shapes: N particles, H actions, ns state row of the combined model.
+"""
+
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass, field
+
+import mujoco
+import numpy as np
+
+from dopt.scene import Scene
+from dopt.tasks.pick.scene import DeformableScene
+from dopt.tasks.push.panda import (
+    JOINT_NAMES,
+    Q_LOWER,
+    Q_UPPER,
+    TAU_MAX,
+    panda_spec,
+)
+from dopt.validation import check_config, float_array
+
+log = logging.getLogger(__name__)
+
+#: the pinch site between the fingertips (Franka's TCP, 0.1034 m from the flange)
+PINCH = "arm/panda_pinch"
+HAND = "arm/panda_hand"
+FINGERS = ("arm/panda_finger_left", "arm/panda_finger_right")
+_TCP = 0.1034
+#: what a snapshot holds: MuJoCo's integration state of the combined model
+SNAPSHOT_SPEC = int(mujoco.mjtState.mjSTATE_INTEGRATION)
+_DOWN = np.array([0.0, 0.0, -1.0])
+_READY = np.array([0.0, -0.3, 0.0, -2.2, 0.0, 2.0, np.pi / 4])
+
+
+def hand_spec() -> mujoco.MjSpec:
+    """The Panda spec with a parallel-gripper hand instead of the pusher."""
+    spec = panda_spec()
+    spec.delete(spec.body("panda_pusher"))          # with its tip site
+    link7 = spec.body("panda_link7")
+    hand = link7.add_body(name="panda_hand", pos=[0, 0, 0.107], gravcomp=1)
+    hand.add_geom(type=mujoco.mjtGeom.mjGEOM_BOX, size=[0.02, 0.09, 0.03], pos=[0, 0, 0.03],
+                  mass=0.6, contype=0, conaffinity=0, rgba=[0.9, 0.9, 0.9, 1])
+    for side, sign in (("left", 1.0), ("right", -1.0)):
+        finger = hand.add_body(name=f"panda_finger_{side}", pos=[0, 0, 0.0584], gravcomp=1)
+        finger.add_joint(name=f"panda_finger_joint_{side}", type=mujoco.mjtJoint.mjJNT_SLIDE,
+                         axis=[0, sign, 0], range=[0.0, 0.04], damping=10.0, armature=0.01)
+        finger.add_geom(type=mujoco.mjtGeom.mjGEOM_BOX, size=[0.008, 0.004, 0.024],
+                        pos=[0, sign * 0.004, 0.022], mass=0.015, contype=0, conaffinity=0,
+                        rgba=[0.25, 0.25, 0.25, 1])
+        act = spec.add_actuator(name=f"panda_finger_{side}", target=f"panda_finger_joint_{side}",
+                                trntype=mujoco.mjtTrn.mjTRN_JOINT)
+        act.set_to_position(kp=200.0)
+        act.ctrlrange = [0.0, 0.04]
+        act.ctrllimited = 1
+    hand.add_site(name="panda_pinch", pos=[0, 0, _TCP], size=[0.005, 0, 0])
+    return spec
+
+
+@dataclass(frozen=True)
+class PandaConfig:
+    """The arm beside the object and how it executes.
+
+    Attributes:
+        base: (3,) where the arm's base stands (m; the object is centred on the origin).
+        approach: height above a particle the hand comes down from and lifts to (m).
+        approach_time: seconds of each free move (to above the particle, down, up).
+        grasp_steps: steps to close (and, after the release, to open) the fingers.
+        grasp_tolerance: largest pinch-to-particle distance the grasp switches on at (m).
+        kp, kd: joint PD gains of the computed-torque law (1/s^2, 1/s) for joints 1-4 and
+            5-7 (400, 40: 20 rad/s, critically damped; 0.4 rad per step at dt 0.02).
+        ik_iterations: damped-least-squares iterations per step (warm started).
+    """
+
+    base: tuple[float, float, float] = (-0.45, 0.0, 0.0)
+    approach: float = 0.06
+    approach_time: float = 0.6
+    grasp_steps: int = 5
+    grasp_tolerance: float = 0.01
+    kp: tuple[float, float] = (400.0, 400.0)
+    kd: tuple[float, float] = (40.0, 40.0)
+    ik_iterations: int = 5
+
+    def __post_init__(self):
+        check_config(self, positive=("approach", "approach_time", "grasp_tolerance", "kp",
+                                     "kd"),
+                     minimum={"grasp_steps": 1, "ik_iterations": 1})
+
+
+def panda_scene(scene: DeformableScene, config: PandaConfig = PandaConfig(),
+                pickable=None) -> tuple[mujoco.MjModel, dict]:
+    """The scene's object and floor with the arm added at ``config.base``: the combined model
+    and the names it holds ({"grip": {particle: equality id}}). ``pickable``: particles the
+    hand may grasp (default: every particle the scene's picker may)."""
+    if not isinstance(scene, DeformableScene):
+        raise TypeError(f"scene must be a DeformableScene, got {type(scene).__name__}")
+    if not isinstance(config, PandaConfig):
+        raise TypeError(f"config must be a PandaConfig, got {type(config).__name__}")
+    spec = mujoco.MjSpec.from_string(scene.xml) if getattr(scene, "xml", None) else None
+    if spec is None:
+        raise ValueError("scene was built without its MJCF text (DeformableScene.xml)")
+    frame = spec.worldbody.add_frame(pos=list(config.base))
+    spec.attach(hand_spec(), prefix="arm/", frame=frame)
+    particles = scene.picker.pickable if pickable is None else np.asarray(pickable, int)
+    for i in particles:
+        eq = spec.add_equality(name=f"grip{int(i)}", type=mujoco.mjtEq.mjEQ_CONNECT,
+                               objtype=mujoco.mjtObj.mjOBJ_BODY, name1=HAND,
+                               name2=f"{scene.flex}_{int(i)}", active=False)
+        eq.data[:3] = [0.0, 0.0, _TCP]              # the anchor: the pinch point on the hand
+        eq.solref = [0.002, 1.0]
+    model = spec.compile()
+    grip = {}
+    for e in range(model.neq):
+        name = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_EQUALITY, e) or ""
+        if name.startswith("grip"):
+            grip[int(name[4:])] = e
+            model.eq_data[e, 3:6] = 0.0        # the particle's own centre, not its qpos0 offset
+    return model, {"grip": grip}
+
+
+@dataclass
+class PandaExecution:
+    """What the arm did: the final object positions (N, 3), the pinch-to-particle distance at
+    each grasp (m), the largest pinch tracking error of each carry (m), the combined model's
+    states (``SNAPSHOT_SPEC``) at the start and after each grasp, carry and release (with
+    ``snapshots``; for pictures), the number of steps."""
+
+    positions: np.ndarray
+    grasp_distance: list = field(default_factory=list)
+    carry_error: list = field(default_factory=list)
+    snapshots: list = field(default_factory=list)
+    steps: int = 0
+
+
+class PandaExecutor:
+    """Executes plans of a ``DeformableScene``'s picker with the arm (module docstring).
+
+    Args:
+        scene: the rope or cloth scene the plan was made on (its picker's timing is reused).
+        config: the arm's placement and gains.
+        pickable: particles the hand may grasp (default: the picker's).
+    """
+
+    def __init__(self, scene: DeformableScene, config: PandaConfig = PandaConfig(),
+                 pickable=None):
+        self.scene, self.config = scene, config
+        self.model, names = panda_scene(scene, config, pickable)
+        self.grip = names["grip"]
+        m = self.model
+        self.data = mujoco.MjData(m)
+        self.site = m.site(PINCH).id
+        joints = [m.joint(f"arm/{n}") for n in JOINT_NAMES]
+        self.qadr = np.array([j.qposadr[0] for j in joints])
+        self.dadr = np.array([j.dofadr[0] for j in joints])
+        self.motors = np.array([m.actuator(f"arm/panda_motor{i}").id for i in range(1, 8)])
+        self.fingers = np.array([m.actuator(f).id for f in FINGERS])
+        self.damping = m.dof_damping[self.dadr].copy()
+        self.kp = np.where(np.arange(7) < 4, config.kp[0], config.kp[1])
+        self.kd = np.where(np.arange(7) < 4, config.kd[0], config.kd[1])
+        self.dt = float(m.opt.timestep)
+        pk = scene.picker
+        self.move_steps, self.settle_steps = pk.move_steps, pk.settle_steps
+        self._profile = 0.5 - 0.5 * np.cos(np.pi * np.arange(1, pk.move_steps + 1)
+                                           / pk.move_steps)
+        self._vert = {i: m.body(f"{scene.flex}_{i}").id for i in self.grip}
+        combined = Scene(m)
+        f = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_FLEX, scene.flex)
+        vadr = int(m.flex_vertadr[f])
+        self._vq = np.stack([combined.qpos_indices(f"vertex:{vadr + i}")
+                             for i in range(scene.n_particles)])                       # (N, 3)
+        bodies = m.flex_vertbodyid[vadr:vadr + scene.n_particles]
+        self._origin = m.body_pos[bodies] - m.qpos0[self._vq]
+        self._qref = self._qdref = None
+        self._M = np.zeros((m.nv, m.nv))
+
+    # ------------------------------------------------------------------ the start
+    def start(self, object_state: np.ndarray) -> None:
+        """Put the object as in ``object_state`` (a state row of the scene), the arm at its
+        ready pose with the hand open, and settle the arm above the object."""
+        m, d = self.model, self.data
+        mujoco.mj_resetData(m, d)
+        d.qpos[self._vq] = self.scene.positions(object_state) - self._origin
+        d.qpos[self.qadr] = _READY
+        d.ctrl[self.fingers] = 0.04
+        mujoco.mj_forward(m, d)
+        self._qref = d.qpos[self.qadr].copy()
+        self._qdref = np.zeros(7)
+
+    # ------------------------------------------------------------------ motion
+    def _ik(self, target: np.ndarray) -> np.ndarray:
+        m, d = self.model, self.data
+        q = self._qref.copy()
+        scratch = mujoco.MjData(m)
+        scratch.qpos[:] = d.qpos
+        jp, jr = np.zeros((3, m.nv)), np.zeros((3, m.nv))
+        for _ in range(self.config.ik_iterations):
+            scratch.qpos[self.qadr] = q
+            mujoco.mj_kinematics(m, scratch)
+            mujoco.mj_comPos(m, scratch)
+            axis = scratch.site_xmat[self.site].reshape(3, 3)[:, 2]
+            err = np.concatenate([target - scratch.site_xpos[self.site], np.cross(axis, _DOWN)])
+            mujoco.mj_jacSite(m, scratch, jp, jr, self.site)
+            jac = np.vstack([jp, jr])[:, self.dadr]
+            q = q + jac.T @ np.linalg.solve(jac @ jac.T + 1e-4 * np.eye(6), err)
+            q = np.clip(q, Q_LOWER + 0.01, Q_UPPER - 0.01)
+        return q
+
+    def _step(self, target: np.ndarray) -> None:
+        """One step toward the pinch ``target``: computed-torque control of the IK reference,
+        tau = M (qdd_ref + kp e + kd de) + damping qd (the joints' own damping cancelled)."""
+        m, d = self.model, self.data
+        q_ref = self._ik(target)
+        qd_ref = (q_ref - self._qref) / self.dt
+        qdd_ref = (qd_ref - self._qdref) / self.dt
+        self._qref, self._qdref = q_ref, qd_ref
+        q, qd = d.qpos[self.qadr], d.qvel[self.dadr]
+        mujoco.mj_fullM(m, d, self._M)
+        acc = qdd_ref + self.kp * (q_ref - q) + self.kd * (qd_ref - qd)
+        tau = self._M[np.ix_(self.dadr, self.dadr)] @ acc + self.damping * qd
+        d.ctrl[self.motors] = np.clip(tau, -TAU_MAX, TAU_MAX)
+        mujoco.mj_step(m, d)
+
+    def pinch(self) -> np.ndarray:
+        """(3,) the pinch site's position now (m)."""
+        return self.data.site_xpos[self.site].copy()
+
+    def _move(self, goal: np.ndarray, steps: int, profile: np.ndarray | None = None) -> float:
+        """Pinch from where it is to ``goal`` in ``steps`` steps; the largest tracking error."""
+        a = self._target_now()
+        s = (0.5 - 0.5 * np.cos(np.pi * np.arange(1, steps + 1) / steps)
+             if profile is None else profile)
+        worst = 0.0
+        for k in range(steps):
+            target = a + s[k] * (goal - a)
+            self._step(target)
+            worst = max(worst, float(np.linalg.norm(self.pinch() - target)))
+        return worst
+
+    def _hold(self, steps: int) -> None:
+        target = self._target_now()
+        for _ in range(steps):
+            self._step(target)
+
+    def _target_now(self) -> np.ndarray:
+        m = self.model
+        scratch = mujoco.MjData(m)
+        scratch.qpos[:] = self.data.qpos
+        scratch.qpos[self.qadr] = self._qref
+        mujoco.mj_kinematics(m, scratch)
+        return scratch.site_xpos[self.site].copy()
+
+    def particle(self, i: int) -> np.ndarray:
+        """(3,) particle i's position now (m)."""
+        return self.data.xpos[self._vert[int(i)]].copy()
+
+    # ------------------------------------------------------------------ actions
+    def execute(self, object_state: np.ndarray, particles, displacements,
+                snapshots: bool = False) -> PandaExecution:
+        """Run the plan ``particles`` (H,), ``displacements`` (H, 3) from ``object_state``.
+
+        Raises:
+            ValueError: a particle the hand cannot grasp, or a plan of bad shape.
+            RuntimeError: the pinch did not reach a particle within ``grasp_tolerance``.
+        """
+        idx = np.asarray(particles).reshape(-1)
+        disp = float_array(displacements, "displacements", (len(idx), 3))
+        bad = [int(i) for i in idx if i != -1 and int(i) not in self.grip]
+        if bad:
+            raise ValueError(f"particles {bad} have no grasp equality in the arm's model")
+        cfg = self.config
+        self.start(object_state)
+        out = PandaExecution(np.empty(0))
+        t_free = max(2, int(round(cfg.approach_time / self.dt)))
+        up = np.array([0.0, 0.0, cfg.approach])
+        self._hold(t_free)                                     # settle at the ready pose
+        snap = (lambda: out.snapshots.append(self.state())) if snapshots else (lambda: None)
+        snap()
+        for i, dv in zip(idx, disp, strict=True):
+            if i == -1:
+                self._hold(self.move_steps + self.settle_steps)
+                continue
+            p = self.particle(i)
+            for goal in (p + up, p):                 # free moves, then let the PD converge
+                self._move(goal, t_free)
+                self._hold(t_free)
+            dist = float(np.linalg.norm(self.pinch() - self.particle(i)))
+            out.grasp_distance.append(dist)
+            if dist > cfg.grasp_tolerance:
+                raise RuntimeError(f"the pinch is {dist * 1e3:.1f} mm from particle {i}, beyond "
+                                   f"the grasp tolerance {cfg.grasp_tolerance * 1e3:.0f} mm")
+            self.data.ctrl[self.fingers] = 0.0
+            self.data.eq_active[self.grip[int(i)]] = 1
+            self._hold(cfg.grasp_steps)
+            snap()
+            start = self._target_now()
+            out.carry_error.append(self._move(start + dv, self.move_steps, self._profile))
+            snap()
+            self.data.eq_active[self.grip[int(i)]] = 0
+            self.data.ctrl[self.fingers] = 0.04
+            self._hold(cfg.grasp_steps)
+            self._move(self._target_now() + up, t_free)
+            self._hold(self.settle_steps)
+            snap()
+        out.positions = self.positions()
+        out.steps = int(round(self.data.time / self.dt))
+        return out
+
+    def state(self) -> np.ndarray:
+        """(ns,) the combined model's ``SNAPSHOT_SPEC`` state now (for pictures)."""
+        out = np.empty(mujoco.mj_stateSize(self.model, SNAPSHOT_SPEC))
+        mujoco.mj_getState(self.model, self.data, out, SNAPSHOT_SPEC)
+        return out
+
+    def positions(self) -> np.ndarray:
+        """(N, 3) the object's particles now (m)."""
+        return self._origin + self.data.qpos[self._vq]

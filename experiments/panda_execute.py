@@ -1,0 +1,194 @@
+"""The key-particle paper's real-robot part (Sec. IV-D) in simulation: a Franka Panda with a
+parallel gripper executes CEM(Simple)'s cloth plans open-loop through inverse kinematics.
+
+For each goal (``--goals``, default the paper's two: diagonal and side) and seed, one trial
+plans with CEM(Simple) on the floating picker (``planners.pick_place``, the goal's preset),
+then replays the executed plan's actions with the arm (``dopt.tasks.pick.panda_gripper``) from
+the same start. Trials are resumable files under OUT/trials.
+
+Writes OUT/summary.json (experiment "panda_execute"): per goal the final cost (mean particle
+distance to the goal, m) of the picker's and the arm's execution (mean and 95 % CI over the
+seeds), their paired difference, the mean distance between the two final cloths, the largest
+grasp distance and carry tracking error; per trial the same. And OUT/panda_<goal>.png, the
+first seed's execution as a strip (start, then grasp / carry / release of each action;
+MUJOCO_GL=egl, skipped with --no-render). Exits 1 if a trial failed, 2 on a bad flag.
+
+    python experiments/panda_execute.py --seeds 3 --out results/panda \\
+        --record docs/results/panda-execute.json
+"""
+
+from __future__ import annotations
+
+import argparse
+import logging
+import os
+import sys
+
+import numpy as np
+
+os.environ.setdefault("MUJOCO_GL", "egl")   # offscreen renders; read when mujoco is imported
+
+from cli_args import (
+    EPILOG,
+    choices_type,
+    guarded,
+    nonneg_int,
+    output_dir,
+    output_file,
+    positive_int,
+    record_problem,
+    write_summary,
+)
+
+from dopt.stats import mean_ci
+from dopt.sweep import Trial, run_sweep
+from planners.pick_place import PickPlaceSettings, make_planner, make_problem, run_problem
+
+GOALS = ("diagonal", "side")
+
+
+def parser() -> argparse.ArgumentParser:
+    ap = argparse.ArgumentParser(prog="panda_execute.py", description=__doc__, epilog=EPILOG,
+                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--goals", type=choices_type(GOALS, "goal(s)"), default=",".join(GOALS),
+                    help="comma-separated cloth goals (default %(default)s, the paper's)")
+    ap.add_argument("--seeds", type=positive_int, default=3,
+                    help="seeds per goal (default %(default)s)")
+    ap.add_argument("--seed", type=nonneg_int, default=0, help="first seed (default 0)")
+    ap.add_argument("--n", type=positive_int, default=None,
+                    help="cloth particles per side (default: the goal's preset)")
+    ap.add_argument("--quick", action="store_true",
+                    help="smoke run: one seed, 8 x 8 cloth, 2 CEM iterations")
+    ap.add_argument("--out", type=output_dir, required=True,
+                    help="output folder; finished trials are kept under OUT/trials")
+    ap.add_argument("--fresh", action="store_true", help="recompute every trial")
+    ap.add_argument("--record", type=output_file, default=None, metavar="PATH",
+                    help="also write the summary to PATH (docs/results/...)")
+    ap.add_argument("--no-render", action="store_true", help="skip the PNG strips")
+    return ap
+
+
+def settings_of(goal: str, args) -> PickPlaceSettings:
+    s = PickPlaceSettings.preset("cloth", goal, quick=args.quick)
+    return s if args.n is None else PickPlaceSettings.from_dict({**s.to_dict(), "n": args.n})
+
+
+def plan_actions(actions: list[dict]) -> tuple[np.ndarray, np.ndarray]:
+    """Every stage's executed actions in order (a trial's "actions"): (H,) particles, (H, 3)
+    displacements."""
+    parts = [p for a in actions for p in a["particles"]]
+    disps = [d for a in actions for d in a["displacements"]]
+    return np.asarray(parts, dtype=np.int64), np.asarray(disps, dtype=float).reshape(-1, 3)
+
+
+def replay(problem, actions: list[dict], snapshots: bool = False):
+    """The arm executing ``actions`` from the problem's start: (executor, PandaExecution)."""
+    from dopt.tasks.pick.panda_gripper import PandaExecutor
+
+    parts, disps = plan_actions(actions)
+    held = sorted({int(p) for p in parts if p >= 0}) or [0]
+    arm = PandaExecutor(problem.scene, pickable=held)
+    return arm, arm.execute(problem.start_state, parts, disps, snapshots=snapshots)
+
+
+def panda_trial(params: dict) -> dict:
+    """Plan with CEM(Simple) on the picker, replay with the arm; the two final costs and how
+    far apart the two final cloths are (m)."""
+    from dopt.tasks.pick.scene import mean_distance
+
+    s = PickPlaceSettings.from_dict(params["settings"])
+    seed = params["seed"]
+    problem = make_problem(s, seed)
+    res = run_problem(problem, make_planner("simple", s, seed), method="simple", seed=seed)
+    _, done = replay(problem, res.actions)
+    return {"seed": seed, "n_actions": int(sum(len(a["particles"]) for a in res.actions)),
+            "picker_final_cost": float(res.metrics["final_cost"]),
+            "panda_final_cost": float(mean_distance(done.positions, problem.final_goal)),
+            "picker_vs_panda": float(mean_distance(done.positions,
+                                                   problem.scene.positions(res.final_state))),
+            "grasp_distance_max": max(done.grasp_distance, default=0.0),
+            "carry_errors": [float(e) for e in done.carry_error],
+            "picker_unstable": bool(res.unstable), "panda_steps": done.steps,
+            "actions": res.actions}
+
+
+def summarize(records: list[dict]) -> dict:
+    """Per goal: both final costs (mean, 95 % CI), their paired difference, the distance
+    between the final cloths, the worst grasp distance and carry error."""
+    by: dict = {}
+    for r in records:
+        by.setdefault(r["params"]["goal"], []).append(r["result"])
+    out = {}
+    for goal, rs in by.items():
+        entry = {"n": len(rs), "seeds": [r["seed"] for r in rs]}
+        for key in ("picker_final_cost", "panda_final_cost", "picker_vs_panda"):
+            entry[f"{key}_mean"], entry[f"{key}_ci95"] = _mean_ci([r[key] for r in rs])
+        entry["difference_mean"], entry["difference_ci95"] = _mean_ci(
+            [r["panda_final_cost"] - r["picker_final_cost"] for r in rs])
+        entry["grasp_distance_max"] = max(r["grasp_distance_max"] for r in rs)
+        entry["carry_error_max"] = max((e for r in rs for e in r["carry_errors"]), default=0.0)
+        entry["picker_unstable_seeds"] = [r["seed"] for r in rs if r["picker_unstable"]]
+        out[goal] = entry
+    return out
+
+
+def _mean_ci(values) -> tuple[float | None, float | None]:
+    """Mean and 95 % CI half-width; None where not finite (one seed has no interval)."""
+    return tuple(float(v) if np.isfinite(v) else None for v in mean_ci(values, 0.95))
+
+
+def render_strip(path, arm, states) -> None:
+    """The snapshots side by side, from one oblique camera framing the cloth and the hand."""
+    import imageio.v3 as iio
+
+    from dopt.render import fit_camera, render_states
+    from dopt.tasks.pick.panda_gripper import SNAPSHOT_SPEC
+
+    points = np.concatenate([arm.positions(), arm.positions() + [0, 0, 0.25]])
+    cam = fit_camera(points, azimuth=200.0, elevation=-35.0, fill=0.8)
+    frames = render_states(arm.model, np.asarray(states), SNAPSHOT_SPEC, cam, 320, 240)
+    iio.imwrite(path, np.concatenate(list(frames), axis=1))
+
+
+@guarded("panda_execute.py")
+def main(argv=None) -> int:
+    logging.basicConfig(level=logging.WARNING)
+    ap = parser()
+    args = ap.parse_args(argv)
+    if record_problem(args.record, args.out):
+        ap.error(record_problem(args.record, args.out))
+    seeds = range(args.seed, args.seed + (1 if args.quick else args.seeds))
+    trials = []
+    for goal in args.goals:
+        s = settings_of(goal, args)
+        for seed in seeds:
+            trials.append(Trial(f"{goal}-seed{seed}-n{s.n}{'-quick' if args.quick else ''}",
+                                {"goal": goal, "seed": int(seed), "settings": s.to_dict()}))
+    res = run_sweep(panda_trial, trials, args.out, workers=1, fresh=args.fresh)
+    for key, err in res.failed.items():
+        print(f"FAILED {key}: {err}", file=sys.stderr)
+    wanted = {t.key for t in trials}
+    records = [r for k, r in res.records.items() if k in wanted]
+    goals = summarize(records)
+    write_summary({"experiment": "panda_execute", "task": "cloth", "goals": goals,
+                   "settings": {g: settings_of(g, args).to_dict() for g in args.goals},
+                   "failed": res.failed, "trial_commits": res.commits},
+                  args.out, args.record, "experiments/panda_execute.py", argv)
+    for goal, e in goals.items():
+        print(f"{goal}: picker {e['picker_final_cost_mean'] * 1e3:.1f} mm, panda "
+              f"{e['panda_final_cost_mean'] * 1e3:.1f} mm, final cloths "
+              f"{e['picker_vs_panda_mean'] * 1e3:.1f} mm apart ({e['n']} seeds)")
+    if not args.no_render:
+        for goal in args.goals:
+            first = next((t for t in trials if t.params["goal"] == goal), None)
+            if first is not None and first.key in res.records:
+                problem = make_problem(PickPlaceSettings.from_dict(first.params["settings"]),
+                                       first.params["seed"])
+                arm, done = replay(problem, res.records[first.key]["result"]["actions"],
+                                   snapshots=True)
+                render_strip(args.out / f"panda_{goal}.png", arm, done.snapshots)
+    return 1 if res.failed else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

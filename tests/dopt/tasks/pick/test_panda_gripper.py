@@ -1,0 +1,72 @@
+"""The Panda with a parallel gripper executing picker plans (dopt.tasks.pick.panda_gripper):
+a one-action plan ends within 2 cm of the floating picker's result, the pinch reaches the
+particle, the carry tracks the picker's path, and bad inputs are named."""
+
+import mujoco
+import numpy as np
+import pytest
+
+from dopt.rollout import RolloutConfig, RolloutService
+from dopt.tasks.pick.cloth_scene import ClothSceneConfig, make_cloth
+from dopt.tasks.pick.panda_gripper import SNAPSHOT_SPEC, PandaConfig, PandaExecutor
+from dopt.tasks.pick.picker import NONE, PickerConfig
+from dopt.tasks.pick.scene import PickPlaceTask, mean_distance
+
+N = 8
+
+
+@pytest.fixture(scope="module")
+def cloth():
+    return make_cloth(ClothSceneConfig(n=N), PickerConfig(bound=(0.3,) * 3))
+
+
+@pytest.fixture(scope="module")
+def arm(cloth):
+    return PandaExecutor(cloth)
+
+
+def _picker_final(cloth, particles, disp):
+    task = PickPlaceTask(cloth, cloth.positions(cloth.initial_state),
+                         rollout=RolloutService(cloth.scene, RolloutConfig(threads=1)))
+    return cloth.positions(task.execute(particles, disp).state)
+
+
+@pytest.mark.parametrize("particle, d", [(N * N - 1, (-0.1, -0.05, 0.02)),
+                                         (0, (0.1, 0.1, 0.05)), (N - 1, (0.2, -0.1, 0.1))])
+def test_a_one_action_plan_ends_within_2_cm_of_the_pickers(cloth, arm, particle, d):
+    disp = np.array([d])
+    done = arm.execute(cloth.initial_state, [particle], disp)
+    assert done.grasp_distance[0] < arm.config.grasp_tolerance
+    assert done.carry_error[0] < 0.02
+    assert mean_distance(done.positions, _picker_final(cloth, [particle], disp)) < 0.02
+
+
+def test_the_pinch_carries_the_particle_along_the_displacement(cloth, arm):
+    """While held (the snapshot right after the carry) the particle sits at p0 + d."""
+    d = np.array([[-0.08, 0.05, 0.06]])
+    corner = N * N - 1
+    p0 = cloth.positions(cloth.initial_state)[corner]
+    done = arm.execute(cloth.initial_state, [corner], d, snapshots=True)
+    assert len(done.snapshots) == 4             # start, grasped, carried, released
+    mujoco.mj_setState(arm.model, arm.data, done.snapshots[2], SNAPSHOT_SPEC)
+    mujoco.mj_forward(arm.model, arm.data)
+    assert np.linalg.norm(arm.positions()[corner] - (p0 + d[0])) < 0.01
+
+
+def test_none_action_leaves_the_cloth_and_an_unknown_particle_is_named(cloth):
+    arm = PandaExecutor(cloth, pickable=[0, 5])
+    done = arm.execute(cloth.initial_state, [NONE], np.zeros((1, 3)))
+    assert mean_distance(done.positions, cloth.positions(cloth.initial_state)) < 1e-3
+    with pytest.raises(ValueError, match=r"particles \[7\]"):
+        arm.execute(cloth.initial_state, [7], np.zeros((1, 3)))
+    with pytest.raises(ValueError, match="displacements"):
+        arm.execute(cloth.initial_state, [0, 5], np.zeros((1, 3)))
+
+
+def test_bad_configs_raise(cloth):
+    with pytest.raises(ValueError, match="approach"):
+        PandaConfig(approach=0.0)
+    with pytest.raises(TypeError, match="PandaConfig"):
+        PandaExecutor(cloth, config={"base": (0, 0, 0)})
+    with pytest.raises(TypeError, match="DeformableScene"):
+        PandaExecutor("cloth")

@@ -1,0 +1,31 @@
+"""experiments/panda_execute.py: the quick run plans, replays with the arm, summarises,
+renders, resumes; bad flags are usage errors."""
+
+import json
+
+import panda_execute
+import pytest
+
+
+def test_quick_run_writes_both_goals_and_resumes(tmp_path):
+    out = tmp_path / "panda"
+    assert panda_execute.main(["--quick", "--out", str(out)]) == 0
+    s = json.loads((out / "summary.json").read_text())
+    assert s["experiment"] == "panda_execute" and set(s["goals"]) == {"diagonal", "side"}
+    for e in s["goals"].values():
+        assert e["n"] == 1 and e["picker_final_cost_ci95"] is None     # one seed: no interval
+        assert e["grasp_distance_max"] < 0.01                             # the grasp tolerance
+        assert e["difference_mean"] == pytest.approx(
+            e["panda_final_cost_mean"] - e["picker_final_cost_mean"])
+    assert (out / "panda_diagonal.png").stat().st_size > 0
+    stamp = {p.name: p.stat().st_mtime_ns for p in (out / "trials").glob("*.json")}
+    assert panda_execute.main(["--quick", "--out", str(out), "--no-render"]) == 0
+    assert {p.name: p.stat().st_mtime_ns for p in (out / "trials").glob("*.json")} == stamp
+
+
+@pytest.mark.parametrize("argv", [["--goals", "reflective"], ["--seeds", "0"], []])
+def test_bad_flags_exit_2(tmp_path, argv, capsys):
+    extra = [] if not argv else ["--out", str(tmp_path / "o")]
+    with pytest.raises(SystemExit) as e:
+        panda_execute.main(argv + extra)
+    assert e.value.code == 2
