@@ -289,6 +289,10 @@ def fig7_section(results: list[Result], page: Path) -> list[str]:
                                 if m in ms),
                      source(r, page)])
     lines += table(header, rows)
+    claims = fig7_claims_lines(results, page)
+    if claims:
+        lines += ["", "The paper's claims on these files (Simple's 95 % interval wholly below "
+                      "the other's: separate):", "", *claims]
     for r in results:
         lines += ["", *fig7_detail(r, page)]
     return lines
@@ -399,6 +403,72 @@ def fig7_headline(r: Result) -> str:
         parts.append(text)
     seeds = max((e.get("n") or 0) for e in ms.values()) if ms else 0
     return ", ".join(parts) + f" ({seeds} seed{'s' if seeds != 1 else ''})"
+
+
+#: the paper's order of the cloth folds by difficulty (Sec. IV-C.2)
+CLOTH_DIFFICULTY = ("diagonal", "side", "reflective", "underneath")
+
+
+def comparison(a: dict | None, b: dict | None) -> str:
+    """Whether method a's final cost is below b's: "yes (separate)" when a's 95 % interval
+    lies wholly below b's, "yes (overlap)", "no (overlap)", "no (separate)"; "n/a" without
+    both means."""
+    if not a or not b or not (_finite(a.get("final_cost_mean"))
+                              and _finite(b.get("final_cost_mean"))):
+        return "n/a"
+    ma, mb = a["final_cost_mean"], b["final_cost_mean"]
+    ca, cb = a.get("final_cost_ci95"), b.get("final_cost_ci95")
+    separate = _finite(ca) and _finite(cb) and abs(ma - mb) > ca + cb
+    return f"{'yes' if ma < mb else 'no'} ({'separate' if separate else 'overlap'})"
+
+
+def fig7_claims(results: list[Result]) -> dict:
+    """The paper's Fig. 7 claims checked on the recorded files (not quick): per panel whether
+    Simple < Original and Simple < Random (``comparison``) and the gap Original - Simple (m);
+    for the cloth folds in the paper's order of difficulty, whether that gap grows."""
+    panels, gaps = {}, []
+    for r in sorted(results, key=lambda r: list(FIG7_PANELS).index(
+            (r.data.get("task"), r.data.get("goal")))
+            if (r.data.get("task"), r.data.get("goal")) in FIG7_PANELS else 99):
+        if r.kind != "fig7" or r.quick:
+            continue
+        ms = r.data["methods"]
+        s, o = ms.get("simple"), ms.get("original")
+        gap = (o["final_cost_mean"] - s["final_cost_mean"]
+               if s and o and _finite(s.get("final_cost_mean"))
+               and _finite(o.get("final_cost_mean")) else None)
+        panels[_panel(r)] = {"file": r, "simple_vs_original": comparison(s, o),
+                             "simple_vs_random": comparison(s, ms.get("random")), "gap": gap,
+                             "seeds": max((e.get("n") or 0) for e in ms.values()),
+                             "size": (f"{n} x {n} particles" if r.data.get("task") == "cloth"
+                                      else f"{n} particles")
+                             if (n := (r.data.get("settings") or {}).get("n")) else "size ?"}
+        if r.data.get("task") == "cloth" and r.data.get("goal") in CLOTH_DIFFICULTY:
+            gaps.append((CLOTH_DIFFICULTY.index(r.data["goal"]), r.data["goal"], gap))
+    gaps.sort()
+    values = [g for _, _, g in gaps]
+    grows = (None if len(values) < 2 or any(g is None for g in values)
+             else all(b > a for a, b in zip(values, values[1:], strict=False)))
+    return {"panels": panels, "cloth_gaps": [(goal, g) for _, goal, g in gaps],
+            "gap_grows": grows}
+
+
+def fig7_claims_lines(results: list[Result], page: Path) -> list[str]:
+    """The claims as a bulleted list (empty without Fig. 7 files)."""
+    c = fig7_claims(results)
+    if not c["panels"]:
+        return []
+    lines = [f"- {panel} ({p['size']}, {p['seeds']} seeds): Simple < Original "
+             f"{p['simple_vs_original']}, Simple < Random {p['simple_vs_random']}; "
+             f"{source(p['file'], page)}" for panel, p in c["panels"].items()]
+    if c["cloth_gaps"]:
+        gaps = ", ".join(f"{goal} {mm(g)}" for goal, g in c["cloth_gaps"])
+        verdict = {True: "grows", False: "does not grow", None: "cannot be judged"}[
+            c["gap_grows"]]
+        lines.append(f"- The gap Original - Simple (mm) over the cloth folds in the paper's "
+                     f"order of difficulty: {gaps}; it {verdict} with difficulty (the paper: "
+                     f"it grows).")
+    return lines
 
 
 # ------------------------------------------------------------------------- table1 (SVR)
@@ -1019,6 +1089,7 @@ def readme_block(results: list[Result], readme: Path, results_md_path: Path) -> 
             rows.append(["-", f"{r.kind}: {r.data.get('task', '')} {r.data.get('goal', '')}"
                          .strip(), f"`{r.command}`",
                          f"{_rendered(r, HEADLINES[r.kind], r)}; {source(r, readme)}"])
+    claims = fig7_claims_lines(results, readme)
     ref, published = paper_table1(results)
     beside = [(t, r) for t in published if (r := paper_preset_table1(results, t))]
     rel = Path(os.path.relpath(results_md_path, Path(readme).parent)).as_posix()
@@ -1028,6 +1099,9 @@ def readme_block(results: list[Result], readme: Path, results_md_path: Path) -> 
                      "commit)"], rows), "",
              f"Every table, per-seed number and setting: [{rel}]({rel}), generated like this "
              f"table from the result files by `{REGENERATE}`."]
+    if claims:
+        lines += ["", "Fig. 7's claims on the recorded files (95 % intervals of the final cost "
+                      "separate or overlapping):", "", *claims]
     if beside:
         lines += ["", f"Table 1 under `--preset paper` against the paper's printed Table 1 "
                       f"(MPC cost / baseline, means; [{rel}]({rel}) has the rows side by side):",

@@ -359,3 +359,33 @@ def test_panda_execution_renders_its_goals(site):
             in site["md"].read_text())
     assert "diagonal: picker 14.8 mm, Panda 17.1 mm, final cloths 5.2 mm apart (3 seeds)" in \
         block(site["readme"])
+
+
+@pytest.mark.parametrize("a, b, want", [
+    ((0.010, 0.002), (0.020, 0.003), "yes (separate)"),
+    ((0.010, 0.006), (0.020, 0.005), "yes (overlap)"),
+    ((0.030, 0.001), (0.020, 0.001), "no (separate)"),
+    ((0.030, None), (0.020, 0.001), "no (overlap)"),           # one seed: no interval
+    ((None, None), (0.020, 0.001), "n/a")])
+def test_fig7_comparison_names_order_and_interval_overlap(a, b, want):
+    def entry(mean_ci):
+        return {"final_cost_mean": mean_ci[0], "final_cost_ci95": mean_ci[1]}
+    assert report.comparison(entry(a), entry(b)) == want
+
+
+def test_fig7_claims_check_whether_the_gap_grows_with_difficulty(site):
+    gaps = {"diagonal": 0.010, "side": 0.020, "reflective": 0.015, "underneath": 0.030}
+    for goal, gap in gaps.items():
+        data = fig7(goal=goal)
+        data["methods"]["original"]["final_cost_mean"] = (
+            data["methods"]["simple"]["final_cost_mean"] + gap)
+        write(site["results"], f"fig7-cloth-{goal}.json", data)
+    claims = report.fig7_claims(report.load_results(site["results"]))
+    assert [g for _, g in claims["cloth_gaps"]] == pytest.approx(list(gaps.values()))
+    assert claims["gap_grows"] is False                  # side 20 > reflective 15
+    assert run(site) == 0
+    assert "it does not grow with difficulty" in block(site["readme"])
+    write(site["results"], "fig7-cloth-reflective.json", fig7(goal="reflective", methods={
+        **fig7()["methods"], "original": {**fig7()["methods"]["original"],
+                                          "final_cost_mean": 0.013649 + 0.025}}))
+    assert report.fig7_claims(report.load_results(site["results"]))["gap_grows"] is True
