@@ -9,7 +9,8 @@ the same start. Trials are resumable files under OUT/trials.
 Writes OUT/summary.json (experiment "panda_execute"): per goal the final cost (mean particle
 distance to the goal, m) of the picker's and the arm's execution (mean and 95 % CI over the
 seeds), their paired difference, the mean distance between the two final cloths, the largest
-grasp distance and carry tracking error; per trial the same. And OUT/panda_<goal>.png, the
+grasp distance and carry tracking error, and the actions the arm skipped because the pinch did
+not reach the particle; per trial the same. And OUT/panda_<goal>.png, the
 first seed's execution as a strip (start, then grasp / carry / release of each action;
 MUJOCO_GL=egl, skipped with --no-render). Exits 1 if a trial failed, 2 on a bad flag.
 
@@ -107,6 +108,7 @@ def panda_trial(params: dict) -> dict:
             "picker_vs_panda": float(mean_distance(done.positions,
                                                    problem.scene.positions(res.final_state))),
             "grasp_distance_max": max(done.grasp_distance, default=0.0),
+            "missed_actions": [int(k) for k in done.missed],
             "carry_errors": [float(e) for e in done.carry_error],
             "picker_unstable": bool(res.unstable), "panda_steps": done.steps,
             "actions": res.actions}
@@ -126,6 +128,8 @@ def summarize(records: list[dict]) -> dict:
         entry["difference_mean"], entry["difference_ci95"] = _mean_ci(
             [r["panda_final_cost"] - r["picker_final_cost"] for r in rs])
         entry["grasp_distance_max"] = max(r["grasp_distance_max"] for r in rs)
+        entry["missed_actions"] = int(sum(len(r["missed_actions"]) for r in rs))
+        entry["n_actions"] = int(sum(r["n_actions"] for r in rs))
         entry["carry_error_max"] = max((e for r in rs for e in r["carry_errors"]), default=0.0)
         entry["picker_unstable_seeds"] = [r["seed"] for r in rs if r["picker_unstable"]]
         out[goal] = entry

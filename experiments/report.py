@@ -551,12 +551,14 @@ def panda_section(results: list[Result], page: Path) -> list[str]:
                  pm(mm(e["panda_final_cost_mean"]), mm(e["panda_final_cost_ci95"])),
                  pm(mm(e["difference_mean"]), mm(e["difference_ci95"])),
                  pm(mm(e["picker_vs_panda_mean"]), mm(e["picker_vs_panda_ci95"])),
-                 mm(e["grasp_distance_max"]), mm(e["carry_error_max"])]
+                 mm(e["grasp_distance_max"]), mm(e["carry_error_max"]),
+                 f"{e.get('missed_actions', 0)} / {e.get('n_actions', '?')}"]
                 for goal, e in r.data["goals"].items()]
         return [f"### `{r.name}`" + (" (quick)" if r.quick else ""), "",
                 *table(["goal", "seeds", "picker final cost (mm)", "Panda final cost (mm)",
                         "Panda - picker (mm)", "final cloths apart (mm)",
-                        "worst grasp distance (mm)", "worst carry error (mm)"], rows)]
+                        "worst grasp distance (mm)", "worst carry error (mm)",
+                        "actions skipped (out of reach)"], rows)]
 
     return section("Key particles, Sec. IV-D: a Panda executes the plans",
                    "CEM(Simple) plans on the floating picker (the goal's preset), replayed "
@@ -565,7 +567,8 @@ def panda_section(results: list[Result], page: Path) -> list[str]:
                    "Final cost: mean particle distance to the goal, mean ± 95 % CI over the "
                    "seeds; the paired difference; the mean particle distance between the two "
                    "final cloths; the worst pinch-to-particle distance at a grasp and the worst "
-                   "tracking error of the pinch while carrying.", results, page, body)
+                   "tracking error of the pinch while carrying; the actions the arm skipped "
+                   "because its pinch did not reach the particle.", results, page, body)
 
 
 def panda_headline(r: Result) -> str:

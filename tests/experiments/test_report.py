@@ -350,12 +350,14 @@ def test_panda_execution_renders_its_goals(site):
             "picker_final_cost_ci95": 0.002, "panda_final_cost_mean": 0.0171,
             "panda_final_cost_ci95": 0.003, "difference_mean": 0.0023, "difference_ci95": 0.001,
             "picker_vs_panda_mean": 0.0052, "picker_vs_panda_ci95": 0.001,
-            "grasp_distance_max": 0.0004, "carry_error_max": 0.031}
+            "grasp_distance_max": 0.0004, "carry_error_max": 0.031, "missed_actions": 1,
+            "n_actions": 7}
     write(site["results"], "panda-execute.json",
           {"experiment": "panda_execute", "goals": {"diagonal": goal}, "failed": {},
            "provenance": provenance("python experiments/panda_execute.py --seeds 3")})
     assert run(site) == 0
-    assert ("| diagonal | 3 | 14.8 ± 2.0 | 17.1 ± 3.0 | 2.3 ± 1.0 | 5.2 ± 1.0 | 0.4 | 31.0 |"
+    assert ("| diagonal | 3 | 14.8 ± 2.0 | 17.1 ± 3.0 | 2.3 ± 1.0 | 5.2 ± 1.0 | 0.4 | 31.0 | "
+            "1 / 7 |"
             in site["md"].read_text())
     assert "diagonal: picker 14.8 mm, Panda 17.1 mm, final cloths 5.2 mm apart (3 seeds)" in \
         block(site["readme"])

@@ -141,7 +141,9 @@ def panda_scene(scene: DeformableScene, config: PandaConfig = PandaConfig(),
 @dataclass
 class PandaExecution:
     """What the arm did: the final object positions (N, 3), the pinch-to-particle distance at
-    each grasp (m), the largest pinch tracking error of each carry (m), the combined model's
+    each grasp attempt (m), the largest pinch tracking error of each carry (m), the actions
+    skipped because the pinch could not reach the particle (indices into the plan), the
+    combined model's
     states (``SNAPSHOT_SPEC``) at the start and after each grasp, carry and release (with
     ``snapshots``; for pictures), the number of steps."""
 
@@ -149,6 +151,7 @@ class PandaExecution:
     grasp_distance: list = field(default_factory=list)
     carry_error: list = field(default_factory=list)
     snapshots: list = field(default_factory=list)
+    missed: list = field(default_factory=list)
     steps: int = 0
 
 
@@ -278,9 +281,11 @@ class PandaExecutor:
                 snapshots: bool = False) -> PandaExecution:
         """Run the plan ``particles`` (H,), ``displacements`` (H, 3) from ``object_state``.
 
+        An action whose particle the pinch does not reach within ``grasp_tolerance`` (out of
+        the arm's reach, or the arm blocked) is skipped and listed in ``missed``.
+
         Raises:
             ValueError: a particle the hand cannot grasp, or a plan of bad shape.
-            RuntimeError: the pinch did not reach a particle within ``grasp_tolerance``.
         """
         idx = np.asarray(particles).reshape(-1)
         disp = float_array(displacements, "displacements", (len(idx), 3))
@@ -295,7 +300,7 @@ class PandaExecutor:
         self._hold(t_free)                                     # settle at the ready pose
         snap = (lambda: out.snapshots.append(self.state())) if snapshots else (lambda: None)
         snap()
-        for i, dv in zip(idx, disp, strict=True):
+        for k, (i, dv) in enumerate(zip(idx, disp, strict=True)):
             if i == -1:
                 self._hold(self.move_steps + self.settle_steps)
                 continue
@@ -305,9 +310,12 @@ class PandaExecutor:
                 self._hold(t_free)
             dist = float(np.linalg.norm(self.pinch() - self.particle(i)))
             out.grasp_distance.append(dist)
-            if dist > cfg.grasp_tolerance:
-                raise RuntimeError(f"the pinch is {dist * 1e3:.1f} mm from particle {i}, beyond "
-                                   f"the grasp tolerance {cfg.grasp_tolerance * 1e3:.0f} mm")
+            if dist > cfg.grasp_tolerance:          # out of reach: the action is not executed
+                log.warning("the pinch is %.1f mm from particle %d, beyond the grasp "
+                            "tolerance: action %d skipped", dist * 1e3, i, k)
+                out.missed.append(k)
+                self._move(self._target_now() + up, t_free)
+                continue
             self.data.ctrl[self.fingers] = 0.0
             self.data.eq_active[self.grip[int(i)]] = 1
             self._hold(cfg.grasp_steps)

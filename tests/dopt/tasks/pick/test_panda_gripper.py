@@ -36,7 +36,7 @@ def _picker_final(cloth, particles, disp):
 def test_a_one_action_plan_ends_within_2_cm_of_the_pickers(cloth, arm, particle, d):
     disp = np.array([d])
     done = arm.execute(cloth.initial_state, [particle], disp)
-    assert done.grasp_distance[0] < arm.config.grasp_tolerance
+    assert done.grasp_distance[0] < arm.config.grasp_tolerance and done.missed == []
     assert done.carry_error[0] < 0.02
     assert mean_distance(done.positions, _picker_final(cloth, [particle], disp)) < 0.02
 
@@ -70,3 +70,12 @@ def test_bad_configs_raise(cloth):
         PandaExecutor(cloth, config={"base": (0, 0, 0)})
     with pytest.raises(TypeError, match="DeformableScene"):
         PandaExecutor("cloth")
+
+
+def test_a_particle_out_of_reach_is_skipped_not_grasped(cloth):
+    """The arm placed 1.5 m away cannot bring its pinch to the far corner: the action is
+    listed as missed and the cloth stays where it was."""
+    far = PandaExecutor(cloth, PandaConfig(base=(-1.5, 0.0, 0.0)))
+    done = far.execute(cloth.initial_state, [N * N - 1], np.array([[-0.1, 0.0, 0.05]]))
+    assert done.missed == [0] and done.grasp_distance[0] > far.config.grasp_tolerance
+    assert mean_distance(done.positions, cloth.positions(cloth.initial_state)) < 2e-3
