@@ -543,6 +543,37 @@ def table1_headline(r: Result) -> str:
             + f" ({trials} trial{'s' if trials != 1 else ''} each)")
 
 
+# ------------------------------------------------------------ cloth step cost by size (KP)
+def cloth_steps_section(results: list[Result], page: Path) -> list[str]:
+    def body(r: Result) -> list[str]:
+        rows = []
+        for preset in dict.fromkeys(row["preset"] for row in r.data["rows"]):
+            mine = [row for row in r.data["rows"] if row["preset"] == preset]
+            small = min(mine, key=lambda row: row["n"])["ms_per_step"]["step"]
+            for row in mine:
+                ms = row["ms_per_step"]
+                warned = {**row.get("warnings", {}),
+                          **{k[:60] + ("..." if len(k) > 60 else ""): v
+                             for k, v in row.get("messages", {}).items()}}
+                rows.append([preset, f"{row['n']} x {row['n']}", num(ms["step"], 2),
+                             num(ms["step"] / small if small else None, 1),
+                             num(ms["collision"], 2), num(ms["constraint_solve"], 2),
+                             num(ms["other"], 2), str(row["steps_per_action"]),
+                             num(row["ms_per_action"], 0),
+                             "; ".join(f"{k} ({v})" for k, v in warned.items()) or "-"])
+        return [f"### `{r.name}`", "",
+                *table(["preset", "cloth", "ms / step", "vs smallest", "collision ms",
+                        "constraint solve ms", "other ms (implicit solve)", "steps / action",
+                        "ms / action", "warnings (count)"], rows)]
+
+    return section("Key particles: what a cloth step costs by resolution",
+                   "`python -m dopt.bench cloth-steps`: one pick-and-place action per preset "
+                   "and size, MuJoCo's own timers per step (collision, constraint solve, and the "
+                   "rest of the step, which holds the discrete integrator's implicit solve), "
+                   "the step against the smallest size's, and every warning MuJoCo raised "
+                   "while the scene was built, settled and stepped.", results, page, body)
+
+
 # ------------------------------------------------------------------- Panda execution (KP)
 def panda_section(results: list[Result], page: Path) -> list[str]:
     def body(r: Result) -> list[str]:
@@ -1015,7 +1046,8 @@ SECTIONS = {"key_particles": kp_section, "kp_compare": kp_compare_section,
             "table1": table1_section, "fig4": fig4_section, "physics": physics_section,
             "clock_model": clock_model_section, "svr_explain": svr_explain_section,
             "ilqr_bench": ilqr_bench_section, "clock_check": clock_check_section,
-            "paper_svr": paper_svr_section, "panda_execute": panda_section}
+            "paper_svr": paper_svr_section, "panda_execute": panda_section,
+            "cloth_steps": cloth_steps_section}
 HEADLINES = {"key_particles": kp_headline, "fig7": fig7_headline, "table1": table1_headline,
              "fig4": fig4_headline, "panda_execute": panda_headline}
 

@@ -391,3 +391,22 @@ def test_fig7_claims_check_whether_the_gap_grows_with_difficulty(site):
         **fig7()["methods"], "original": {**fig7()["methods"]["original"],
                                           "final_cost_mean": 0.013649 + 0.025}}))
     assert report.fig7_claims(report.load_results(site["results"]))["gap_grows"] is True
+
+
+def test_cloth_step_bench_renders_the_ratio_to_the_smallest_size(site):
+    def row(n, step, warnings=None, messages=None):
+        ms = {"step": step, "collision": step / 4, "constraint_solve": step / 4,
+              "other": step / 2}
+        return {"preset": "default", "n": n, "ms_per_step": ms, "steps_per_action": 69,
+                "ms_per_action": step * 69, "warnings": warnings or {},
+                "messages": messages or {}}
+    write(site["results"], "cloth-steps.json",
+          {"experiment": "cloth_steps", "rows": [row(12, 0.8), row(40, 12.0, {"mjWARN_INERTIA": 3},
+                                                                {"Inertia matrix is too close "
+                                                                 "to singular": 2})],
+           "provenance": provenance("python -m dopt.bench cloth-steps")})
+    assert run(site) == 0
+    md = site["md"].read_text()
+    assert "| default | 12 x 12 | 0.80 | 1.0 | 0.20 | 0.20 | 0.40 | 69 | 55 | - |" in md
+    assert ("| default | 40 x 40 | 12.00 | 15.0 | 3.00 | 3.00 | 6.00 | 69 | 828 | "
+            "mjWARN_INERTIA (3); Inertia matrix is too close to singular (2) |") in md
