@@ -8,7 +8,8 @@ damping 100 / 10 N m s/rad) with the pusher replaced by a hand: two fingers on s
 the flange (Franka's hand). It stands on the floor at ``base``, facing +x, beside the object.
 
 One action (i, d) becomes a pinch-site path (``PandaExecutor``): above particle i
-(``approach`` m), down to it, close the fingers and grasp, carry it by d along the picker's
+(``approach`` m), down to it (both following the particle, which may still be settling from
+the previous release), close the fingers and grasp, carry it by d along the picker's
 smooth profile in the picker's move time, release and open, lift, and wait the picker's
 settle time. Every step, damped-least-squares IK of the path point (hand pointing down, warm
 started) gives the joint reference, and computed-torque control (the arm's mass matrix times
@@ -247,14 +248,19 @@ class PandaExecutor:
         """(3,) the pinch site's position now (m)."""
         return self.data.site_xpos[self.site].copy()
 
-    def _move(self, goal: np.ndarray, steps: int, profile: np.ndarray | None = None) -> float:
-        """Pinch from where it is to ``goal`` in ``steps`` steps; the largest tracking error."""
+    def _move(self, goal, steps: int, profile: np.ndarray | None = None,
+              hold: bool = False) -> float:
+        """Pinch from its reference to ``goal`` ((3,), or a function giving it at each step)
+        in ``steps`` steps along ``profile`` (default a smooth 0 -> 1); ``hold``: at the goal
+        throughout. Returns the largest tracking error (m)."""
         a = self._target_now()
-        s = (0.5 - 0.5 * np.cos(np.pi * np.arange(1, steps + 1) / steps)
+        s = (np.ones(steps) if hold else
+             0.5 - 0.5 * np.cos(np.pi * np.arange(1, steps + 1) / steps)
              if profile is None else profile)
         worst = 0.0
         for k in range(steps):
-            target = a + s[k] * (goal - a)
+            g = goal() if callable(goal) else goal
+            target = a + s[k] * (g - a)
             self._step(target)
             worst = max(worst, float(np.linalg.norm(self.pinch() - target)))
         return worst
@@ -304,10 +310,14 @@ class PandaExecutor:
             if i == -1:
                 self._hold(self.move_steps + self.settle_steps)
                 continue
-            p = self.particle(i)
-            for goal in (p + up, p):                 # free moves, then let the PD converge
-                self._move(goal, t_free)
-                self._hold(t_free)
+            # free moves to above the particle and down to it, each followed by as long a
+            # hold; the targets follow the particle, which may still be moving (the cloth
+            # relaxes after the previous release while the arm comes)
+            for lift in (up, 0.0 * up):
+                def above(i=i, lift=lift):
+                    return self.particle(i) + lift
+                self._move(above, t_free)
+                self._move(above, t_free, hold=True)
             dist = float(np.linalg.norm(self.pinch() - self.particle(i)))
             out.grasp_distance.append(dist)
             if dist > cfg.grasp_tolerance:          # out of reach: the action is not executed
