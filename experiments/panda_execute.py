@@ -110,7 +110,8 @@ def panda_trial(params: dict) -> dict:
             "grasp_distance_max": max(done.grasp_distance, default=0.0),
             "missed_actions": [int(k) for k in done.missed],
             "carry_errors": [float(e) for e in done.carry_error],
-            "picker_unstable": bool(res.unstable), "panda_steps": done.steps,
+            "picker_unstable": bool(res.unstable), "panda_unstable": done.unstable,
+            "panda_unstable_reason": done.stability.reason[0], "panda_steps": done.steps,
             "actions": res.actions}
 
 
@@ -132,6 +133,7 @@ def summarize(records: list[dict]) -> dict:
         entry["n_actions"] = int(sum(r["n_actions"] for r in rs))
         entry["carry_error_max"] = max((e for r in rs for e in r["carry_errors"]), default=0.0)
         entry["picker_unstable_seeds"] = [r["seed"] for r in rs if r["picker_unstable"]]
+        entry["panda_unstable_seeds"] = [r["seed"] for r in rs if r.get("panda_unstable")]
         out[goal] = entry
     return out
 

@@ -583,13 +583,15 @@ def panda_section(results: list[Result], page: Path) -> list[str]:
                  pm(mm(e["difference_mean"]), mm(e["difference_ci95"])),
                  pm(mm(e["picker_vs_panda_mean"]), mm(e["picker_vs_panda_ci95"])),
                  mm(e["grasp_distance_max"]), mm(e["carry_error_max"]),
-                 f"{e.get('missed_actions', 0)} / {e.get('n_actions', '?')}"]
+                 f"{e.get('missed_actions', 0)} / {e.get('n_actions', '?')}",
+                 ("not judged" if "panda_unstable_seeds" not in e else
+                  ", ".join(map(str, e["panda_unstable_seeds"])) or "none")]
                 for goal, e in r.data["goals"].items()]
         return [f"### `{r.name}`" + (" (quick)" if r.quick else ""), "",
                 *table(["goal", "seeds", "picker final cost (mm)", "Panda final cost (mm)",
                         "Panda - picker (mm)", "final cloths apart (mm)",
                         "worst grasp distance (mm)", "worst carry error (mm)",
-                        "actions skipped (out of reach)"], rows)]
+                        "actions skipped (out of reach)", "unstable replays (seeds)"], rows)]
 
     return section("Key particles, Sec. IV-D: a Panda executes the plans",
                    "CEM(Simple) plans on the floating picker (the goal's preset), replayed "

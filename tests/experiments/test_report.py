@@ -357,7 +357,7 @@ def test_panda_execution_renders_its_goals(site):
            "provenance": provenance("python experiments/panda_execute.py --seeds 3")})
     assert run(site) == 0
     assert ("| diagonal | 3 | 14.8 ± 2.0 | 17.1 ± 3.0 | 2.3 ± 1.0 | 5.2 ± 1.0 | 0.4 | 31.0 | "
-            "1 / 7 |"
+            "1 / 7 | not judged |"
             in site["md"].read_text())
     assert "diagonal: picker 14.8 mm, Panda 17.1 mm, final cloths 5.2 mm apart (3 seeds)" in \
         block(site["readme"])

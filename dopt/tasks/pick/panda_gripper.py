@@ -31,6 +31,7 @@ import mujoco
 import numpy as np
 
 from dopt.scene import Scene
+from dopt.stability import Monitor, Stability
 from dopt.tasks.pick.scene import DeformableScene
 from dopt.tasks.push.panda import (
     JOINT_NAMES,
@@ -146,7 +147,9 @@ class PandaExecution:
     skipped because the pinch could not reach the particle (indices into the plan), the
     combined model's
     states (``SNAPSHOT_SPEC``) at the start and after each grasp, carry and release (with
-    ``snapshots``; for pictures), the number of steps."""
+    ``snapshots``; for pictures), the number of steps, and the stability verdict on the replay
+    (``dopt.stability``, the scene's bounds, checked after every step; MuJoCo's warnings
+    count as unstable)."""
 
     positions: np.ndarray
     grasp_distance: list = field(default_factory=list)
@@ -154,6 +157,12 @@ class PandaExecution:
     snapshots: list = field(default_factory=list)
     missed: list = field(default_factory=list)
     steps: int = 0
+    stability: Stability | None = None
+
+    @property
+    def unstable(self) -> bool:
+        """Whether the replay broke a stability bound or made MuJoCo warn."""
+        return bool(self.stability is not None and self.stability.unstable[0])
 
 
 class PandaExecutor:
@@ -196,11 +205,13 @@ class PandaExecutor:
         self._origin = m.body_pos[bodies] - m.qpos0[self._vq]
         self._qref = self._qdref = None
         self._M = np.zeros((m.nv, m.nv))
+        self.monitor = Monitor(m, scene.scene.stability)
+        self._scan = None
 
     # ------------------------------------------------------------------ the start
     def start(self, object_state: np.ndarray) -> None:
-        """Put the object as in ``object_state`` (a state row of the scene), the arm at its
-        ready pose with the hand open, and settle the arm above the object."""
+        """Put the object as in ``object_state`` (a state row of the scene) and the arm at
+        its ready pose with the hand open; the stability verdict starts over."""
         m, d = self.model, self.data
         mujoco.mj_resetData(m, d)
         d.qpos[self._vq] = self.scene.positions(object_state) - self._origin
@@ -209,6 +220,7 @@ class PandaExecutor:
         mujoco.mj_forward(m, d)
         self._qref = d.qpos[self.qadr].copy()
         self._qdref = np.zeros(7)
+        self._scan, self._t = self.monitor.start(1), 0
 
     # ------------------------------------------------------------------ motion
     def _ik(self, target: np.ndarray) -> np.ndarray:
@@ -243,6 +255,9 @@ class PandaExecutor:
         tau = self._M[np.ix_(self.dadr, self.dadr)] @ acc + self.damping * qd
         d.ctrl[self.motors] = np.clip(tau, -TAU_MAX, TAU_MAX)
         mujoco.mj_step(m, d)
+        self._scan.update(np.zeros(1, int), self._t,
+                          {k: np.asarray(getattr(d, k))[None, None] for k in self.monitor.record})
+        self._t += 1
 
     def pinch(self) -> np.ndarray:
         """(3,) the pinch site's position now (m)."""
@@ -340,7 +355,15 @@ class PandaExecutor:
             self._hold(self.settle_steps)
             snap()
         out.positions = self.positions()
-        out.steps = int(round(self.data.time / self.dt))
+        out.steps = self._t
+        warned = [mujoco.mjtWarning(w).name for w in range(len(self.data.warning))
+                  if self.data.warning[w].number]
+        if warned or not np.all(np.isfinite(self.data.qpos)):
+            self._scan.flag(0, self._t, "MuJoCo warned: " + ", ".join(warned) if warned
+                            else "non-finite state")
+        out.stability = self._scan.result()
+        if out.unstable:
+            log.warning("the arm's replay went unstable: %s", out.stability.reason[0])
         return out
 
     def state(self) -> np.ndarray:

@@ -79,3 +79,18 @@ def test_a_particle_out_of_reach_is_skipped_not_grasped(cloth):
     done = far.execute(cloth.initial_state, [N * N - 1], np.array([[-0.1, 0.0, 0.05]]))
     assert done.missed == [0] and done.grasp_distance[0] > far.config.grasp_tolerance
     assert mean_distance(done.positions, cloth.positions(cloth.initial_state)) < 2e-3
+
+
+def test_the_replay_is_judged_by_the_scenes_stability_bounds(cloth):
+    """A gentle plan passes the verdict; with a speed bound below what the cloth reaches while
+    carried, the same replay is flagged with the bound's reason."""
+    from dataclasses import replace
+
+    d = np.array([[-0.1, -0.05, 0.02]])
+    calm = PandaExecutor(cloth).execute(cloth.initial_state, [N * N - 1], d)
+    assert not calm.unstable and calm.stability.max_speed[0] > 0.01
+    strict = PandaExecutor(cloth)
+    strict.monitor = type(strict.monitor)(strict.model, replace(cloth.scene.stability,
+                                                               max_speed=0.01))
+    done = strict.execute(cloth.initial_state, [N * N - 1], d)
+    assert done.unstable and done.stability.reason[0].startswith("speed")
