@@ -11,13 +11,15 @@ One action (i, d) becomes a pinch-site path (``PandaExecutor``): above particle 
 (``approach`` m), down to it (both following the particle, which may still be settling from
 the previous release), close the fingers and grasp, carry it by d along the picker's
 smooth profile in the picker's move time, release and open, lift, and wait the picker's
-settle time. Every step, damped-least-squares IK of the path point (hand pointing down, warm
-started) gives the joint reference, and computed-torque control (the arm's mass matrix times
-the reference acceleration plus PD, the joints' own damping cancelled) gives the torques,
-clipped to the datasheet's. The grasp itself is a connect equality between the hand and the
-particle, switched on when the pinch site is within ``grasp_tolerance`` of it: the same hold
-the picker has, so that a comparison with the picker measures the arm's motion, not a grasp
-model. The fingers close for the picture and do not collide with anything.
+settle time. The pinch target keeps the picker's limits: not below one particle radius (the
+picker's floor stop) and inside its workspace box (C(a_t)). Every step, damped-least-squares
+IK of the path point (hand pointing down, warm started) gives the joint reference, and
+computed-torque control (the arm's mass matrix times the reference acceleration plus PD, the
+joints' own damping cancelled) gives the torques, clipped to the datasheet's. The grasp
+itself is a connect equality between the hand and the particle, switched on when the pinch
+site is within ``grasp_tolerance`` of it: the same hold the picker has, so that a comparison
+with the picker measures the arm's motion, not a grasp model. The fingers close for the
+picture and do not collide with anything.
 
 Shapes: N particles, H actions, ns state row of the combined model.
 """
@@ -207,6 +209,14 @@ class PandaExecutor:
         self._M = np.zeros((m.nv, m.nv))
         self.monitor = Monitor(m, scene.scene.stability)
         self._scan = None
+        # the picker's limits, held by the pinch target: the floor stop at one particle radius
+        # and the workspace box of C(a_t)
+        box = scene.picker.config.workspace
+        self._low = np.array([-np.inf, -np.inf, scene.radius])
+        self._high = np.full(3, np.inf)
+        if box is not None:
+            self._low = np.maximum(self._low, box.low)
+            self._high = np.array(box.high)
 
     # ------------------------------------------------------------------ the start
     def start(self, object_state: np.ndarray) -> None:
@@ -245,7 +255,7 @@ class PandaExecutor:
         """One step toward the pinch ``target``: computed-torque control of the IK reference,
         tau = M (qdd_ref + kp e + kd de) + damping qd (the joints' own damping cancelled)."""
         m, d = self.model, self.data
-        q_ref = self._ik(target)
+        q_ref = self._ik(np.clip(target, self._low, self._high))
         qd_ref = (q_ref - self._qref) / self.dt
         qdd_ref = (qd_ref - self._qdref) / self.dt
         self._qref, self._qdref = q_ref, qd_ref

@@ -94,3 +94,13 @@ def test_the_replay_is_judged_by_the_scenes_stability_bounds(cloth):
                                                                max_speed=0.01))
     done = strict.execute(cloth.initial_state, [N * N - 1], d)
     assert done.unstable and done.stability.reason[0].startswith("speed")
+
+
+def test_a_carry_into_the_floor_stops_at_the_floor_as_the_pickers(cloth):
+    """d with dz < 0 from a particle on the floor: the pinch stays at one particle radius or
+    above (the picker's floor stop), so the held particle is not pressed into the floor."""
+    corner = N * N - 1
+    done = PandaExecutor(cloth).execute(cloth.initial_state, [corner], np.array([[-0.1, 0.0,
+                                                                                  -0.1]]))
+    assert not done.unstable
+    assert done.stability.max_penetration[0] < 0.005
