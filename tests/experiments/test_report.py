@@ -410,3 +410,16 @@ def test_cloth_step_bench_renders_the_ratio_to_the_smallest_size(site):
     assert "| default | 12 x 12 | 0.80 | 1.0 | 0.20 | 0.20 | 0.40 | 69 | 55 | - |" in md
     assert ("| default | 40 x 40 | 12.00 | 15.0 | 3.00 | 3.00 | 6.00 | 69 | 828 | "
             "mjWARN_INERTIA (3); Inertia matrix is too close to singular (2) |") in md
+
+
+def test_clock_check_headline_gives_the_lag_ratios(site):
+    row = {"real": {"n_trials": 10, "lag_steps_mean": 20.0}, "virtual": {"n_trials": 10},
+           "lag_ratio": 0.64, "opt_ms_ratio": 0.64, "lag_within_10_percent": False,
+           "cost_intervals_overlap": True}
+    write(site["results"], "clock-check-clutter.json",
+          {"experiment": "clock_check", "task": "clutter", "preset": "paper",
+           "rows": {"rand-t5": row, "baseline": {**row, "cost_intervals_overlap": False}},
+           "failed": {}, "provenance": provenance("python experiments/clock_check.py")})
+    assert run(site) == 0
+    assert ("clutter: lag virtual / real rand-t5 0.64, baseline 0.64; MPC cost intervals "
+            "overlap on 1 of 2 rows (10 seeds each)") in block(site["readme"])
