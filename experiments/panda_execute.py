@@ -24,6 +24,7 @@ import argparse
 import logging
 import os
 import sys
+from dataclasses import replace
 
 import numpy as np
 
@@ -71,7 +72,7 @@ def parser() -> argparse.ArgumentParser:
 
 def settings_of(goal: str, args) -> PickPlaceSettings:
     s = PickPlaceSettings.preset("cloth", goal, quick=args.quick)
-    return s if args.n is None else PickPlaceSettings.from_dict({**s.to_dict(), "n": args.n})
+    return s if args.n is None else replace(s, n=args.n)
 
 
 def plan_actions(actions: list[dict]) -> tuple[np.ndarray, np.ndarray]:

@@ -34,6 +34,7 @@ import numpy as np
 
 from dopt.scene import Scene
 from dopt.stability import Monitor, Stability
+from dopt.tasks.pick.picker import fix_grasp_anchors, grasp_equalities, smooth_profile
 from dopt.tasks.pick.scene import DeformableScene
 from dopt.tasks.push.panda import (
     JOINT_NAMES,
@@ -120,9 +121,9 @@ def panda_scene(scene: DeformableScene, config: PandaConfig = PandaConfig(),
         raise TypeError(f"scene must be a DeformableScene, got {type(scene).__name__}")
     if not isinstance(config, PandaConfig):
         raise TypeError(f"config must be a PandaConfig, got {type(config).__name__}")
-    spec = mujoco.MjSpec.from_string(scene.xml) if getattr(scene, "xml", None) else None
-    if spec is None:
+    if not scene.xml:
         raise ValueError("scene was built without its MJCF text (DeformableScene.xml)")
+    spec = mujoco.MjSpec.from_string(scene.xml)
     frame = spec.worldbody.add_frame(pos=list(config.base))
     spec.attach(hand_spec(), prefix="arm/", frame=frame)
     particles = scene.picker.pickable if pickable is None else np.asarray(pickable, int)
@@ -131,15 +132,10 @@ def panda_scene(scene: DeformableScene, config: PandaConfig = PandaConfig(),
                                objtype=mujoco.mjtObj.mjOBJ_BODY, name1=HAND,
                                name2=f"{scene.flex}_{int(i)}", active=False)
         eq.data[:3] = [0.0, 0.0, _TCP]              # the anchor: the pinch point on the hand
-        eq.solref = [0.002, 1.0]
+        eq.solref = list(scene.picker.config.solref)   # the picker's own hold
     model = spec.compile()
-    grip = {}
-    for e in range(model.neq):
-        name = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_EQUALITY, e) or ""
-        if name.startswith("grip"):
-            grip[int(name[4:])] = e
-            model.eq_data[e, 3:6] = 0.0        # the particle's own centre, not its qpos0 offset
-    return model, {"grip": grip}
+    fix_grasp_anchors(model, "grip")
+    return model, {"grip": grasp_equalities(model, "grip")}
 
 
 @dataclass
@@ -195,8 +191,8 @@ class PandaExecutor:
         self.dt = float(m.opt.timestep)
         pk = scene.picker
         self.move_steps, self.settle_steps = pk.move_steps, pk.settle_steps
-        self._profile = 0.5 - 0.5 * np.cos(np.pi * np.arange(1, pk.move_steps + 1)
-                                           / pk.move_steps)
+        self._profile = smooth_profile(pk.move_steps)[1:]
+        self._scratch = mujoco.MjData(m)               # kinematics of reference poses
         self._vert = {i: m.body(f"{scene.flex}_{i}").id for i in self.grip}
         combined = Scene(m)
         f = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_FLEX, scene.flex)
@@ -236,7 +232,7 @@ class PandaExecutor:
     def _ik(self, target: np.ndarray) -> np.ndarray:
         m, d = self.model, self.data
         q = self._qref.copy()
-        scratch = mujoco.MjData(m)
+        scratch = self._scratch
         scratch.qpos[:] = d.qpos
         jp, jr = np.zeros((3, m.nv)), np.zeros((3, m.nv))
         for _ in range(self.config.ik_iterations):
@@ -279,9 +275,8 @@ class PandaExecutor:
         in ``steps`` steps along ``profile`` (default a smooth 0 -> 1); ``hold``: at the goal
         throughout. Returns the largest tracking error (m)."""
         a = self._target_now()
-        s = (np.ones(steps) if hold else
-             0.5 - 0.5 * np.cos(np.pi * np.arange(1, steps + 1) / steps)
-             if profile is None else profile)
+        s = (np.ones(steps) if hold else smooth_profile(steps)[1:] if profile is None
+             else profile)
         worst = 0.0
         for k in range(steps):
             g = goal() if callable(goal) else goal
@@ -296,11 +291,10 @@ class PandaExecutor:
             self._step(target)
 
     def _target_now(self) -> np.ndarray:
-        m = self.model
-        scratch = mujoco.MjData(m)
+        scratch = self._scratch
         scratch.qpos[:] = self.data.qpos
         scratch.qpos[self.qadr] = self._qref
-        mujoco.mj_kinematics(m, scratch)
+        mujoco.mj_kinematics(self.model, scratch)
         return scratch.site_xpos[self.site].copy()
 
     def particle(self, i: int) -> np.ndarray:

@@ -123,24 +123,31 @@ def picker_mjcf(flex_name: str, particles: Iterable[int],
     return body, eqs, acts
 
 
-def grasp_equalities(model: mujoco.MjModel) -> dict[int, int]:
-    """particle -> equality id of every ``pick<i>`` connect in ``model``."""
+def grasp_equalities(model: mujoco.MjModel, prefix: str = "pick") -> dict[int, int]:
+    """particle -> equality id of every ``<prefix><i>`` connect in ``model`` (the picker's
+    ``pick<i>``; another gripper's grasps by their own prefix)."""
     out = {}
     for e in range(model.neq):
         name = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_EQUALITY, e) or ""
-        if name.startswith("pick") and name[4:].isdigit():
-            out[int(name[4:])] = e
+        if name.startswith(prefix) and name[len(prefix):].isdigit():
+            out[int(name[len(prefix):])] = e
     return out
 
 
-def fix_grasp_anchors(model: mujoco.MjModel) -> None:
-    """Make every grasp equality pull the picker onto the vertex itself.
+def fix_grasp_anchors(model: mujoco.MjModel, prefix: str = "pick") -> None:
+    """Make every grasp equality (``<prefix><i>``) pull the gripper onto the vertex itself.
 
     For a body-to-body connect the compiler stores the qpos0 offset between the two bodies as
     body2's anchor; zero it (do not call ``mj_setConst`` afterwards, it recomputes it).
     """
-    for e in grasp_equalities(model).values():
+    for e in grasp_equalities(model, prefix).values():
         model.eq_data[e, 3:6] = 0.0
+
+
+def smooth_profile(n: int) -> np.ndarray:
+    """(n + 1,) the smooth 0 -> 1 progress s(k / n) = (1 - cos(pi k / n)) / 2, k = 0..n, of a
+    move in n steps (zero velocity at both ends)."""
+    return 0.5 - 0.5 * np.cos(np.pi * np.arange(n + 1) / n)
 
 
 class Picker:
@@ -202,7 +209,7 @@ class Picker:
         self.settle_steps = int(np.ceil(cfg.settle / self.dt))
         self.steps_per_action = (self.snap_steps + self.hold_steps + self.move_steps
                                  + self.settle_steps)
-        s = 0.5 - 0.5 * np.cos(np.pi * np.arange(self.move_steps + 1) / self.move_steps)
+        s = smooth_profile(self.move_steps)
         self._profile = np.diff(s) / self.dt                             # sum * dt == 1
 
     @property
