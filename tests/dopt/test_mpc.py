@@ -151,16 +151,22 @@ class BusyOptimiser:
 
 def test_virtual_clock_lag_is_the_cpu_time_over_the_threads(slider):
     """Each optimisation lets the agent take the steps that fall in its CPU time / threads:
-    within one step of cpu / threads / (dt x slowdown); all steps are accounted for."""
+    optimisation i ends at virtual time T_i = sum_{j<=i} cpu_j / threads, and its lag is the
+    number of steps k < timeout with k dt slowdown < T_i not taken before it (the last one is
+    cut short by the timeout); all steps are accounted for."""
     scene, x0 = slider
     cfg = MPCConfig(timeout=120, slowdown=2.0, clock="virtual", threads=2.0)
     res = MPC(scene, BusyOptimiser(0.05), cfg, np.random.default_rng(0)).run(
         x0, Plan(np.zeros((20, 1))))
     period = scene.model.opt.timestep * cfg.slowdown
     assert len(res.controls) == 120 and len(res.cpu_seconds) == len(res.lag_steps)
+    clock, taken = 0.0, 0
     for cpu, lag, seconds in zip(res.cpu_seconds, res.lag_steps, res.opt_seconds, strict=True):
         assert seconds == pytest.approx(cpu / 2.0)
-        assert abs(lag - cpu / 2.0 / period) <= 1
+        end = sum(1 for k in range(120) if k * period < clock + seconds)
+        assert lag == end - taken
+        assert lag <= cpu / 2.0 / period + 1
+        clock, taken = clock + seconds, end
     assert sum(res.lag_steps) == 120
     assert np.mean(res.lag_steps) == pytest.approx(0.05 / 2 / period, abs=1)
 
