@@ -165,6 +165,7 @@ def test_bench_rows_report_key_steps_and_interpolation_error():
     assert (every["keypoints"], every["fd_steps"], every["interp_error"]) == ("every", 80, None)
     assert skip["keypoints"] == "skip5" and skip["fd_steps"] == 17      # 0, 5, ..., 75, 79
     assert 0 < skip["interp_error"] < 0.05
+    assert 0 <= skip["interp_error_median"] <= 2 * skip["interp_error"]   # Markov: non-negative
     assert skip["vs_every"] == skip["ms_per_iteration"] / every["ms_per_iteration"]
     assert 0 < skip["derivative_share"] < 1
     with pytest.raises(ValueError, match="keypoint variant"):
