@@ -154,11 +154,11 @@ class ILQR:
         t0 = time.perf_counter()
         keys = key_steps(self.config.keypoints, scene, X, C)
         D = svc.derivatives(X[keys], C, self.config.fd)
+        F = interpolate(torch.from_numpy(D.F), keys, len(U))     # part of the derivatives' time
         t1 = time.perf_counter()
         cd = self.cost.derivatives(X, U, C)
         limits = _limits(scene.model, U) if self.config.box_qp else None
         with torch.inference_mode():   # no autograd bookkeeping: ~20 % of a small op's cost
-            F = interpolate(torch.from_numpy(D.F), keys, len(U))
             while True:
                 gains = backward_pass(F, cd.lx, cd.lxx, cd.lu, cd.luu, self.mu, limits)
                 if gains is not None or self.mu >= self.config.mu_max:
