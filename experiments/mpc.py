@@ -65,8 +65,10 @@ from planners.svr_mpc import (
     OUTLIER_DISTANCE,
     TABLE1_ROWS,
     SVRMPCSettings,
+    derivatives_effect,
     feedback_effect,
     paired,
+    parse_row,
     row_label,
     run_trial,
     summarize,
@@ -97,13 +99,30 @@ def parser() -> argparse.ArgumentParser:
     return ap
 
 
+def rows_list(text: str) -> list[str]:
+    """--rows: comma-separated ``parse_row`` specs, none twice (argparse ``type=``)."""
+    names = [name.strip() for name in text.split(",")]
+    try:
+        for name in names:
+            parse_row(name)
+    except ValueError as e:
+        raise argparse.ArgumentTypeError(str(e)) from None
+    repeated = sorted({name for name in names if names.count(name) > 1})
+    if repeated:
+        raise argparse.ArgumentTypeError(f"row(s) {', '.join(repeated)} given twice")
+    return names
+
+
 def add_rows_argument(ap: argparse.ArgumentParser, default: tuple[str, ...] | None) -> None:
     """--rows: Table 1 rows by name (``default``; None: all nine with --preset paper)."""
-    ap.add_argument("--rows", type=choices_type(tuple(TABLE1_ROWS), "row(s)"),
+    ap.add_argument("--rows", type=rows_list,
                     default=None if default is None else ",".join(default),
                     help="comma-separated Table 1 rows by name (" + ", ".join(TABLE1_ROWS)
-                    + "); default " + ("with --preset paper: all nine" if default is None
-                                       else ",".join(default)))
+                    + "), each optionally with derivative variants +skip<K>, +adaptive, "
+                    "+boxqp (e.g. sum-t10-r1+skip5; they override --fd-skip, --keypoints and "
+                    "--box-qp for that row); default "
+                    + ("with --preset paper: all nine" if default is None
+                       else ",".join(default)))
 
 
 def add_run_arguments(ap: argparse.ArgumentParser) -> None:
@@ -185,8 +204,8 @@ def parse_args(argv=None, ap: argparse.ArgumentParser | None = None,
     if args.threads is None:
         args.threads = 1 if (args.workers > 1 or args.ray) else 0
     try:               # the pipeline's own checks of the settings, as usage errors
-        for method, theta, rho in grid(args):
-            settings_of(args, method, theta, rho, args.feedback == "on")
+        for method, theta, rho, row in grid(args):
+            settings_of(args, method, theta, rho, args.feedback == "on", row)
     except (ValueError, TypeError) as e:
         ap.error(str(e))
     if record_problem(args.record, args.out):
@@ -194,8 +213,10 @@ def parse_args(argv=None, ap: argparse.ArgumentParser | None = None,
     return args
 
 
-def settings_of(args, method: str, theta: int, rho: float, feedback: bool) -> SVRMPCSettings:
-    """The settings of one row under the flags: the preset's, then the flags that override it."""
+def settings_of(args, method: str, theta: int, rho: float, feedback: bool,
+                row: dict | None = None) -> SVRMPCSettings:
+    """The settings of one row under the flags: the preset's, then the flags that override
+    it, then the row's own derivative variants (``row``, from ``parse_row``)."""
     preset = SVRMPCSettings.paper(args.task) if args.preset == "paper" else SVRMPCSettings()
     over = {"cost": args.cost, "control_noise": args.control_noise, "clock": args.clock}
     over = {k: v for k, v in over.items() if v is not None}
@@ -209,21 +230,30 @@ def settings_of(args, method: str, theta: int, rho: float, feedback: bool) -> SV
         over.update(keypoints="skip", fd_skip=args.fd_skip)
     if args.box_qp:
         over["box_qp"] = True
+    over.update(row or {})
     return replace(preset, task=args.task, method=method, theta=theta, rho=float(rho),
                    slowdown=args.slowdown or _task_slowdown(args.task), timeout=args.timeout,
                    threads=args.threads or 0, feedback=feedback,
                    nominal_threads=float(args.nominal_threads), **over)
 
 
+def baseline_label(args) -> str:
+    """The row label (``row_label``) of the baseline trials of the flags: the row every other
+    is normalised by."""
+    p = asdict(settings_of(args, "baseline", 0, 1.0, args.feedback == "on"))
+    return row_label(p)
+
+
 def grid(args, methods=None, rhos=None, thetas=None) -> list[tuple]:
-    """The (method, theta, rho) rows of the flags: those of --rows (default with --preset
-    paper: the nine of Table 1), else every (method, rho, theta) of the arguments or flags."""
+    """The (method, theta, rho, row variants) rows of the flags: those of --rows (default with
+    --preset paper: the nine of Table 1; ``parse_row``), else every (method, rho, theta) of the
+    arguments or flags, without variants of their own."""
     rows = getattr(args, "rows", None)
     if rows is None and methods is None and args.preset == "paper" and hasattr(args, "rows"):
         rows = list(TABLE1_ROWS)
     if rows:
-        return [TABLE1_ROWS[r] for r in rows]
-    return [(m, t, rho) for m in methods or getattr(args, "methods", ["baseline"])
+        return [parse_row(r) for r in rows]
+    return [(m, t, rho, {}) for m in methods or getattr(args, "methods", ["baseline"])
             for rho in rhos or [getattr(args, "rho", 1.0)]
             for t in thetas or [_theta(getattr(args, "theta", None), m)]]
 
@@ -233,9 +263,9 @@ def make_trials(args, methods=None, rhos=None, thetas=None, **override) -> list[
     fields replaced in every trial (e.g. clock="real")."""
     out = []
     for seed in range(args.seed, args.seed + args.trials):
-        for method, theta, rho in grid(args, methods, rhos, thetas):
+        for method, theta, rho, row in grid(args, methods, rhos, thetas):
             for feedback in FEEDBACK[args.feedback]:
-                s = replace(settings_of(args, method, theta, rho, feedback), **override)
+                s = replace(settings_of(args, method, theta, rho, feedback, row), **override)
                 p = {**asdict(s), "seed": seed}
                 out.append(Trial(trial_key(p), p))
     return out
@@ -474,7 +504,7 @@ def main(argv=None) -> int:
     trials = make_trials(args)
     records, res = run(args, trials)
     failed = res.failed
-    baseline = "baseline +fb" if args.feedback == "on" else "baseline"
+    baseline = baseline_label(args)
     rows = summarize(records, baseline=baseline)
     order = {name: i for i, name in enumerate(TABLE1_ROWS)}
     rows = dict(sorted(rows.items(), key=lambda kv: (order.get(kv[0].split()[0], 99), kv[0])))
@@ -486,6 +516,8 @@ def main(argv=None) -> int:
                "failed": failed, "trial_commits": res.commits}
     if args.feedback == "both":
         summary["feedback_effect"] = feedback_effect(records)
+    if variants := derivatives_effect(records):
+        summary["derivatives_effect"] = variants
     write_summary(summary, args.out, args.record, "experiments/mpc.py", argv)
     write_table(args.out, args.task, rows, summary.get("feedback_effect"))
     write_plots(args.out, args.task, records, list(rows), render=not args.no_render)

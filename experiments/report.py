@@ -76,8 +76,13 @@ class Entry:
     where: dict = field(default_factory=dict)
 
     def match(self, r: Result) -> bool:
-        return r.kind == self.kind and all(r.data.get(k) == v for k, v in self.where.items())
+        """Its kind, and each ``where`` field equal to the value (a callable: true of it)."""
+        return r.kind == self.kind and all(v(r.data.get(k)) if callable(v) else
+                                           r.data.get(k) == v for k, v in self.where.items())
 
+
+#: the paper's Table 1 trials per task
+TABLE1_TRIALS = {"clutter": 100, "soft": 20, "soft_rigid": 20}
 
 #: what the papers report and the scripts that reproduce it (the README's headline rows)
 CATALOGUE = (
@@ -92,8 +97,16 @@ CATALOGUE = (
              "--record docs/results/panda-execute.json", "panda_execute")]
     + [Entry(SVR, f"Table 1: {task}", f"python experiments/mpc.py --task {task} --preset paper "
              f"--trials {n} --workers 2 --no-render --out docs/results/runs/table1-{task} "
-             f"--record docs/results/table1-{task}.json", "table1", {"task": task})
-       for task, n in (("clutter", 100), ("soft", 20), ("soft_rigid", 20))]
+             f"--record docs/results/table1-{task}.json", "table1",
+             {"task": task, "derivatives_effect": None})
+       for task, n in TABLE1_TRIALS.items()]
+    + [Entry(SVR, f"Beyond the paper: FD at every K-th timestep on sum-t10-r1, {task}",
+             f"python experiments/mpc.py --task {task} --preset paper --rows "
+             f"baseline,sum-t10-r1,sum-t10-r1+skip5,sum-t10-r1+skip10 --trials {n} --workers 2 "
+             f"--no-render --out docs/results/runs/keypoints-{task} "
+             f"--record docs/results/keypoints-{task}.json", "table1",
+             {"task": task, "derivatives_effect": bool})
+       for task, n in TABLE1_TRIALS.items()]
     + [Entry(SVR, "Table 1's virtual clock against the real clock",
              "python experiments/clock_check.py --task clutter --preset paper --rows "
              "baseline,rand-t5,sum-t10-r1 --trials 10 --out docs/results/runs/clock-check-clutter "
@@ -511,6 +524,21 @@ def table1_section(results: list[Result], page: Path) -> list[str]:
                              f"{f.get('better')}/{f.get('pairs')}",
                              f"{f.get('success_open_loop')} -> {f.get('success_feedback')}"]
                             for name, f in fb.items()])
+        variants = d.get("derivatives_effect")
+        if variants:
+            lines += ["", "Derivative variants against the same row with finite differences at "
+                      "every timestep, paired by seed (MPC cost ratio: geometric mean and 90 % "
+                      "CI; pairs where the variant cost less; agent steps per optimisation and "
+                      "optimisation time on the episode's clock, variant / plain):", ""]
+            lines += table(["row", "versus", "cost ratio", "CI90", "variant better",
+                            "lag (steps)", "opt. time (ms)"],
+                           [[name, f["versus"], num(f["ratio_geomean"]),
+                             "-".join(num(x) for x in f["ratio_ci90"]),
+                             f"{f['better']}/{f['pairs']}",
+                             f"{num(f['lag_steps_mean'], 1)} / "
+                             f"{num(f['versus_lag_steps_mean'], 1)}",
+                             f"{num(f['opt_ms_mean'], 0)} / {num(f['versus_opt_ms_mean'], 0)}"]
+                            for name, f in variants.items()])
         return lines
 
     return section("State-vector reduction, Table 1: iLQR-SVR in asynchronous MPC",
@@ -535,6 +563,13 @@ def protocol_line(d: dict) -> str:
 
 
 def table1_headline(r: Result) -> str:
+    if r.data.get("derivatives_effect"):
+        return "; ".join(
+            f"{name} / {f['versus']}: MPC cost {num(f['ratio_geomean'])} "
+            f"({'-'.join(num(x) for x in f['ratio_ci90'])}), lag {num(f['lag_steps_mean'], 1)} "
+            f"/ {num(f['versus_lag_steps_mean'], 1)} steps, opt. time "
+            f"{num(f['opt_ms_mean'], 0)} / {num(f['versus_opt_ms_mean'], 0)} ms "
+            f"({f['pairs']} seeds)" for name, f in r.data["derivatives_effect"].items())
     parts = []
     trials = 0
     for name, m in r.data["methods"].items():
@@ -626,7 +661,8 @@ def paper_table1(results: list[Result]) -> tuple[Result | None, dict]:
 def paper_preset_table1(results: list[Result], task: str) -> Result | None:
     """The Table 1 file of ``task`` run under the authors' protocol (not quick), if any."""
     chosen = [r for r in results if r.kind == "table1" and r.data.get("task") == task
-              and r.data.get("preset") == "paper" and not r.quick]
+              and r.data.get("preset") == "paper" and not r.quick
+              and not r.data.get("derivatives_effect")]
     return chosen[-1] if chosen else None
 
 

@@ -26,7 +26,7 @@ import mpc as table1
 import numpy as np
 from cli_args import EPILOG, guarded, number_list, write_summary
 
-from planners.svr_mpc import row_name, summarize
+from planners.svr_mpc import row_label, summarize
 
 
 def parser() -> argparse.ArgumentParser:
@@ -50,7 +50,6 @@ def main(argv=None) -> int:
     ap = parser()
     args = table1.parse_args(argv, ap, one_feedback=True)
     args.rho, args.theta = 1.0, None          # make_trials' defaults; the grid overrides them
-    fb = " +fb" if args.feedback == "on" else ""
     trials = table1.make_trials(args, methods=["baseline"]) + table1.make_trials(
         args, methods=[args.method], rhos=args.rhos, thetas=args.thetas)
     recs, res = table1.run(args, trials)
@@ -63,8 +62,8 @@ def main(argv=None) -> int:
                      and r["params"]["rho"] == rho and r["params"]["theta"] == theta]
             if group:
                 rows.append(dict(rho=rho, theta=theta,
-                                 **summarize(base + group, baseline="baseline" + fb)[
-                                     row_name(args.method, theta, rho) + fb]))
+                                 **summarize(base + group, baseline=table1.baseline_label(args))[
+                                     row_label(group[0]["params"])]))
     write_summary({"experiment": "fig4", "task": args.task, "method": args.method,
                    "points": rows, "failed": failed, "trial_commits": res.commits},
                   args.out, args.record, "experiments/rho_sweep.py", argv)

@@ -66,6 +66,41 @@ def row_name(method: str, theta: int, rho: float) -> str:
     return f"{method[4:]}-t{theta}-r{rho:g}"
 
 
+def parse_row(spec: str) -> tuple[str, int, float, dict]:
+    """A row of ``TABLE1_ROWS`` by name, optionally with derivative variants:
+    ``sum-t10-r1+skip5``, ``sum-t10-r1+adaptive``, ``sum-t10-r1+skip5+boxqp``. Returns
+    (method, theta, rho, the ``SVRMPCSettings`` fields the variants set)."""
+    name, *mods = spec.split("+")
+    if name not in TABLE1_ROWS:
+        raise ValueError(f"unknown Table 1 row {name!r}: choose from {', '.join(TABLE1_ROWS)}")
+    over: dict = {}
+    for mod in mods:
+        if mod == "boxqp" and "box_qp" not in over:
+            over["box_qp"] = True
+        elif mod != "boxqp" and "keypoints" not in over:
+            try:
+                kp = KeypointConfig.parse(mod)
+            except ValueError:
+                raise ValueError(f"row {spec!r}: a variant is skip<K>, adaptive or boxqp, got "
+                                 f"{mod!r}") from None
+            over.update(keypoints=kp.method, fd_skip=kp.skip)
+        else:
+            raise ValueError(f"row {spec!r}: {mod!r} repeats a variant")
+    return (*TABLE1_ROWS[name], over)
+
+
+def derivatives_tag(p: dict) -> str:
+    """The derivative variant of a trial's params as a row-label suffix: `` +skip<K>`` or
+    `` +adaptive`` (key timesteps), `` +boxqp``; '' for finite differences at every timestep
+    and a plain backward pass."""
+    tag = ""
+    if p.get("keypoints", "every") == "adaptive":
+        tag += " +adaptive"
+    elif p.get("keypoints", "every") == "skip" and p.get("fd_skip", 1) > 1:
+        tag += f" +skip{p['fd_skip']}"
+    return tag + (" +boxqp" if p.get("box_qp") else "")
+
+
 @dataclass(frozen=True)
 class SVRMPCSettings:
     """One MPC trial's settings (the seed comes separately).
@@ -371,9 +406,9 @@ OUTLIER_DISTANCE = 0.5
 
 
 def row_label(p: dict) -> str:
-    """Table row of a trial (``row_name`` of its method, theta and rho), ' +fb' when it
-    executed the K feedback term."""
-    return (row_name(p["method"], p["theta"], p["rho"])
+    """Table row of a trial: ``row_name`` of its method, theta and rho, its
+    ``derivatives_tag`` and ' +fb' when it executed the K feedback term."""
+    return (row_name(p["method"], p["theta"], p["rho"]) + derivatives_tag(p)
             + (" +fb" if p.get("feedback") else ""))
 
 
@@ -455,6 +490,29 @@ def paired(records: list[dict], baseline: str = "baseline", level: float = 0.90)
             for row, costs in by.items() if row != baseline}
 
 
+def _variant_pairs(records: list[dict], plain) -> dict:
+    """{row label: (plain row label, {seed: result}, {seed: plain result})} for every row
+    (``row_label``) that differs from its ``plain(params)`` row, over the seeds both ran."""
+    by: dict = {}
+    plain_of: dict = {}
+    for r in records:
+        p = r["params"]
+        label, base = row_label(p), plain(p)
+        by.setdefault(label, {})[p["seed"]] = r["result"]
+        if base != label:
+            plain_of[label] = base
+    out = {}
+    for label, base in plain_of.items():
+        seeds = sorted(set(by[label]) & set(by.get(base, {})))
+        if seeds:
+            out[label] = (base, {k: by[label][k] for k in seeds}, {k: by[base][k] for k in seeds})
+    return out
+
+
+def _costs(results: dict) -> dict:
+    return {k: v["mpc_cost"] for k, v in results.items()}
+
+
 def feedback_effect(records: list[dict], level: float = 0.90) -> dict:
     """Per row with both variants: MPC cost with feedback over open loop on the same seed.
 
@@ -462,20 +520,31 @@ def feedback_effect(records: list[dict], level: float = 0.90) -> dict:
     "success_open_loop", "success_feedback"}} (``paired_ratio``; "better": pairs where
     feedback cost less).
     """
-    by: dict = {}
-    for r in records:
-        p = r["params"]
-        by.setdefault(row_name(p["method"], p["theta"], p["rho"]), {}).setdefault(
-            p["seed"], {})[bool(p.get("feedback"))] = r["result"]
-    out = {}
-    for row, seeds in by.items():
-        pairs = {k: v for k, v in seeds.items() if len(v) == 2}
-        if not pairs:
-            continue
-        out[row] = {
-            **paired_ratio({k: v[True]["mpc_cost"] for k, v in pairs.items()},
-                           {k: v[False]["mpc_cost"] for k, v in pairs.items()}, level),
-            "success_open_loop": int(sum(v[False]["success"] for v in pairs.values())),
-            "success_feedback": int(sum(v[True]["success"] for v in pairs.values())),
-        }
-    return out
+    pairs = _variant_pairs(records, lambda p: row_label({**p, "feedback": False}))
+    return {base: {**paired_ratio(_costs(fb), _costs(open_loop), level),
+                   "success_open_loop": int(sum(v["success"] for v in open_loop.values())),
+                   "success_feedback": int(sum(v["success"] for v in fb.values()))}
+            for base, fb, open_loop in pairs.values()}
+
+
+def derivatives_effect(records: list[dict], level: float = 0.90) -> dict:
+    """Per row run with a derivative variant (``derivatives_tag``: key timesteps, box QP) and
+    without it: the variant's MPC cost over the plain row's on the same seeds.
+
+    Returns {row label: {"versus": the plain row's label, "ratio_geomean", "ratio_ci90",
+    "better", "pairs" (``paired_ratio``; "better": pairs where the variant cost less),
+    "lag_steps_mean", "versus_lag_steps_mean", "opt_ms_mean", "versus_opt_ms_mean" (means
+    over the paired trials)}}.
+    """
+    def plain(p):
+        return row_label({**p, "keypoints": "every", "fd_skip": 1, "box_qp": False})
+
+    def mean(results, field):
+        return float(np.mean([v[field] for v in results.values()]))
+
+    return {label: {"versus": base, **paired_ratio(_costs(var), _costs(ref), level),
+                    **{f"{who}{field}": mean(res, field)
+                       for field in ("lag_steps_mean", "opt_ms_mean")
+                       for who, res in (("", var), ("versus_", ref))}}
+            for label, (base, var, ref) in _variant_pairs(records, plain).items()}
+

@@ -131,3 +131,49 @@ def test_derivative_options_reach_the_trials(tmp_path):
                            "--out", str(tmp_path / "b")])
     (t,) = mpc.make_trials(args)
     assert t.params["keypoints"] == "adaptive" and t.key.endswith("-kpadaptive")
+
+
+def test_rows_carry_their_own_derivative_variants(tmp_path):
+    """--rows sum-t10-r1,sum-t10-r1+skip5: the plain row's trials are those of a Table 1 run
+    (same keys, so a run in the same folder reuses them); the variant row differs only in its
+    derivatives, and its label says so; the baseline label follows the global flags."""
+    import mpc
+
+    from planners.svr_mpc import row_label
+
+    table1 = mpc.make_trials(mpc.parse_args(
+        ["--preset", "paper", "--rows", "baseline,sum-t10-r1", "--trials", "2",
+         "--out", str(tmp_path / "a")]))
+    args = mpc.parse_args(["--preset", "paper", "--rows",
+                           "baseline,sum-t10-r1,sum-t10-r1+skip5,sum-t10-r1+adaptive+boxqp",
+                           "--trials", "2", "--out", str(tmp_path / "a")])
+    trials = mpc.make_trials(args)
+    labels = [row_label(t.params) for t in trials[:4]]
+    assert labels == ["baseline", "sum-t10-r1", "sum-t10-r1 +skip5",
+                      "sum-t10-r1 +adaptive +boxqp"]
+    assert {t.key for t in table1} <= {t.key for t in trials}
+    skip = trials[2].params
+    assert (skip["keypoints"], skip["fd_skip"], skip["box_qp"]) == ("skip", 5, False)
+    assert {k: v for k, v in skip.items() if k not in ("keypoints", "fd_skip")} == \
+        {k: v for k, v in trials[1].params.items() if k not in ("keypoints", "fd_skip")}
+    assert mpc.baseline_label(args) == "baseline"
+    glob = mpc.parse_args(["--preset", "paper", "--rows", "baseline,sum-t10-r1+adaptive",
+                           "--fd-skip", "2", "--trials", "1", "--out", str(tmp_path / "b")])
+    assert mpc.baseline_label(glob) == "baseline +skip2"
+    assert [row_label(t.params) for t in mpc.make_trials(glob)] == \
+        ["baseline +skip2", "sum-t10-r1 +adaptive"]          # the row's variant wins
+
+
+@pytest.mark.parametrize("rows, message", [
+    ("sum-t10-r1+skip0", "skip<K>, adaptive or boxqp"),
+    ("sum-t10-r1+skip5+adaptive", "repeats a variant"),
+    ("sum-t10-r1+boxqp+boxqp", "repeats a variant"),
+    ("sum-t9-r1+skip5", "unknown Table 1 row"),
+    ("sum-t10-r1+skip5,sum-t10-r1+skip5", "given twice"),
+])
+def test_bad_row_variants_are_usage_errors(rows, message, capsys):
+    import mpc
+
+    with pytest.raises(SystemExit) as e:
+        mpc.parse_args(["--rows", rows, "--out", "unused"])
+    assert e.value.code == 2 and message in capsys.readouterr().err

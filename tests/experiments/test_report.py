@@ -423,3 +423,29 @@ def test_clock_check_headline_gives_the_lag_ratios(site):
     assert run(site) == 0
     assert ("clutter: lag virtual / real rand-t5 0.64, baseline 0.64; MPC cost intervals "
             "overlap on 1 of 2 rows (10 seeds each)") in block(site["readme"])
+
+
+def test_a_derivative_variant_run_has_its_own_row_not_table1s(site):
+    """A run with rows +skip5 (derivatives_effect) gets the key-timestep row of the README,
+    its variant table in RESULTS.md, and is never taken for the task's Table 1."""
+    data = table1()
+    data.update(preset="paper", methods={"baseline": mpc_row(1.0, 0.0, 130.0, 55.0),
+                                         "sum-t10-r1": mpc_row(0.80, 0.02, 53.0, 17.0),
+                                         "sum-t10-r1 +skip5": mpc_row(0.78, 0.02, 30.0, 17.0)},
+                derivatives_effect={"sum-t10-r1 +skip5": {
+                    "versus": "sum-t10-r1", "ratio_geomean": 0.97, "ratio_ci90": [0.94, 1.01],
+                    "better": 61, "pairs": 100, "lag_steps_mean": 7.5,
+                    "versus_lag_steps_mean": 13.4, "opt_ms_mean": 30.2,
+                    "versus_opt_ms_mean": 53.9}})
+    write(site["results"], "keypoints-clutter.json", data)
+    assert run(site) == 0
+    readme = block(site["readme"])
+    assert ("sum-t10-r1 +skip5 / sum-t10-r1: MPC cost 0.97 (0.94-1.01), lag 7.5 / 13.4 steps, "
+            "opt. time 30 / 54 ms (100 seeds)") in readme
+    row = next(line for line in readme.splitlines() if "keypoints-clutter.json" in line)
+    assert "FD at every K-th timestep" in row
+    table1_row = next(line for line in readme.splitlines() if "Table 1: clutter" in line)
+    assert "not recorded yet" in table1_row
+    assert "| sum-t10-r1 +skip5 | sum-t10-r1 | 0.97 | 0.94-1.01 | 61/100 | 7.5 / 13.4 | 30 / 54 |" \
+        in site["md"].read_text()
+    assert report.paper_preset_table1(report.load_results(site["results"]), "clutter") is None

@@ -7,6 +7,7 @@ import pytest
 from planners.svr_mpc import (
     TABLE1_ROWS,
     SVRMPCSettings,
+    derivatives_effect,
     dofs_mask,
     dofs_of_mask,
     feedback_effect,
@@ -86,6 +87,27 @@ def test_feedback_effect_is_the_paired_ratio():
     assert r["ratio_geomean"] == pytest.approx((0.5 * 2.0 * 0.5) ** (1 / 3))
     assert r["ratio_ci90"][0] < r["ratio_geomean"] < r["ratio_ci90"][1]
     assert (r["better"], r["pairs"]) == (2, 3)
+
+
+def test_derivatives_effect_pairs_each_variant_with_its_plain_row():
+    """sum-t10-r1 +skip5 against sum-t10-r1 on the seeds both ran; feedback trials pair with
+    feedback trials; a variant without a plain row has no entry."""
+    records = []
+    for seed, (plain, skip) in enumerate([(100.0, 50.0), (100.0, 200.0), (80.0, 40.0)]):
+        records += [rec("svr-sum", seed, plain), rec("svr-sum", seed, skip)]
+        records[-1]["params"].update(keypoints="skip", fd_skip=5)
+        records[-1]["result"]["lag_steps_mean"] = 10.0
+    records.append(rec("svr-sum", 7, 1.0))                         # no variant on seed 7
+    records.append(rec("naive", 0, 10.0))
+    records[-1]["params"].update(keypoints="adaptive")               # no plain naive row
+    fb = rec("svr-sum", 0, 30.0)
+    fb["params"].update(keypoints="skip", fd_skip=5, feedback=True)  # no plain +fb row
+    out = derivatives_effect([*records, fb])
+    assert set(out) == {SUM + " +skip5"}
+    r = out[SUM + " +skip5"]
+    assert r["versus"] == SUM and (r["better"], r["pairs"]) == (2, 3)
+    assert r["ratio_geomean"] == pytest.approx((0.5 * 2.0 * 0.5) ** (1 / 3))
+    assert (r["lag_steps_mean"], r["versus_lag_steps_mean"]) == (10.0, 25.0)
 
 
 def test_one_synchronous_episode_from_python_is_deterministic():
