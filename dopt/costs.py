@@ -40,7 +40,8 @@ class CostDerivatives:
 
 class EEDistanceTerm:
     """w |P (fk(q_arm) - target)|^2 with target = offset + M q_target, a linear function of
-    some qpos entries (an object's position, or the mean of a soft body's vertices).
+    some qpos entries (an object's position, or the mean of a soft body's vertices); with
+    ``distance`` r: w (|P (fk(q_arm) - target)| - r)^2, a distance to keep rather than close.
 
     Only DoFs whose tangent coordinate equals their qpos coordinate may enter (hinge, slide,
     free-joint translation), so the Jacobian in qpos is the Jacobian in the tangent space.
@@ -53,10 +54,12 @@ class EEDistanceTerm:
         target_dofs: (k,) DoFs the target depends on; target_map: (3, k); offset: (3,).
         axes: which of x, y, z enter the distance.
         weight, terminal_weight: w in l and in l_f.
+        distance: r (m), or None (the residual is the offset vector itself).
     """
 
     def __init__(self, scene: Scene, fk, arm_dofs, target_dofs, target_map, offset,
-                 axes=(0, 1, 2), weight: float = 1.0, terminal_weight: float = 1.0):
+                 axes=(0, 1, 2), weight: float = 1.0, terminal_weight: float = 1.0,
+                 distance: float | None = None):
         if not isinstance(scene, Scene):
             raise TypeError(f"scene must be a dopt.Scene, got {type(scene).__name__}")
         if not callable(fk):
@@ -75,19 +78,25 @@ class EEDistanceTerm:
         self.axes = axes.tolist()
         self.weight = check_real(weight, "weight", minimum=0)
         self.terminal_weight = check_real(terminal_weight, "terminal_weight", minimum=0)
+        self.distance = None if distance is None else check_real(distance, "distance",
+                                                                 minimum=0)
         self.dofs = dofs
         self.column = {int(d): i for i, d in enumerate(dofs)}   # DoF -> Jacobian column
         if len(self.column) != len(dofs):
             raise ValueError("arm_dofs and target_dofs overlap")
 
     def residual(self, qpos: torch.Tensor) -> torch.Tensor:
-        """(..., nq) -> (..., len(axes))."""
+        """(..., nq) -> (..., len(axes)), or (..., 1) with ``distance``."""
         x = qpos[..., self._qadr]
         a = len(self.arm_dofs)
         lead = x.shape[:-1]
         ee = self.fk(x[..., :a].reshape(-1, a)).reshape(*lead, 3)
         target = self.offset + x[..., a:] @ self.M.T
-        return (ee - target)[..., self.axes]
+        d = (ee - target)[..., self.axes]
+        if self.distance is None:
+            return d
+        # the 1e-24 keeps the gradient finite where the two points meet
+        return torch.sqrt((d ** 2).sum(-1, keepdim=True) + 1e-24) - self.distance
 
     def weights(self, T: int) -> torch.Tensor:
         """(T+1,) weight per row: running, then terminal."""

@@ -136,7 +136,8 @@ def add_run_arguments(ap: argparse.ArgumentParser) -> None:
                          "virtual clock); ours: cost with the end-effector term, zero initial "
                          "plan, real clock (default %(default)s). Flags below override it")
     ap.add_argument("--cost", default=None, choices=list(COST_PRESETS),
-                    help="the cost: paper (Eq. 2) or ee (with the end-effector term)")
+                    help="the cost: paper (Eq. 2), paper-reach (Eq. 2 with the authors' soft-task "
+                         "reach residual) or ee (with the end-effector term)")
     ap.add_argument("--warm-start", default=None, choices=["on", "off"],
                     help="start from the authors' set-up state and push plan")
     ap.add_argument("--clock", default=None, choices=list(CLOCKS),

@@ -117,7 +117,8 @@ class SVRMPCSettings:
         synchronous: the agent waits for the optimiser (deterministic; tests, debugging).
         threads: simulation threads (0: one per core).
         cost: a name of ``dopt.tasks.push.costs.COST_PRESETS``: ``ee`` (with the end-effector
-            term, ours) or ``paper`` (Eq. 2 alone).
+            term, ours), ``paper`` (Eq. 2 alone) or ``paper-reach`` (Eq. 2 with the authors'
+            soft-task reach residual).
         warm_start: start from the authors' set-up state and initial push plan
             (``dopt.tasks.push.warm_start``) instead of the task's start and zero controls.
         clock: ``real``, ``virtual`` or ``model`` (``dopt.mpc``); nominal_threads: the thread

@@ -100,3 +100,36 @@ def test_bad_terms(problem):
         EEDistanceTerm(scene, planar_fk, [0, 1], [1], np.ones((3, 1)), np.zeros(3))
     with pytest.raises(ValueError, match="w must have shape"):
         QuadraticCost(scene, scene.model.qpos0, np.ones(3), np.ones(3), np.ones(2))
+
+
+def test_a_distance_to_keep_is_the_norm_less_the_distance_and_its_gradient_is_exact(problem):
+    """distance r: the residual is |ee - target| - r (by hand), and the cost's gradient with
+    that term matches central differences of the total."""
+    scene, _, _, X, U = problem
+    obj = scene.dofs("object:obj")
+    term = EEDistanceTerm(scene, planar_fk, [0, 1], obj[:3], np.eye(3), [0.0, 0.0, 0.0],
+                          weight=0.0, terminal_weight=7.0, distance=0.05)
+    lay = scene.layout
+    q = X[-1, lay["qpos"]]
+    ee = planar_fk(torch.tensor(q[None, :2])).numpy()[0]
+    want = np.linalg.norm(ee - q[2:5]) - 0.05
+    assert term.residual(torch.tensor(q[None])).numpy()[0, 0] == pytest.approx(want, rel=1e-12)
+    cost = QuadraticCost(scene, scene.model.qpos0, np.zeros(2 * scene.nv),
+                         np.zeros(2 * scene.nv), [0.0, 0.0], terms=[term])
+    assert float(cost.total(X, U)) == pytest.approx(7.0 * want ** 2, rel=1e-12)
+    C = np.array([0, 1, 2, 3, 4])
+    D = cost.derivatives(X, U, C)
+    eps = 1e-6
+    for i, dof in enumerate(C):
+        Y = [X.copy(), X.copy()]
+        for sign, Yk in zip((1, -1), Y, strict=True):
+            qk = Yk[-1, lay["qpos"]]
+            dv = np.zeros(scene.nv)
+            dv[dof] = sign * eps
+            mujoco.mj_integratePos(scene.model, qk, dv, 1.0)
+            Yk[-1, lay["qpos"]] = qk
+        fd = (float(cost.total(Y[0], U)) - float(cost.total(Y[1], U))) / (2 * eps)
+        assert D.lx[-1, i].item() == pytest.approx(fd, rel=1e-6, abs=1e-9)
+    assert not D.lx[:-1].any()                     # running weight 0: only the last row
+    with pytest.raises(ValueError, match="distance"):
+        EEDistanceTerm(scene, planar_fk, [0, 1], obj[:3], np.eye(3), np.zeros(3), distance=-1)

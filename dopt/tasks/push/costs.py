@@ -13,10 +13,16 @@ Every cost is diagonal-quadratic in the full tangent state, plus (``PushWeights(
   block onto the cylinder behind it, so the cost reads only the robot and the cylinder's x, y:
   the paper's 9 naive DoFs (a term on the block's centroid made all 94 vertex x, y "costed").
 
+- (``reach``, ``reach_f``) the authors' "reach" residual of their soft task: the end
+  effector's 3D distance to the goal object's centre at table height, less the distance at
+  which the pusher touches it (``contact_distance``; theirs is 0.28 m from their gripper body's
+  origin, ours is measured from the pusher tip), squared.
+
 The weights are ours (the paper does not give its W, R, W_f); they are in ``PushWeights``.
-``COST_PRESETS`` names the two costs: ``paper`` (Eq. 2, no end-effector term; the pushing then
-relies on the initial plan of ``dopt.tasks.push.warm_start`` to bring the pusher into contact)
-and ``ee`` (with the term).
+``COST_PRESETS`` names the costs: ``paper`` (Eq. 2, no end-effector term; the pushing then
+relies on the initial plan of ``dopt.tasks.push.warm_start`` to bring the pusher into
+contact), ``paper-reach`` (Eq. 2 with the reach residual at the authors' terminal weight, 100
+times the goal's) and ``ee`` (with the end-effector term).
 """
 
 from __future__ import annotations
@@ -29,6 +35,7 @@ import numpy as np
 
 from dopt.costs import EEDistanceTerm, QuadraticCost
 from dopt.scene import Scene
+from dopt.tasks.push.clutter import STANDOFF
 from dopt.tasks.push.panda import TAU_MAX
 from dopt.tasks.push.task_model import TaskModel, planar_dofs
 from dopt.validation import check_config
@@ -47,12 +54,15 @@ class PushWeights:
     torque: float = 1e-2
     ee: float = 10.0
     ee_f: float = 10.0
+    reach: float = 0.0
+    reach_f: float = 0.0
     success_radius: float = 0.02     # m: goal object centre within this of the goal ends the task
 
     @classmethod
     def paper(cls, **overrides) -> PushWeights:
         """The paper's Eq. 2 cost: these weights without the end-effector term (ee = ee_f =
-        0); the authors' task files weight their "reach" residual 0 as well."""
+        0). The authors' clutter task file weights its "reach" residual 0 as well; their soft
+        task file does not (``COST_PRESETS["paper-reach"]``)."""
         return cls(**{"ee": 0.0, "ee_f": 0.0, **overrides})
 
     def __post_init__(self):
@@ -60,8 +70,11 @@ class PushWeights:
                      positive=("success_radius",))
 
 
-#: the pushing costs by name: the paper's Eq. 2, and ours with the end-effector term
-COST_PRESETS = {"paper": PushWeights.paper(), "ee": PushWeights()}
+#: the pushing costs by name: the paper's Eq. 2; Eq. 2 with the authors' soft-task "reach"
+#: residual (their push_soft.yaml: terminal weight 1e5 against the goal's 1e3, running 0); ours
+#: with the end-effector term
+COST_PRESETS = {"paper": PushWeights.paper(), "paper-reach": PushWeights.paper(reach_f=1e5),
+                "ee": PushWeights()}
 
 
 def _xy(scene: Scene, bodies: list[int]) -> tuple[np.ndarray, np.ndarray]:
@@ -110,23 +123,39 @@ def push_cost(tm: TaskModel, scene: Scene, weights: PushWeights = PushWeights())
     arm = tm.robot_dofs
     w[nv + arm], w_f[nv + arm] = W.arm_velocity, W.arm_velocity_f
     r = W.torque / TAU_MAX ** 2
-    if W.ee == 0 and W.ee_f == 0:          # the paper's Eq. 2: no end-effector term
-        return QuadraticCost(scene, q_ref, w, w_f, r)
+    terms = []
+    if W.ee or W.ee_f or W.reach or W.reach_f:
+        from dopt.tasks.push.panda import ee_chain
+        chain = ee_chain()
 
-    from dopt.tasks.push.panda import ee_chain
-    chain = ee_chain()
+        def fk(q):
+            return chain.forward_kinematics(q).get_matrix()[:, :3, 3]
 
-    def fk(q):
-        return chain.forward_kinematics(q).get_matrix()[:, :3, 3]
+        if len(goal_d) > 2:   # the soft body is the goal: its centroid
+            M, offset = _centroid_map(m, tm.goal_bodies, len(goal_d))
+        else:
+            M, offset = np.eye(3)[:, :2], np.zeros(3)
+        if W.ee or W.ee_f:
+            terms.append(EEDistanceTerm(scene, fk, arm, goal_d, M, offset, axes=(0, 1),
+                                        weight=W.ee, terminal_weight=W.ee_f))
+        if W.reach or W.reach_f:
+            term = EEDistanceTerm(scene, fk, arm, goal_d, M, offset, axes=(0, 1, 2),
+                                  weight=W.reach, terminal_weight=W.reach_f)
+            terms.append(EEDistanceTerm(scene, fk, arm, goal_d, M, offset, axes=(0, 1, 2),
+                                        weight=W.reach, terminal_weight=W.reach_f,
+                                        distance=contact_distance(term, q0)))
+    return QuadraticCost(scene, q_ref, w, w_f, r, terms=terms)
 
-    if len(goal_d) > 2:   # the soft body is the goal: its centroid
-        M, offset = _centroid_map(m, tm.goal_bodies, len(goal_d))
-    else:
-        M, offset = np.eye(3)[:, :2], np.zeros(3)
-    t_d = goal_d
-    term = EEDistanceTerm(scene, fk, arm, t_d, M, offset, axes=(0, 1), weight=W.ee,
-                          terminal_weight=W.ee_f)
-    return QuadraticCost(scene, q_ref, w, w_f, r, terms=[term])
+
+def contact_distance(term: EEDistanceTerm, q0: np.ndarray) -> float:
+    """The pusher tip's 3D distance to the term's target (the goal object's centre, or the
+    soft body's centroid, at table height z = 0, as the authors' residual has it) when it
+    touches the object: every push task starts the tip ``STANDOFF`` behind the object on the
+    line through its centre, so the horizontal distance at ``q0`` less ``STANDOFF``, with the
+    tip's height kept."""
+    import torch
+    d = term.residual(torch.as_tensor(q0)[None]).numpy()[0]          # (3,): x, y, z
+    return float(np.hypot(np.hypot(d[0], d[1]) - STANDOFF, d[2]))
 
 
 def goal_distance(tm: TaskModel, scene: Scene) -> Callable[[np.ndarray], float]:

@@ -129,3 +129,34 @@ def test_paper_cost_has_no_end_effector_term(task):
 
     assert cost(paper, moved) == pytest.approx(cost(paper, task.initial_state), rel=1e-12)
     assert cost(ours, moved) != pytest.approx(cost(ours, task.initial_state), rel=1e-3)
+
+
+def test_paper_reach_is_eq2_plus_the_authors_terminal_reach_residual():
+    """paper-reach on the soft task: Eq. 2's weights and one terminal-only term, the pusher
+    tip's 3D distance to the block's centroid at table height less the contact distance: at
+    the start (tip STANDOFF behind the block) its residual is below STANDOFF and positive; an
+    arm 10 cm farther away costs 1e5 (d - r)^2 more, only at the last row."""
+    import torch
+
+    from dopt.tasks.push.clutter import STANDOFF
+
+    task = PUSH_TASKS["soft"](np.random.default_rng(0))
+    scene = Scene(task.model)
+    reach = push_cost(task, scene, COST_PRESETS["paper-reach"])
+    paper = push_cost(task, scene, COST_PRESETS["paper"])
+    (term,) = reach.terms
+    assert (term.weight, term.terminal_weight, term.axes) == (0.0, 1e5, [0, 1, 2])
+    q0 = task.initial_state[scene.layout["qpos"]]
+    r0 = float(term.residual(torch.as_tensor(q0)[None])[0, 0])
+    assert 0 < r0 < STANDOFF
+    u = np.zeros((1, task.model.nu))
+    x0 = task.initial_state
+    assert float(reach.total(np.stack([x0, x0]), u)) == pytest.approx(
+        float(paper.total(np.stack([x0, x0]), u)) + 1e5 * r0 ** 2, rel=1e-9)
+    moved = arm_elsewhere(task, np.array([-0.1, 0.0, 0.0]))
+    qm = moved[scene.layout["qpos"]]
+    rm = float(term.residual(torch.as_tensor(qm)[None])[0, 0])
+    assert rm > r0 + 0.05
+    assert float(reach.total(np.stack([moved, x0]), u)) == pytest.approx(
+        float(paper.total(np.stack([moved, x0]), u)) + 1e5 * r0 ** 2, rel=1e-9)
+
