@@ -13,7 +13,9 @@ Writes OUT/summary.json ({"task", the protocol's settings, "row_settings", "meth
 {"mpc_cost_normalised_mean", "mpc_cost_normalised_ci90", "mpc_cost_normalised_median",
 "mpc_cost_median_ratio", "opt_ms_mean", "n_dofs_mean", "lag_steps_mean", "success_rate",
 "outliers", "n_trials", ...}}, "paired": {row: geometric mean and CI90 of cost / baseline on
-the same seed}, "failed", "provenance"}), OUT/table1.md and OUT/table1.csv, and the plots of the
+the same seed}, "derivatives_effect": {row with a derivative variant such as
+sum-t10-r1+skip5: its cost over the plain row's on the same seed, and both rows' lag}, "failed",
+"provenance"}), OUT/table1.md and OUT/table1.csv, and the plots of the
 first seed of each row: OUT/mpc_dofs.png (|C| per optimisation over the episode),
 OUT/mpc_goal_distance.png (the goal object's distance to the goal) and OUT/final_<row>.png (the
 final scene; MUJOCO_GL=egl, skipped with --no-render). summary.json also holds "trial_commits"
@@ -132,9 +134,10 @@ def add_run_arguments(ap: argparse.ArgumentParser) -> None:
                     help="the pushing task (default %(default)s)")
     ap.add_argument("--preset", default="ours", choices=["ours", "paper"],
                     help="paper: the authors' protocol (Eq. 2 cost without the end-effector "
-                         "term, their set-up motion and initial push plan, 5%% control noise, "
-                         "virtual clock); ours: cost with the end-effector term, zero initial "
-                         "plan, real clock (default %(default)s). Flags below override it")
+                         "term, on soft with their terminal reach residual; their set-up motion "
+                         "and initial push plan, 5%% control noise, virtual clock); ours: cost "
+                         "with the end-effector term, zero initial plan, real clock (default "
+                         "%(default)s). Flags below override it")
     ap.add_argument("--cost", default=None, choices=list(COST_PRESETS),
                     help="the cost: paper (Eq. 2), paper-reach (Eq. 2 with the authors' soft-task "
                          "reach residual) or ee (with the end-effector term)")
