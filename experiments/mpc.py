@@ -121,8 +121,8 @@ def add_rows_argument(ap: argparse.ArgumentParser, default: tuple[str, ...] | No
                     default=None if default is None else ",".join(default),
                     help="comma-separated Table 1 rows by name (" + ", ".join(TABLE1_ROWS)
                     + "), each optionally with derivative variants +skip<K>, +adaptive, "
-                    "+boxqp (e.g. sum-t10-r1+skip5; they override --fd-skip, --keypoints and "
-                    "--box-qp for that row); default "
+                    "+boxqp, +central (e.g. sum-t10-r1+skip5; they override --fd-skip, "
+                    "--keypoints, --box-qp and --fd for that row); default "
                     + ("with --preset paper: all nine" if default is None
                        else ",".join(default)))
 

@@ -72,7 +72,8 @@ def row_name(method: str, theta: int, rho: float) -> str:
 
 def parse_row(spec: str) -> tuple[str, int, float, dict]:
     """A row of ``TABLE1_ROWS`` by name, optionally with derivative variants:
-    ``sum-t10-r1+skip5``, ``sum-t10-r1+adaptive``, ``sum-t10-r1+skip5+boxqp``. Returns
+    ``sum-t10-r1+skip5``, ``sum-t10-r1+adaptive``, ``sum-t10-r1+skip5+boxqp``,
+    ``sum-t10-r1+central`` (the authors' central differences, eps 1e-6). Returns
     (method, theta, rho, the ``SVRMPCSettings`` fields the variants set)."""
     name, *mods = spec.split("+")
     if name not in TABLE1_ROWS:
@@ -81,12 +82,14 @@ def parse_row(spec: str) -> tuple[str, int, float, dict]:
     for mod in mods:
         if mod == "boxqp" and "box_qp" not in over:
             over["box_qp"] = True
-        elif mod != "boxqp" and "keypoints" not in over:
+        elif mod == "central" and "fd_centered" not in over:
+            over.update(fd_centered=True, fd_eps=1e-6)
+        elif mod not in ("boxqp", "central") and "keypoints" not in over:
             try:
                 kp = KeypointConfig.parse(mod)
             except ValueError:
-                raise ValueError(f"row {spec!r}: a variant is skip<K>, adaptive or boxqp, got "
-                                 f"{mod!r}") from None
+                raise ValueError(f"row {spec!r}: a variant is skip<K>, adaptive, boxqp or "
+                                 f"central, got {mod!r}") from None
             over.update(keypoints=kp.method, fd_skip=kp.skip)
         else:
             raise ValueError(f"row {spec!r}: {mod!r} repeats a variant")
@@ -94,10 +97,12 @@ def parse_row(spec: str) -> tuple[str, int, float, dict]:
 
 
 def derivatives_tag(p: dict) -> str:
-    """The derivative variant of a trial's params as a row-label suffix: `` +skip<K>`` or
-    `` +adaptive`` (key timesteps), `` +boxqp``; '' for finite differences at every timestep
-    and a plain backward pass."""
+    """The derivative variant of a trial's params as a row-label suffix: `` +central``
+    (central differences), `` +skip<K>`` or `` +adaptive`` (key timesteps), `` +boxqp``; ''
+    for forward differences (eps 1e-3) at every timestep and a plain backward pass."""
     tag = ""
+    if p.get("fd_centered") or p.get("fd_eps", 1e-3) != 1e-3:
+        tag += " +central" if p.get("fd_centered") else f" +fd{p['fd_eps']:g}"
     if p.get("keypoints", "every") == "adaptive":
         tag += " +adaptive"
     elif p.get("keypoints", "every") == "skip" and p.get("fd_skip", 1) > 1:
@@ -535,8 +540,9 @@ def feedback_effect(records: list[dict], level: float = 0.90) -> dict:
 
 
 def derivatives_effect(records: list[dict], level: float = 0.90) -> dict:
-    """Per row run with a derivative variant (``derivatives_tag``: key timesteps, box QP) and
-    without it: the variant's MPC cost over the plain row's on the same seeds.
+    """Per row run with a derivative variant (``derivatives_tag``: central differences, key
+    timesteps, box QP) and without it: the variant's MPC cost over the plain row's on the
+    same seeds.
 
     Returns {row label: {"versus": the plain row's label, "ratio_geomean", "ratio_ci90",
     "better", "pairs" (``paired_ratio``; "better": pairs where the variant cost less),
@@ -544,7 +550,8 @@ def derivatives_effect(records: list[dict], level: float = 0.90) -> dict:
     over the paired trials)}}.
     """
     def plain(p):
-        return row_label({**p, "keypoints": "every", "fd_skip": 1, "box_qp": False})
+        return row_label({**p, "keypoints": "every", "fd_skip": 1, "box_qp": False,
+                          "fd_centered": False, "fd_eps": 1e-3})
 
     def mean(results, field):
         return float(np.mean([v[field] for v in results.values()]))

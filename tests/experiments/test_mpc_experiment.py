@@ -113,7 +113,7 @@ def test_paper_preset_runs_the_nine_rows_by_name(tmp_path):
                            "--trials", "1",
                            "--clock", "model", "--fd", "central", "--out", str(tmp_path / "q")])
     trials = mpc.make_trials(args)
-    assert [row_label(t.params) for t in trials] == ["rand-t5", "svd-t5-r1"]
+    assert [row_label(t.params) for t in trials] == ["rand-t5 +central", "svd-t5-r1 +central"]
     assert trials[0].params["cost"] == "ee" and trials[0].params["clock"] == "model"
     assert trials[0].params["fd_centered"] and trials[0].params["fd_eps"] == 1e-6
     assert trials[0].key.endswith("fdc1e-06")
@@ -160,12 +160,19 @@ def test_rows_carry_their_own_derivative_variants(tmp_path):
     glob = mpc.parse_args(["--preset", "paper", "--rows", "baseline,sum-t10-r1+adaptive",
                            "--fd-skip", "2", "--trials", "1", "--out", str(tmp_path / "b")])
     assert mpc.baseline_label(glob) == "baseline +skip2"
+    central = mpc.make_trials(mpc.parse_args(
+        ["--preset", "paper", "--rows", "sum-t10-r1+central+skip5", "--trials", "1",
+         "--out", str(tmp_path / "c")]))[0]
+    assert row_label(central.params) == "sum-t10-r1 +central +skip5"
+    assert (central.params["fd_centered"], central.params["fd_eps"]) == (True, 1e-6)
+    assert central.key.endswith("-fdc1e-06-skip5")
     assert [row_label(t.params) for t in mpc.make_trials(glob)] == \
         ["baseline +skip2", "sum-t10-r1 +adaptive"]          # the row's variant wins
 
 
 @pytest.mark.parametrize("rows, message", [
-    ("sum-t10-r1+skip0", "skip<K>, adaptive or boxqp"),
+    ("sum-t10-r1+skip0", "skip<K>, adaptive, boxqp or central"),
+    ("sum-t10-r1+central+central", "repeats a variant"),
     ("sum-t10-r1+skip5+adaptive", "repeats a variant"),
     ("sum-t10-r1+boxqp+boxqp", "repeats a variant"),
     ("sum-t9-r1+skip5", "unknown Table 1 row"),

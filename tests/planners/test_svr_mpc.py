@@ -102,8 +102,11 @@ def test_derivatives_effect_pairs_each_variant_with_its_plain_row():
     records[-1]["params"].update(keypoints="adaptive")               # no plain naive row
     fb = rec("svr-sum", 0, 30.0)
     fb["params"].update(keypoints="skip", fd_skip=5, feedback=True)  # no plain +fb row
-    out = derivatives_effect([*records, fb])
-    assert set(out) == {SUM + " +skip5"}
+    central = rec("svr-sum", 0, 90.0)
+    central["params"].update(fd_centered=True, fd_eps=1e-6)           # pairs with plain seed 0
+    out = derivatives_effect([*records, fb, central])
+    assert set(out) == {SUM + " +skip5", SUM + " +central"}
+    assert out[SUM + " +central"]["ratio_geomean"] == pytest.approx(0.9)
     r = out[SUM + " +skip5"]
     assert r["versus"] == SUM and (r["better"], r["pairs"]) == (2, 3)
     assert r["ratio_geomean"] == pytest.approx((0.5 * 2.0 * 0.5) ** (1 / 3))
