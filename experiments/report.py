@@ -108,6 +108,13 @@ CATALOGUE = (
              {"task": task, "derivatives_effect": lambda v: bool(v) and any(
                  "+skip" in k for k in v)})
        for task, n in TABLE1_TRIALS.items()]
+    + [Entry(SVR, f"Beyond the paper: control limits in iLQR's backward pass (box QP), {task}",
+             f"python experiments/mpc.py --task {task} --preset paper --rows "
+             f"baseline,sum-t10-r1,sum-t10-r1+boxqp --trials 10 --workers 2 --no-render "
+             f"--out docs/results/runs/boxqp-{task} --record docs/results/boxqp-{task}.json",
+             "table1", {"task": task, "derivatives_effect": lambda v: bool(v) and any(
+                 "+boxqp" in k for k in v)})
+       for task in TABLE1_TRIALS]
     + [Entry(SVR, "Finite differences: the authors' central (eps 1e-6) against our forward "
                   "(eps 1e-3), clutter",
              "python experiments/mpc.py --task clutter --preset paper --rows "
