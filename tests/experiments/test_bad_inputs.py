@@ -118,7 +118,7 @@ BAD = [
     ("mpc", ["--fd-skip", "0"], "argument --fd-skip: must be >= 1, got 0"),
     ("mpc", ["--nominal-threads", "0"], "argument --nominal-threads: must be > 0"),
     ("mpc", ["--keypoints", "often"], "argument --keypoints: invalid choice: 'often'"),
-    ("svr_explain", ["--rows", "sum-t7"], "argument --rows: unknown row(s) ['sum-t7']"),
+    ("svr_explain", ["--rows", "sum-t7"], "argument --rows: unknown Table 1 row 'sum-t7'"),
     ("svr_explain", ["--bins", "0"], "argument --bins: must be >= 1, got 0"),
     ("svr_explain", ["--feedback", "both"], "--feedback both is for experiments/mpc.py"),
     ("clock_check", ["--real-threads", "0"], "argument --real-threads: must be >= 1, got 0"),
