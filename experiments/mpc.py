@@ -335,7 +335,8 @@ def write_table(out: Path, task: str, methods: dict, feedback: dict | None = Non
     with open(out / "table1.csv", "w", newline="") as f:
         csv.writer(f).writerows(rows)
     lines = [f"Task: {task}. Normalised by baseline on the same instance; mean and 90% CI "
-             f"exclude outliers (goal object > {OUTLIER_DISTANCE} m from the goal).", "",
+             f"exclude outliers (goal object > {OUTLIER_DISTANCE} m from the goal) and unstable "
+             "trials.", "",
              "| " + " | ".join(rows[0]) + " |", "|" + "---|" * len(rows[0])]
     lines += ["| " + " | ".join(r) + " |" for r in rows[1:]]
     if feedback:

@@ -506,7 +506,8 @@ def fig7_claims_lines(results: list[Result], page: Path) -> list[str]:
 
 # ------------------------------------------------------------------------- table1 (SVR)
 MPC_HEADER = ["MPC cost / baseline (mean ± CI90)", "median (all)", "opt. time (ms)", "DoFs",
-              "lag (steps)", "success", "goal distance (m, median)", "outliers", "trials"]
+              "lag (steps)", "success", "goal distance (m, median)", "outliers", "unstable",
+              "trials"]
 
 
 def mpc_cells(m: dict) -> list[str]:
@@ -514,7 +515,8 @@ def mpc_cells(m: dict) -> list[str]:
             num(m.get("mpc_cost_normalised_median")), num(m.get("opt_ms_mean"), 0),
             num(m.get("n_dofs_mean", m.get("dofs_mean")), 1), num(m.get("lag_steps_mean"), 1),
             num(m.get("success_rate")), num(m.get("goal_distance_end_median"), 3),
-            str(m.get("outliers", "?")), str(m.get("n_trials", m.get("trials", "?")))]
+            str(m.get("outliers", "?")), str(m.get("n_unstable_trials", "-")),
+            str(m.get("n_trials", m.get("trials", "?")))]
 
 
 def table1_section(results: list[Result], page: Path) -> list[str]:
@@ -559,8 +561,9 @@ def table1_section(results: list[Result], page: Path) -> list[str]:
 
     return section("State-vector reduction, Table 1: iLQR-SVR in asynchronous MPC",
                    "MPC cost normalised by the baseline's on the same task instance; mean and "
-                   "90 % CI over the trials that are not outliers (goal object too far from the "
-                   "goal at the end), median over all.", results, page, body)
+                   "90 % CI over the trials that are neither outliers (goal object too far from "
+                   "the goal at the end) nor unstable (the executed episode broke a stability "
+                   "bound; counted in its own column), median over all.", results, page, body)
 
 
 def protocol_line(d: dict) -> str:

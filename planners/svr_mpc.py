@@ -429,8 +429,10 @@ def summarize(records: list[dict], baseline: str = "baseline", level: float = 0.
 
     - ``mpc_cost_normalised_mean``, ``_ci90``: MPC cost over the ``baseline`` row's on the
       same task instance (seed), mean and Student-t half-width at ``level`` over the trials
-      that are not outliers (goal object ending > ``OUTLIER_DISTANCE`` from the goal; counted
-      in ``outliers``), as the paper's clutter means do;
+      that are neither outliers (goal object ending > ``OUTLIER_DISTANCE`` from the goal, as
+      the paper's clutter means leave out; counted in ``outliers``) nor unstable (the executed
+      episode broke a stability bound: its cost is not that of a physical push; counted in
+      ``n_unstable_trials``), on either side of the ratio;
     - ``mpc_cost_normalised_median``: median of the same per-seed ratios over all trials;
     - ``mpc_cost_median_ratio``: median cost of the row over median cost of baseline (all
       trials, unpaired): the statistic the authors' own data reproduce their Table 1 with;
@@ -447,14 +449,17 @@ def summarize(records: list[dict], baseline: str = "baseline", level: float = 0.
     def outlier(v):
         return v["goal_distance_end"] > OUTLIER_DISTANCE
 
+    def excluded(v):
+        return outlier(v) or bool(v.get("unstable", False))
+
     base_all = {k: v["mpc_cost"] for k, v in by.get(baseline, {}).items()}
-    base = {k: c for k, c in base_all.items() if not outlier(by[baseline][k])}
+    base = {k: c for k, c in base_all.items() if not excluded(by[baseline][k])}
     out = {}
     for row, trials in by.items():
         res = list(trials.values())
         norm_all = [v["mpc_cost"] / base_all[k] for k, v in trials.items() if k in base_all]
         norm = [v["mpc_cost"] / base[k] for k, v in trials.items()
-                if k in base and not outlier(v)]
+                if k in base and not excluded(v)]
         mean, ci = mean_ci(norm, level) if norm else (float("nan"), float("nan"))
         costs = [v["mpc_cost"] for v in res]
         out[row] = {

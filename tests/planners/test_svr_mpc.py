@@ -169,3 +169,14 @@ def test_model_clock_episode_is_deterministic():
     a, b = run_svr_mpc(settings, seed=2), run_svr_mpc(settings, seed=2)
     assert a.mpc_cost == b.mpc_cost and a.lag_steps == b.lag_steps and a.steps == 40
     assert a.active_sets == b.active_sets and a.clock == "model"
+
+
+def test_unstable_trials_leave_the_mean_on_either_side_and_are_counted():
+    records = [rec("baseline", 0, 100.0), rec("baseline", 1, 100.0), rec("baseline", 2, 100.0),
+               rec("svr-sum", 0, 50.0), rec("svr-sum", 1, 70.0), rec("svr-sum", 2, 9.0)]
+    records[5]["result"]["unstable"] = True            # its cost is no push's cost
+    records[1]["result"]["unstable"] = True            # baseline seed 1: no reference
+    out = aggregate(records)
+    assert out[SUM]["mpc_cost_normalised_mean"] == pytest.approx(0.5)     # seed 0 only
+    assert out[SUM]["n_unstable_trials"] == 1 and out["baseline"]["n_unstable_trials"] == 1
+    assert out[SUM]["mpc_cost_normalised_median"] == pytest.approx(0.5)   # 0.09, 0.5, 0.7
