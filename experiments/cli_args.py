@@ -37,6 +37,11 @@ def choices_list(text: str, choices: Sequence[str], what: str) -> list[str]:
     bad = [name for name in names if name not in choices]
     if bad or not names:
         raise ValueError(f"unknown {what} {bad}; choose from {', '.join(choices)}")
+    return no_repeats(names, what)
+
+
+def no_repeats(names: list[str], what: str) -> list[str]:
+    """``names`` unchanged. Raises ValueError naming ``what`` and the names given twice."""
     repeated = sorted({name for name in names if names.count(name) > 1})
     if repeated:
         raise ValueError(f"{what} {', '.join(repeated)} given twice")

@@ -48,6 +48,7 @@ from cli_args import (
     EPILOG,
     choices_type,
     guarded,
+    no_repeats,
     nonneg_float,
     nonneg_int,
     output_dir,
@@ -75,6 +76,7 @@ from planners.svr_mpc import (
     run_trial,
     summarize,
     trial_key,
+    variant_settings,
 )
 
 log = logging.getLogger(__name__)
@@ -107,12 +109,9 @@ def rows_list(text: str) -> list[str]:
     try:
         for name in names:
             parse_row(name)
+        return no_repeats(names, "row(s)")
     except ValueError as e:
         raise argparse.ArgumentTypeError(str(e)) from None
-    repeated = sorted({name for name in names if names.count(name) > 1})
-    if repeated:
-        raise argparse.ArgumentTypeError(f"row(s) {', '.join(repeated)} given twice")
-    return names
 
 
 def add_rows_argument(ap: argparse.ArgumentParser, default: tuple[str, ...] | None) -> None:
@@ -226,14 +225,11 @@ def settings_of(args, method: str, theta: int, rho: float, feedback: bool,
     over = {k: v for k, v in over.items() if v is not None}
     if args.warm_start is not None:
         over["warm_start"] = args.warm_start == "on"
-    if args.fd == "central":
-        over.update(fd_centered=True, fd_eps=1e-6)
-    if args.keypoints == "adaptive":
-        over["keypoints"] = "adaptive"
-    elif args.fd_skip > 1:
-        over.update(keypoints="skip", fd_skip=args.fd_skip)
-    if args.box_qp:
-        over["box_qp"] = True
+    flags = ((["central"] if args.fd == "central" else [])
+             + (["adaptive"] if args.keypoints == "adaptive" else
+                [f"skip{args.fd_skip}"] if args.fd_skip > 1 else [])
+             + (["boxqp"] if args.box_qp else []))
+    over.update(variant_settings(flags, "--fd, --fd-skip, --keypoints, --box-qp"))
     over.update(row or {})
     return replace(preset, task=args.task, method=method, theta=theta, rho=float(rho),
                    slowdown=args.slowdown or _task_slowdown(args.task), timeout=args.timeout,

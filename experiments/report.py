@@ -81,6 +81,12 @@ class Entry:
                                            r.data.get(k) == v for k, v in self.where.items())
 
 
+def has_variant(tag: str):
+    """A ``where`` test of a Table 1 file's "derivatives_effect": a row with ``tag``
+    (``+skip``, ``+boxqp``, ``+central``)."""
+    return lambda effect: any(tag in row for row in effect or {})
+
+
 #: the paper's Table 1 trials per task
 TABLE1_TRIALS = {"clutter": 100, "soft": 20, "soft_rigid": 20}
 
@@ -105,15 +111,13 @@ CATALOGUE = (
              f"baseline,sum-t10-r1,sum-t10-r1+skip5,sum-t10-r1+skip10 --trials {n} --workers 2 "
              f"--no-render --out docs/results/runs/keypoints-{task} "
              f"--record docs/results/keypoints-{task}.json", "table1",
-             {"task": task, "derivatives_effect": lambda v: bool(v) and any(
-                 "+skip" in k for k in v)})
+             {"task": task, "derivatives_effect": has_variant("+skip")})
        for task, n in TABLE1_TRIALS.items()]
     + [Entry(SVR, f"Beyond the paper: control limits in iLQR's backward pass (box QP), {task}",
              f"python experiments/mpc.py --task {task} --preset paper --rows "
              f"baseline,sum-t10-r1,sum-t10-r1+boxqp --trials 10 --workers 2 --no-render "
              f"--out docs/results/runs/boxqp-{task} --record docs/results/boxqp-{task}.json",
-             "table1", {"task": task, "derivatives_effect": lambda v: bool(v) and any(
-                 "+boxqp" in k for k in v)})
+             "table1", {"task": task, "derivatives_effect": has_variant("+boxqp")})
        for task in TABLE1_TRIALS]
     + [Entry(SVR, "Finite differences: the authors' central (eps 1e-6) against our forward "
                   "(eps 1e-3), clutter",
@@ -121,8 +125,7 @@ CATALOGUE = (
              "baseline,sum-t10-r1,sum-t10-r1+central --trials 20 --workers 2 --no-render "
              "--out docs/results/runs/fd-central-clutter "
              "--record docs/results/fd-central-clutter.json", "table1",
-             {"task": "clutter", "derivatives_effect": lambda v: bool(v) and any(
-                 "+central" in k for k in v)})]
+             {"task": "clutter", "derivatives_effect": has_variant("+central")})]
     + [Entry(SVR, "Table 1's virtual clock against the real clock",
              "python experiments/clock_check.py --task clutter --preset paper --rows "
              "baseline,rand-t5,sum-t10-r1 --trials 10 --out docs/results/runs/clock-check-clutter "
@@ -227,6 +230,11 @@ def mm(x, digits: int = 1) -> str:
 def pm(mean: str, ci: str) -> str:
     """"mean ± ci", or the mean alone when there is no interval."""
     return mean if ci == "n/a" or mean == "n/a" else f"{mean} ± {ci}"
+
+
+def span(interval) -> str:
+    """An interval [lo, hi] as "lo-hi" (empty for none)."""
+    return "-".join(num(x) for x in interval or [])
 
 
 def cell(text) -> str:
@@ -538,7 +546,7 @@ def table1_section(results: list[Result], page: Path) -> list[str]:
                       "feedback):", ""]
             lines += table(["method", "cost ratio", "CI90", "feedback better", "successes"],
                            [[name, num(f.get("ratio_geomean")),
-                             "-".join(num(x) for x in f.get("ratio_ci90", [])),
+                             span(f.get("ratio_ci90")),
                              f"{f.get('better')}/{f.get('pairs')}",
                              f"{f.get('success_open_loop')} -> {f.get('success_feedback')}"]
                             for name, f in fb.items()])
@@ -551,7 +559,7 @@ def table1_section(results: list[Result], page: Path) -> list[str]:
             lines += table(["row", "versus", "cost ratio", "CI90", "variant better",
                             "lag (steps)", "opt. time (ms)"],
                            [[name, f["versus"], num(f["ratio_geomean"]),
-                             "-".join(num(x) for x in f["ratio_ci90"]),
+                             span(f["ratio_ci90"]),
                              f"{f['better']}/{f['pairs']}",
                              f"{num(f['lag_steps_mean'], 1)} / "
                              f"{num(f['versus_lag_steps_mean'], 1)}",
@@ -585,7 +593,7 @@ def table1_headline(r: Result) -> str:
     if r.data.get("derivatives_effect"):
         return "; ".join(
             f"{name} / {f['versus']}: MPC cost {num(f['ratio_geomean'])} "
-            f"({'-'.join(num(x) for x in f['ratio_ci90'])}), lag {num(f['lag_steps_mean'], 1)} "
+            f"({span(f['ratio_ci90'])}), lag {num(f['lag_steps_mean'], 1)} "
             f"/ {num(f['versus_lag_steps_mean'], 1)} steps, opt. time "
             f"{num(f['opt_ms_mean'], 0)} / {num(f['versus_opt_ms_mean'], 0)} ms "
             f"({f['pairs']} seeds)" for name, f in r.data["derivatives_effect"].items())

@@ -71,13 +71,20 @@ def row_name(method: str, theta: int, rho: float) -> str:
 
 
 def parse_row(spec: str) -> tuple[str, int, float, dict]:
-    """A row of ``TABLE1_ROWS`` by name, optionally with derivative variants:
-    ``sum-t10-r1+skip5``, ``sum-t10-r1+adaptive``, ``sum-t10-r1+skip5+boxqp``,
-    ``sum-t10-r1+central`` (the authors' central differences, eps 1e-6). Returns
-    (method, theta, rho, the ``SVRMPCSettings`` fields the variants set)."""
+    """A row of ``TABLE1_ROWS`` by name, optionally with derivative variants
+    (``variant_settings``): ``sum-t10-r1+skip5``, ``sum-t10-r1+adaptive``,
+    ``sum-t10-r1+skip5+boxqp``, ``sum-t10-r1+central``. Returns (method, theta, rho, the
+    ``SVRMPCSettings`` fields the variants set)."""
     name, *mods = spec.split("+")
     if name not in TABLE1_ROWS:
         raise ValueError(f"unknown Table 1 row {name!r}: choose from {', '.join(TABLE1_ROWS)}")
+    return (*TABLE1_ROWS[name], variant_settings(mods, f"row {spec!r}"))
+
+
+def variant_settings(mods, what: str = "variants") -> dict:
+    """The ``SVRMPCSettings`` fields of derivative variants: ``skip<K>`` or ``adaptive`` (key
+    timesteps, ``planners.keypoints``), ``boxqp`` (the box-QP backward pass), ``central`` (the
+    authors' central differences, eps 1e-6); ``what`` names them in errors."""
     over: dict = {}
     for mod in mods:
         if mod == "boxqp" and "box_qp" not in over:
@@ -88,12 +95,12 @@ def parse_row(spec: str) -> tuple[str, int, float, dict]:
             try:
                 kp = KeypointConfig.parse(mod)
             except ValueError:
-                raise ValueError(f"row {spec!r}: a variant is skip<K>, adaptive, boxqp or "
-                                 f"central, got {mod!r}") from None
+                raise ValueError(f"{what}: a variant is skip<K>, adaptive, boxqp or central, "
+                                 f"got {mod!r}") from None
             over.update(keypoints=kp.method, fd_skip=kp.skip)
         else:
-            raise ValueError(f"row {spec!r}: {mod!r} repeats a variant")
-    return (*TABLE1_ROWS[name], over)
+            raise ValueError(f"{what}: {mod!r} repeats a variant")
+    return over
 
 
 def derivatives_tag(p: dict) -> str:

@@ -139,21 +139,22 @@ def push_cost(tm: TaskModel, scene: Scene, weights: PushWeights = PushWeights())
             terms.append(EEDistanceTerm(scene, fk, arm, goal_d, M, offset, axes=(0, 1),
                                         weight=W.ee, terminal_weight=W.ee_f))
         if W.reach or W.reach_f:
-            term = EEDistanceTerm(scene, fk, arm, goal_d, M, offset, axes=(0, 1, 2),
-                                  weight=W.reach, terminal_weight=W.reach_f)
-            terms.append(EEDistanceTerm(scene, fk, arm, goal_d, M, offset, axes=(0, 1, 2),
-                                        weight=W.reach, terminal_weight=W.reach_f,
-                                        distance=contact_distance(term, q0)))
+            geometry = (scene, fk, arm, goal_d, M, offset)
+            kw = {"axes": (0, 1, 2), "weight": W.reach, "terminal_weight": W.reach_f}
+            r0 = contact_distance(EEDistanceTerm(*geometry, **kw), q0)
+            terms.append(EEDistanceTerm(*geometry, **kw, distance=r0))
     return QuadraticCost(scene, q_ref, w, w_f, r, terms=terms)
 
 
 def contact_distance(term: EEDistanceTerm, q0: np.ndarray) -> float:
-    """The pusher tip's 3D distance to the term's target (the goal object's centre, or the
-    soft body's centroid, at table height z = 0, as the authors' residual has it) when it
-    touches the object: every push task starts the tip ``STANDOFF`` behind the object on the
-    line through its centre, so the horizontal distance at ``q0`` less ``STANDOFF``, with the
-    tip's height kept."""
+    """The pusher tip's 3D distance to the target of ``term`` (a vector term: ``distance``
+    None; the goal object's centre, or the soft body's centroid, at table height z = 0, as the
+    authors' residual has it) when it touches the object: every push task starts the tip
+    ``STANDOFF`` behind the object on the line through its centre, so the horizontal distance
+    at ``q0`` less ``STANDOFF``, with the tip's height kept."""
     import torch
+    if term.distance is not None:
+        raise ValueError("contact_distance needs the term's offset vector (distance None)")
     d = term.residual(torch.as_tensor(q0)[None]).numpy()[0]          # (3,): x, y, z
     return float(np.hypot(np.hypot(d[0], d[1]) - STANDOFF, d[2]))
 
