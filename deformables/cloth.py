@@ -42,7 +42,7 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import dijkstra
 from scipy.spatial import ConvexHull, cKDTree
 
-from dopt.validation import check_config
+from dopt.validation import check_config, check_real
 
 from .decimation import BACKENDS, EmptyDecimationError, decimate
 from .distance import SurfaceDistance, hausdorff, sample_surface
@@ -62,7 +62,7 @@ from .validation import (
 
 logger = logging.getLogger(__name__)
 
-PANEL_MODES = ("auto", "on", "off")
+PANEL_MODES = ("auto", "on", "off", "fold")
 ERRORS = ("symmetric", "one-sided")
 
 
@@ -151,7 +151,12 @@ class ClothConfig:
         panels: with rest positions, project the goal onto its flat panels first
             (:func:`deformables.panels.project_on_panels`): ``"on"`` (default) always,
             ``"auto"`` when the goal's estimated noise exceeds ``panel_noise_floor``, ``"off"``
-            never. Decimation alone fails from about 0.05 mm of goal noise; with restarts,
+            never, ``"fold"`` every particle onto its panel: for a goal that is a fold made by
+            a simulator or seen by a camera, whose crease stands as a loop and whose panels
+            sag and wrinkle by centimetres (neighbouring panels turned by less than
+            ``fold_merge_deg`` are one panel). The default moves only particles within a
+            layer gap plus the noise of their panel and keeps the rest as structure.
+            Decimation alone fails from about 0.05 mm of goal noise; with restarts,
             projecting exact goals too keeps all 112 noise-free counts and fixes the goals
             that 0.02 mm of noise, below the floor, throws off under ``"auto"``
             (docs/DESIGN-NOTES.md, "Key particles").
@@ -159,6 +164,11 @@ class ClothConfig:
             about 1.55 sigma of per-coordinate Gaussian noise, 0 on an exact fold) above which
             ``"auto"`` projects (sigma ~0.03 mm): it skips the projection's boundary fit on
             exact goals.
+        fold_merge_deg: under ``panels="fold"``, neighbouring panels whose rigid fits turn
+            by less than this (degrees) are one panel: a fold turns one panel against the next
+            by 90-180 degrees, a wrinkle by tens. Measured on the simulated goals of
+            ``experiments/key_particles.py`` (docs/DESIGN-NOTES.md, "Goals from the
+            simulator").
         strict: raise ``ValueError`` when no model up to ``max_faces`` reaches the threshold.
             By default the model with the least error is returned with
             ``reached_threshold=False`` and a logged warning.
@@ -183,6 +193,7 @@ class ClothConfig:
     canonical_triangulation: bool = True
     panels: str = "on"
     panel_noise_floor: float = 5e-5
+    fold_merge_deg: float = 60.0
     strict: bool = False
 
     def __post_init__(self):
@@ -196,6 +207,8 @@ class ClothConfig:
                      "geodesic_radius", "geodesic_spacings", "geodesic_cap", "sample_spacings",
                      "panel_noise_floor"):
             check_threshold(getattr(self, name), f"ClothConfig.{name}")
+        check_real(self.fold_merge_deg, "ClothConfig.fold_merge_deg", positive=True,
+                   maximum=180.0)
         if self.layer_gap is not None:
             check_threshold(self.layer_gap, "ClothConfig.layer_gap")
         check_config(self, minimum={"restart_seed": 0})
@@ -378,8 +391,13 @@ def cloth_key_particles(positions, faces, threshold: float | None = None,
     gap = config.layer_gap if config.layer_gap is not None else layer_gap(goal)
     if rest is not None and config.panels != "off":
         floor = config.panel_noise_floor if config.panels == "auto" else None
+        fold = config.panels == "fold"
         fit = project_on_panels(goal, rest, tri, gap or config.flat_gap_spacings * spacing,
-                                min_noise=floor)
+                                min_noise=floor, tolerance=np.inf if fold else None,
+                                merge_deg=config.fold_merge_deg if fold else None)
+        if fold and fit.n_panels > 1:      # the boundaries again, fitted on the panel model
+            fit = project_on_panels(fit.positions, rest, tri,
+                                    gap or config.flat_gap_spacings * spacing)
         if fit.projected.any():
             goal = fit.positions
             if config.layer_gap is None:       # again, on the projected goal: free of noise

@@ -226,6 +226,34 @@ def _panel_transform(rest: np.ndarray, goal: np.ndarray, members: np.ndarray,
     return rot[0], shift[0]
 
 
+def _merge_panels(rest: np.ndarray, goal: np.ndarray, pairs: np.ndarray,
+                  members: list[np.ndarray], merge_deg: float) -> list[np.ndarray]:
+    """Join neighbouring panels whose rigid fits turn by less than ``merge_deg`` from each
+    other, refit, and repeat until none do. Two panels are neighbours where a mesh edge joins
+    particles the two explain best. A fold turns one panel against the next by 90-180 degrees;
+    a wrinkle or a sag splits a panel into pieces that turn by tens of degrees."""
+    while len(members) > 1:
+        fits = [_panel_transform(rest, goal, m) for m in members]
+        rot = np.stack([r for r, _ in fits])
+        shift = np.stack([t for _, t in fits])
+        predicted = np.einsum("pij,nj->pni", rot, rest) + shift[:, None]
+        labels = np.linalg.norm(predicted - goal[None], axis=2).argmin(axis=0)
+        a, b = labels[pairs[:, 0]], labels[pairs[:, 1]]
+        touching = {(int(x), int(y)) for x, y in zip(np.minimum(a, b), np.maximum(a, b),
+                                                      strict=True) if x != y}
+        turns = {(p, q): np.degrees(np.arccos(np.clip(
+            (np.trace(rot[p].T @ rot[q]) - 1.0) / 2.0, -1.0, 1.0))) for p, q in touching}
+        close = [(turn, pq) for pq, turn in turns.items() if turn < merge_deg]
+        if not close:
+            break
+        _, (p, q) = min(close)
+        logger.info("panel projection: panels of %d and %d particles turn by %.0f deg; joined",
+                    len(members[p]), len(members[q]), turns[(p, q)])
+        members = ([m for i, m in enumerate(members) if i not in (p, q)]
+                   + [np.sort(np.concatenate([members[p], members[q]]))])
+    return members
+
+
 def panel_weights(rest: np.ndarray, labels: np.ndarray, n_panels: int, width: float,
                   l2: float = 1e-6, fit: np.ndarray | None = None,
                   miss: np.ndarray | None = None) -> np.ndarray:
@@ -328,7 +356,8 @@ def project_on_panels(goal: np.ndarray, rest: np.ndarray, faces: np.ndarray, lay
                       neighbours: int = 9, angle_deg: float = 30.0, min_fraction: float = 0.02,
                       min_width: float = 0.35, crease_width: float = 0.25,
                       tolerance: float | None = None,
-                      min_noise: float | None = None) -> PanelFit:
+                      min_noise: float | None = None,
+                      merge_deg: float | None = None) -> PanelFit:
     """Project the particles of a folded cloth goal onto its flat panels (see module doc).
 
     Args:
@@ -345,9 +374,12 @@ def project_on_panels(goal: np.ndarray, rest: np.ndarray, faces: np.ndarray, lay
             spacings; a row of crease particles is narrower (0), a panel two rows wide is 0.5.
         crease_width: half-width of the band along a boundary whose particles all go to one
             panel, in particle spacings (:func:`panel_weights`).
-        tolerance: largest distance moved, metres; None for the default above.
+        tolerance: largest distance moved, metres (``inf``: every particle goes to its
+            panel); None for the default above.
         min_noise: with an estimated noise at or below this (metres), nothing moves (the
             boundaries are not fitted); None projects whatever the noise.
+        merge_deg: join neighbouring panels whose rigid fits turn by less than this (degrees;
+            :func:`_merge_panels`): the pieces of a wrinkled panel. None: no joining.
 
     Returns:
         :class:`PanelFit`; with no panel found, or too little noise, ``positions`` is ``goal``
@@ -358,7 +390,8 @@ def project_on_panels(goal: np.ndarray, rest: np.ndarray, faces: np.ndarray, lay
             faces (see :func:`deformables.validation.check_faces`), or an option out of range
             (each named): ``layer_gap`` > 0, ``neighbours`` an int >= 3, ``angle_deg`` in
             (0, 180], ``min_fraction`` in [0, 1], ``min_width`` >= 0, ``crease_width`` > 0,
-            ``tolerance`` and ``min_noise`` None or >= 0.
+            ``tolerance`` and ``min_noise`` None or >= 0 (``tolerance`` may be ``inf``),
+            ``merge_deg`` None or in (0, 180].
     """
     goal = check_positions(goal, "goal")
     rest = check_positions(rest, "rest")
@@ -372,8 +405,10 @@ def project_on_panels(goal: np.ndarray, rest: np.ndarray, faces: np.ndarray, lay
     check_real(min_width, "min_width", minimum=0.0)
     check_real(crease_width, "crease_width", positive=True)
     for name, value in (("tolerance", tolerance), ("min_noise", min_noise)):
-        if value is not None:
+        if value is not None and not (name == "tolerance" and value == np.inf):
             check_real(value, name, minimum=0.0)
+    if merge_deg is not None:
+        check_real(merge_deg, "merge_deg", positive=True, maximum=180.0)
     n = len(goal)
     pairs = edges(faces)
     spacing = float(np.median(np.linalg.norm(rest[pairs[:, 0]] - rest[pairs[:, 1]], axis=1)))
@@ -385,6 +420,8 @@ def project_on_panels(goal: np.ndarray, rest: np.ndarray, faces: np.ndarray, lay
         logger.info("panel projection: no flat panel found; goal left as measured")
         return PanelFit(goal, np.full(n, -1), np.zeros((0, 3, 3)), np.zeros((0, 3)), noise,
                         np.zeros(n, dtype=bool))
+    if merge_deg is not None:
+        members = _merge_panels(rest, goal, pairs, members, merge_deg)
     fits = [_panel_transform(rest, goal, m) for m in members]
     rot = np.stack([r for r, _ in fits])
     shift = np.stack([t for _, t in fits])

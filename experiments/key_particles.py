@@ -255,7 +255,8 @@ def simulated_goals(resolutions: list[int], cloth_config: ClothConfig,
     goal, whether the stability verdict flagged its executed plan, the layer gap
     ``estimate_layer_gap`` finds in the settled goal (before the reduction's panel projection),
     the gap the reduction's threshold is relative to (``KeyParticles.layer_gap``) and the
-    counts."""
+    counts, under ``cloth_config`` and, in ``row["fold"]``, under it with ``panels="fold"``
+    (every particle onto its panel: the mode for goals a simulator or a camera makes)."""
     from deformables.layers import estimate_layer_gap
     from planners.pick_place import PickPlaceSettings, make_planner, make_problem, run_problem
 
@@ -276,6 +277,8 @@ def simulated_goals(resolutions: list[int], cloth_config: ClothConfig,
             gap = estimate_layer_gap(goal, scene.elements, spacing)
             keys = cloth_key_particles(goal, scene.elements, rest_positions=rest,
                                        config=cloth_config)
+            folded = cloth_key_particles(goal, scene.elements, rest_positions=rest,
+                                         config=replace(cloth_config, panels="fold"))
             row.update(selfcollide=settings.selfcollide,
                        scripted_cost_mm=1e3 * float(np.mean(np.linalg.norm(
                            goal - problem.final_goal, axis=1))),
@@ -284,7 +287,10 @@ def simulated_goals(resolutions: list[int], cloth_config: ClothConfig,
                        reduction_layer_gap_mm=1e3 * keys.layer_gap,
                        n_keys=keys.n_keys, n_elements=keys.n_elements,
                        reached_threshold=keys.reached_threshold,
-                       held=keys.n_keys == CLOTH_REFERENCE_KEYS[task])
+                       held=keys.n_keys == CLOTH_REFERENCE_KEYS[task],
+                       fold={"n_keys": folded.n_keys, "n_elements": folded.n_elements,
+                             "reached_threshold": folded.reached_threshold,
+                             "held": folded.n_keys == CLOTH_REFERENCE_KEYS[task]})
         except Exception as exc:
             row["error"] = failed[f"simulated/{task}/n{n}/{preset}"] = one_line(exc)
             logger.error("simulated %s n=%d %s failed: %s", task, n, preset, row["error"])

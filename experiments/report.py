@@ -923,22 +923,30 @@ def kp_simulated(rows: list[dict]) -> list[str]:
            "as given), settled; the reduction gets the settled positions, the flex's "
            "triangles and the settled flat start as rest sheet. Scripted error: mean particle "
            "distance to the ideal fold; `!` marks an executed plan the stability verdict "
-           "flagged.", ""]
+           "flagged. Keys and faces under the default panel projection and under "
+           "`ClothConfig(panels=\"fold\")` (every particle onto its panel); `*`: no model up "
+           "to 40 faces reached the threshold.", ""]
     body = []
     for r in rows:
         if "error" in r:
             body.append([_short_task(r["task"]), str(r["n"]), r.get("physics", "-"), "-", "-",
-                         "-", "failed: " + cell(r["error"]), "-", "-"])
+                         "-", "-", "failed: " + cell(r["error"]), "-", "-"])
             continue
+
+        def keys(k: dict) -> str:
+            return f"{k['n_keys']}{'' if k['reached_threshold'] else '*'}"
+
+        fold = r.get("fold")
         body.append([_short_task(r["task"]), str(r["n"]), r["physics"],
                      "yes" if r["selfcollide"] else "no",
                      num(r["scripted_cost_mm"], 1) + (" !" if r["unstable"] else ""),
                      "none found" if r["layer_gap_mm"] is None else num(r["layer_gap_mm"], 2),
-                     f"{r['n_keys']} ({r['reference_keys']})", str(r["n_elements"]),
-                     "yes" if r["reached_threshold"] else "no"])
+                     str(r["reference_keys"]), keys(r),
+                     "-" if fold is None else keys(fold),
+                     f"{r['n_elements']} / {'-' if fold is None else fold['n_elements']}"])
     return out + table(["goal", "n", "physics", "self-collision", "scripted error (mm)",
-                        "layer gap (mm)", "keys (reference)", "faces", "threshold reached"],
-                       body)
+                        "layer gap (mm)", "reference keys", "keys", "keys (fold)",
+                        "faces (default / fold)"], body)
 
 
 def kp_headline(r: Result) -> str:

@@ -107,3 +107,43 @@ def test_a_region_no_panel_explains_keeps_its_measured_positions():
 def test_panel_mode_is_checked():
     with pytest.raises(ValueError, match="panels"):
         ClothConfig(panels="yes")
+
+
+def _hinged_sheet(turn_deg: float, n: int = 20, spacing: float = 0.015):
+    """A flat n x n sheet bent sharply along x = 0 by ``turn_deg`` (the half x > 0 turns
+    about the y axis): rest, goal and faces."""
+    u, v = np.meshgrid(np.arange(n) - (n - 1) / 2, np.arange(n) - (n - 1) / 2, indexing="ij")
+    rest = np.c_[u.ravel(), v.ravel(), np.zeros(n * n)] * spacing
+    turned = Rotation.from_euler("y", -turn_deg, degrees=True).apply(rest)
+    goal = np.where((rest[:, 0] > 0)[:, None], turned, rest)
+    i = np.arange(n - 1)[:, None] * n + np.arange(n - 1)[None]
+    faces = np.r_[np.c_[i.ravel(), i.ravel() + n, i.ravel() + 1],
+                  np.c_[i.ravel() + 1, i.ravel() + n, i.ravel() + n + 1]]
+    return rest, goal, faces
+
+
+@pytest.mark.parametrize("turn_deg, merged", [(40.0, True), (50.0, True), (90.0, False),
+                                              (179.0, False)])
+def test_merging_joins_a_wrinkle_and_keeps_a_fold(turn_deg, merged):
+    """Two halves turned by 40-50 degrees are two panels (local fits differ by more than
+    ``angle_deg`` = 30) that ``merge_deg`` = 60 joins into one; a right-angle or a flat fold
+    stays two."""
+    rest, goal, faces = _hinged_sheet(turn_deg)
+    assert project_on_panels(goal, rest, faces, 0.005).n_panels == 2
+    fit = project_on_panels(goal, rest, faces, 0.005, merge_deg=60.0, tolerance=np.inf)
+    assert fit.n_panels == (1 if merged else 2)
+    assert fit.projected.all()
+    if merged:      # one rigid fit of a bent sheet: every particle moved onto one plane
+        normal = np.linalg.svd(fit.positions - fit.positions.mean(axis=0))[2][2]
+        assert np.abs((fit.positions - fit.positions.mean(axis=0)) @ normal).max() < 1e-9
+
+
+def test_fold_mode_rejects_bad_merge_angles():
+    rest, goal, faces = _hinged_sheet(40.0, n=6)
+    for bad in (0.0, -5.0, 181.0, float("nan")):
+        with pytest.raises(ValueError, match="merge_deg"):
+            project_on_panels(goal, rest, faces, 0.005, merge_deg=bad)
+    with pytest.raises(ValueError, match="fold_merge_deg"):
+        ClothConfig(panels="fold", fold_merge_deg=0.0)
+    with pytest.raises(ValueError, match="panels must be one of"):
+        ClothConfig(panels="folded")

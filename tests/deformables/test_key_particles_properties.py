@@ -346,3 +346,43 @@ def test_a_rectangle_folded_across_its_short_side_keeps_crease_ends_a_quarter_ap
     result = cloth_key_particles(points[:-2], triangles(nu, nv, "anti", None),
                                  rest_positions=turn(rest, 0.6, np.zeros(3)))
     assert result.n_keys == 8
+
+
+# ---------------------------------------------------------------- folds as a simulator leaves them
+WRINKLED_GOALS = 40
+WRINKLE_HEIGHT = 0.015
+
+
+def wrinkle(g: dict, rng: np.random.Generator, height: float = WRINKLE_HEIGHT) -> np.ndarray:
+    """The goal lifted along its stacking axis (z) by three smooth bulges of the surface under
+    it (Gaussian, widths 8-20 % of the sheet, heights 30-100 % of ``height``), a function of
+    the position over the floor, so that the layers keep their order and their gaps: a fold
+    lying on a crumpled underlayer, or sagging and wrinkled panels as the MuJoCo folds leave
+    them (docs/RESULTS.md, "Goals made by the simulator": panels turned by tens of degrees)."""
+    positions = g["positions"].copy()
+    xy = positions[:, :2].copy()
+    side = float(np.ptp(g["rest"], axis=0).max())
+    for _ in range(3):
+        centre = xy[rng.integers(len(xy))]
+        width = rng.uniform(0.08, 0.2) * side
+        positions[:, 2] += rng.uniform(0.3, 1.0) * height * np.exp(
+            -((xy - centre) ** 2).sum(axis=1) / (2.0 * width ** 2))
+    return positions
+
+
+# panels="fold" fits each panel on its own, so the two fits of a bulged pair of layers need not
+# meet on their crease line; where they miss by more than the threshold, the model keeps a
+# vertex on the crease (one extra key). 6 of goals 0-199 do so (the default projection: 15).
+_CREASE_KINK = {9}
+
+
+@pytest.mark.parametrize("number", [
+    pytest.param(n, marks=pytest.mark.xfail(strict=True, reason="crease kink, see above"))
+    if n in _CREASE_KINK else n for n in range(WRINKLED_GOALS)])
+def test_key_count_of_a_wrinkled_goal_under_the_fold_mode(number):
+    g = make_goal(number, seed=SEED + 2)
+    positions = wrinkle(g, np.random.default_rng([99, number]))
+    result = cloth_key_particles(positions, g["faces"], rest_positions=g["rest"],
+                                 config=ClothConfig(panels="fold"))
+    assert result.reached_threshold, describe(g)
+    assert result.n_keys == g["keys"], describe(g)

@@ -267,7 +267,9 @@ def test_key_particle_benches_and_simulated_goals(site):
     simulated = [{"task": "cloth_diagonal", "n": 16, "physics": "default", "reference_keys": 4,
                   "selfcollide": False, "scripted_cost_mm": 14.66, "unstable": True,
                   "unstable_reason": "strain", "layer_gap_mm": None, "n_keys": 4,
-                  "n_elements": 10, "reached_threshold": True, "held": True},
+                  "n_elements": 10, "reached_threshold": True, "held": True,
+                  "fold": {"n_keys": 5, "n_elements": 7, "reached_threshold": False,
+                           "held": False}},
                  {"task": "cloth_side", "n": 40, "physics": "default", "reference_keys": 6,
                   "error": "RuntimeError: boom"}]
     write(site["results"], "key_particles.json",
@@ -281,8 +283,10 @@ def test_key_particle_benches_and_simulated_goals(site):
            "| 0.60 |" in md
     assert "| cloth side | 10000 | 1 | 6 (6) | 6 | yes | 3.46 |" in md
     assert "| 1 | 3.46 | 0.73 | 4.73 | 1 / 4 |" in md
-    assert "| cloth diagonal | 16 | default | no | 14.7 ! | none found | 4 (4) | 10 | yes |" in md
-    assert "| cloth side | 40 | default | - | - | - | failed: RuntimeError: boom | - | - |" in md
+    assert "| cloth diagonal | 16 | default | no | 14.7 ! | none found | 4 | 4 | 5* | 10 / 7 |" \
+        in md
+    assert "| cloth side | 40 | default | - | - | - | - | failed: RuntimeError: boom | - | - |" \
+        in md
 
 
 # ------------------------------------------------------------- Table 1 beside the paper
