@@ -243,6 +243,10 @@ def noise_sweep(journal: Path, rope_config: RopeConfig, cloth_config: ClothConfi
     return rows, failed
 
 
+#: fold_merge_deg values the simulated goals are also reduced under (ClothConfig's default: 60)
+MERGE_SWEEP_DEG = (30.0, 45.0, 60.0, 90.0, 120.0)
+
+
 def simulated_goals(resolutions: list[int], cloth_config: ClothConfig,
                     physics: tuple[str, ...] = ("default",),
                     settle: float = 1.0) -> tuple[list[dict], dict]:
@@ -279,6 +283,12 @@ def simulated_goals(resolutions: list[int], cloth_config: ClothConfig,
                                        config=cloth_config)
             folded = cloth_key_particles(goal, scene.elements, rest_positions=rest,
                                          config=replace(cloth_config, panels="fold"))
+            # the merge angle's range: a wrinkle turns panels by tens of degrees, a fold by
+            # 90-180
+            merge = {str(int(deg)): cloth_key_particles(
+                goal, scene.elements, rest_positions=rest,
+                config=replace(cloth_config, panels="fold", fold_merge_deg=deg)).n_keys
+                for deg in MERGE_SWEEP_DEG}
             row.update(selfcollide=settings.selfcollide,
                        scripted_cost_mm=1e3 * float(np.mean(np.linalg.norm(
                            goal - problem.final_goal, axis=1))),
@@ -290,7 +300,8 @@ def simulated_goals(resolutions: list[int], cloth_config: ClothConfig,
                        held=keys.n_keys == CLOTH_REFERENCE_KEYS[task],
                        fold={"n_keys": folded.n_keys, "n_elements": folded.n_elements,
                              "reached_threshold": folded.reached_threshold,
-                             "held": folded.n_keys == CLOTH_REFERENCE_KEYS[task]})
+                             "held": folded.n_keys == CLOTH_REFERENCE_KEYS[task],
+                             "n_keys_by_merge_deg": merge})
         except Exception as exc:
             row["error"] = failed[f"simulated/{task}/n{n}/{preset}"] = one_line(exc)
             logger.error("simulated %s n=%d %s failed: %s", task, n, preset, row["error"])

@@ -930,7 +930,7 @@ def kp_simulated(rows: list[dict]) -> list[str]:
     for r in rows:
         if "error" in r:
             body.append([_short_task(r["task"]), str(r["n"]), r.get("physics", "-"), "-", "-",
-                         "-", "-", "failed: " + cell(r["error"]), "-", "-"])
+                         "-", "-", "failed: " + cell(r["error"]), "-", "-", "-"])
             continue
 
         def keys(k: dict) -> str:
@@ -943,10 +943,16 @@ def kp_simulated(rows: list[dict]) -> list[str]:
                      "none found" if r["layer_gap_mm"] is None else num(r["layer_gap_mm"], 2),
                      str(r["reference_keys"]), keys(r),
                      "-" if fold is None else keys(fold),
-                     f"{r['n_elements']} / {'-' if fold is None else fold['n_elements']}"])
+                     f"{r['n_elements']} / {'-' if fold is None else fold['n_elements']}",
+                     " / ".join(str(k) for k in (fold or {}).get("n_keys_by_merge_deg",
+                                                                 {}).values()) or "-"])
+    angles = next((" / ".join(r["fold"]["n_keys_by_merge_deg"]) for r in rows
+                   if "n_keys_by_merge_deg" in r.get("fold", {})), "")
     return out + table(["goal", "n", "physics", "self-collision", "scripted error (mm)",
                         "layer gap (mm)", "reference keys", "keys", "keys (fold)",
-                        "faces (default / fold)"], body)
+                        "faces (default / fold)",
+                        f"keys (fold), merge angle {angles} deg" if angles else
+                        "keys (fold) by merge angle"], body)
 
 
 def kp_headline(r: Result) -> str:

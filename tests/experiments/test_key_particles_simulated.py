@@ -20,6 +20,8 @@ def test_simulated_goals_rows_are_consistent():
         fold = r["fold"]
         assert fold["held"] == (fold["n_keys"] == key_particles.CLOTH_REFERENCE_KEYS[r["task"]])
         assert 1 <= fold["n_keys"] <= 64 and fold["n_elements"] >= 2
+        assert fold["n_keys_by_merge_deg"]["60"] == fold["n_keys"]      # the default angle
+        assert list(fold["n_keys_by_merge_deg"]) == ["30", "45", "60", "90", "120"]
     # the multi-layer folds run with self-collision, as the experiments do
     assert [r["selfcollide"] for r in rows] == [False, False, True, True]
 

@@ -269,7 +269,7 @@ def test_key_particle_benches_and_simulated_goals(site):
                   "unstable_reason": "strain", "layer_gap_mm": None, "n_keys": 4,
                   "n_elements": 10, "reached_threshold": True, "held": True,
                   "fold": {"n_keys": 5, "n_elements": 7, "reached_threshold": False,
-                           "held": False}},
+                           "held": False, "n_keys_by_merge_deg": {"30": 6, "60": 5}}},
                  {"task": "cloth_side", "n": 40, "physics": "default", "reference_keys": 6,
                   "error": "RuntimeError: boom"}]
     write(site["results"], "key_particles.json",
@@ -283,10 +283,11 @@ def test_key_particle_benches_and_simulated_goals(site):
            "| 0.60 |" in md
     assert "| cloth side | 10000 | 1 | 6 (6) | 6 | yes | 3.46 |" in md
     assert "| 1 | 3.46 | 0.73 | 4.73 | 1 / 4 |" in md
-    assert "| cloth diagonal | 16 | default | no | 14.7 ! | none found | 4 | 4 | 5* | 10 / 7 |" \
-        in md
-    assert "| cloth side | 40 | default | - | - | - | - | failed: RuntimeError: boom | - | - |" \
-        in md
+    assert "| keys (fold) | faces (default / fold) | keys (fold), merge angle 30 / 60 deg |" in md
+    assert "| cloth diagonal | 16 | default | no | 14.7 ! | none found | 4 | 4 | 5* | 10 / 7 " \
+        "| 6 / 5 |" in md
+    assert "| cloth side | 40 | default | - | - | - | - | failed: RuntimeError: boom | - | - " \
+        "| - |" in md
 
 
 # ------------------------------------------------------------- Table 1 beside the paper
