@@ -355,9 +355,9 @@ def cloth_key_particles(positions, faces, threshold: float | None = None,
             threshold that is not a number.
         ValueError: bad positions or faces (NaN/inf, fewer than 3 particles, zero extent,
             indices out of range, particles in no face, zero-area faces), rest positions that
-            do not match the goal (edge lengths disagree far beyond what a fold does), a
-            non-positive threshold, or, with ``config.strict``, a threshold that no model up
-            to ``config.max_faces`` reaches.
+            do not match the goal (edge lengths disagree far beyond what a fold does), no
+            rest positions under ``panels="fold"``, a non-positive threshold, or, with
+            ``config.strict``, a threshold that no model up to ``config.max_faces`` reaches.
     """
     start = time.perf_counter()
     if not isinstance(config, ClothConfig):
@@ -374,6 +374,9 @@ def cloth_key_particles(positions, faces, threshold: float | None = None,
     check_areas(tri, reference)
     if threshold is not None:
         threshold = check_threshold(threshold)
+    if rest is None and config.panels == "fold":
+        raise ValueError("ClothConfig(panels='fold') needs rest_positions: the panels are "
+                         "rigid maps of regions of the rest sheet")
     pairs = edges(tri)
     spacing = float(np.median(np.linalg.norm(reference[pairs[:, 0]] - reference[pairs[:, 1]],
                                              axis=1)))

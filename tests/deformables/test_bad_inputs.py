@@ -328,6 +328,8 @@ def test_cloth_faces(kind, error, match):
     (dict(threshold=-1.0), ValueError, "threshold must be a positive finite"),
     (dict(threshold="1"), TypeError, "threshold must be a number"),
     (dict(config={}), TypeError, "config must be a ClothConfig"),
+    (dict(rest_positions=None, config=ClothConfig(panels="fold")), ValueError,
+     r"panels='fold'\) needs rest_positions"),
 ])
 def test_cloth_arrays_threshold_and_config(kwargs, error, match):
     args = dict(positions=CLOTH.positions, faces=CLOTH.faces,
@@ -439,6 +441,9 @@ G = goals.cloth_diagonal(n=8)
     (dict(crease_width=np.nan), ValueError, "crease_width must be finite"),
     (dict(tolerance=-1.0), ValueError, "tolerance must be >= 0"),
     (dict(min_noise="0"), TypeError, "min_noise must be a number"),
+    (dict(tolerance=-np.inf), ValueError, "tolerance must be finite"),
+    (dict(tolerance=np.nan), ValueError, "tolerance must be finite"),
+    (dict(merge_deg="60"), TypeError, "merge_deg must be a number"),
 ])
 def test_project_on_panels(kwargs, error, match):
     args = dict(goal=G.positions, rest=G.rest_positions, faces=G.faces, layer_gap=0.005)
