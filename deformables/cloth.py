@@ -395,12 +395,12 @@ def cloth_key_particles(positions, faces, threshold: float | None = None,
     if rest is not None and config.panels != "off":
         floor = config.panel_noise_floor if config.panels == "auto" else None
         fold = config.panels == "fold"
-        fit = project_on_panels(goal, rest, tri, gap or config.flat_gap_spacings * spacing,
-                                min_noise=floor, tolerance=np.inf if fold else None,
+        panel_gap = gap or config.flat_gap_spacings * spacing
+        fit = project_on_panels(goal, rest, tri, panel_gap, min_noise=floor,
+                                tolerance=np.inf if fold else None,
                                 merge_deg=config.fold_merge_deg if fold else None)
         if fold and fit.n_panels > 1:      # the boundaries again, fitted on the panel model
-            fit = project_on_panels(fit.positions, rest, tri,
-                                    gap or config.flat_gap_spacings * spacing)
+            fit = project_on_panels(fit.positions, rest, tri, panel_gap)
         if fit.projected.any():
             goal = fit.positions
             if config.layer_gap is None:       # again, on the projected goal: free of noise

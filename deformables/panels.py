@@ -192,12 +192,17 @@ def local_rotations(rest: np.ndarray, goal: np.ndarray, spacing: float,
     return best_rot, best_rms
 
 
+def _turn_cosine(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Cosine of the angle of the rotation from ``a`` to ``b`` (each ``(..., 3, 3)``),
+    (tr(a^T b) - 1) / 2, shape ``(...)``."""
+    return (np.einsum("...ij,...ij->...", a, b) - 1.0) / 2.0
+
+
 def _panels(rest: np.ndarray, pairs: np.ndarray, rot: np.ndarray, spacing: float,
             angle_deg: float, min_particles: int, min_width: float) -> list[np.ndarray]:
     """Components of the edge graph whose local rotations agree; each ``(n_p,)`` indices."""
     n = len(rest)
-    cos = (np.einsum("eij,eij->e", rot[pairs[:, 0]], rot[pairs[:, 1]]) - 1.0) / 2.0
-    agree = pairs[cos > np.cos(np.radians(angle_deg))]
+    agree = pairs[_turn_cosine(rot[pairs[:, 0]], rot[pairs[:, 1]]) > np.cos(np.radians(angle_deg))]
     graph = coo_matrix((np.ones(len(agree)), (agree[:, 0], agree[:, 1])), shape=(n, n))
     _, component = connected_components(graph, directed=False)
     panels = []
@@ -226,32 +231,43 @@ def _panel_transform(rest: np.ndarray, goal: np.ndarray, members: np.ndarray,
     return rot[0], shift[0]
 
 
+def _fit_panels(rest: np.ndarray, goal: np.ndarray,
+                members: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
+    """Each panel's rigid transform (:func:`_panel_transform`): rotations ``(P, 3, 3)`` and
+    translations ``(P, 3)``."""
+    fits = [_panel_transform(rest, goal, m) for m in members]
+    return np.stack([r for r, _ in fits]), np.stack([t for _, t in fits])
+
+
 def _merge_panels(rest: np.ndarray, goal: np.ndarray, pairs: np.ndarray,
-                  members: list[np.ndarray], merge_deg: float) -> list[np.ndarray]:
+                  members: list[np.ndarray], merge_deg: float
+                  ) -> tuple[list[np.ndarray], np.ndarray, np.ndarray]:
     """Join neighbouring panels whose rigid fits turn by less than ``merge_deg`` from each
     other, refit, and repeat until none do. Two panels are neighbours where a mesh edge joins
     particles the two explain best. A fold turns one panel against the next by 90-180 degrees;
-    a wrinkle or a sag splits a panel into pieces that turn by tens of degrees."""
+    a wrinkle or a sag splits a panel into pieces that turn by tens of degrees. Returns the
+    members and their fits (:func:`_fit_panels`)."""
+    rot, shift = _fit_panels(rest, goal, members)
     while len(members) > 1:
-        fits = [_panel_transform(rest, goal, m) for m in members]
-        rot = np.stack([r for r, _ in fits])
-        shift = np.stack([t for _, t in fits])
         predicted = np.einsum("pij,nj->pni", rot, rest) + shift[:, None]
         labels = np.linalg.norm(predicted - goal[None], axis=2).argmin(axis=0)
         a, b = labels[pairs[:, 0]], labels[pairs[:, 1]]
-        touching = {(int(x), int(y)) for x, y in zip(np.minimum(a, b), np.maximum(a, b),
-                                                      strict=True) if x != y}
-        turns = {(p, q): np.degrees(np.arccos(np.clip(
-            (np.trace(rot[p].T @ rot[q]) - 1.0) / 2.0, -1.0, 1.0))) for p, q in touching}
-        close = [(turn, pq) for pq, turn in turns.items() if turn < merge_deg]
-        if not close:
+        touching = sorted({(int(x), int(y)) for x, y in zip(np.minimum(a, b), np.maximum(a, b),
+                                                             strict=True) if x != y})
+        if not touching:
             break
-        _, (p, q) = min(close)
+        p_idx, q_idx = np.array(touching).T
+        turns = np.degrees(np.arccos(np.clip(_turn_cosine(rot[p_idx], rot[q_idx]), -1.0, 1.0)))
+        closest = int(np.argmin(turns))
+        if turns[closest] >= merge_deg:
+            break
+        p, q = touching[closest]
         logger.info("panel projection: panels of %d and %d particles turn by %.0f deg; joined",
-                    len(members[p]), len(members[q]), turns[(p, q)])
+                    len(members[p]), len(members[q]), turns[closest])
         members = ([m for i, m in enumerate(members) if i not in (p, q)]
                    + [np.sort(np.concatenate([members[p], members[q]]))])
-    return members
+        rot, shift = _fit_panels(rest, goal, members)
+    return members, rot, shift
 
 
 def panel_weights(rest: np.ndarray, labels: np.ndarray, n_panels: int, width: float,
@@ -404,9 +420,10 @@ def project_on_panels(goal: np.ndarray, rest: np.ndarray, faces: np.ndarray, lay
     check_real(min_fraction, "min_fraction", minimum=0.0, maximum=1.0)
     check_real(min_width, "min_width", minimum=0.0)
     check_real(crease_width, "crease_width", positive=True)
-    for name, value in (("tolerance", tolerance), ("min_noise", min_noise)):
-        if value is not None and not (name == "tolerance" and value == np.inf):
-            check_real(value, name, minimum=0.0)
+    if tolerance is not None and tolerance != np.inf:       # inf: every particle moves
+        check_real(tolerance, "tolerance", minimum=0.0)
+    if min_noise is not None:
+        check_real(min_noise, "min_noise", minimum=0.0)
     if merge_deg is not None:
         check_real(merge_deg, "merge_deg", positive=True, maximum=180.0)
     n = len(goal)
@@ -420,11 +437,10 @@ def project_on_panels(goal: np.ndarray, rest: np.ndarray, faces: np.ndarray, lay
         logger.info("panel projection: no flat panel found; goal left as measured")
         return PanelFit(goal, np.full(n, -1), np.zeros((0, 3, 3)), np.zeros((0, 3)), noise,
                         np.zeros(n, dtype=bool))
-    if merge_deg is not None:
-        members = _merge_panels(rest, goal, pairs, members, merge_deg)
-    fits = [_panel_transform(rest, goal, m) for m in members]
-    rot = np.stack([r for r, _ in fits])
-    shift = np.stack([t for _, t in fits])
+    if merge_deg is None:
+        rot, shift = _fit_panels(rest, goal, members)
+    else:
+        members, rot, shift = _merge_panels(rest, goal, pairs, members, merge_deg)
     predicted = np.einsum("pij,nj->pni", rot, rest) + shift[:, None]           # (P, N, 3)
     miss = np.linalg.norm(predicted - goal[None], axis=2)                      # (P, N)
     labels = miss.argmin(axis=0)
@@ -433,12 +449,12 @@ def project_on_panels(goal: np.ndarray, rest: np.ndarray, faces: np.ndarray, lay
         logger.info("panel projection: noise %.3g mm <= %.3g mm; goal left as measured",
                     noise * 1e3, min_noise * 1e3)
         return PanelFit(goal, np.full(n, -1), rot, shift, noise, np.zeros(n, dtype=bool))
-    if len(fits) > 1:
+    if len(members) > 1:
         # a particle two panels explain about as well (the middle of a rounded crease) says
         # nothing of where the boundary runs
         ranked = np.sort(miss, axis=0)
         clear = ranked[1] - ranked[0] > max(3.0 * noise, 1e-3 * spacing)
-        weights = panel_weights(rest, labels, len(fits), crease_width * spacing,
+        weights = panel_weights(rest, labels, len(members), crease_width * spacing,
                                 fit=clear if clear.any() else None, miss=miss)
         labels = weights.argmax(axis=1)
         own = np.einsum("np,pni->ni", weights, predicted)
@@ -448,5 +464,5 @@ def project_on_panels(goal: np.ndarray, rest: np.ndarray, faces: np.ndarray, lay
     moved = np.linalg.norm(own - goal, axis=1) <= limit
     positions = np.where(moved[:, None], own, goal)
     logger.info("panel projection: %d panels, noise %.3g mm, %d/%d particles moved",
-                len(fits), noise * 1e3, int(moved.sum()), n)
+                len(members), noise * 1e3, int(moved.sum()), n)
     return PanelFit(positions, np.where(moved, labels, -1), rot, shift, noise, moved)

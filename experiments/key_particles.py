@@ -281,14 +281,15 @@ def simulated_goals(resolutions: list[int], cloth_config: ClothConfig,
             gap = estimate_layer_gap(goal, scene.elements, spacing)
             keys = cloth_key_particles(goal, scene.elements, rest_positions=rest,
                                        config=cloth_config)
-            folded = cloth_key_particles(goal, scene.elements, rest_positions=rest,
-                                         config=replace(cloth_config, panels="fold"))
-            # the merge angle's range: a wrinkle turns panels by tens of degrees, a fold by
-            # 90-180
-            merge = {str(int(deg)): cloth_key_particles(
+            # the fold mode at the config's merge angle and over the sweep's range (a wrinkle
+            # turns panels by tens of degrees, a fold by 90-180), each angle reduced once
+            chosen = cloth_config.fold_merge_deg
+            by_angle = {deg: cloth_key_particles(
                 goal, scene.elements, rest_positions=rest,
-                config=replace(cloth_config, panels="fold", fold_merge_deg=deg)).n_keys
-                for deg in MERGE_SWEEP_DEG}
+                config=replace(cloth_config, panels="fold", fold_merge_deg=deg))
+                for deg in sorted({*MERGE_SWEEP_DEG, chosen})}
+            folded = by_angle[chosen]
+            merge = {str(int(deg)): by_angle[deg].n_keys for deg in MERGE_SWEEP_DEG}
             row.update(selfcollide=settings.selfcollide,
                        scripted_cost_mm=1e3 * float(np.mean(np.linalg.norm(
                            goal - problem.final_goal, axis=1))),

@@ -29,8 +29,8 @@ def test_simulated_goals_rows_are_consistent():
 def test_goals_the_simulator_folds_give_the_reference_counts_under_the_fold_mode():
     """Issue #15's goals from physics at 16 per side (accurate preset, the one whose scripted
     folds are not flagged there): with ``panels="fold"`` every fold gives the paper's count
-    (4 / 6 / 8 / 10) although the settled goals have crease loops 2-4 cm high and panels
-    that sag by centimetres (docs/RESULTS.md, "Goals made by the simulator")."""
+    (4 / 6 / 8 / 10) although the settled goals have crease loops and sagging panels
+    (docs/RESULTS.md, "Goals made by the simulator")."""
     rows, failed = key_particles.simulated_goals([16], ClothConfig(), ("accurate",))
     assert failed == {}
     for r in rows:
