@@ -52,6 +52,24 @@ CLOTH_SETTINGS = {
                                     bending=False),
     "E1e5 dt.01 CG30 stretch": dict(young=1e5, timestep=0.01, solver="CG", iterations=30,
                                     bending=False),
+    # strain under random drags is quasi-static (friction 1.5 against a 50 N/m membrane: flex
+    # damping 0.01-0.2 leaves it unchanged in a first look), so the sheet has to be stiffer,
+    # and a stiffer sheet needs a shorter step than 20 ms
+    "E2e5 dt.01 CG30": dict(young=2e5, timestep=0.01, solver="CG", iterations=30),
+    "E5e5 dt.01 CG30": dict(young=5e5, timestep=0.01, solver="CG", iterations=30),
+    "E5e5 dt.01 CG30 stretch": dict(young=5e5, timestep=0.01, solver="CG", iterations=30,
+                                    bending=False),
+    # membrane stiffness goes with E t, bending with E t^3 / 12: a thinner, stiffer sheet
+    # stretches like E 5e5 at 1 mm (500 N/m) and bends like E 5e4 at 1 mm (as cloth does:
+    # stiff in stretch, soft in bending)
+    "E1.7e6 t.3mm dt.02 CG30": dict(young=1.7e6, thickness=3e-4, timestep=0.02, solver="CG",
+                                    iterations=30),
+    "E1.7e6 t.3mm dt.01 CG30": dict(young=1.7e6, thickness=3e-4, timestep=0.01, solver="CG",
+                                    iterations=30),
+    "E1e6 t.5mm dt.01 CG30": dict(young=1e6, thickness=5e-4, timestep=0.01, solver="CG",
+                                  iterations=30),
+    "E5e6 t.3mm dt.01 CG30": dict(young=5e6, thickness=3e-4, timestep=0.01, solver="CG",
+                                  iterations=30),
 }
 ROPE_SETTINGS = {
     "preset:fast": None, "preset:default": None, "preset:accurate": None,
@@ -60,6 +78,15 @@ ROPE_SETTINGS = {
     "dt.02 Newton": dict(timestep=0.02, solver="Newton", iterations=50),
     "dt.02 CG50 damp.01": dict(timestep=0.02, solver="CG", iterations=50, damping=0.01),
     "dt.005 CG50": dict(timestep=0.005, solver="CG", iterations=50),
+    # the strain flags of the rope are dynamic (neighbours of the grasped particle overshoot it
+    # during a lift; a rope without bending elasticity is flagged on every action, friction 0.3
+    # changes nothing): damping of the rod's bending and twist removes them in a first look
+    "dt.02 CG50 damp.1": dict(timestep=0.02, solver="CG", iterations=50, damping=0.1),
+    "dt.02 CG50 damp.3": dict(timestep=0.02, solver="CG", iterations=50, damping=0.3),
+    "dt.02 CG50 damp1": dict(timestep=0.02, solver="CG", iterations=50, damping=1.0),
+    "dt.02 CG50 E1e5 damp.1": dict(timestep=0.02, solver="CG", iterations=50, young=1e5,
+                                   damping=0.1),
+    "dt.01 CG50 damp.1": dict(timestep=0.01, solver="CG", iterations=50, damping=0.1),
 }
 
 
