@@ -73,11 +73,11 @@ CLOTH_SETTINGS = {
 }
 ROPE_SETTINGS = {
     "preset:fast": None, "preset:default": None, "preset:accurate": None,
-    "dt.02 CG50": dict(timestep=0.02, solver="CG", iterations=50),
-    "dt.01 CG50": dict(timestep=0.01, solver="CG", iterations=50),
-    "dt.02 Newton": dict(timestep=0.02, solver="Newton", iterations=50),
+    "dt.02 CG50 damp.001": dict(timestep=0.02, solver="CG", iterations=50, damping=1e-3),
+    "dt.01 CG50 damp.001": dict(timestep=0.01, solver="CG", iterations=50, damping=1e-3),
+    "dt.02 Newton damp.001": dict(timestep=0.02, solver="Newton", iterations=50, damping=1e-3),
     "dt.02 CG50 damp.01": dict(timestep=0.02, solver="CG", iterations=50, damping=0.01),
-    "dt.005 CG50": dict(timestep=0.005, solver="CG", iterations=50),
+    "dt.005 CG50 damp.001": dict(timestep=0.005, solver="CG", iterations=50, damping=1e-3),
     # the strain flags of the rope are dynamic (neighbours of the grasped particle overshoot it
     # during a lift; a rope without bending elasticity is flagged on every action, friction 0.3
     # changes nothing): damping of the rod's bending and twist removes them in a first look
