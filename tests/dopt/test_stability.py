@@ -145,8 +145,8 @@ def test_scripted_cloth_folds_are_not_flagged(goal, n, physics):
 
 
 def test_rope_actions_are_not_flagged():
-    """False positives: bounded random pick-and-place actions on the 40-particle rope (its
-    default preset: 0 of 1000 flagged in ``python -m planners.bench rope``)."""
+    """False positives: bounded random pick-and-place actions on the 40-particle rope under
+    its default preset."""
     scene = make_rope(RopeSceneConfig())
     rng = np.random.default_rng(3)
     P = 16

@@ -3,9 +3,8 @@
 MuJoCo 4.0 removed ``composite``/cable: the rope is a 1D flexcomp with inextensible edges
 (``<edge equality="true"/>``, a flex equality that must stay active) and ``<elasticity young>``
 for bending and twist (which adds per-edge twist joints and plastic state). Discrete integrator,
-CG, dt 0.01 s and rod damping 0.1, the setting of ``python -m planners.bench rope`` with no
-rollout the stability verdict flags in 1000 random pick-and-place actions (docs/RESULTS.md,
-"Physics presets"). Young's modulus 1e4 Pa
+CG, dt 0.01 s and rod damping 0.1, chosen with ``python -m planners.bench rope`` against the
+stability verdict (docs/DESIGN-NOTES.md, "Cloth and rope physics"). Young's modulus 1e4 Pa
 (not the notes' 1e6): a stiffer rod springs back towards its straight rest shape, a crumpled
 1e6 rope straightens itself to 75-100 % of its length within 0.4 s, a 1e4 one stays put (< 3 mm).
 
@@ -52,13 +51,13 @@ class RopeSceneConfig:
         mass: total mass (kg).
         radius: particle radius (m).
         young, damping: rod elasticity (bending and twist) and its damping (s). Damping 0.1
-            keeps the neighbours of a lifted particle from overshooting it: at 1e-3 one random
-            pick-and-place in three stretched an edge beyond 50 %.
+            keeps the neighbours of a lifted particle from overshooting it: at 1e-3 and dt
+            0.02, 289 of 1000 random pick-and-place actions stretch an edge beyond 50 %
+            (docs/results/physics-rope.json).
         edge_solref: solref of the inextensibility constraint.
         friction: sliding friction with the floor.
         selfcollide: rope-rope contacts.
-        timestep, iterations, tolerance: dt (s) and CG settings; at dt 0.02 the edges of a
-            lifted rope lag its grasped particle (4 % of random actions flagged).
+        timestep, iterations, tolerance: dt (s) and CG settings.
         settle: seconds the rope settles before the initial state.
     """
 
