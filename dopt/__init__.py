@@ -12,6 +12,10 @@ Glossary of shape letters used in every docstring:
 
 import importlib
 
+#: the version a result records (``dopt.provenance.code_version``); bump it for a
+#: result-changing release. pyproject.toml reads it from here.
+__version__ = "0.2.0"
+
 #: public name -> the module that defines it; loaded on first use, so that the pure-Python
 #: modules (dopt.validation, dopt.stats, dopt.provenance) import without MuJoCo or torch
 _EXPORTS = {

@@ -17,6 +17,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+from dopt import __version__
+
 #: the packages whose versions a result records
 PACKAGES = ("dopt", "mujoco", "torch", "numpy", "scipy", "cvxpy", "pymeshlab", "trimesh")
 _ROOT = Path(__file__).resolve().parents[1]
@@ -42,6 +44,9 @@ def versions() -> dict:
     """{package: version or None} of ``PACKAGES`` and Python."""
     out = {"python": platform.python_version()}
     for name in PACKAGES:
+        if name == "dopt":                  # the source's, which no stale install metadata hides
+            out[name] = __version__
+            continue
         try:
             out[name] = importlib.metadata.version(name)
         except importlib.metadata.PackageNotFoundError:
@@ -53,12 +58,10 @@ def code_version() -> dict:
     """{"version": dopt's version, "commit": ``git_commit()`` or "unknown"}: what a trial file
     records. A resumed sweep recomputes a trial written by another dopt *version* (a version
     bump marks a result-changing release) and reuses, but counts, one written by another
-    *commit* of the same version (``dopt.sweep.SweepResult.commits``)."""
-    try:
-        version = importlib.metadata.version("dopt")
-    except importlib.metadata.PackageNotFoundError:
-        version = None
-    return {"version": version, "commit": git_commit() or "unknown"}
+    *commit* of the same version (``dopt.sweep.SweepResult.commits``). The version is
+    ``dopt.__version__``, read from the source: an editable install's metadata keeps the
+    version it was installed with until it is reinstalled."""
+    return {"version": __version__, "commit": git_commit() or "unknown"}
 
 
 def provenance(argv: list[str] | None = None) -> dict:

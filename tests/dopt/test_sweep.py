@@ -114,6 +114,18 @@ def test_real_code_version_names_dopt_and_its_commit():
     assert set(v) == {"version", "commit"} and v["version"] and v["commit"]
 
 
+def test_code_version_is_the_sources_not_stale_install_metadata(monkeypatch):
+    """An editable install keeps the metadata version it was installed with; a sweep must
+    label its trials with the version of the code that ran (dopt.__version__)."""
+    import importlib.metadata
+
+    import dopt
+    from dopt import provenance
+    monkeypatch.setattr(importlib.metadata, "version", lambda name: "0.0.stale")
+    assert code_version()["version"] == dopt.__version__ != "0.0.stale"
+    assert provenance.versions()["dopt"] == dopt.__version__
+
+
 @pytest.mark.parametrize("name, text, reason", [
     ("x1.json", '{"key": "x1", "params": {"x": 1}, "res', "not valid JSON"),
     ("x1.json", "", "not valid JSON"),
