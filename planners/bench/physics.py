@@ -70,6 +70,19 @@ CLOTH_SETTINGS = {
                                   iterations=30),
     "E5e6 t.3mm dt.01 CG30": dict(young=5e6, thickness=3e-4, timestep=0.01, solver="CG",
                                   iterations=30),
+    "E1.7e6 t.3mm dt.005 CG30": dict(young=1.7e6, thickness=3e-4, timestep=0.005, solver="CG",
+                                     iterations=30),
+    # linear triangles lock: a crease across their diagonals must stretch them. The library's
+    # diagonal fold (corner N-1 onto corner 0) creases along x = -y, across MuJoCo's grid
+    # diagonals (x = y); "x=-y" splits the squares along the crease, "alternating" both ways
+    "E5e4 dt.02 CG30 tri x=-y": dict(young=5e4, timestep=0.02, solver="CG", iterations=30,
+                                     triangulation="x=-y"),
+    "E2e5 dt.005 CG30 tri x=-y": dict(young=2e5, timestep=0.005, solver="CG", iterations=30,
+                                      triangulation="x=-y"),
+    "E5e5 dt.005 CG30 tri x=-y": dict(young=5e5, timestep=0.005, solver="CG", iterations=30,
+                                      triangulation="x=-y"),
+    "E5e5 dt.005 CG30 tri alt": dict(young=5e5, timestep=0.005, solver="CG", iterations=30,
+                                     triangulation="alternating"),
 }
 ROPE_SETTINGS = {
     "preset:fast": None, "preset:default": None, "preset:accurate": None,

@@ -198,7 +198,7 @@ def test_every_config_field_is_type_checked(cls, required):
     (lambda: PickerConfig(bound=(0.1, 0.0, 0.1)), ValueError, r"PickerConfig\.bound must be > 0"),
     (lambda: PickerConfig(bound=0.1), TypeError, r"PickerConfig\.bound must be a tuple"),
     (lambda: PickerConfig(speed="fast"), TypeError, r"PickerConfig\.speed"),
-    (lambda: PickerConfig(snap_steps=3.0), TypeError, r"PickerConfig\.snap_steps"),
+    (lambda: PickerConfig(snap=0.0), ValueError, r"PickerConfig\.snap"),
     (lambda: PickerConfig(hold_steps=-1), ValueError, r"PickerConfig\.hold_steps"),
     (lambda: PickerConfig(mass=0), ValueError, r"PickerConfig\.mass"),
     (lambda: PickerConfig(solref=(0.002,)), ValueError, r"PickerConfig\.solref"),
@@ -230,7 +230,7 @@ def test_bad_config_values(make, exc, match):
 def test_good_config_values_pass():
     """numpy scalars for numbers, lists or arrays for tuples (a config read back from JSON),
     ints for floats and None where allowed."""
-    PickerConfig(bound=[0.1, 0.1, 0.1], speed=np.float32(0.5), snap_steps=np.int64(3), kv=1000)
+    PickerConfig(bound=[0.1, 0.1, 0.1], speed=np.float32(0.5), snap=np.float32(0.06), kv=1000)
     ClothSceneConfig(n=np.int32(4), radius=None, selfcollide=np.bool_(True))
     MPCConfig(timeout=np.int64(3), slowdown=2)
     FDConfig(eps=1e-6, centered=True)

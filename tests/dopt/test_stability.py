@@ -113,7 +113,7 @@ def test_violent_pick_is_flagged_with_reason_and_step():
     assert np.isfinite(res.final_states).all()
     st = res.stability
     assert st.unstable[0] and st.reason[0].startswith("speed") and "rope_" in st.reason[0]
-    move = picker.snap_steps + picker.hold_steps
+    move = scene.picker.snap_steps + scene.picker.hold_steps
     assert move <= st.step[0] < move + scene.picker.move_steps
     assert st.max_speed[0] > 5.0
 
@@ -130,7 +130,8 @@ STRAINED = pytest.mark.xfail(strict=True, reason="the default cloth preset excee
     ("diagonal", 8, "default"), ("side", 8, "default"), ("diagonal", 12, "default"),
     ("side", 12, "default"), pytest.param("reflective", 12, "default", marks=STRAINED),
     pytest.param("underneath", 12, "default", marks=STRAINED),
-    # the accurate preset was chosen on these four folds at 12 x 12 (docs/RESULTS.md)
+    # the accurate preset at 12 x 12 (docs/RESULTS.md); its multi-layer folds' side stage
+    # peaks near the 50 % bound (0.51 was seen with the grid's coordinates rounded otherwise)
     ("diagonal", 12, "accurate"), ("side", 12, "accurate"), ("reflective", 12, "accurate"),
     ("underneath", 12, "accurate"),
     # and the paper protocol's cloth runs it at 20 x 20 (docs/results/physics-cloth-20.json)

@@ -14,6 +14,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass, replace
 
 import mujoco
+import numpy as np
 
 from dopt.tasks.pick.picker import PickerConfig, picker_mjcf
 from dopt.tasks.pick.scene import (
@@ -26,6 +27,8 @@ from dopt.tasks.pick.scene import (
 from dopt.validation import check_config
 
 FLEX = "cloth"
+#: how each grid square is split (``ClothSceneConfig.triangulation``)
+TRIANGULATIONS = ("x=y", "x=-y", "alternating")
 
 #: physics presets: name -> the fields that differ from ClothSceneConfig's defaults (which are
 #: "default"), chosen by ``python -m planners.bench cloth`` (docs/DESIGN-NOTES.md, "Cloth and
@@ -55,6 +58,10 @@ class ClothSceneConfig:
             while the other half is dragged over it; with the notes' pyramidal cone and
             friction 0.8 at dt 0.02 the whole cloth creeps by centimetres during a fold.
         selfcollide: self-collision (needed when layer order matters: multi-layer folds).
+        triangulation: the diagonal that splits each grid square into two triangles: "x=y"
+            (MuJoCo's own grid), "x=-y", or "alternating" (the two in a checkerboard). Linear
+            triangles lock: a crease that crosses their diagonals must stretch them, so a
+            fold along the other diagonal needs a soft membrane (``TRIANGULATIONS``).
         timestep: dt (s); plan and evaluate with the same dt (folds depend on it).
         iterations, tolerance: CG solver settings (20-30 iterations; 10 breaks fold symmetry).
         settle: seconds the flat cloth settles before the initial state.
@@ -76,6 +83,7 @@ class ClothSceneConfig:
     cone: str = "elliptic"
     impratio: float = 10.0
     selfcollide: bool = False
+    triangulation: str = "x=y"
     timestep: float = 0.02
     solver: str = "CG"
     iterations: int = 30
@@ -87,7 +95,8 @@ class ClothSceneConfig:
                                      "timestep"),
                      minimum={"n": 2, "poisson": 0, "damping": 0, "friction": 0,
                               "iterations": 1, "tolerance": 0, "settle": 0},
-                     choices={"cone": ("elliptic", "pyramidal"), "solver": SOLVERS})
+                     choices={"cone": ("elliptic", "pyramidal"), "solver": SOLVERS,
+                              "triangulation": TRIANGULATIONS})
         if not self.poisson < 0.5:
             raise ValueError(f"ClothSceneConfig.poisson must be < 0.5, got {self.poisson!r}")
 
@@ -115,8 +124,8 @@ def cloth_xml(config: ClothSceneConfig = ClothSceneConfig(),
     c = config
     n, sp, r = c.n, c.spacing, c.particle_radius
     fr = f"{c.friction} 0.005 0.0001"
-    flexcomp = f"""<flexcomp name="{FLEX}" type="grid" dim="2" count="{n} {n} 1"
-              spacing="{sp} {sp} {sp}"
+    flexcomp = f"""<flexcomp name="{FLEX}" type="direct" dim="2"
+              point="{_grid_points(n, sp)}" element="{_grid_triangles(n, c.triangulation)}"
               pos="0 0 {r + 1e-4}" radius="{r}" mass="{c.mass}" rgba=".8 .3 .2 1">
       <contact selfcollide="{'auto' if c.selfcollide else 'none'}" condim="3" friction="{fr}"
                solref="0.01 1" solimp="0.95 0.99 0.0001"/>
@@ -128,6 +137,27 @@ def cloth_xml(config: ClothSceneConfig = ClothSceneConfig(),
     return floor_scene_xml(f"cloth{n}", option, max(64, n * n // 2),
                            f'condim="3" friction="{fr}"', flexcomp,
                            picker_mjcf(FLEX, ids, picker, lowest=r))
+
+
+def _grid_points(n: int, spacing: float) -> str:
+    """The flexcomp ``point`` list of the n x n grid centred on the origin, vertex ix * n + iy
+    (MuJoCo's grid numbering and placement)."""
+    ix, iy = np.divmod(np.arange(n * n), n)
+    xyz = np.stack([(ix - (n - 1) / 2) * spacing, (iy - (n - 1) / 2) * spacing,
+                    np.zeros(n * n)], axis=1)
+    return " ".join(f"{v:.9g}" for v in xyz.ravel())
+
+
+def _grid_triangles(n: int, triangulation: str) -> str:
+    """The flexcomp ``element`` list: two counter-clockwise triangles per grid square, split
+    along the diagonal ``triangulation`` names (``TRIANGULATIONS``); "x=y" is MuJoCo's grid."""
+    ix, iy = (a.ravel() for a in np.meshgrid(np.arange(n - 1), np.arange(n - 1), indexing="ij"))
+    a, b, c, d = ix * n + iy, (ix + 1) * n + iy, ix * n + iy + 1, (ix + 1) * n + iy + 1
+    along_xy = np.stack([a, b, d, a, d, c], axis=1)         # split a-d
+    along_anti = np.stack([a, b, c, b, d, c], axis=1)       # split b-c
+    use_xy = {"x=y": np.ones_like(a, bool), "x=-y": np.zeros_like(a, bool),
+              "alternating": (ix + iy) % 2 == 0}[triangulation]
+    return " ".join(map(str, np.where(use_xy[:, None], along_xy, along_anti).ravel()))
 
 
 def make_cloth(config: ClothSceneConfig = ClothSceneConfig(),

@@ -46,8 +46,10 @@ class PickerConfig:
         speed: average picker speed (m/s) of the longest move (the diagonal of the bound box);
             about 0.5 m/s keeps the cloth from being flung.
         settle: seconds of settling after each release.
-        snap_steps: steps for the picker to snap onto the particle (>= 3 at dt 0.02, >= 5 at
-            dt 0.01, otherwise the particle is dragged towards the picker).
+        snap: seconds for the picker to snap onto the particle, rounded to whole steps of the
+            scene's dt (0.06 s: 3 steps at dt 0.02, 12 at 5 ms). A fixed step count is not
+            enough: the equality's time constant is at least 2 dt, and 3 steps at 5 ms leave
+            the picker short of the particle, which the hold then lifts by about 2 cm.
         hold_steps: steps of holding still before the move.
         kv: servo gain (N s/m); 1000 tracks the commanded path within a millimetre.
         mass: picker mass (kg); tiny, so that snapping does not drag the particle.
@@ -61,7 +63,7 @@ class PickerConfig:
     bound: tuple[float, float, float] = (0.1, 0.1, 0.1)
     speed: float = 0.5
     settle: float = 0.25
-    snap_steps: int = 3
+    snap: float = 0.06
     hold_steps: int = 1
     kv: float = 1000.0
     mass: float = 1e-6
@@ -70,8 +72,8 @@ class PickerConfig:
     workspace: ActionConstraint | None = None
 
     def __post_init__(self):
-        check_config(self, positive=("bound", "speed", "settle", "kv", "mass"),
-                     minimum={"snap_steps": 1, "hold_steps": 0})
+        check_config(self, positive=("bound", "speed", "settle", "kv", "mass", "snap"),
+                     minimum={"hold_steps": 0})
         if self.workspace is not None:
             if not isinstance(self.workspace, ActionConstraint):
                 raise TypeError(f"PickerConfig.workspace must be an ActionConstraint or None, "
@@ -203,7 +205,8 @@ class Picker:
         others = np.setdiff1d(np.arange(model.neq), list(grasp.values()))
         self._base[eq.start + others] = model.eq_active0[others]         # e.g. rope edges
         cfg = config
-        self.snap_steps, self.hold_steps = cfg.snap_steps, cfg.hold_steps
+        self.snap_steps = max(1, int(round(cfg.snap / self.dt)))
+        self.hold_steps = cfg.hold_steps
         longest = float(np.linalg.norm(self.bound))
         self.move_steps = max(2, int(np.ceil(longest / cfg.speed / self.dt)))
         self.settle_steps = int(np.ceil(cfg.settle / self.dt))

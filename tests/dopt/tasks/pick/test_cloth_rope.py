@@ -1,6 +1,8 @@
 """Rope and cloth scenes with the picker: particle numbering, action encoding, bad actions,
 grasp tracking, batched == loop, and a scripted diagonal fold."""
 
+import re
+
 import mujoco
 import numpy as np
 import pytest
@@ -117,6 +119,32 @@ def test_unpickable_particle_raises():
         scene.picker.encode([[5]], np.zeros((1, 1, 3)))
 
 
+@pytest.mark.parametrize("make, config", [
+    (make_cloth, ClothSceneConfig(n=N_SIDE, timestep=0.02)),
+    (make_cloth, ClothSceneConfig(n=N_SIDE, timestep=0.01)),
+    (make_cloth, ClothSceneConfig(n=N_SIDE, timestep=0.005)),
+    (make_rope, RopeSceneConfig(n=12, length=0.2, timestep=0.02)),
+    (make_rope, RopeSceneConfig(n=12, length=0.2, timestep=0.01)),
+    (make_rope, RopeSceneConfig(n=12, length=0.2, timestep=0.005)),
+])
+def test_snap_brings_the_picker_to_the_particle_at_every_dt(make, config):
+    """Snap and hold move the picker onto the grasped particle, not the particle up to the
+    picker: at the end of the hold the particle is within 2 mm of where it rested."""
+    scene = make(config)
+    pk, i = scene.picker, scene.n_particles - 1
+    U = pk.encode(np.array([[i]]), np.zeros((1, 1, 3)))[0]
+    m = scene.model
+    d = mujoco.MjData(m)
+    mujoco.mj_setState(m, d, scene.initial_state, mujoco.mjtState.mjSTATE_INTEGRATION)
+    for u in U[:pk.snap_steps + pk.hold_steps]:
+        mujoco.mj_setState(m, d, u, CONTROL_SPEC)
+        mujoco.mj_step(m, d)
+    state = np.empty(mujoco.mj_stateSize(m, mujoco.mjtState.mjSTATE_INTEGRATION))
+    mujoco.mj_getState(m, d, state, mujoco.mjtState.mjSTATE_INTEGRATION)
+    moved = scene.positions(state)[i] - scene.positions(scene.initial_state)[i]
+    assert np.linalg.norm(moved) < 0.002, moved
+
+
 def test_grasped_particle_follows_displacement(cloth):
     """An in-plane drag of a corner lands it at p0 + d (within the cloth's pull-back)."""
     task = _task(cloth)
@@ -184,6 +212,35 @@ def test_scripted_diagonal_fold_reaches_goal():
     res = scripted(task, [0, n - 1, n * n - n, n * n - 1])
     assert res.particles.tolist() == [n * n - 1]          # only the far corner moves
     assert res.cost < 0.025
+
+
+@pytest.mark.parametrize("triangulation", ["x=y", "x=-y", "alternating"])
+def test_triangulations_split_every_square_once(triangulation):
+    """Two counter-clockwise triangles per grid square, split along the named diagonal; "x=y"
+    compiles to the same elements as MuJoCo's own grid flexcomp."""
+    n = 5
+    xml = cloth_xml(ClothSceneConfig(n=n, triangulation=triangulation))
+    tri = mujoco.MjModel.from_xml_string(xml).flex_elem.reshape(-1, 3)
+    p = np.stack(np.divmod(np.arange(n * n), n), axis=1).astype(float)     # (ix, iy)
+    e1, e2 = p[tri[:, 1]] - p[tri[:, 0]], p[tri[:, 2]] - p[tri[:, 0]]
+    assert len(tri) == 2 * (n - 1) ** 2
+    np.testing.assert_allclose(e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0], 1.0)  # 2 x area
+    corner = p[tri].min(axis=1)                                  # each triangle's square
+    squares, counts = np.unique(corner, axis=0, return_counts=True)
+    assert len(squares) == (n - 1) ** 2 and (counts == 2).all()
+    for t, (ix, iy) in zip(p[tri], corner, strict=True):
+        d = [b - a for a, b in ((t[0], t[1]), (t[1], t[2]), (t[2], t[0]))
+             if abs(b - a).min() == 1]                            # the diagonal side
+        along_xy = d[0][0] * d[0][1] > 0
+        want = {"x=y": True, "x=-y": False, "alternating": (ix + iy) % 2 == 0}[triangulation]
+        assert along_xy == want
+    if triangulation == "x=y":
+        sp = ClothSceneConfig(n=n).spacing
+        grid = re.sub(r'type="direct" dim="2"\s*point="[^"]*" element="[^"]*"',
+                      f'type="grid" dim="2" count="{n} {n} 1" spacing="{sp} {sp} {sp}"', xml)
+        assert grid != xml
+        np.testing.assert_array_equal(mujoco.MjModel.from_xml_string(grid).flex_elem,
+                                      tri.ravel())
 
 
 def test_a_sheet_without_bending_keeps_its_stretch_stiffness():
