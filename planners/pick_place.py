@@ -160,6 +160,26 @@ class PickPlaceSettings:
         """The picker of the task's scenes: the bound per axis, limited to ``constraint()``."""
         return PickerConfig(bound=(self.bound,) * 3, workspace=self.constraint())
 
+    def scene_config(self, physics: str | None = None,
+                     overrides: dict | None = None) -> ClothSceneConfig | RopeSceneConfig:
+        """The scene config of the preset ``physics`` (None: ``self.physics``) with the
+        settings' own fields (n, side or length, selfcollide) and ``overrides`` on top."""
+        physics = self.physics if physics is None else physics
+        if self.task == "cloth":
+            return ClothSceneConfig.preset(physics, **{"n": self.n, "side": self.side,
+                                                       "selfcollide": self.selfcollide,
+                                                       **(overrides or {})})
+        return RopeSceneConfig.preset(physics, **{"n": self.n, "length": self.length,
+                                                  **(overrides or {})})
+
+    def resolved_physics(self) -> dict:
+        """JSON-able scene and picker configs these settings run (what a preset name means
+        today): a trial's identity, so that a changed preset or picker is not reused."""
+        out = {"scene": asdict(self.scene_config()), "picker": asdict(self.picker())}
+        if self.planning_physics not in (None, self.physics):
+            out["planning_scene"] = asdict(self.scene_config(self.planning_physics))
+        return out
+
     def to_dict(self) -> dict:
         """JSON-able form (nested configs as dicts); ``from_dict`` inverts it."""
         return asdict(self)
@@ -306,9 +326,8 @@ def _cloth_problem(s: PickPlaceSettings, overrides: dict) -> Problem:
     from deformables.cloth import cloth_key_particles
     from deformables.goals import goal_sequence
 
-    fields = {"n": s.n, "side": s.side, "selfcollide": s.selfcollide, **overrides}
-    scene = make_cloth(ClothSceneConfig.preset(s.physics, **fields), s.picker())
-    planning = (make_cloth(ClothSceneConfig.preset(s.planning_physics, **fields), s.picker())
+    scene = make_cloth(s.scene_config(overrides=overrides), s.picker())
+    planning = (make_cloth(s.scene_config(s.planning_physics, overrides), s.picker())
                 if s.planning_physics not in (None, s.physics) else None)
     lift = np.array([0.0, 0.0, scene.radius])          # the cloth rests at z = radius
     stages = []
@@ -325,9 +344,8 @@ def _rope_problem(s: PickPlaceSettings, seed: int, overrides: dict) -> Problem:
     from deformables.goals import rope_crossed_triangle, rope_crumpled, rope_straight
     from deformables.rope import rope_key_particles
 
-    config = RopeSceneConfig.preset(s.physics, **{"n": s.n, "length": s.length, **overrides})
-    planning_config = (RopeSceneConfig.preset(s.planning_physics, **{"n": s.n, "length": s.length,
-                                                                     **overrides})
+    config = s.scene_config(overrides=overrides)
+    planning_config = (s.scene_config(s.planning_physics, overrides)
                        if s.planning_physics not in (None, s.physics) else None)
     picker = s.picker()
     planning = None

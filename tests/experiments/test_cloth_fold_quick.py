@@ -107,3 +107,25 @@ def test_paper_protocol_runs_the_papers_budget():
     assert s.cem.iterations == 30
     with pytest.raises(ValueError, match="protocol"):
         PickPlaceSettings.preset("cloth", "diagonal", protocol="theirs")
+
+
+def test_trial_key_follows_what_the_preset_and_picker_mean(monkeypatch):
+    """A trial is identified by the physics it ran, not by a preset's name: redefining the
+    preset or the picker gives another key (the old trial is not reused), threads do not."""
+    from dataclasses import replace
+
+    import pick_place_cli
+
+    from dopt.tasks.pick import cloth_scene, picker
+    from planners.pick_place import PickPlaceSettings
+
+    s = PickPlaceSettings.preset("cloth", "diagonal")
+    key = pick_place_cli.trial_key("simple", 0, s)
+    assert pick_place_cli.trial_key("simple", 0, replace(s, threads=7)) == key
+    monkeypatch.setitem(cloth_scene.PHYSICS_PRESETS, "default", {"young": 1e5})
+    assert pick_place_cli.trial_key("simple", 0, s) != key
+    monkeypatch.setitem(cloth_scene.PHYSICS_PRESETS, "default", {})
+    assert pick_place_cli.trial_key("simple", 0, s) == key
+    monkeypatch.setattr(PickPlaceSettings, "picker",
+                        lambda self: picker.PickerConfig(bound=(self.bound,) * 3, snap=0.015))
+    assert pick_place_cli.trial_key("simple", 0, s) != key
