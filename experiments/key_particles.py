@@ -367,10 +367,10 @@ def parser() -> argparse.ArgumentParser:
                          "16,25,40)")
     ap.add_argument("--simulated-physics", type=choices_type(tuple(PHYSICS_PRESETS),
                                                              "physics presets"),
-                    default=["default", "accurate"],
+                    default=["fast", "default"],
                     help="cloth physics presets the simulated goals are made under "
                          "(comma-separated, of " + ", ".join(PHYSICS_PRESETS) + "; default "
-                         "default,accurate)")
+                         "fast,default)")
     ap.add_argument("--fresh", action="store_true",
                     help="recompute the noise sweep (DIR/noise.jsonl moves to "
                          "DIR/noise.jsonl.old) instead of resuming it")

@@ -23,65 +23,76 @@ from dopt.tasks.pick.picker import CONTROL_SPEC, PickerConfig
 from dopt.tasks.pick.rope_scene import RopeSceneConfig, make_rope
 from planners.pick_place import GOALS, PickPlaceSettings, ScriptedPlanner, make_problem, run_problem
 
+
+def grid(**fields) -> dict:
+    """Scene overrides on MuJoCo's own grid triangulation ("mujoco"), which the default sheet
+    does not use."""
+    return {"triangulation": "mujoco", **fields}
+
+
 #: the settings the sweep compares: name -> scene-config overrides (on top of the config's
 #: defaults); "preset:<name>" entries are the named presets themselves
 CLOTH_SETTINGS = {
     "preset:fast": None, "preset:default": None, "preset:accurate": None,
-    "E5e4 dt.02 CG30": dict(young=5e4, timestep=0.02, solver="CG", iterations=30),
-    "E2e5 dt.02 CG30": dict(young=2e5, timestep=0.02, solver="CG", iterations=30),
-    "E1e6 dt.02 CG30": dict(young=1e6, timestep=0.02, solver="CG", iterations=30),
-    "E1e6 dt.01 CG30": dict(young=1e6, timestep=0.01, solver="CG", iterations=30),
-    "E1e6 dt.02 Newton": dict(young=1e6, timestep=0.02, solver="Newton", iterations=30),
-    "E1e6 dt.02 CG30 damp.01": dict(young=1e6, timestep=0.02, solver="CG", iterations=30,
+    "E5e4 dt.02 CG30": grid(young=5e4, timestep=0.02, solver="CG", iterations=30),
+    "E2e5 dt.02 CG30": grid(young=2e5, timestep=0.02, solver="CG", iterations=30),
+    "E1e6 dt.02 CG30": grid(young=1e6, timestep=0.02, solver="CG", iterations=30),
+    "E1e6 dt.01 CG30": grid(young=1e6, timestep=0.01, solver="CG", iterations=30),
+    "E1e6 dt.02 Newton": grid(young=1e6, timestep=0.02, solver="Newton", iterations=30),
+    "E1e6 dt.02 CG30 damp.01": grid(young=1e6, timestep=0.02, solver="CG", iterations=30,
                                     damping=0.01),
-    "E1e6 dt.02 CG30 selfcollide": dict(young=1e6, timestep=0.02, solver="CG", iterations=30,
+    "E1e6 dt.02 CG30 selfcollide": grid(young=1e6, timestep=0.02, solver="CG", iterations=30,
                                         selfcollide=True),
     # the 4.0 guide's range starts at 1-4 ms; 5 ms is the largest step at which the scripted
     # folds of 16 x 16 sheets of 1e5-5e5 Pa stayed unflagged in a first look
-    "E5e4 dt.005 CG30": dict(young=5e4, timestep=0.005, solver="CG", iterations=30),
-    "E1e5 dt.005 CG30": dict(young=1e5, timestep=0.005, solver="CG", iterations=30),
-    "E2e5 dt.005 CG30": dict(young=2e5, timestep=0.005, solver="CG", iterations=30),
-    "E5e5 dt.005 CG30": dict(young=5e5, timestep=0.005, solver="CG", iterations=30),
-    "E5e5 dt.005 CG30 selfcollide": dict(young=5e5, timestep=0.005, solver="CG", iterations=30,
+    "E5e4 dt.005 CG30": grid(young=5e4, timestep=0.005, solver="CG", iterations=30),
+    "E1e5 dt.005 CG30": grid(young=1e5, timestep=0.005, solver="CG", iterations=30),
+    "E2e5 dt.005 CG30": grid(young=2e5, timestep=0.005, solver="CG", iterations=30),
+    "E5e5 dt.005 CG30": grid(young=5e5, timestep=0.005, solver="CG", iterations=30),
+    "E5e5 dt.005 CG30 selfcollide": grid(young=5e5, timestep=0.005, solver="CG", iterations=30,
                                          selfcollide=True),
     # a stiffer sheet at half the step: the scripted folds of 20 x 20 and 25 x 25 sheets stay
     # unflagged on the diagonal and side goals in a first look, where the default's are not
-    "E1e5 dt.01 CG30": dict(young=1e5, timestep=0.01, solver="CG", iterations=30),
+    "E1e5 dt.01 CG30": grid(young=1e5, timestep=0.01, solver="CG", iterations=30),
     # stretching only (no bending stiffness): about half the step at 40 x 40
-    "E5e4 dt.02 CG30 stretch": dict(young=5e4, timestep=0.02, solver="CG", iterations=30,
+    "E5e4 dt.02 CG30 stretch": grid(young=5e4, timestep=0.02, solver="CG", iterations=30,
                                     bending=False),
-    "E1e5 dt.01 CG30 stretch": dict(young=1e5, timestep=0.01, solver="CG", iterations=30,
+    "E1e5 dt.01 CG30 stretch": grid(young=1e5, timestep=0.01, solver="CG", iterations=30,
                                     bending=False),
     # strain under random drags is quasi-static (friction 1.5 against a 50 N/m membrane: flex
     # damping 0.01-0.2 leaves it unchanged in a first look), so the sheet has to be stiffer,
     # and a stiffer sheet needs a shorter step than 20 ms
-    "E2e5 dt.01 CG30": dict(young=2e5, timestep=0.01, solver="CG", iterations=30),
-    "E5e5 dt.01 CG30": dict(young=5e5, timestep=0.01, solver="CG", iterations=30),
-    "E5e5 dt.01 CG30 stretch": dict(young=5e5, timestep=0.01, solver="CG", iterations=30,
+    "E2e5 dt.01 CG30": grid(young=2e5, timestep=0.01, solver="CG", iterations=30),
+    "E5e5 dt.01 CG30": grid(young=5e5, timestep=0.01, solver="CG", iterations=30),
+    "E5e5 dt.01 CG30 stretch": grid(young=5e5, timestep=0.01, solver="CG", iterations=30,
                                     bending=False),
     # membrane stiffness goes with E t, bending with E t^3 / 12: a thinner, stiffer sheet
     # stretches like E 5e5 at 1 mm (500 N/m) and bends like E 5e4 at 1 mm (as cloth does:
     # stiff in stretch, soft in bending)
-    "E1.7e6 t.3mm dt.02 CG30": dict(young=1.7e6, thickness=3e-4, timestep=0.02, solver="CG",
+    "E1.7e6 t.3mm dt.02 CG30": grid(young=1.7e6, thickness=3e-4, timestep=0.02, solver="CG",
                                     iterations=30),
-    "E1.7e6 t.3mm dt.01 CG30": dict(young=1.7e6, thickness=3e-4, timestep=0.01, solver="CG",
+    "E1.7e6 t.3mm dt.01 CG30": grid(young=1.7e6, thickness=3e-4, timestep=0.01, solver="CG",
                                     iterations=30),
-    "E1e6 t.5mm dt.01 CG30": dict(young=1e6, thickness=5e-4, timestep=0.01, solver="CG",
+    "E1e6 t.5mm dt.01 CG30": grid(young=1e6, thickness=5e-4, timestep=0.01, solver="CG",
                                   iterations=30),
-    "E5e6 t.3mm dt.01 CG30": dict(young=5e6, thickness=3e-4, timestep=0.01, solver="CG",
+    "E5e6 t.3mm dt.01 CG30": grid(young=5e6, thickness=3e-4, timestep=0.01, solver="CG",
                                   iterations=30),
-    "E1.7e6 t.3mm dt.005 CG30": dict(young=1.7e6, thickness=3e-4, timestep=0.005, solver="CG",
+    "E1.7e6 t.3mm dt.005 CG30": grid(young=1.7e6, thickness=3e-4, timestep=0.005, solver="CG",
                                      iterations=30),
     # linear triangles lock: a crease across their diagonals must stretch them. The library's
     # diagonal fold (corner N-1 onto corner 0) creases along x = -y, across MuJoCo's grid
-    # diagonals (x = y); "x=-y" splits the squares along the crease, "alternating" both ways
-    "E5e4 dt.02 CG30 tri x=-y": dict(young=5e4, timestep=0.02, solver="CG", iterations=30,
-                                     triangulation="x=-y"),
-    "E2e5 dt.005 CG30 tri x=-y": dict(young=2e5, timestep=0.005, solver="CG", iterations=30,
-                                      triangulation="x=-y"),
-    "E5e5 dt.005 CG30 tri x=-y": dict(young=5e5, timestep=0.005, solver="CG", iterations=30,
-                                      triangulation="x=-y"),
-    "E5e5 dt.005 CG30 tri alt": dict(young=5e5, timestep=0.005, solver="CG", iterations=30,
+    # diagonals (x = y); "anti" splits the squares along the crease, "alternating" (the
+    # default) both ways
+    "E5e4 dt.02 CG30 tri anti": dict(young=5e4, timestep=0.02, solver="CG", iterations=30,
+                                     triangulation="anti"),
+    "E2e5 dt.005 CG30 tri anti": dict(young=2e5, timestep=0.005, solver="CG", iterations=30,
+                                      triangulation="anti"),
+    "E5e5 dt.005 CG30 tri anti": dict(young=5e5, timestep=0.005, solver="CG", iterations=30,
+                                      triangulation="anti"),
+    # the default sheet at twice its step, and the accurate preset's former sheet, on it
+    "E5e5 dt.01 CG30 tri alt": dict(young=5e5, timestep=0.01, solver="CG", iterations=30,
+                                    triangulation="alternating"),
+    "E2e5 dt.005 CG30 tri alt": dict(young=2e5, timestep=0.005, solver="CG", iterations=30,
                                      triangulation="alternating"),
 }
 ROPE_SETTINGS = {

@@ -118,24 +118,23 @@ def test_violent_pick_is_flagged_with_reason_and_step():
     assert st.max_speed[0] > 5.0
 
 
-# The default cloth preset stretches edges beyond 50 % under ordinary pick-and-place
-# (docs/RESULTS.md, physics presets), away from the grasped particle too on the multi-stage
-# folds: these false-positive checks fail there, which is the open part of the physics work,
-# not a reason to loosen the bound.
-STRAINED = pytest.mark.xfail(strict=True, reason="the default cloth preset exceeds 50 % edge "
+# The fast preset (the soft 5e4 Pa sheet at 20 ms) stretches edges beyond 50 % under ordinary
+# pick-and-place, away from the grasped particle too on the multi-stage folds
+# (docs/results/physics-cloth.json): these false-positive checks fail there, which is why it
+# is not the default, not a reason to loosen the bound.
+STRAINED = pytest.mark.xfail(strict=True, reason="the fast cloth preset exceeds 50 % edge "
                                                  "strain (docs/RESULTS.md, physics presets)")
 
 
 @pytest.mark.parametrize("goal, n, physics", [
     ("diagonal", 8, "default"), ("side", 8, "default"), ("diagonal", 12, "default"),
-    ("side", 12, "default"), pytest.param("reflective", 12, "default", marks=STRAINED),
-    pytest.param("underneath", 12, "default", marks=STRAINED),
-    # the accurate preset at 12 x 12 (docs/RESULTS.md); its multi-layer folds' side stage
-    # peaks near the 50 % bound (0.51 was seen with the grid's coordinates rounded otherwise)
-    ("diagonal", 12, "accurate"), ("side", 12, "accurate"), ("reflective", 12, "accurate"),
-    ("underneath", 12, "accurate"),
-    # and the paper protocol's cloth runs it at 20 x 20 (docs/results/physics-cloth-20.json)
-    ("diagonal", 20, "accurate"), ("side", 20, "accurate")])
+    ("side", 12, "default"), ("reflective", 12, "default"), ("underneath", 12, "default"),
+    # the paper protocol's cloth is 20 x 20
+    ("diagonal", 20, "default"), ("side", 20, "default"),
+    ("diagonal", 12, "accurate"), ("side", 12, "accurate"),
+    ("diagonal", 12, "fast"), ("side", 12, "fast"),
+    pytest.param("reflective", 12, "fast", marks=STRAINED),
+    pytest.param("underneath", 12, "fast", marks=STRAINED)])
 def test_scripted_cloth_folds_are_not_flagged(goal, n, physics):
     """False positives: the scripted folds of an n x n cloth under a physics preset."""
     from planners.pick_place import PickPlaceSettings, ScriptedPlanner, make_problem, run_problem
@@ -160,7 +159,7 @@ def test_rope_actions_are_not_flagged():
 def grasped_cloth(strain_at_grasps: bool, max_strain: float = 1e-3):
     """A 6 x 6 cloth whose particle 14 an active picker equality holds, and the scene with
     the given strain bounds."""
-    base = make_cloth(ClothSceneConfig(n=6))
+    base = make_cloth(ClothSceneConfig.preset("fast", n=6))     # the soft sheet: strains
     bounds = replace(base.scene.stability, max_strain=max_strain,
                      strain_at_grasps=strain_at_grasps)
     scene = Scene(base.model, stability=bounds)
@@ -201,7 +200,7 @@ def test_grasp_verdict_is_the_same_on_every_route(strain_at_grasps, c_kernels):
     """With an active grasp pulling particle 14 to the picker, the open-loop Batch rollout
     and the feedback loops (Batch, C) flag the same step for the same reason."""
     scene, x0, _ = grasped_cloth(strain_at_grasps, max_strain=0.05)
-    picker = make_cloth(ClothSceneConfig(n=6)).picker
+    picker = make_cloth(ClothSceneConfig.preset("fast", n=6)).picker
     rows = picker.encode(np.array([[14]]), np.array([[[0.1, 0.0, 0.1]]]))[0]
     u = np.ascontiguousarray(rows[None, :, :scene.nu])     # the picker's controls, no grasp
     T = u.shape[1]                                         # switching: the grasp stays on

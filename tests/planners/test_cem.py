@@ -137,5 +137,9 @@ def test_cloth_iteration_is_reproducible():
             for _ in range(2)]
     assert runs[0].cost == runs[1].cost
     assert np.array_equal(runs[0].displacements, runs[1].displacements)
-    replay = task.cost(task.execute(runs[0].particles, runs[0].displacements).state)
-    assert replay == runs[0].cost
+    # replaying the plan reaches the batched rollout's final state bit for bit; the cost's
+    # reductions differ in order between the two paths (last-bit differences)
+    final = task.execute(runs[0].particles, runs[0].displacements).state
+    batched = task.rollout(runs[0].particles[None], runs[0].displacements[None])
+    assert np.array_equal(batched.final_states[0], final)
+    assert task.cost(final) == pytest.approx(runs[0].cost, rel=1e-12, abs=0)

@@ -7,19 +7,19 @@ from planners.bench.physics import bench_physics
 
 
 def test_rows_name_their_physics_and_count_the_actions():
-    out = bench_physics("cloth", [4], ["preset:accurate", "E5e4 dt.02 CG30"], actions=8,
+    out = bench_physics("cloth", [4], ["preset:fast", "preset:default"], actions=8,
                         threads=1, seed=0, scripted=False)
-    accurate, plain = out["rows"]
-    assert accurate["fields"] == PHYSICS_PRESETS["accurate"]
+    fast, plain = out["rows"]
+    assert fast["fields"] == PHYSICS_PRESETS["fast"]
     assert plain["fields"] == {}                     # the class defaults
     for row in out["rows"]:
         assert row["actions"] == 8 and 0 <= row["unstable_per_1000_actions"] <= 1000
         assert sum(row["reasons"].values()) == row["unstable_per_1000_actions"] * 8 / 1000
         assert 0 <= row["strain_p50"] <= row["strain_p90"] <= row["strain_max"]
-    # about the same seconds per action at a quarter of the step (the picker's phases round
-    # up to whole steps): close to four times the steps
-    ratio = accurate["steps_per_action"] / plain["steps_per_action"]
-    assert ratio == pytest.approx(0.02 / PHYSICS_PRESETS["accurate"]["timestep"], rel=0.1)
+    # the same seconds per action at a quarter of the step (the picker's phases round to
+    # whole steps): close to four times the steps
+    ratio = plain["steps_per_action"] / fast["steps_per_action"]
+    assert ratio == pytest.approx(PHYSICS_PRESETS["fast"]["timestep"] / 0.005, rel=0.1)
 
 
 def test_unknown_setting_is_named():

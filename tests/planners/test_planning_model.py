@@ -20,7 +20,7 @@ from planners.pick_place import (
 def cloths(n=6):
     picker = PickerConfig(bound=(0.1,) * 3)
     return (make_cloth(ClothSceneConfig.preset("default", n=n), picker),
-            make_cloth(ClothSceneConfig.preset("accurate", n=n), picker))
+            make_cloth(ClothSceneConfig.preset("fast", n=n), picker))
 
 
 def test_evaluate_runs_on_the_planning_scene_and_execute_on_the_scene():
@@ -51,7 +51,7 @@ def test_planning_scene_must_model_the_same_object():
 
 def test_reported_costs_are_the_executed_plans_on_the_scene():
     s = replace(PickPlaceSettings.preset("cloth", "diagonal", quick=True),
-                planning_physics="accurate")
+                planning_physics="fast")
     problem = make_problem(s)
     assert problem.planning_scene is not None
     res = run_problem(problem, make_planner("simple", s, seed=0), method="simple")

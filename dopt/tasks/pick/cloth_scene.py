@@ -28,15 +28,15 @@ from dopt.validation import check_config
 
 FLEX = "cloth"
 #: how each grid square is split (``ClothSceneConfig.triangulation``)
-TRIANGULATIONS = ("x=y", "x=-y", "alternating")
+TRIANGULATIONS = ("mujoco", "anti", "alternating")
 
 #: physics presets: name -> the fields that differ from ClothSceneConfig's defaults (which are
 #: "default"), chosen by ``python -m planners.bench cloth`` (docs/DESIGN-NOTES.md, "Cloth and
 #: rope physics presets")
 PHYSICS_PRESETS: dict[str, dict] = {
-    "fast": {"bending": False},
+    "fast": {"young": 5e4, "timestep": 0.02, "bending": False, "triangulation": "mujoco"},
     "default": {},
-    "accurate": {"young": 2e5, "timestep": 0.005},
+    "accurate": {"timestep": 0.0025},
 }
 
 
@@ -58,10 +58,11 @@ class ClothSceneConfig:
             while the other half is dragged over it; with the notes' pyramidal cone and
             friction 0.8 at dt 0.02 the whole cloth creeps by centimetres during a fold.
         selfcollide: self-collision (needed when layer order matters: multi-layer folds).
-        triangulation: the diagonal that splits each grid square into two triangles: "x=y"
-            (MuJoCo's own grid), "x=-y", or "alternating" (the two in a checkerboard). Linear
-            triangles lock: a crease that crosses their diagonals must stretch them, so a
-            fold along the other diagonal needs a soft membrane (``TRIANGULATIONS``).
+        triangulation: how each grid square is split into two triangles, with the names of
+            ``deformables.goals.grid_faces``: "mujoco" along (ix, iy)-(ix+1, iy+1) (MuJoCo's
+            own grid), "anti" along the other diagonal, "alternating" the two in a
+            checkerboard. Linear triangles lock: a crease across their diagonals must stretch
+            them, so on "mujoco" a stiff sheet folds badly along x = -y (the diagonal goal).
         timestep: dt (s); plan and evaluate with the same dt (folds depend on it).
         iterations, tolerance: CG solver settings (20-30 iterations; 10 breaks fold symmetry).
         settle: seconds the flat cloth settles before the initial state.
@@ -74,7 +75,7 @@ class ClothSceneConfig:
     side: float = 0.3
     mass: float = 0.1
     radius: float | None = None
-    young: float = 5e4
+    young: float = 5e5
     poisson: float = 0.2
     thickness: float = 1e-3
     damping: float = 1e-3
@@ -83,8 +84,8 @@ class ClothSceneConfig:
     cone: str = "elliptic"
     impratio: float = 10.0
     selfcollide: bool = False
-    triangulation: str = "x=y"
-    timestep: float = 0.02
+    triangulation: str = "alternating"
+    timestep: float = 0.005
     solver: str = "CG"
     iterations: int = 30
     tolerance: float = 1e-6
@@ -150,14 +151,15 @@ def _grid_points(n: int, spacing: float) -> str:
 
 def _grid_triangles(n: int, triangulation: str) -> str:
     """The flexcomp ``element`` list: two counter-clockwise triangles per grid square, split
-    along the diagonal ``triangulation`` names (``TRIANGULATIONS``); "x=y" is MuJoCo's grid."""
+    as ``triangulation`` names (``TRIANGULATIONS``; the faces of
+    ``deformables.goals.grid_faces``, which dopt does not import; tested equal)."""
     ix, iy = (a.ravel() for a in np.meshgrid(np.arange(n - 1), np.arange(n - 1), indexing="ij"))
     a, b, c, d = ix * n + iy, (ix + 1) * n + iy, ix * n + iy + 1, (ix + 1) * n + iy + 1
-    along_xy = np.stack([a, b, d, a, d, c], axis=1)         # split a-d
+    along_main = np.stack([a, b, d, a, d, c], axis=1)       # split a-d
     along_anti = np.stack([a, b, c, b, d, c], axis=1)       # split b-c
-    use_xy = {"x=y": np.ones_like(a, bool), "x=-y": np.zeros_like(a, bool),
-              "alternating": (ix + iy) % 2 == 0}[triangulation]
-    return " ".join(map(str, np.where(use_xy[:, None], along_xy, along_anti).ravel()))
+    main = {"mujoco": np.ones_like(a, bool), "anti": np.zeros_like(a, bool),
+            "alternating": (ix + iy) % 2 == 0}[triangulation]
+    return " ".join(map(str, np.where(main[:, None], along_main, along_anti).ravel()))
 
 
 def make_cloth(config: ClothSceneConfig = ClothSceneConfig(),

@@ -99,7 +99,7 @@ CORNER = N * N - 1          # at (+side/2, +side/2)
 def _task(workspace=None, max_stretch=None):
     if workspace is not None and max_stretch is not None:
         workspace = ActionConstraint(workspace.low, workspace.high, max_stretch)
-    scene = make_cloth(ClothSceneConfig(n=N),
+    scene = make_cloth(ClothSceneConfig.preset("fast", n=N),     # a sheet that stretches
                        PickerConfig(bound=(0.3,) * 3, workspace=workspace))
     return PickPlaceTask(scene, scene.positions(scene.initial_state),
                          rollout=RolloutService(scene.scene, RolloutConfig(threads=1)))
@@ -197,7 +197,8 @@ def test_a_trial_counts_the_rollouts_beyond_the_stretch_limit():
     apart from the unstable ones; without a limit none is."""
     from planners.pick_place import solve
 
-    s = PickPlaceSettings.preset("cloth", "diagonal", quick=True)
+    s = replace(PickPlaceSettings.preset("cloth", "diagonal", quick=True),
+                physics="fast")                                  # a sheet that stretches
     assert solve(s, "simple", seed=0).n_infeasible_rollouts == 0
     tight = solve(replace(s, max_stretch=0.2), "simple", seed=0)
     assert 0 < tight.n_infeasible_rollouts
