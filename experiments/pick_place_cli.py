@@ -180,7 +180,7 @@ def _main(task: str, script: str, doc: str, help_: dict, argv=None) -> int:
     results, res = _run(trials, settings.cem.iterations * len(problem.stages), out, args.fresh)
     failed = res.failed
     summary = {"experiment": "fig7", "task": task, "goal": args.goal, "protocol": args.preset,
-               "settings": settings.to_dict(),
+               "settings": settings.to_dict(), "physics": settings.resolved_physics(),
                "methods": summarize(results, args.methods, problem.metric_names),
                "failed": failed, "trial_commits": res.commits,
                "wall_s": time.perf_counter() - start}

@@ -20,6 +20,8 @@ ROOT = Path(__file__).resolve().parents[2]
 def _check_summary(out: Path, goal: str, extra=()):
     summary = json.loads((out / "summary.json").read_text())
     assert summary["goal"] == goal
+    # the physics the preset name meant when it ran: the scene config and the picker
+    assert summary["physics"]["scene"]["timestep"] > 0 and "snap" in summary["physics"]["picker"]
     assert set(summary["methods"]) == {"simple", "original", "random", "scripted"}
     for name, entry in summary["methods"].items():
         assert all(0 < c < 1.0 for c in entry["final_costs"])      # metres, every trial

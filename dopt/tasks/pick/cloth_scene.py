@@ -1,8 +1,10 @@
-"""A square cloth (MuJoCo 2D ``flexcomp`` grid) on a floor, with the picker.
+"""A square cloth (MuJoCo 2D ``flexcomp`` on a particle grid) on a floor, with the picker.
 
-Settings measured stable and fast in MuJoCo 4.0 (notes/feasibility-cloth-rope-cem.md): continuum
-elasticity ``elastic2d="both"`` with the discrete integrator, the CG solver (2-3x faster than
-Newton here), dt 0.02 s, Young's modulus 5e4 Pa at 1 mm thickness (3 % strain in a fold).
+Continuum elasticity ``elastic2d="both"`` under the discrete integrator and the CG solver.
+The default sheet (Young's modulus 5e5 Pa at 1 mm, dt 5 ms, an alternating triangulation) is
+the cheapest setting of ``python -m planners.bench cloth`` whose random pick-and-place actions
+and scripted folds the stability verdict leaves unflagged (docs/DESIGN-NOTES.md, "Cloth and
+rope physics").
 
 Vertex i = ix * n + iy (y fastest) sits at x = -side/2 + ix * spacing, y = -side/2 + iy * spacing,
 the numbering of ``deformables.goals``.
@@ -56,7 +58,7 @@ class ClothSceneConfig:
         cone, impratio: friction cone and the frictional-to-normal impedance ratio. An elliptic
             cone with impratio 10 and friction 1.5 keep the resting half of the cloth in place
             while the other half is dragged over it; with the notes' pyramidal cone and
-            friction 0.8 at dt 0.02 the whole cloth creeps by centimetres during a fold.
+            friction 0.8 the whole cloth creeps by centimetres during a fold.
         selfcollide: self-collision (needed when layer order matters: multi-layer folds).
         triangulation: how each grid square is split into two triangles, with the names of
             ``deformables.goals.grid_faces``: "mujoco" along (ix, iy)-(ix+1, iy+1) (MuJoCo's
@@ -66,9 +68,6 @@ class ClothSceneConfig:
         timestep: dt (s); plan and evaluate with the same dt (folds depend on it).
         iterations, tolerance: CG solver settings (20-30 iterations; 10 breaks fold symmetry).
         settle: seconds the flat cloth settles before the initial state.
-
-    Fold quality at dt 0.02 (12x12, two bounded drags of the far corner): 14 mm mean particle
-    distance to the ideal diagonal fold, 8 mm at 16x16.
     """
 
     n: int = 16
