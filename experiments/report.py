@@ -344,6 +344,22 @@ def fig7_section(results: list[Result], page: Path) -> list[str]:
     return lines
 
 
+def _fig7_physics(d: dict) -> str:
+    """The preset name and, where the summary records it, what it meant (a preset's fields
+    change between commits: a summary without them names its commit)."""
+    name = (d.get("settings") or {}).get("physics", "default")
+    scene = (d.get("physics") or {}).get("scene")
+    if not scene:
+        commit = str((d.get("provenance") or {}).get("git_commit") or "?")[:8]
+        return f"preset {name} as defined at {commit}"
+    what = [f"dt {scene['timestep'] * 1000:g} ms"]
+    if "young" in scene:
+        what.insert(0, f"{scene['young']:.2g} Pa")
+    if "triangulation" in scene:
+        what.append(f"{scene['triangulation']} triangles")
+    return f"preset {name} ({', '.join(what)})"
+
+
 def fig7_detail(r: Result, page: Path) -> list[str]:
     d = r.data
     s = d.get("settings") or {}
@@ -352,7 +368,7 @@ def fig7_detail(r: Result, page: Path) -> list[str]:
     if s:
         lines += [f"Settings: {s.get('task')} {s.get('goal')}, n {s.get('n')}, bound "
                   f"{s.get('bound')} m, self-collision {'on' if s.get('selfcollide') else 'off'}, "
-                  f"physics preset {s.get('physics', 'default')};"
+                  f"physics {_fig7_physics(d)};"
                   f" CEM population {cem.get('population')}, elites {cem.get('elites')}, "
                   f"{cem.get('iterations')} iterations per stage, horizon {cem.get('horizon')}."
                   + (f" Wall time {num(d.get('wall_s'), 0)} s." if "wall_s" in d else ""), ""]

@@ -481,3 +481,14 @@ def test_physics_sweeps_render_by_size_with_flagged_folds_marked(site):
                     for n in (12, 20))
     assert small < large
     assert "| 16.0 |" in md[small:large] and "| 24.0 ! |" in md[large:]
+
+
+def test_fig7_settings_say_what_the_physics_preset_meant():
+    """A summary that records its resolved scene names the sheet; one without names the
+    commit at which its preset name was defined."""
+    scene = {"young": 5e5, "timestep": 0.005, "triangulation": "alternating"}
+    with_scene = {"settings": {"physics": "default"}, "physics": {"scene": scene}}
+    assert report._fig7_physics(with_scene) == \
+        "preset default (5e+05 Pa, dt 5 ms, alternating triangles)"
+    old = {"settings": {"physics": "default"}, "provenance": {"git_commit": "b22f11ba0123"}}
+    assert report._fig7_physics(old) == "preset default as defined at b22f11ba"
