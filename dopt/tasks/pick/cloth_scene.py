@@ -34,7 +34,7 @@ TRIANGULATIONS = ("mujoco", "anti", "alternating")
 
 #: physics presets: name -> the fields that differ from ClothSceneConfig's defaults (which are
 #: "default"), chosen by ``python -m planners.bench cloth`` (docs/DESIGN-NOTES.md, "Cloth and
-#: rope physics presets")
+#: rope physics")
 PHYSICS_PRESETS: dict[str, dict] = {
     "fast": {"young": 5e4, "timestep": 0.02, "bending": False, "triangulation": "mujoco"},
     "default": {},

@@ -33,7 +33,7 @@ FLEX = "rope"
 
 #: physics presets: name -> the fields that differ from RopeSceneConfig's defaults (which are
 #: "default"), chosen by ``python -m planners.bench rope`` (docs/DESIGN-NOTES.md, "Cloth and
-#: rope physics presets")
+#: rope physics")
 PHYSICS_PRESETS: dict[str, dict] = {
     "fast": {"timestep": 0.02},
     "default": {},
