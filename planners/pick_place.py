@@ -172,12 +172,21 @@ class PickPlaceSettings:
         return RopeSceneConfig.preset(physics, **{"n": self.n, "length": self.length,
                                                   **(overrides or {})})
 
+    def planning_scene_config(self, overrides: dict | None = None
+                              ) -> ClothSceneConfig | RopeSceneConfig | None:
+        """``scene_config`` of ``planning_physics``; None where CEM plans on the scene itself
+        (no planning preset, or the scene's own)."""
+        if self.planning_physics in (None, self.physics):
+            return None
+        return self.scene_config(self.planning_physics, overrides)
+
     def resolved_physics(self) -> dict:
         """JSON-able scene and picker configs these settings run (what a preset name means
         today): a trial's identity, so that a changed preset or picker is not reused."""
         out = {"scene": asdict(self.scene_config()), "picker": asdict(self.picker())}
-        if self.planning_physics not in (None, self.physics):
-            out["planning_scene"] = asdict(self.scene_config(self.planning_physics))
+        planning = self.planning_scene_config()
+        if planning is not None:
+            out["planning_scene"] = asdict(planning)
         return out
 
     def to_dict(self) -> dict:
@@ -325,8 +334,8 @@ def _cloth_problem(s: PickPlaceSettings, overrides: dict) -> Problem:
     from deformables.goals import goal_sequence
 
     scene = make_cloth(s.scene_config(overrides=overrides), s.picker())
-    planning = (make_cloth(s.scene_config(s.planning_physics, overrides), s.picker())
-                if s.planning_physics not in (None, s.physics) else None)
+    planning_config = s.planning_scene_config(overrides)
+    planning = None if planning_config is None else make_cloth(planning_config, s.picker())
     lift = np.array([0.0, 0.0, scene.radius])          # the cloth rests at z = radius
     stages = []
     for goal in goal_sequence(f"cloth_{s.goal}", n=s.n, side=s.side):
@@ -343,8 +352,7 @@ def _rope_problem(s: PickPlaceSettings, seed: int, overrides: dict) -> Problem:
     from deformables.rope import rope_key_particles
 
     config = s.scene_config(overrides=overrides)
-    planning_config = (s.scene_config(s.planning_physics, overrides)
-                       if s.planning_physics not in (None, s.physics) else None)
+    planning_config = s.planning_scene_config(overrides)
     picker = s.picker()
     planning = None
     if s.goal == "straighten":
