@@ -107,7 +107,8 @@ static void advance(const mjModel* m, mjData* d, int skip) {
 /* why a step failed (dopt/kernels.py names them): MuJoCo warned (read its counters), or the
  * state it left has a bad qpos, a bad qvel (|x| > mjMAXVAL or NaN), another non-finite entry */
 enum { FAULT_NONE = -1, FAULT_WARNING = 0, FAULT_QPOS = 1, FAULT_QVEL = 2, FAULT_NONFINITE = 3,
-       FAULT_SPEED = 4, FAULT_PENETRATION = 5, FAULT_STRAIN = 6, FAULT_CAPPED = 7 };
+       FAULT_SPEED = 4, FAULT_PENETRATION = 5, FAULT_STRAIN = 6, FAULT_CAPPED = 7,
+       FAULT_ENERGY = 8 };
 #define MAXVAL 1e10   /* mjMAXVAL of mujoco/mjtype.h: the bound of mj_checkPos/Vel/Acc */
 
 static int bad_value(mjtNum x) { return x != x || x > MAXVAL || x < -MAXVAL; }
@@ -283,7 +284,7 @@ int dopt_fd(const mjModel* m, mjData* d, const layout_t* L, const warnings_t* wa
 }
 
 /* The stability bounds of one model (dopt.stability.Monitor fills it): the same expressions,
- * in the same order, as Monitor.speed / penetration / strain / capped. */
+ * in the same order, as Monitor.speed / penetration / strain / capped / free / energy_gain. */
 typedef struct {
   const int* groups; int ngroup;        /* (ngroup, 3) qvel indices of linear DoFs, -1 pad */
   const mjtNum* planes; int nplane;     /* (nplane, 4): unit normal, offset n.p */
@@ -293,6 +294,10 @@ typedef struct {
   mjtNum max_speed, max_penetration, max_strain;
   const int* edge_grasps; int grasp_width;  /* (nedge, grasp_width) equality ids at each
                                                edge's vertices, -1 pad: skipped while active */
+  int energy_judged;                    /* 0: the energy bound is not set */
+  mjtNum max_energy, energy_mass;       /* J/kg; kg of the judged bodies */
+  const int* window_eqs; int nwindow;   /* equalities whose activity ends a free window */
+  const int* working_act; int nworking; /* actuators whose force ends a free window */
 } bounds_t;
 
 /* one MjData's fields, read in place: flexvert_xpos (nvert, 3), flexedge_length (nedge),
@@ -303,11 +308,15 @@ typedef struct {
   const int* niter;
   int nisland;
   const unsigned char* eq_active;      /* (neq,) mjtByte */
+  const mjtNum* energy;                 /* (2,) potential, kinetic of the step's start state */
+  const mjtNum* actuator_force;         /* (nu,) */
 } probe_t;
 
-/* running extremes of one rollout: max speed, penetration, strain, capped steps; and the
- * violated bound's value and index */
-enum { STAT_SPEED, STAT_PENETRATION, STAT_STRAIN, STAT_CAPPED, STAT_VALUE, STAT_INDEX, NSTAT };
+/* running extremes of one rollout: max speed, penetration, strain, capped steps, energy gain;
+ * the violated bound's value and index; the energy window in progress (its lowest energy,
+ * whether the last step was free) */
+enum { STAT_SPEED, STAT_PENETRATION, STAT_STRAIN, STAT_CAPPED, STAT_ENERGY, STAT_VALUE,
+       STAT_INDEX, STAT_LOW, STAT_FREE, NSTAT };
 
 /* Judge the step just taken (qvel of the new state, positions of the step's start state):
  * FAULT_NONE or the first broken bound, with its value and index in stats. */
@@ -350,6 +359,24 @@ static int judge(const bounds_t* B, const probe_t* p, const mjtNum* qvel, mjtNum
   for (int i = 0; i < p->nisland; i++) {
     if (p->niter[i] >= B->iteration_cap) capped = 1;
   }
+  mjtNum gain = 0;
+  if (B->energy_judged) {
+    const mjtNum e = p->energy[0] + p->energy[1];
+    const int was_free = stats[STAT_FREE] != 0;
+    if (was_free) {
+      gain = (e - stats[STAT_LOW]) / B->energy_mass;
+      if (e < stats[STAT_LOW]) stats[STAT_LOW] = e;
+    }
+    int free = 1;
+    for (int i = 0; i < B->nwindow; i++) {
+      if (p->eq_active[B->window_eqs[i]]) free = 0;
+    }
+    for (int i = 0; i < B->nworking; i++) {
+      if (!(p->actuator_force[B->working_act[i]] == 0)) free = 0;
+    }
+    if (free && !was_free) stats[STAT_LOW] = e;
+    stats[STAT_FREE] = free;
+  }
   if (B->ngroup == 0) speed = 0;
   if (B->nplane == 0 || B->nvert == 0) pen = 0;
   if (strain == -INFINITY) strain = 0;
@@ -357,6 +384,7 @@ static int judge(const bounds_t* B, const probe_t* p, const mjtNum* qvel, mjtNum
   if (speed > stats[STAT_SPEED]) stats[STAT_SPEED] = speed;
   if (pen > stats[STAT_PENETRATION]) stats[STAT_PENETRATION] = pen;
   if (strain > stats[STAT_STRAIN]) stats[STAT_STRAIN] = strain;
+  if (gain > stats[STAT_ENERGY]) stats[STAT_ENERGY] = gain;
   if (speed > B->max_speed) {
     stats[STAT_VALUE] = speed; stats[STAT_INDEX] = si; return FAULT_SPEED;
   }
@@ -368,6 +396,9 @@ static int judge(const bounds_t* B, const probe_t* p, const mjtNum* qvel, mjtNum
   }
   if (B->max_capped >= 0 && stats[STAT_CAPPED] > B->max_capped) {
     stats[STAT_VALUE] = stats[STAT_CAPPED]; stats[STAT_INDEX] = 0; return FAULT_CAPPED;
+  }
+  if (B->energy_judged && gain > B->max_energy) {
+    stats[STAT_VALUE] = gain; stats[STAT_INDEX] = 0; return FAULT_ENERGY;
   }
   return FAULT_NONE;
 }

@@ -78,7 +78,11 @@ class Bounds(ctypes.Structure):
                 ("iteration_cap", ctypes.c_int), ("max_capped", ctypes.c_int),
                 ("max_speed", ctypes.c_double), ("max_penetration", ctypes.c_double),
                 ("max_strain", ctypes.c_double),
-                ("edge_grasps", ctypes.c_void_p), ("grasp_width", ctypes.c_int)]
+                ("edge_grasps", ctypes.c_void_p), ("grasp_width", ctypes.c_int),
+                ("energy_judged", ctypes.c_int), ("max_energy", ctypes.c_double),
+                ("energy_mass", ctypes.c_double), ("window_eqs", ctypes.c_void_p),
+                ("nwindow", ctypes.c_int), ("working_act", ctypes.c_void_p),
+                ("nworking", ctypes.c_int)]
 
     @classmethod
     def of(cls, monitor: Monitor) -> Bounds:
@@ -86,14 +90,18 @@ class Bounds(ctypes.Structure):
                 np.ascontiguousarray(monitor.planes, dtype=np.float64),
                 np.ascontiguousarray(monitor.radius, dtype=np.float64),
                 np.ascontiguousarray(monitor.length0, dtype=np.float64),
-                np.ascontiguousarray(monitor.edge_grasps, dtype=np.int32)]
+                np.ascontiguousarray(monitor.edge_grasps, dtype=np.int32),
+                np.ascontiguousarray(monitor.window_eqs, dtype=np.int32),
+                np.ascontiguousarray(monitor.working_actuators, dtype=np.int32)]
         b = monitor.bounds
         out = cls(keep[0].ctypes.data, len(keep[0]), keep[1].ctypes.data, len(keep[1]),
                   keep[2].ctypes.data, len(keep[2]), keep[3].ctypes.data, len(keep[3]),
                   monitor.iteration_cap,
                   -1 if b.max_capped_steps is None else b.max_capped_steps,
                   b.max_speed, b.max_penetration, b.max_strain, keep[4].ctypes.data,
-                  keep[4].shape[1])
+                  keep[4].shape[1], int(monitor.energy_judged),
+                  b.max_energy_gain if monitor.energy_judged else 0.0, monitor.energy_mass,
+                  keep[5].ctypes.data, len(keep[5]), keep[6].ctypes.data, len(keep[6]))
         out._keep = keep
         return out
 
@@ -103,7 +111,8 @@ class Probe(ctypes.Structure):
 
     _fields_ = [("vert_xpos", ctypes.c_void_p), ("edge_length", ctypes.c_void_p),
                 ("niter", ctypes.c_void_p), ("nisland", ctypes.c_int),
-                ("eq_active", ctypes.c_void_p)]
+                ("eq_active", ctypes.c_void_p), ("energy", ctypes.c_void_p),
+                ("actuator_force", ctypes.c_void_p)]
 
     @classmethod
     def of(cls, data: mujoco.MjData) -> Probe:
@@ -116,12 +125,17 @@ class Probe(ctypes.Structure):
         eq = data.eq_active
         if eq.size and (eq.itemsize != 1 or not eq.flags.c_contiguous):
             raise RuntimeError("unexpected layout of mjData.eq_active")
+        for f in (data.energy, data.actuator_force):
+            if f.size and not f.flags.c_contiguous:
+                raise RuntimeError("unexpected layout of mjData.energy / actuator_force")
         return cls(data.flexvert_xpos.ctypes.data, data.flexedge_length.ctypes.data,
-                   niter.ctypes.data, len(niter), eq.ctypes.data)
+                   niter.ctypes.data, len(niter), eq.ctypes.data, data.energy.ctypes.data,
+                   data.actuator_force.ctypes.data)
 
 
 #: the columns of the C file's per-rollout stats (NSTAT)
-STATS = ("speed", "penetration", "strain", "capped", "value", "index")
+STATS = ("speed", "penetration", "strain", "capped", "energy", "value", "index", "low",
+         "free")
 
 
 def _library_path() -> str | None:
@@ -310,7 +324,7 @@ def _warnings(d: mujoco.MjData) -> list[str]:
 # the FAULT_* codes of the C file, past FAULT_WARNING: the warning MuJoCo's next step would give,
 # then the stability bounds (dopt.stability.BOUNDS, in order)
 _FAULTS = {1: "mjWARN_BADQPOS", 2: "mjWARN_BADQVEL", 3: "non-finite state"}
-FAULT_BOUNDS = {4: "speed", 5: "penetration", 6: "strain", 7: "capped_steps"}
+FAULT_BOUNDS = {4: "speed", 5: "penetration", 6: "strain", 7: "capped_steps", 8: "energy"}
 
 
 def _reasons(d: mujoco.MjData, fault: int) -> list[str]:

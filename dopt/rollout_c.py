@@ -49,7 +49,7 @@ class CRoute(BatchRoute):
             applied[p, t + 1:] = applied[p, t]
         verdict = Stability(step >= 0, step, tuple(reason), stats[:, col["speed"]].copy(),
                             stats[:, col["penetration"]].copy(), stats[:, col["strain"]].copy(),
-                            stats[:, col["capped"]].astype(int))
+                            stats[:, col["capped"]].astype(int), stats[:, col["energy"]].copy())
         return out, applied, verdict
 
     def derivatives(self, x: np.ndarray, C: np.ndarray, eps: float,

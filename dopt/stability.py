@@ -14,11 +14,19 @@ through the floor and be thrown a metre up at 22 m/s with every state finite and
   none of whose vertices an active equality holds (a picker's grasp of one particle is a point
   load whose local stretch belongs to the grasp model; ``strain_at_grasps`` judges them too);
 - capped steps: steps whose constraint solver stopped at its iteration cap (counted; a bound
-  only if ``max_capped_steps`` is set: CG at 30 iterations caps on cloth often and harmlessly).
+  only if ``max_capped_steps`` is set: CG at 30 iterations caps on cloth often and harmlessly);
+- energy gain (only if ``max_energy_gain`` is set): within a *free window*, a run of steps in
+  which nothing does work on the judged system (no equality that attaches an unjudged body,
+  such as a picker's grasp, is active, and no actuator outside the unjudged bodies exerts a
+  force), the model's mechanical energy (MuJoCo's potential + kinetic, ``mjENBL_ENERGY``) can
+  only fall; its rise above the lowest value since the window began, per kg of judged mass
+  (J/kg), is judged. Soft contacts store and give back a little (a settling cloth: up to
+  0.02 J/kg, docs/DESIGN-NOTES.md); a cloth thrown 1 m up gains about 10 J/kg.
 
 MuJoCo's own warnings and non-finite states stay unstable as before. ``Monitor`` evaluates the
 bounds on the fields MuJoCo leaves in MjData after step t: qvel of state t+1, flex vertex
-positions and edge lengths of state t (computed during step t). The C loops of
+positions, edge lengths and energy of state t (computed during step t), eq_active and
+actuator forces applied in step t. The C loops of
 ``dopt/_rollout_kernels.c`` evaluate the same expressions in the same order, so both rollout
 routes give the same verdict (tested).
 
@@ -36,7 +44,7 @@ import numpy as np
 from dopt.validation import check_config
 
 #: the bound names in the order they are checked within one step
-BOUNDS = ("speed", "penetration", "strain", "capped_steps")
+BOUNDS = ("speed", "penetration", "strain", "capped_steps", "energy")
 
 
 @dataclass(frozen=True)
@@ -53,6 +61,10 @@ class StabilityBounds:
             the pick scenes' massless picker, which snaps onto a particle at up to 15 m/s.
         strain_at_grasps: judge the strain of edges at a vertex an active equality holds (a
             grasped particle) too; by default they are left out.
+        max_energy_gain: J per kg of judged mass: the largest rise of the mechanical energy
+            within a free window (module docstring). None: not judged. Setting it turns on
+            MuJoCo's energy computation (``mjENBL_ENERGY``) in the scene's model, which reads
+            the state and changes no dynamics.
     """
 
     max_speed: float = 5.0
@@ -61,9 +73,11 @@ class StabilityBounds:
     max_capped_steps: int | None = None
     unjudged_bodies: tuple[str, ...] = ()
     strain_at_grasps: bool = False
+    max_energy_gain: float | None = None
 
     def __post_init__(self):
-        check_config(self, positive=("max_speed", "max_penetration", "max_strain"),
+        check_config(self, positive=("max_speed", "max_penetration", "max_strain",
+                                     "max_energy_gain"),
                      minimum={"max_capped_steps": 0})
 
 
@@ -75,7 +89,9 @@ class Stability:
         unstable: (P,) bool; step: (P,) int, the step that first broke a bound or warned
             (-1 where stable); reason: P strings naming it ("" where stable);
         max_speed, max_penetration, max_strain: (P,) the largest values seen up to the end of
-            the rollout (or the step it was stopped at); capped_steps: (P,) int.
+            the rollout (or the step it was stopped at); capped_steps: (P,) int;
+        max_energy_gain: (P,) J/kg, the largest energy gain within a free window (0 where the
+            bound is not set).
     """
 
     unstable: np.ndarray
@@ -85,6 +101,7 @@ class Stability:
     max_penetration: np.ndarray
     max_strain: np.ndarray
     capped_steps: np.ndarray
+    max_energy_gain: np.ndarray
 
     @property
     def n_unstable(self) -> int:
@@ -108,15 +125,27 @@ class Monitor:
     offset n.p of each static plane geom; radius (V,) flex vertex radii; length0 (E,) rest
     lengths of the flex edges; edge_grasps (E, w) int32 the equality constraints attaching a
     body to either vertex of each edge, -1 padded (w = 0: none, or ``strain_at_grasps``);
-    iteration_cap: the solver's iteration limit.
+    iteration_cap: the solver's iteration limit; energy_judged: whether the energy bound is
+    set; window_eqs (nw,) int32 the equalities that attach an unjudged body (active: no free
+    window); working_actuators (na,) int32 the actuators that can do work on the judged system
+    (all but those on the joints of unjudged bodies); energy_mass: kg of the judged bodies.
     """
 
     def __init__(self, model: mujoco.MjModel, bounds: StabilityBounds = StabilityBounds()):
         if not isinstance(bounds, StabilityBounds):
             raise TypeError(f"bounds must be a StabilityBounds, got {type(bounds).__name__}")
         self.model, self.bounds = model, bounds
-        self.groups, self.group_body = _linear_groups(model, _body_ids(model,
-                                                                        bounds.unjudged_bodies))
+        unjudged = _body_ids(model, bounds.unjudged_bodies)
+        self.groups, self.group_body = _linear_groups(model, unjudged)
+        self.energy_judged = bounds.max_energy_gain is not None
+        if self.energy_judged:
+            model.opt.enableflags |= int(mujoco.mjtEnableBit.mjENBL_ENERGY)
+        self.window_eqs = _equalities_attaching(model, unjudged)
+        self.working_actuators = _actuators_outside(model, unjudged)
+        self.energy_mass = float(sum(model.body_mass[b] for b in range(1, model.nbody)
+                                     if b not in unjudged))
+        if self.energy_judged and not self.energy_mass > 0:
+            raise ValueError("StabilityBounds.max_energy_gain: the model has no judged mass")
         self.planes = _static_planes(model)
         self.radius = np.repeat(model.flex_radius, model.flex_vertnum).astype(float)
         self.length0 = np.array(model.flexedge_length0, dtype=float)
@@ -133,8 +162,12 @@ class Monitor:
         items = ["qvel", "solver_niter"]
         if self.has_flex:
             items += ["flexvert_xpos", "flexedge_length"]
-        if self.edge_grasps.shape[1]:
+        if self.edge_grasps.shape[1] or (self.energy_judged and len(self.window_eqs)):
             items.append("eq_active")
+        if self.energy_judged:
+            items.append("energy")
+            if len(self.working_actuators):
+                items.append("actuator_force")
         return tuple(items)
 
     # ---------------------------------------------------------------- per step values
@@ -183,6 +216,34 @@ class Monitor:
         """(..., nisland) solver iterations -> whether any island hit the cap (...)."""
         return (niter >= self.iteration_cap).any(axis=-1)
 
+    def free(self, fields: dict, shape: tuple) -> np.ndarray:
+        """Whether nothing did work on the judged system in each step (``shape``, e.g.
+        (n, K)), from the recorded fields eq_active (..., neq) and actuator_force (..., nu)."""
+        out = np.ones(shape, bool)
+        if len(self.window_eqs):
+            out &= ~np.asarray(fields["eq_active"], bool)[..., self.window_eqs].any(axis=-1)
+        if len(self.working_actuators):
+            out &= (fields["actuator_force"][..., self.working_actuators] == 0).all(axis=-1)
+        return out
+
+    def energy_gain(self, energy: np.ndarray, free: np.ndarray, low: np.ndarray,
+                    was_free: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Energy gain of K steps of n rollouts (J/kg): energy (n, K, 2) of states t, free
+        (n, K) whether step t was free; low (n,), was_free (n,) the window carried in from
+        the steps before. The energy of state t is judged if step t-1 was free, against the
+        lowest energy since its window began (the state its first free step started from).
+        Returns (gain (n, K), low, was_free after the K steps)."""
+        e_all = energy[..., 0] + energy[..., 1]
+        gain = np.zeros(e_all.shape)
+        low, was_free = low.copy(), was_free.copy()
+        for k in range(e_all.shape[1]):
+            e = e_all[:, k]
+            gain[:, k] = np.where(was_free, (e - low) / self.energy_mass, 0.0)
+            low = np.where(was_free & (e < low), e, low)
+            low = np.where(free[:, k] & ~was_free, e, low)
+            was_free = free[:, k].copy()
+        return gain, low, was_free
+
     # ------------------------------------------------------------------ scanning
     def start(self, n: int) -> Scan:
         """A verdict in progress for n rollouts."""
@@ -200,6 +261,9 @@ class Monitor:
                     f"vertex {index})")
         if bound == "strain":
             return f"strain {value:.3g} > {b.max_strain:g} (flex edge {index})"
+        if bound == "energy":
+            return (f"energy gain {value:.3g} J/kg > {b.max_energy_gain:g} J/kg (while nothing "
+                    f"did work on the system)")
         return (f"capped_steps {int(value)} > {b.max_capped_steps} (solver at its "
                 f"{self.iteration_cap}-iteration cap)")
 
@@ -215,6 +279,9 @@ class Scan:
         self.max_penetration = np.zeros(n)
         self.max_strain = np.zeros(n)
         self.capped = np.zeros(n, dtype=int)
+        self.max_energy_gain = np.zeros(n)
+        self.low = np.zeros(n)                   # the energy window in progress
+        self.was_free = np.zeros(n, bool)
 
     @property
     def unstable(self) -> np.ndarray:
@@ -242,13 +309,21 @@ class Scan:
         valid = np.ones(speed.shape, bool) if nstep is None else \
             np.arange(K)[None, :] < np.asarray(nstep)[:, None]
         cum_capped = self.capped[rows][:, None] + np.cumsum(capped & valid, axis=1)
-        checks = [(speed > b.max_speed, speed, sp_i), (pen > b.max_penetration, pen, pen_i),
-                  (strain > b.max_strain, strain, st_i)]
+        zero = np.zeros_like(sp_i)
+        checks = [("speed", speed > b.max_speed, speed, sp_i),
+                  ("penetration", pen > b.max_penetration, pen, pen_i),
+                  ("strain", strain > b.max_strain, strain, st_i)]
         if b.max_capped_steps is not None:
-            checks.append((cum_capped > b.max_capped_steps, cum_capped.astype(float),
-                           np.zeros_like(sp_i)))
+            checks.append(("capped_steps", cum_capped > b.max_capped_steps,
+                           cum_capped.astype(float), zero))
+        gain = np.zeros(speed.shape)
+        if mon.energy_judged:
+            gain, self.low[rows], self.was_free[rows] = mon.energy_gain(
+                fields["energy"], mon.free(fields, speed.shape), self.low[rows],
+                self.was_free[rows])
+            checks.append(("energy", gain > b.max_energy_gain, gain, zero))
         broke = np.zeros(speed.shape, bool)
-        for over, _, _ in checks:
+        for _, over, _, _ in checks:
             broke |= over
         broke &= valid
         newly = []
@@ -262,10 +337,10 @@ class Scan:
             self.max_penetration[r] = max(self.max_penetration[r], _max(pen[j, upto]))
             self.max_strain[r] = max(self.max_strain[r], _max(strain[j, upto]))
             self.capped[r] = int(cum_capped[j, upto.stop - 1]) if upto.stop else self.capped[r]
+            self.max_energy_gain[r] = max(self.max_energy_gain[r], _max(gain[j, upto]))
             if len(hit):
                 k = hit[0]
-                name, (_, value, index) = next((BOUNDS[n], c) for n, c in enumerate(checks)
-                                               if c[0][j, k])
+                name, _, value, index = next(c for c in checks if c[1][j, k])
                 self.step[r] = step0 + k
                 self.reason[r] = mon.reason(name, float(value[j, k]), int(index[j, k]))
                 newly.append(r)
@@ -281,7 +356,8 @@ class Scan:
     def result(self) -> Stability:
         return Stability(self.step >= 0, self.step.copy(), tuple(self.reason),
                          self.max_speed.copy(), self.max_penetration.copy(),
-                         self.max_strain.copy(), self.capped.copy())
+                         self.max_strain.copy(), self.capped.copy(),
+                         self.max_energy_gain.copy())
 
 
 def _max(x: np.ndarray) -> float:
@@ -320,6 +396,32 @@ def _linear_groups(model: mujoco.MjModel, skip: set[int]) -> tuple[np.ndarray, n
             bodies.append(b)
     return (np.array(groups, dtype=np.int32).reshape(-1, 3),
             np.array(bodies, dtype=np.int32))
+
+
+def _equalities_attaching(model: mujoco.MjModel, bodies: set[int]) -> np.ndarray:
+    """(nw,) int32: the connect and weld equalities one of whose bodies (or sites' bodies)
+    is in ``bodies``."""
+    out = []
+    for i in range(model.neq):
+        if int(model.eq_type[i]) not in (int(mujoco.mjtEq.mjEQ_CONNECT),
+                                         int(mujoco.mjtEq.mjEQ_WELD)):
+            continue
+        ids = (int(model.eq_obj1id[i]), int(model.eq_obj2id[i]))
+        if int(model.eq_objtype[i]) == int(mujoco.mjtObj.mjOBJ_SITE):
+            ids = tuple(int(model.site_bodyid[k]) for k in ids)
+        if bodies.intersection(ids):
+            out.append(i)
+    return np.array(out, dtype=np.int32)
+
+
+def _actuators_outside(model: mujoco.MjModel, bodies: set[int]) -> np.ndarray:
+    """(na,) int32: the actuators that do not drive a joint of a body in ``bodies`` (those
+    with another transmission count as able to do work on anything)."""
+    joint = (int(mujoco.mjtTrn.mjTRN_JOINT), int(mujoco.mjtTrn.mjTRN_JOINTINPARENT))
+    return np.array([a for a in range(model.nu)
+                     if not (int(model.actuator_trntype[a]) in joint
+                             and int(model.jnt_bodyid[model.actuator_trnid[a, 0]]) in bodies)],
+                    dtype=np.int32)
 
 
 def _edge_equalities(model: mujoco.MjModel) -> np.ndarray:

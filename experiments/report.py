@@ -420,7 +420,8 @@ def physics_section(results: list[Result], page: Path) -> list[str]:
         d = r.data
         goals = list((d["rows"][0].get("scripted") or {}).keys()) if d["rows"] else []
         header = ["setting", "n", "ms / step", "steps / action", "unstable / 1000 actions",
-                  "why", "strain p50 / p90 / max", *[f"scripted {g}" for g in goals]]
+                  "why", "strain p50 / p90 / max", "energy gain max (J/kg)",
+                  *[f"scripted {g}" for g in goals]]
         rows = []
         for row in d["rows"]:
             sc = row.get("scripted") or {}
@@ -436,12 +437,14 @@ def physics_section(results: list[Result], page: Path) -> list[str]:
                          or "-",
                          " / ".join(num(row[k], 2) for k in ("strain_p50", "strain_p90",
                                                               "strain_max")),
+                         num(row["energy_gain_max"], 3) if "energy_gain_max" in row else "-",
                          *[mm(sc[g]["error_mm"] / 1e3) + (" !" if sc[g]["unstable"] else "")
                            for g in goals]])
         sizes = " and ".join(f"{n} x {n}" if d.get("bench") == "cloth" else str(n)
                              for n in d.get("sizes", []))
+        seed = f", seed {d['seed']}" if "seed" in d else ""
         return [f"### {d.get('bench')} ({sizes}): {d.get('actions_per_setting')} random "
-                f"actions per setting", "", *table(header, rows)]
+                f"actions per setting{seed}", "", *table(header, rows)]
 
     return section("Physics presets: `python -m planners.bench cloth|rope`",
                    "Per setting and size: CPU ms per simulated step (wall x threads / steps of "
@@ -449,7 +452,9 @@ def physics_section(results: list[Result], page: Path) -> list[str]:
                    "stability verdict flags per 1000 random actions (uniform displacements "
                    "within the picker bound, random particles, half from the flat start and "
                    "half after a fold) and why, the edge strain those actions reach (median / "
-                   "90th percentile / max), and the scripted policy's error on each goal (mm; "
+                   "90th percentile / max), the largest energy gain while nothing held the object "
+                   "(the verdict's energy bound, `-` where the file predates it), and the "
+                   "scripted policy's error on each goal (mm; "
                    "`!` marks an executed plan the verdict flagged). Presets: the `preset:` "
                    "rows.", results, page, body,
                    key=lambda r: (r.data.get("bench", ""), r.data.get("sizes", [])))

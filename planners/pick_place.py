@@ -40,6 +40,7 @@ from dopt.tasks.pick.constraints import ActionConstraint
 from dopt.tasks.pick.picker import PickerConfig
 from dopt.tasks.pick.rope_scene import RopeSceneConfig, make_rope
 from dopt.tasks.pick.scene import (
+    PICK_BOUNDS,
     DeformableScene,
     PickPlaceTask,
     end_to_end,
@@ -182,8 +183,11 @@ class PickPlaceSettings:
 
     def resolved_physics(self) -> dict:
         """JSON-able scene and picker configs these settings run (what a preset name means
-        today): a trial's identity, so that a changed preset or picker is not reused."""
-        out = {"scene": asdict(self.scene_config()), "picker": asdict(self.picker())}
+        today) and the stability bounds their rollouts are judged by (CEM scores an unstable
+        sample +inf): a trial's identity, so that a changed preset, picker or verdict is not
+        reused."""
+        out = {"scene": asdict(self.scene_config()), "picker": asdict(self.picker()),
+               "stability": asdict(PICK_BOUNDS)}
         planning = self.planning_scene_config()
         if planning is not None:
             out["planning_scene"] = asdict(planning)

@@ -3,7 +3,8 @@
 Per setting (scene-config overrides) and size: CPU ms per simulated step (wall x threads /
 steps, from the random-action batch), steps per pick-and-place action, unstable rollouts per
 1000 random actions (``dopt.stability`` verdict; bounded displacements, random particles, from
-the flat start and from a folded one), the strain percentiles those actions reach, and the
+the flat start and from a folded one), the strain percentiles and the energy gain while nothing
+holds the object those actions reach, and the
 scripted policy's error on the task's goals (Fig. 7 protocol, one trial each) with its
 verdict. Lives in planners.bench, not dopt.bench, because the scripted folds need the goals
 (deformables) and the scripted policy (planners).
@@ -145,7 +146,7 @@ def random_actions(task: str, config, actions: int, threads: int, seed: int,
     rng = np.random.default_rng(seed)
     P = max(1, actions // 4)
     out = {"unstable": 0, "actions": 0, "steps": 0, "wall_s": 0.0, "strain": [],
-           "penetration": [], "speed": [], "reasons": {}}
+           "penetration": [], "speed": [], "energy": [], "reasons": {}}
     for start in (scene.initial_state, folded.final_states[0]):
         particles = rng.integers(0, N, (P, 2))
         disp = rng.uniform(-bound, bound, (P, 2, 3))
@@ -160,12 +161,14 @@ def random_actions(task: str, config, actions: int, threads: int, seed: int,
         out["strain"] += st.max_strain.tolist()
         out["penetration"] += st.max_penetration.tolist()
         out["speed"] += st.max_speed.tolist()
+        out["energy"] += st.max_energy_gain.tolist()
         for r in st.reason:
             if r:
                 key = r.split(" ", 1)[0]
                 out["reasons"][key] = out["reasons"].get(key, 0) + 1
     svc.close()
     strain = np.array(out["strain"])
+    gain = np.array(out["energy"])
     return {
         "unstable_per_1000_actions": 1000.0 * out["unstable"] / out["actions"],
         "actions": out["actions"], "reasons": out["reasons"],
@@ -175,6 +178,9 @@ def random_actions(task: str, config, actions: int, threads: int, seed: int,
         "strain_max": float(strain.max()),
         "penetration_max_mm": 1e3 * float(np.max(out["penetration"])),
         "speed_max": float(np.max(out["speed"])),
+        # J/kg while nothing holds the object (dopt.stability; up to a rollout's first
+        # broken bound)
+        "energy_gain_p99": float(np.percentile(gain, 99)), "energy_gain_max": float(gain.max()),
     }
 
 
@@ -215,5 +221,5 @@ def bench_physics(task: str, sizes: list[int], settings: list[str] | None, actio
             if scripted:
                 row["scripted"] = scripted_goals(task, name, table[name], n, threads)
             rows.append(row)
-    return {"experiment": "physics", "bench": task, "sizes": sizes,
+    return {"experiment": "physics", "bench": task, "sizes": sizes, "seed": seed,
             "actions_per_setting": actions, "rows": rows, "provenance": provenance()}

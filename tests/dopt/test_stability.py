@@ -102,6 +102,72 @@ def test_chunked_rollout_equals_one_call(monkeypatch):
     assert whole.stability.max_strain.tolist() == chunked.stability.max_strain.tolist()
 
 
+def energy_reference(energy: np.ndarray, mass: float) -> np.ndarray:
+    """Energy gain by its definition, for a rollout free from its first step: (T, 2) MuJoCo's
+    potential and kinetic energy of states 0..T-1 -> (T,) J/kg, E_t - min_{s<t} E_s."""
+    e = energy.sum(axis=1)
+    gain = np.zeros(len(e))
+    gain[1:] = (e[1:] - np.minimum.accumulate(e)[:-1]) / mass
+    return gain
+
+
+def test_energy_gain_is_judged_while_nothing_does_work(c_kernels):
+    """The drop: once the sheet lands, its soft contacts give back some of the energy they
+    took. With the slider's motor off nothing works on the system and the gain is judged
+    (against its definition on MuJoCo's own energy); with the motor pushing (rollout 1) it is
+    not. With the bound below the gain, every route flags the same step for it."""
+    bounds = StabilityBounds(**LOOSE, max_energy_gain=1e9)
+    sc = drop_scene(bounds)
+    assert sc.model.opt.enableflags & mujoco.mjtEnableBit.mjENBL_ENERGY
+    x0 = sc.state_of(mujoco.MjData(sc.model))
+    T = 60
+    u = np.zeros((2, T, 1))
+    u[1] = 0.5
+    with RolloutService(sc, RolloutConfig(threads=2, c_kernels=c_kernels)) as svc:
+        res = svc.rollout(x0, u, record=("energy",))
+    mass = sc.model.body_mass[1:].sum()
+    ref = energy_reference(res.records["energy"][0], mass)
+    st = res.stability
+    assert ref.max() > 1e-3, "the landing should give energy back"
+    assert st.max_energy_gain[0] == pytest.approx(ref.max(), rel=1e-12)
+    assert st.max_energy_gain[1] == 0.0 and not st.unstable.any()
+
+    bound = ref.max() / 2
+    sc = drop_scene(StabilityBounds(**LOOSE, max_energy_gain=bound))
+    with RolloutService(sc, RolloutConfig(threads=2, c_kernels=c_kernels)) as svc:
+        open_loop = svc.rollout(x0, u).stability
+        fb = svc.rollout_feedback(x0, u, np.repeat(x0[None], T, 0), np.zeros((T, 1, 2)),
+                                  [0]).stability
+    first = int(np.argmax(ref > bound))
+    assert open_loop.unstable.tolist() == [True, False]
+    assert open_loop.step[0] == first and open_loop.reason[0].startswith("energy gain")
+    assert fb.step.tolist() == open_loop.step.tolist() and fb.reason == open_loop.reason
+    np.testing.assert_allclose(fb.max_energy_gain, open_loop.max_energy_gain, rtol=1e-12)
+
+
+def test_energy_window_ends_with_a_grasp_or_a_working_actuator():
+    """Pick scenes judge energy; the picker's grasps end a free window, its servo does not
+    (it drives only the massless picker), the rope's own flex equality does not; an actuator
+    on a judged body does."""
+    cloth = make_cloth(ClothSceneConfig(n=6)).scene
+    mon = cloth.monitor
+    assert mon.energy_judged and {"energy", "eq_active"} <= set(mon.record)
+    grasps = [i for i in range(cloth.model.neq)
+              if mujoco.mj_id2name(cloth.model, mujoco.mjtObj.mjOBJ_EQUALITY, i)
+              .startswith("pick")]
+    assert mon.window_eqs.tolist() == grasps and len(mon.working_actuators) == 0
+    rope = make_rope(RopeSceneConfig(n=10, length=0.2)).scene
+    flex_eqs = [i for i in range(rope.model.neq)
+                if rope.model.eq_type[i] == mujoco.mjtEq.mjEQ_FLEX]
+    assert flex_eqs and not set(flex_eqs) & set(rope.monitor.window_eqs.tolist())
+    drop = drop_scene(StabilityBounds(max_energy_gain=1.0)).monitor
+    assert drop.working_actuators.tolist() == [0] and "actuator_force" in drop.record
+    eq = np.zeros((2, 3, 0), np.uint8)
+    force = np.array([[[0.0], [0.0], [0.0]], [[0.0], [1e-9], [0.0]]])
+    assert drop.free({"eq_active": eq, "actuator_force": force}, (2, 3)).tolist() == \
+        [[True, True, True], [True, False, True]]
+
+
 def test_violent_pick_is_flagged_with_reason_and_step():
     """A rope yanked up by a picker commanded to 50 m/s: finite states, no MuJoCo warning,
     but flagged by the speed bound at the first step of the move, naming a rope body."""
@@ -192,7 +258,10 @@ def test_strain_leaves_out_the_edges_of_a_grasped_particle():
     every, _ = grasped_cloth(True)[0].monitor.strain(d.flexedge_length[None],
                                                      d.eq_active[None])
     assert every[0] == pytest.approx(strain.max())
-    assert "eq_active" in mon.record and "eq_active" not in grasped_cloth(True)[0].monitor.record
+    assert "eq_active" in mon.record
+    every = grasped_cloth(True)[0]       # the energy bound reads eq_active too; without it:
+    assert "eq_active" not in Scene(every.model, stability=replace(
+        every.stability, max_energy_gain=None)).monitor.record
 
 
 @pytest.mark.parametrize("strain_at_grasps", [False, True])
@@ -224,6 +293,8 @@ def test_the_picker_is_not_speed_judged():
 def test_bad_bounds():
     with pytest.raises(ValueError, match="max_speed"):
         StabilityBounds(max_speed=0)
+    with pytest.raises(ValueError, match="max_energy_gain"):
+        StabilityBounds(max_energy_gain=-1.0)
     with pytest.raises(ValueError, match="no body 'hand'"):
         drop_scene(StabilityBounds(unjudged_bodies=("hand",)))
     with pytest.raises(ValueError, match="on_unstable"):

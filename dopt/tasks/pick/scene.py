@@ -25,6 +25,13 @@ from dopt.tasks.pick.constraints import ActionConstraint
 from dopt.tasks.pick.picker import CONTROL_SPEC, Picker, PickerConfig, fix_grasp_anchors
 from dopt.validation import check_real, float_array, index_array, is_int
 
+#: the bounds rope and cloth rollouts are judged by: the defaults, and the energy gain while
+#: nothing holds the object (grasp released, or the None action): 0.5 J/kg, the energy of a
+#: 5 cm rise of the whole object, against a few hundredths of a J/kg that random pick-and-place
+#: on the presets gains there (docs/results/physics-*-verdict.json) and about 10 J/kg of a
+#: sheet thrown 1 m up (docs/DESIGN-NOTES.md, "Energy")
+PICK_BOUNDS = StabilityBounds(max_energy_gain=0.5)
+
 
 def check_pickable(pickable: Iterable[int] | None, n: int, picker) -> np.ndarray:
     """The pickable particles of an object of n: (k,) unique ints in [0, n) (None: all), for
@@ -88,8 +95,9 @@ class DeformableScene:
         picker: the picker config the model was built with.
         settle: seconds the object settles to make ``initial_state``.
         positions: (N, 3) start positions of the particles (None: the compiled layout).
-        stability: the bounds rollouts of this scene are judged by (the picker, a massless
-            virtual gripper, is never speed-judged).
+        stability: the bounds rollouts of this scene are judged by (``PICK_BOUNDS``; the
+            picker, a massless virtual gripper, is never judged: not its speed, and its
+            servo and grasps are what end a free window of the energy bound).
 
     Attributes:
         scene: the ``dopt.Scene``; picker: the ``Picker``; radius: particle radius (m);
@@ -102,7 +110,7 @@ class DeformableScene:
     def __init__(self, model: mujoco.MjModel, flex: str, picker: PickerConfig,
                  settle: float = 0.2,
                  positions: np.ndarray | None = None,
-                 stability: StabilityBounds = StabilityBounds(), xml: str | None = None):
+                 stability: StabilityBounds = PICK_BOUNDS, xml: str | None = None):
         check_model(model)
         if not isinstance(stability, StabilityBounds):
             raise TypeError(f"stability must be a StabilityBounds, got "
