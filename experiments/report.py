@@ -357,6 +357,9 @@ def _fig7_physics(d: dict) -> str:
         what.insert(0, f"{scene['young']:.2g} Pa")
     if "triangulation" in scene:
         what.append(f"{scene['triangulation']} triangles")
+    energy = ((d.get("physics") or {}).get("stability") or {}).get("max_energy_gain")
+    what.append(f"energy bound {energy:g} J/kg" if energy is not None
+                else "no energy bound in the verdict")
     return f"preset {name} ({', '.join(what)})"
 
 
@@ -453,7 +456,7 @@ def physics_section(results: list[Result], page: Path) -> list[str]:
                    "within the picker bound, random particles, half from the flat start and "
                    "half after a fold) and why, the edge strain those actions reach (median / "
                    "90th percentile / max), the largest energy gain while nothing held the object "
-                   "(the verdict's energy bound, `-` where the file predates it), and the "
+                   "(the verdict's energy bound; `-` where the file does not record it), and the "
                    "scripted policy's error on each goal (mm; "
                    "`!` marks an executed plan the verdict flagged). Presets: the `preset:` "
                    "rows.", results, page, body,
