@@ -183,7 +183,10 @@ def _main(task: str, script: str, doc: str, help_: dict, argv=None) -> int:
                "settings": settings.to_dict(), "physics": settings.resolved_physics(),
                "methods": summarize(results, args.methods, problem.metric_names),
                "failed": failed, "trial_commits": res.commits,
-               "wall_s": time.perf_counter() - start}
+               # this run's wall time (a resumed run reuses finished trials), and the trials'
+               # own wall times summed, wherever and whenever they ran
+               "wall_s": time.perf_counter() - start,
+               "trials_wall_s": float(sum(r["wall_s"] for r in results))}
     write_summary(summary, out, args.record, script, argv)
     write_curves(out / "curves.csv", results)
     plot_curves(out / "cost_curves.png", results, args.methods,

@@ -40,7 +40,12 @@ def _check_summary(out: Path, goal: str, extra=()):
     lines = (out / "curves.csv").read_text().splitlines()
     assert lines[0] == "method,seed,iteration,stage,best_cost_m" and len(lines) > 4
     assert (out / "cost_curves.png").stat().st_size > 0
-    assert len(list((out / "trials").glob("*.json"))) == 4
+    trials = [json.loads(f.read_text()) for f in (out / "trials").glob("*.json")]
+    assert len(trials) == 4
+    # the trials' own wall times, summed (a resumed run's wall_s is only its own)
+    assert summary["trials_wall_s"] == pytest.approx(sum(t["result"]["wall_s"] for t in trials))
+    # the verdict is part of the recorded physics: rope and cloth judge energy
+    assert summary["physics"]["stability"]["max_energy_gain"] > 0
     return summary
 
 
