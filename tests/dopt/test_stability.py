@@ -280,6 +280,29 @@ def test_grasp_verdict_is_the_same_on_every_route(strain_at_grasps, c_kernels):
     assert open_loop.unstable[0], "the grasp should strain the cloth"
     assert fb.step.tolist() == open_loop.step.tolist() and fb.reason == open_loop.reason
     np.testing.assert_allclose(fb.max_strain, open_loop.max_strain, rtol=1e-12)
+    # the cloth judges energy too; the grasp stays on, so no window opens on either route
+    assert scene.monitor.energy_judged
+    assert fb.max_energy_gain.tolist() == open_loop.max_energy_gain.tolist() == [0.0]
+
+
+def test_cloth_energy_verdict_is_the_same_on_every_route(c_kernels):
+    """A 6 x 6 cloth dropped from 1 cm while the picker moves without a grasp: its servo does
+    no work on the cloth, so the whole drop is one free window; both routes judge the same
+    gain, which the landing makes positive."""
+    cloth = make_cloth(ClothSceneConfig(n=6))
+    scene = cloth.scene
+    x = cloth.positions(cloth.initial_state) + [0.0, 0.0, 0.01]
+    x0 = cloth.with_positions(cloth.initial_state, x)
+    rows = cloth.picker.encode(np.array([[14]]), np.array([[[0.1, 0.0, 0.1]]]))[0]
+    u = np.ascontiguousarray(rows[None, :, :scene.nu])     # the picker's controls, no grasp
+    T = u.shape[1]
+    with RolloutService(scene, RolloutConfig(threads=1, c_kernels=c_kernels)) as svc:
+        open_loop = svc.rollout(x0, u).stability
+        fb = svc.rollout_feedback(x0, u, np.repeat(x0[None], T, 0),
+                                  np.zeros((T, scene.nu, 2)), [0]).stability
+    assert 0 < open_loop.max_energy_gain[0] < scene.stability.max_energy_gain
+    np.testing.assert_allclose(fb.max_energy_gain, open_loop.max_energy_gain, rtol=1e-12)
+    assert not open_loop.unstable.any() and not fb.unstable.any()
 
 
 def test_the_picker_is_not_speed_judged():
