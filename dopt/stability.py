@@ -20,8 +20,9 @@ through the floor and be thrown a metre up at 22 m/s with every state finite and
   such as a picker's grasp, is active, and no actuator outside the unjudged bodies exerts a
   force), the model's mechanical energy (MuJoCo's potential + kinetic, ``mjENBL_ENERGY``) can
   only fall; its rise above the lowest value since the window began, per kg of judged mass
-  (J/kg), is judged. Soft contacts store and give back a little (a settling cloth: up to
-  0.02 J/kg, docs/DESIGN-NOTES.md); a cloth thrown 1 m up gains about 10 J/kg.
+  (J/kg), is judged. Soft contacts store and give back a little (a few hundredths of a J/kg
+  under the presets' random actions, docs/DESIGN-NOTES.md "Energy"); a cloth thrown 1 m up
+  gains about 10 J/kg.
 
 MuJoCo's own warnings and non-finite states stay unstable as before. ``Monitor`` evaluates the
 bounds on the fields MuJoCo leaves in MjData after step t: qvel of state t+1, flex vertex
