@@ -867,11 +867,11 @@ def fig4_headline(r: Result) -> str:
     if not points:
         return f"{r.data.get('method')}: no finite point"
     best = min(points, key=lambda p: p["mpc_cost_normalised_mean"])
-    trials = sum(p.get("trials") or 0 for p in r.data.get("points") or [])
+    trials = sum(p.get("n_trials") or 0 for p in r.data.get("points") or [])
     cost = pm(num(best["mpc_cost_normalised_mean"]), num(best.get("mpc_cost_normalised_ci90")))
     return (f"{r.data.get('method')}, {len(r.data.get('points'))} (rho, theta) points, "
             f"{trials} trials; lowest MPC cost / baseline {cost} at rho {best.get('rho')}, "
-            f"theta {best.get('theta')} ({num(best.get('dofs_mean'), 1)} DoFs)")
+            f"theta {best.get('theta')} ({num(best.get('n_dofs_mean'), 1)} DoFs)")
 
 
 # ---------------------------------------------------------------------- key particles
