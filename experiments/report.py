@@ -853,6 +853,11 @@ def fig4_section(results: list[Result], page: Path) -> list[str]:
                  + (" (quick)" if r.quick else ""), ""]
         if not points:
             return lines + ["No points (every trial failed?)."]
+        image = page.parent / "images" / f"fig4-{d.get('task')}.png"
+        if image.exists():     # the experiment's rho_sweep.png, copied beside the docs
+            lines += [f"![Fig. 4, {d.get('task')}: MPC cost / baseline and mean |C| against rho, "
+                      f"ours (solid, 90 % CI bands) and the authors' (dashed)]"
+                      f"(images/{image.name})", ""]
         return lines + table(["rho", "theta", *MPC_HEADER],
                              [[str(p.get("rho")), str(p.get("theta")), *mpc_cells(p)]
                               for p in points])

@@ -489,6 +489,8 @@ def test_fig7_settings_say_what_the_physics_preset_meant():
     scene = {"young": 5e5, "timestep": 0.005, "triangulation": "alternating"}
     with_scene = {"settings": {"physics": "default"}, "physics": {"scene": scene}}
     assert report._fig7_physics(with_scene) == \
-        "preset default (5e+05 Pa, dt 5 ms, alternating triangles)"
+        "preset default (5e+05 Pa, dt 5 ms, alternating triangles, no energy bound in the verdict)"
+    judged = {**with_scene, "physics": {"scene": scene, "stability": {"max_energy_gain": 0.5}}}
+    assert report._fig7_physics(judged).endswith("energy bound 0.5 J/kg)")
     old = {"settings": {"physics": "default"}, "provenance": {"git_commit": "b22f11ba0123"}}
     assert report._fig7_physics(old) == "preset default as defined at b22f11ba"
