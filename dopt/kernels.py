@@ -322,7 +322,7 @@ def _warnings(d: mujoco.MjData) -> list[str]:
 
 
 # the FAULT_* codes of the C file, past FAULT_WARNING: the warning MuJoCo's next step would give,
-# then the stability bounds (dopt.stability.BOUNDS, in order)
+# then the stability bounds (in the order dopt.stability.Scan.update checks them)
 _FAULTS = {1: "mjWARN_BADQPOS", 2: "mjWARN_BADQVEL", 3: "non-finite state"}
 FAULT_BOUNDS = {4: "speed", 5: "penetration", 6: "strain", 7: "capped_steps", 8: "energy"}
 

@@ -44,9 +44,6 @@ import numpy as np
 
 from dopt.validation import check_config
 
-#: the bound names in the order they are checked within one step
-BOUNDS = ("speed", "penetration", "strain", "capped_steps", "energy")
-
 
 @dataclass(frozen=True)
 class StabilityBounds:
@@ -311,6 +308,8 @@ class Scan:
             np.arange(K)[None, :] < np.asarray(nstep)[:, None]
         cum_capped = self.capped[rows][:, None] + np.cumsum(capped & valid, axis=1)
         zero = np.zeros_like(sp_i)
+        # (bound name, broken, value, index) in the order they are checked within one step,
+        # the order of the C file's judge()
         checks = [("speed", speed > b.max_speed, speed, sp_i),
                   ("penetration", pen > b.max_penetration, pen, pen_i),
                   ("strain", strain > b.max_strain, strain, st_i)]
