@@ -5,11 +5,11 @@ write the error-vs-size curve as CSV, a PNG with the curve, the goal and the sim
 with its key particles, and DIR/summary.json with counts, indices, errors and times (and the
 provenance: command, git commit, versions; --record PATH writes a copy to PATH). Unless
 --quick, it also sweeps cloth resolutions x triangulations and goal noise, and reduces goals
-made by the simulator (the scripted fold on the MuJoCo cloth, settled), and records the key
-counts (the robustness tables of docs/RESULTS.md); the noise sweep appends one line per goal to
-DIR/noise.jsonl as it goes, and a rerun resumes it (lines that cannot be read, failed goals and
-goals of another dopt version are recomputed; --fresh moves the journal to
-DIR/noise.jsonl.old and starts again). A goal whose reduction never reaches the threshold is a
+made by the simulator (each fold made on the MuJoCo cloth by a line grasp, settled), and
+records the key counts (the robustness tables of docs/RESULTS.md); the noise sweep appends one
+line per goal to DIR/noise.jsonl as it goes, and a rerun resumes it (lines that cannot be
+read, failed goals and goals of another dopt version are recomputed; --fresh moves the journal
+to DIR/noise.jsonl.old and starts again). A goal whose reduction never reaches the threshold is a
 result: the best model's keys, with "reached_threshold": false; an error is a failure:
 summary.json lists it under "failed" ({what: error}), the other goals go on, and the script
 exits 1.
@@ -24,6 +24,7 @@ import itertools
 import json
 import logging
 import sys
+import time
 from dataclasses import replace
 from pathlib import Path
 
@@ -250,35 +251,36 @@ MERGE_SWEEP_DEG = (30.0, 45.0, 60.0, 90.0, 120.0)
 def simulated_goals(resolutions: list[int], cloth_config: ClothConfig,
                     physics: tuple[str, ...] = ("default",),
                     settle: float = 1.0) -> tuple[list[dict], dict]:
-    """Key counts of cloth goals made by the simulator: each fold executed by the scripted
-    policy on the MuJoCo cloth (``planners.pick_place``, the experiments' scene, under each
-    of the ``physics`` presets), then left to settle ``settle`` seconds holding nothing. The
-    reduction sees what a user with a simulator has: the settled particle positions, the
-    flex's own triangles and the settled flat start as the rest sheet. Returns (rows, {goal:
-    error} of the goals that failed); a row holds the scripted fold's distance to the ideal
-    goal, whether the stability verdict flagged its executed plan, the layer gap
-    ``estimate_layer_gap`` finds in the settled goal (before the reduction's panel projection),
-    the gap the reduction's threshold is relative to (``KeyParticles.layer_gap``) and the
-    counts, under ``cloth_config`` and, in ``row["fold"]``, under it with ``panels="fold"``
-    (every particle onto its panel: the mode for goals a simulator or a camera makes)."""
+    """Key counts of cloth goals made by the simulator: each fold made on the MuJoCo cloth (the
+    experiments' scene under each of the ``physics`` presets, with self-collision) by the line
+    grasp of ``dopt.tasks.pick.fold_goals``, then left to settle ``settle`` seconds holding
+    nothing. The reduction sees what a user with a simulator has: the settled particle
+    positions, the flex's own triangles and the settled flat start as the rest sheet. Returns
+    (rows, {goal: error} of the goals that failed); a row holds the goal's mean and largest
+    particle distance to its rigid fold (``ideal_folds``), whether the stability verdict
+    flagged the folding, the layer gap ``estimate_layer_gap`` finds in the settled goal (before
+    the reduction's panel projection), the gap the reduction's threshold is relative to
+    (``KeyParticles.layer_gap``) and the counts, under ``cloth_config`` and, in ``row["fold"]``,
+    under it with ``panels="fold"`` (every particle onto its panel: the mode for goals a
+    simulator or a camera makes)."""
     from deformables.layers import estimate_layer_gap
-    from planners.pick_place import PickPlaceSettings, make_planner, make_problem, run_problem
+    from dopt.tasks.pick.fold_goals import fold_goal, folds, ideal_folds
+    from planners.pick_place import PickPlaceSettings, make_problem
 
     rows, failed = [], {}
     for task, preset, n in itertools.product(CLOTH_TASKS, physics, resolutions):
-        fold = task.removeprefix("cloth_")
         row = {"task": task, "n": n, "physics": preset,
                "reference_keys": CLOTH_REFERENCE_KEYS[task]}
         try:
-            settings = replace(PickPlaceSettings.preset("cloth", fold), n=n, physics=preset)
-            problem = make_problem(settings)
-            result = run_problem(problem, make_planner("scripted", settings),
-                                 method="scripted")
-            scene = problem.scene
-            final = scene.settle(result.final_state, settle)
-            goal, rest = scene.positions(final), scene.positions(scene.initial_state)
-            spacing = settings.side / (n - 1)
-            gap = estimate_layer_gap(goal, scene.elements, spacing)
+            start = time.perf_counter()
+            settings = replace(PickPlaceSettings.preset("cloth", task.removeprefix("cloth_")),
+                               n=n, physics=preset, selfcollide=True)
+            scene = make_problem(settings).scene
+            creases = folds(task, settings.side)
+            made = fold_goal(scene, creases, settle=settle)
+            goal, rest = made.positions, scene.positions(scene.initial_state)
+            miss = np.linalg.norm(goal - ideal_folds(rest, creases, 2 * scene.radius), axis=1)
+            gap = estimate_layer_gap(goal, scene.elements, settings.side / (n - 1))
             keys = cloth_key_particles(goal, scene.elements, rest_positions=rest,
                                        config=cloth_config)
             # the fold mode at the config's merge angle and over the sweep's range (a wrinkle
@@ -291,9 +293,10 @@ def simulated_goals(resolutions: list[int], cloth_config: ClothConfig,
             folded = by_angle[chosen]
             merge = {str(int(deg)): by_angle[deg].n_keys for deg in MERGE_SWEEP_DEG}
             row.update(selfcollide=settings.selfcollide,
-                       scripted_cost_mm=1e3 * float(np.mean(np.linalg.norm(
-                           goal - problem.final_goal, axis=1))),
-                       unstable=result.unstable, unstable_reason=result.unstable_reason,
+                       fold_error_mm=1e3 * float(miss.mean()),
+                       fold_error_max_mm=1e3 * float(miss.max()),
+                       held_particles=[len(h) for h in made.held],
+                       unstable=made.unstable, unstable_reason=made.reason,
                        layer_gap_mm=(1e3 * gap.gap if gap.found else None),
                        reduction_layer_gap_mm=1e3 * keys.layer_gap,
                        n_keys=keys.n_keys, n_elements=keys.n_elements,
@@ -302,7 +305,8 @@ def simulated_goals(resolutions: list[int], cloth_config: ClothConfig,
                        fold={"n_keys": folded.n_keys, "n_elements": folded.n_elements,
                              "reached_threshold": folded.reached_threshold,
                              "held": folded.n_keys == CLOTH_REFERENCE_KEYS[task],
-                             "n_keys_by_merge_deg": merge})
+                             "n_keys_by_merge_deg": merge},
+                       seconds=time.perf_counter() - start)
         except Exception as exc:
             row["error"] = failed[f"simulated/{task}/n{n}/{preset}"] = one_line(exc)
             logger.error("simulated %s n=%d %s failed: %s", task, n, preset, row["error"])
@@ -362,9 +366,9 @@ def parser() -> argparse.ArgumentParser:
                          "per goal that does not converge)")
     ap.add_argument("--simulated-n", type=number_list(int, 3, "particles per side"),
                     default=[16, 25, 40],
-                    help="cloth particles per side of the simulated goals (the scripted fold "
-                         "on the MuJoCo cloth, settled; comma-separated, each >= 3; default "
-                         "16,25,40)")
+                    help="cloth particles per side of the simulated goals (each fold made "
+                         "on the MuJoCo cloth by a line grasp, settled; comma-separated, each "
+                         ">= 3; default 16,25,40)")
     ap.add_argument("--simulated-physics", type=choices_type(tuple(PHYSICS_PRESETS),
                                                              "physics presets"),
                     default=["fast", "default"],

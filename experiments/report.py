@@ -949,41 +949,40 @@ def kp_noise(noise: dict) -> list[str]:
 
 
 def kp_simulated(rows: list[dict]) -> list[str]:
-    """Key counts of the goals the simulator made (the scripted fold, settled)."""
-    out = ["Goals made by the simulator: the scripted fold on the MuJoCo cloth (physics preset "
-           "as given), settled; the reduction gets the settled positions, the flex's "
-           "triangles and the settled flat start as rest sheet. Scripted error: mean particle "
-           "distance to the ideal fold; `!` marks an executed plan the stability verdict "
-           "flagged. Keys and faces under the default panel projection and under "
-           "`ClothConfig(panels=\"fold\")` (every particle onto its panel); `*`: no model up "
-           "to 40 faces reached the threshold.", ""]
+    """Key counts of the goals the simulator made (each fold by a line grasp, settled)."""
+    out = ["Goals made by the simulator: each fold made on the MuJoCo cloth (physics preset as "
+           "given, self-collision on) by a line grasp of the moving part's far edge turned over "
+           "its crease (`dopt.tasks.pick.fold_goals`; the underneath fold as the accordion of "
+           "three folds on top that makes the same stack), settled; the reduction gets the "
+           "settled positions, the flex's triangles and the settled flat start as rest sheet. "
+           "Fold error: mean / largest particle distance to the rigid fold with sharp creases "
+           "(`ideal_folds`); `!` marks a folding the stability verdict flagged. Keys and faces "
+           "under the default panel projection and under `ClothConfig(panels=\"fold\")` "
+           "(every particle onto its panel); `*`: no model up to 40 faces reached the "
+           "threshold.", ""]
     body = []
     for r in rows:
         if "error" in r:
             body.append([_short_task(r["task"]), str(r["n"]), r.get("physics", "-"), "-", "-",
-                         "-", "-", "failed: " + cell(r["error"]), "-", "-", "-"])
+                         str(r["reference_keys"]), "failed: " + cell(r["error"]), "-", "-", "-"])
             continue
 
         def keys(k: dict) -> str:
             return f"{k['n_keys']}{'' if k['reached_threshold'] else '*'}"
 
-        fold = r.get("fold")
+        fold = r["fold"]
         body.append([_short_task(r["task"]), str(r["n"]), r["physics"],
-                     "yes" if r["selfcollide"] else "no",
-                     num(r["scripted_cost_mm"], 1) + (" !" if r["unstable"] else ""),
+                     f"{num(r['fold_error_mm'], 1)} / {num(r['fold_error_max_mm'], 1)}"
+                     + (" !" if r["unstable"] else ""),
                      "none found" if r["layer_gap_mm"] is None else num(r["layer_gap_mm"], 2),
-                     str(r["reference_keys"]), keys(r),
-                     "-" if fold is None else keys(fold),
-                     f"{r['n_elements']} / {'-' if fold is None else fold['n_elements']}",
-                     " / ".join(str(k) for k in (fold or {}).get("n_keys_by_merge_deg",
-                                                                 {}).values()) or "-"])
+                     str(r["reference_keys"]), keys(r), keys(fold),
+                     f"{r['n_elements']} / {fold['n_elements']}",
+                     " / ".join(str(k) for k in fold["n_keys_by_merge_deg"].values())])
     angles = next((" / ".join(r["fold"]["n_keys_by_merge_deg"]) for r in rows
-                   if "n_keys_by_merge_deg" in r.get("fold", {})), "")
-    return out + table(["goal", "n", "physics", "self-collision", "scripted error (mm)",
-                        "layer gap (mm)", "reference keys", "keys", "keys (fold)",
-                        "faces (default / fold)",
-                        f"keys (fold), merge angle {angles} deg" if angles else
-                        "keys (fold) by merge angle"], body)
+                   if "fold" in r), "")
+    return out + table(["goal", "n", "physics", "fold error (mm)", "layer gap (mm)",
+                        "reference keys", "keys", "keys (fold)", "faces (default / fold)",
+                        f"keys (fold), merge angle {angles} deg"], body)
 
 
 def kp_headline(r: Result) -> str:
