@@ -6,7 +6,7 @@ from deformables import ClothConfig
 from deformables.cloth import cloth_key_particles
 from deformables.goals import CLOTH_REFERENCE_KEYS, cloth_rest, grid_faces, make_goal
 from dopt.tasks.pick.cloth_scene import ClothSceneConfig, make_cloth
-from dopt.tasks.pick.fold_goals import Crease, _place, fold_goal, folds, ideal_folds, turn_over
+from dopt.tasks.pick.fold_goals import Crease, _place, _turn_over, fold_goal, folds, ideal_folds
 
 TASKS = tuple(CLOTH_REFERENCE_KEYS)
 
@@ -56,17 +56,21 @@ def test_the_underneath_accordion_is_the_papers_underneath_fold_reflected():
     np.testing.assert_allclose(mine[:, 1], paper[:, 1])
 
 
-def test_turn_over_is_a_rotation_with_its_derivative():
+def test_a_turn_is_a_rotation_about_the_crease_line():
     rng = np.random.default_rng(3)
     p = rng.normal(size=(7, 3)) * 0.1
     crease = Crease((0.02, -0.01), (1.0, 2.0))
     turn = _place(crease, p, p, crease.distance(p) > 0, spacing=1.0)
-    q, dq = turn_over(p, turn, 0.03, 0.7)
+    q = _turn_over(p, turn, 0.03, 0.7)
     d = np.linalg.norm(p[:, None] - p[None], axis=2)
     np.testing.assert_allclose(np.linalg.norm(q[:, None] - q[None], axis=2), d, atol=1e-12)
-    ahead = turn_over(p, turn, 0.03, 0.7 + 1e-7)[0]
-    np.testing.assert_allclose(dq, (ahead - q) / 1e-7, atol=1e-6)
-    np.testing.assert_allclose(turn_over(p, turn, 0.03, 2 * np.pi)[0], p, atol=1e-12)
+    # points on the turning line stay; a full turn is the identity; a half turn mirrors
+    on_line = np.array([[*turn.point[:2], 0.03]]) + [[*(0.2 * turn.normal[1::-1] * [-1, 1]), 0]]
+    np.testing.assert_allclose(_turn_over(on_line, turn, 0.03, 0.7), on_line, atol=1e-12)
+    np.testing.assert_allclose(_turn_over(p, turn, 0.03, 2 * np.pi), p, atol=1e-12)
+    half = _turn_over(p, turn, 0.03, np.pi)
+    np.testing.assert_allclose(turn.distance(half), -turn.distance(p), atol=1e-12)
+    np.testing.assert_allclose(half[:, 2], 0.06 - p[:, 2], atol=1e-12)
 
 
 @pytest.fixture(scope="module")

@@ -265,7 +265,8 @@ def test_key_particle_benches_and_simulated_goals(site):
                                        "ratio_to_paper": 4.734, "keys_held": 1}},
            "provenance": provenance("python -m deformables.bench paper-scale")})
     simulated = [{"task": "cloth_diagonal", "n": 16, "physics": "default", "reference_keys": 4,
-                  "selfcollide": False, "scripted_cost_mm": 14.66, "unstable": True,
+                  "selfcollide": True, "fold_error_mm": 14.66, "fold_error_max_mm": 30.04,
+                  "unstable": True,
                   "unstable_reason": "strain", "layer_gap_mm": None, "n_keys": 4,
                   "n_elements": 10, "reached_threshold": True, "held": True,
                   "fold": {"n_keys": 5, "n_elements": 7, "reached_threshold": False,
@@ -284,10 +285,10 @@ def test_key_particle_benches_and_simulated_goals(site):
     assert "| cloth side | 10000 | 1 | 6 (6) | 6 | yes | 3.46 |" in md
     assert "| 1 | 3.46 | 0.73 | 4.73 | 1 / 4 |" in md
     assert "| keys (fold) | faces (default / fold) | keys (fold), merge angle 30 / 60 deg |" in md
-    assert "| cloth diagonal | 16 | default | no | 14.7 ! | none found | 4 | 4 | 5* | 10 / 7 " \
+    assert "| cloth diagonal | 16 | default | 14.7 / 30.0 ! | none found | 4 | 4 | 5* | 10 / 7 " \
         "| 6 / 5 |" in md
-    assert "| cloth side | 40 | default | - | - | - | - | failed: RuntimeError: boom | - | - " \
-        "| - |" in md
+    assert "| cloth side | 40 | default | - | - | 6 | failed: RuntimeError: boom | - | - | - |" \
+        in md
 
 
 # ------------------------------------------------------------- Table 1 beside the paper

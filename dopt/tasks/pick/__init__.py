@@ -5,6 +5,7 @@
                     (Eq. 2 of a population of action sequences in one rollout call),
                     mean_distance, end_to_end, matching_distance (the paper's metrics)
     cloth_scene.py  ClothSceneConfig, make_cloth; rope_scene.py: RopeSceneConfig, make_rope
+    fold_goals.py   cloth goals folded on the MuJoCo sheet by a line grasp (fold_goal, folds)
 
 The scene builders are registered by name in ``dopt.tasks.PICK_SCENES``.
 """

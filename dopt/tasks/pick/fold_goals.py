@@ -94,22 +94,17 @@ def folds(task: str, side: float) -> tuple[Crease, ...]:
     return table[task]
 
 
-def turn_over(positions: np.ndarray, turn: _Turn, axis_height: float,
-              angle: float) -> tuple[np.ndarray, np.ndarray]:
+def _turn_over(positions: np.ndarray, turn: _Turn, axis_height: float,
+               angle: float) -> np.ndarray:
     """Positions (M, 3) turned by ``angle`` (rad) about the world crease line ``turn`` at
-    height ``axis_height`` (m), the moving side going up and over, and their derivative (M, 3)
-    with respect to the angle (m/rad)."""
-    n = turn.normal
+    height ``axis_height`` (m), the moving side going up and over."""
     p = np.asarray(positions, dtype=float)
     s = turn.distance(p)                                # along the normal, from the crease
     h = p[:, 2] - axis_height
-    c, si = np.cos(angle), np.sin(angle)
-    out, rate = p.copy(), np.zeros_like(p)
-    out[:, :2] += (s * c - h * si - s)[:, None] * n[:2]
-    out[:, 2] = axis_height + s * si + h * c
-    rate[:, :2] = (-s * si - h * c)[:, None] * n[:2]
-    rate[:, 2] = s * c - h * si
-    return out, rate
+    out = p.copy()
+    out[:, :2] += (s * np.cos(angle) - h * np.sin(angle) - s)[:, None] * turn.normal[:2]
+    out[:, 2] = axis_height + s * np.sin(angle) + h * np.cos(angle)
+    return out
 
 
 def ideal_folds(rest: np.ndarray, creases: Sequence[Crease], gap: float) -> np.ndarray:
@@ -123,7 +118,7 @@ def ideal_folds(rest: np.ndarray, creases: Sequence[Crease], gap: float) -> np.n
     for crease in creases:
         moving = crease.distance(rest) > 0
         turn = _place(crease, rest, p, moving, spacing)
-        p[moving] = turn_over(p[moving], turn, _axis_height(p, moving, gap), np.pi)[0]
+        p[moving] = _turn_over(p[moving], turn, _axis_height(p, moving, gap), np.pi)
     return p
 
 
@@ -215,7 +210,7 @@ def fold_goal(scene: DeformableScene, creases: Sequence[Crease], start: np.ndarr
         scan = judges[0].start(1)
         for k in range(1, nsteps + 1):
             angle = np.pi * (1 - np.cos(np.pi * k / nsteps)) / 2
-            m.eq_data[hold_eq[held], 3:6] = turn_over(start_pos, turn, height, angle)[0]
+            m.eq_data[hold_eq[held], 3:6] = _turn_over(start_pos, turn, height, angle)
             mujoco.mj_step(m, data)
             reason = reason or _judge(scan, data, step)
             step += 1
