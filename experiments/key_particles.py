@@ -264,8 +264,9 @@ def simulated_goals(resolutions: list[int], cloth_config: ClothConfig,
     under it with ``panels="fold"`` (every particle onto its panel: the mode for goals a
     simulator or a camera makes)."""
     from deformables.layers import estimate_layer_gap
+    from dopt.tasks.pick.cloth_scene import make_cloth
     from dopt.tasks.pick.fold_goals import fold_goal, folds, ideal_folds
-    from planners.pick_place import PickPlaceSettings, make_problem
+    from planners.pick_place import PickPlaceSettings
 
     rows, failed = [], {}
     for task, preset, n in itertools.product(CLOTH_TASKS, physics, resolutions):
@@ -275,7 +276,7 @@ def simulated_goals(resolutions: list[int], cloth_config: ClothConfig,
             start = time.perf_counter()
             settings = replace(PickPlaceSettings.preset("cloth", task.removeprefix("cloth_")),
                                n=n, physics=preset, selfcollide=True)
-            scene = make_problem(settings).scene
+            scene = make_cloth(settings.scene_config(), settings.picker())
             creases = folds(task, settings.side)
             made = fold_goal(scene, creases, settle=settle)
             goal, rest = made.positions, scene.positions(scene.initial_state)

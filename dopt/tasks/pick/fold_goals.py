@@ -30,11 +30,16 @@ import mujoco
 import numpy as np
 
 from dopt.stability import Monitor
+from dopt.state import INTEGRATION
 from dopt.tasks.pick.picker import CONTROL_SPEC, fix_grasp_anchors
 from dopt.tasks.pick.scene import DeformableScene
 from dopt.validation import check_real, float_array
 
 log = logging.getLogger(__name__)
+
+#: the state a scene's model and its copy with the hold equalities share (the picker's grasp
+#: flags stay off throughout)
+_SHARED_STATE = INTEGRATION & ~int(mujoco.mjtState.mjSTATE_EQ_ACTIVE)
 
 #: how deep the grasp reaches into the moving part, in grid spacings from its farthest particle
 GRIP = 1.5
@@ -188,13 +193,13 @@ def fold_goal(scene: DeformableScene, creases: Sequence[Crease], start: np.ndarr
     data, source = mujoco.MjData(m), mujoco.MjData(scene.model)
     mujoco.mj_setState(scene.model, source, state, scene.scene.layout.spec)
     mujoco.mj_setState(scene.model, source, scene.picker.idle_row, CONTROL_SPEC)
-    _copy_state(source, data)
+    _copy_state(scene.model, source, m, data)
     bounds = scene.scene.stability
     judges = (Monitor(m, replace(bounds, max_energy_gain=None)), Monitor(m, bounds))
     gap = 2 * scene.radius
     step, reason = 0, ""
     for i, (crease, moving, held) in enumerate(plan):
-        _copy_state(data, source)
+        _copy_state(m, data, scene.model, source)
         p = scene.positions(scene.scene.state_of(source))
         turn = _place(crease, rest, p, moving, spacing)
         turn = replace(turn, point=turn.point + 0.5 * (np.pi * gap / 2 + slack) * turn.normal)
@@ -220,7 +225,7 @@ def fold_goal(scene: DeformableScene, creases: Sequence[Crease], start: np.ndarr
             mujoco.mj_step(m, data)
             reason = reason or _judge(scan, data, step)
             step += 1
-    _copy_state(data, source)
+    _copy_state(m, data, scene.model, source)
     final = scene.scene.state_of(source)
     if reason:
         log.warning("fold goal: %s", reason)
@@ -228,14 +233,13 @@ def fold_goal(scene: DeformableScene, creases: Sequence[Crease], start: np.ndarr
                     reason)
 
 
-def _copy_state(a: mujoco.MjData, b: mujoco.MjData) -> None:
-    """Copy the dynamic state of ``a`` into ``b``, whose model is ``a``'s with (or without)
-    the hold equalities appended."""
-    b.time = a.time
-    for name in ("qpos", "qvel", "act", "qacc_warmstart", "ctrl"):
-        getattr(b, name)[:] = getattr(a, name)
-    n = min(len(a.eq_active), len(b.eq_active))
-    b.eq_active[:n] = a.eq_active[:n]
+def _copy_state(ma: mujoco.MjModel, a: mujoco.MjData, mb: mujoco.MjModel,
+                b: mujoco.MjData) -> None:
+    """Copy the state of ``a`` into ``b`` (MuJoCo's integration state but the equalities'
+    active flags: ``mb`` is ``ma`` with, or without, the hold equalities appended)."""
+    state = np.empty(mujoco.mj_stateSize(ma, _SHARED_STATE))
+    mujoco.mj_getState(ma, a, state, _SHARED_STATE)
+    mujoco.mj_setState(mb, b, state, _SHARED_STATE)
 
 
 def _place(crease: Crease, rest: np.ndarray, p: np.ndarray, moving: np.ndarray,
