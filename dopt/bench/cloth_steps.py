@@ -30,11 +30,11 @@ TIMERS = {"mjTIMER_STEP": "step", "mjTIMER_POSITION": "position",
           "mjTIMER_CONSTRAINT": "constraint_solve"}
 
 
-#: settings tried on top of a preset where it warns (``--variants``): name -> the
-#: ClothSceneConfig fields changed. The flex solve of the discrete integrator (M + K with a
-#: per-vertex block preconditioner) runs at most ``iterations`` iterations to ``tolerance``;
-#: these probe which of the step, the mass, the stiffness and the solver budget decide whether
-#: it converges.
+#: settings tried on top of a preset (``--variants``): name -> the ClothSceneConfig fields
+#: changed. The flex solve of the discrete integrator (M + K with a per-vertex block
+#: preconditioner) runs at most ``iterations`` iterations to ``tolerance``; these probe which
+#: of the step, the mass, the stiffness and the solver budget decide whether it converges and
+#: what a step costs (Newton: the solver MuJoCo 4.0's tuning guide recommends for cloth).
 VARIANTS: dict[str, dict] = {
     "iterations 100": {"iterations": 100},
     "iterations 300": {"iterations": 300},
@@ -45,6 +45,10 @@ VARIANTS: dict[str, dict] = {
     "mass x1000": {"mass": 100.0},
     "young / 10": {"young": 5e3},
     "no bending": {"bending": False},
+    "Newton": {"solver": "Newton"},
+    "iterations 15": {"iterations": 15},
+    "tolerance 1e-5": {"tolerance": 1e-5},
+    "dt 10 ms": {"timestep": 0.01},
 }
 
 #: the relative residual MuJoCo's warning gives when the flex solve ran out of iterations
