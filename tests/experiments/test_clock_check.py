@@ -14,14 +14,16 @@ def test_ratios_and_verdicts():
     records = {"real": [rec("real", 0, 20.0, 80.0, 100.0), rec("real", 1, 22.0, 88.0, 110.0)],
                "virtual": [rec("virtual", 0, 21.0, 84.0, 104.0),
                            rec("virtual", 1, 23.0, 92.0, 108.0)]}
-    row = clock_check.compare(records)["sum-t10-r1"]
+    row = clock_check.compare(records, 2.0)["sum-t10-r1"]
     assert row["lag_ratio"] == pytest.approx(22.0 / 21.0)
     assert row["opt_ms_ratio"] == pytest.approx(88.0 / 84.0)
+    # one thread's CPU time is 2 x the virtual time: 2 x 88 over the real 84 ms
+    assert row["real_speedup"] == pytest.approx(2.0 * 88.0 / 84.0)
     assert row["lag_within_10_percent"] and row["cost_intervals_overlap"]
     assert row["real"]["n_trials"] == 2
     records["virtual"] = [rec("virtual", 0, 30.0, 84.0, 1000.0),
                           rec("virtual", 1, 31.0, 92.0, 1001.0)]
-    row = clock_check.compare(records)["sum-t10-r1"]
+    row = clock_check.compare(records, 2.0)["sum-t10-r1"]
     assert not row["lag_within_10_percent"] and not row["cost_intervals_overlap"]
 
 
