@@ -185,12 +185,12 @@ class PickPlaceSettings:
         """JSON-able scene and picker configs these settings run (what a preset name means
         today) and the stability bounds their rollouts are judged by (CEM scores an unstable
         sample +inf): a trial's identity, so that a changed preset, picker or verdict is not
-        reused."""
-        out = {"scene": asdict(self.scene_config()), "picker": asdict(self.picker()),
+        reused. Scene fields in ``UNSET_SCENE_FIELDS`` appear only when set."""
+        out = {"scene": _scene_identity(self.scene_config()), "picker": asdict(self.picker()),
                "stability": asdict(PICK_BOUNDS)}
         planning = self.planning_scene_config()
         if planning is not None:
-            out["planning_scene"] = asdict(planning)
+            out["planning_scene"] = _scene_identity(planning)
         return out
 
     def to_dict(self) -> dict:
@@ -209,6 +209,18 @@ class PickPlaceSettings:
                 d[name] = config(**d[name])
         _check_fields(cls, d, "settings")
         return cls(**d)
+
+
+#: scene-config fields a trial's identity leaves out at these values, as ``trial_key`` leaves
+#: out an unset planning model: options whose unset value is the scene every trial ran before
+#: they existed, so those trials stay valid
+UNSET_SCENE_FIELDS = {"passive": False}
+
+
+def _scene_identity(config: ClothSceneConfig | RopeSceneConfig) -> dict:
+    """``asdict(config)`` without the ``UNSET_SCENE_FIELDS`` at their unset values."""
+    return {k: v for k, v in asdict(config).items()
+            if k not in UNSET_SCENE_FIELDS or v != UNSET_SCENE_FIELDS[k]}
 
 
 @dataclass(frozen=True)

@@ -95,6 +95,16 @@ CLOTH_SETTINGS = {
                                     triangulation="alternating"),
     "E2e5 dt.005 CG30 tri alt": dict(young=2e5, timestep=0.005, solver="CG", iterations=30,
                                      triangulation="alternating"),
+    # on the default sheet (5e5 Pa, 5 ms, alternating triangles): self-collision by MuJoCo's
+    # midphase ("auto" is sap for a sheet), MuJoCo 4.0's passive flex contact (self and floor
+    # contacts as a frictionless penalty force, off the solver), and the Newton solver that
+    # 4.0's guide recommends for flex, at the default step and at twice it
+    "default selfcollide": dict(selfcollide=True),
+    "default selfcollide bvh": dict(selfcollide="bvh"),
+    "default passive": dict(passive=True),
+    "default selfcollide passive": dict(selfcollide=True, passive=True),
+    "default Newton": dict(solver="Newton"),
+    "default Newton dt.01": dict(solver="Newton", timestep=0.01),
 }
 ROPE_SETTINGS = {
     "preset:fast": None, "preset:default": None, "preset:accurate": None,

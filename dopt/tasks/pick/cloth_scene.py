@@ -25,6 +25,7 @@ from dopt.tasks.pick.scene import (
     check_pickable,
     floor_scene_xml,
     preset_fields,
+    selfcollide_mode,
 )
 from dopt.validation import check_config
 
@@ -59,7 +60,12 @@ class ClothSceneConfig:
             cone with impratio 10 and friction 1.5 keep the resting half of the cloth in place
             while the other half is dragged over it; with the notes' pyramidal cone and
             friction 0.8 the whole cloth creeps by centimetres during a fold.
-        selfcollide: self-collision (needed when layer order matters: multi-layer folds).
+        selfcollide: self-collision (needed when layer order matters: multi-layer folds):
+            False / True ("none" / "auto", which is sap for a sheet) or MuJoCo's midphase by
+            name ("bvh", "sap", "narrow"; ``SELFCOLLIDE_MODES``).
+        passive: MuJoCo 4.0's passive flex contact (``<contact passive="true">``): contacts
+            with the sheet itself and with static geometry (the floor) leave the constraint
+            solver and become a frictionless penalty force; contacts with the picker stay.
         triangulation: how each grid square is split into two triangles, with the names of
             ``deformables.goals.grid_faces``: "mujoco" along (ix, iy)-(ix+1, iy+1) (MuJoCo's
             own grid), "anti" along the other diagonal, "alternating" the two in a
@@ -82,7 +88,8 @@ class ClothSceneConfig:
     friction: float = 1.5
     cone: str = "elliptic"
     impratio: float = 10.0
-    selfcollide: bool = False
+    selfcollide: bool | str = False
+    passive: bool = False
     triangulation: str = "alternating"
     timestep: float = 0.005
     solver: str = "CG"
@@ -97,6 +104,7 @@ class ClothSceneConfig:
                               "iterations": 1, "tolerance": 0, "settle": 0},
                      choices={"cone": ("elliptic", "pyramidal"), "solver": SOLVERS,
                               "triangulation": TRIANGULATIONS})
+        selfcollide_mode(self.selfcollide, "ClothSceneConfig.selfcollide")
         if not self.poisson < 0.5:
             raise ValueError(f"ClothSceneConfig.poisson must be < 0.5, got {self.poisson!r}")
 
@@ -127,7 +135,8 @@ def cloth_xml(config: ClothSceneConfig = ClothSceneConfig(),
     flexcomp = f"""<flexcomp name="{FLEX}" type="direct" dim="2"
               point="{_grid_points(n, sp)}" element="{_grid_triangles(n, c.triangulation)}"
               pos="0 0 {r + 1e-4}" radius="{r}" mass="{c.mass}" rgba=".8 .3 .2 1">
-      <contact selfcollide="{'auto' if c.selfcollide else 'none'}" condim="3" friction="{fr}"
+      <contact selfcollide="{selfcollide_mode(c.selfcollide, 'selfcollide')}" condim="3"
+               friction="{fr}"{' passive="true"' if c.passive else ''}
                solref="0.01 1" solimp="0.95 0.99 0.0001"/>
       <elasticity young="{c.young}" poisson="{c.poisson}" thickness="{c.thickness}"
                   elastic2d="{'both' if c.bending else 'stretch'}" damping="{c.damping}"/>

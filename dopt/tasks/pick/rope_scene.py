@@ -26,6 +26,7 @@ from dopt.tasks.pick.scene import (
     check_pickable,
     floor_scene_xml,
     preset_fields,
+    selfcollide_mode,
 )
 from dopt.validation import check_config
 
@@ -56,7 +57,8 @@ class RopeSceneConfig:
             (docs/results/physics-rope.json).
         edge_solref: solref of the inextensibility constraint.
         friction: sliding friction with the floor.
-        selfcollide: rope-rope contacts.
+        selfcollide: rope-rope contacts: False / True ("none" / "auto") or MuJoCo's
+            midphase by name (``SELFCOLLIDE_MODES``).
         timestep, iterations, tolerance: dt (s) and CG settings.
         settle: seconds the rope settles before the initial state.
     """
@@ -69,7 +71,7 @@ class RopeSceneConfig:
     damping: float = 0.1
     edge_solref: tuple[float, float] = (0.004, 1.0)
     friction: float = 0.8
-    selfcollide: bool = False
+    selfcollide: bool | str = False
     timestep: float = 0.01
     solver: str = "CG"
     iterations: int = 50
@@ -81,6 +83,7 @@ class RopeSceneConfig:
                      minimum={"n": 3, "damping": 0, "friction": 0, "iterations": 1,
                               "tolerance": 0, "settle": 0},
                      choices={"solver": SOLVERS})
+        selfcollide_mode(self.selfcollide, "RopeSceneConfig.selfcollide")
 
     @classmethod
     def preset(cls, name: str = "default", **fields) -> RopeSceneConfig:
@@ -102,7 +105,7 @@ def rope_xml(config: RopeSceneConfig = RopeSceneConfig(),
               spacing="{sp} {sp} {sp}"
               pos="0 0 {c.radius + 1e-4}" radius="{c.radius}" mass="{c.mass}"
               rgba=".2 .3 .8 1">
-      <contact selfcollide="{'auto' if c.selfcollide else 'none'}" friction="{fr}"
+      <contact selfcollide="{selfcollide_mode(c.selfcollide, 'selfcollide')}" friction="{fr}"
                solref="0.01 1" solimp="0.95 0.99 0.0001"/>
       <edge equality="true" solref="{c.edge_solref[0]} {c.edge_solref[1]}"/>
       <elasticity young="{c.young}" damping="{c.damping}"/>

@@ -50,6 +50,23 @@ def check_pickable(pickable: Iterable[int] | None, n: int, picker) -> np.ndarray
 
 #: the constraint solvers a scene config may name
 SOLVERS = ("CG", "Newton", "PGS")
+#: MuJoCo's midphase strategies for a flex's self-collision (``<contact selfcollide>``)
+SELFCOLLIDE_MODES = ("none", "narrow", "bvh", "sap", "auto")
+
+
+def selfcollide_mode(value, name: str) -> str:
+    """A scene config's ``selfcollide`` as MuJoCo's attribute: False -> "none", True ->
+    "auto" (sap for 1D and 2D flexes), or one of ``SELFCOLLIDE_MODES`` by name; TypeError /
+    ValueError naming ``name`` otherwise."""
+    if isinstance(value, (bool, np.bool_)):
+        return "auto" if value else "none"
+    if not isinstance(value, str):
+        raise TypeError(f"{name} must be a bool or one of {list(SELFCOLLIDE_MODES)}, "
+                        f"got {value!r}")
+    if value not in SELFCOLLIDE_MODES:
+        raise ValueError(f"{name} must be a bool or one of {list(SELFCOLLIDE_MODES)}, "
+                         f"got {value!r}")
+    return value
 
 
 def preset_fields(presets: dict, name: str, fields: dict) -> dict:

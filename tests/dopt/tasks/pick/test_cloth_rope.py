@@ -247,3 +247,30 @@ def test_a_sheet_without_bending_keeps_its_stretch_stiffness():
     np.testing.assert_array_equal(stretch.flex_stiffness, both.flex_stiffness)
     assert ClothSceneConfig.preset("fast").bending is False
     assert ClothSceneConfig.preset("default").bending is True
+
+
+@pytest.mark.parametrize("scene", [lambda mode: make_cloth(ClothSceneConfig(n=4, selfcollide=mode)),
+                                   lambda mode: make_rope(RopeSceneConfig(n=4, selfcollide=mode))],
+                         ids=["cloth", "rope"])
+@pytest.mark.parametrize("mode", [False, True, "none", "narrow", "bvh", "sap", "auto"])
+def test_selfcollide_compiles_to_mujocos_midphase(scene, mode):
+    """False / True are MuJoCo's "none" / "auto"; a name is MuJoCo's own midphase."""
+    name = {False: "none", True: "auto"}.get(mode, mode)
+    expected = getattr(mujoco.mjtFlexSelf, f"mjFLEXSELF_{name.upper()}")
+    assert scene(mode).model.flex_selfcollide[0] == int(expected)
+
+
+def test_passive_contact_takes_the_floor_off_the_solver():
+    """With passive flex contact the settled sheet rests on the floor by MuJoCo's penalty
+    force: its floor contacts are found but have no constraint rows; without it every floor
+    contact is a constraint. Either way no particle sinks below the floor."""
+    for passive in (False, True):
+        scene = make_cloth(ClothSceneConfig(n=6, passive=passive))
+        assert scene.model.flex_passive[0] == passive
+        d = mujoco.MjData(scene.model)
+        mujoco.mj_setState(scene.model, d, scene.initial_state, scene.scene.layout.spec)
+        mujoco.mj_forward(scene.model, d)
+        assert d.ncon > 0
+        rows = d.contact.efc_address[:d.ncon]
+        assert (rows == -1).all() if passive else (rows >= 0).all()
+        assert scene.positions(scene.initial_state)[:, 2].min() > 0
