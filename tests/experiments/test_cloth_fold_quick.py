@@ -131,6 +131,12 @@ def test_trial_key_follows_what_the_preset_and_picker_mean(monkeypatch):
     assert pick_place_cli.trial_key("simple", 0, replace(s, threads=7)) == key
     monkeypatch.setitem(cloth_scene.PHYSICS_PRESETS, "default", {"young": 1e5})
     assert pick_place_cli.trial_key("simple", 0, s) != key
+    monkeypatch.setitem(cloth_scene.PHYSICS_PRESETS, "default", {"passive": True})
+    assert pick_place_cli.trial_key("simple", 0, s) != key
+    # an option at its unset value (UNSET_SCENE_FIELDS) is not part of the identity
+    monkeypatch.setitem(cloth_scene.PHYSICS_PRESETS, "default", {"passive": False})
+    assert "passive" not in s.resolved_physics()["scene"]
+    assert pick_place_cli.trial_key("simple", 0, s) == key
     monkeypatch.setitem(cloth_scene.PHYSICS_PRESETS, "default", {})
     assert pick_place_cli.trial_key("simple", 0, s) == key
     monkeypatch.setattr(PickPlaceSettings, "picker",
