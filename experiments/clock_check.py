@@ -6,10 +6,11 @@ on one thread and divides its CPU time by ``--nominal-threads`` (default 2). Bot
 of mpc.py's flags (``--preset paper`` for the authors' protocol). Trials are resumable files
 under OUT/real/trials and OUT/virtual/trials.
 
-Writes OUT/summary.json (experiment "clock_check"): per row and clock the mean lag (agent steps
-per optimisation), mean optimisation time, MPC cost mean and 90 % CI; the ratios virtual / real
-of the mean lag and of the mean optimisation time; whether the lag ratio is within 10 % of 1
-and whether the two cost intervals overlap. Exits 1 if a trial failed, 2 on a bad flag.
+Writes OUT/summary.json (experiment "clock_check", with the seeds): per row and clock the mean
+lag (agent steps per optimisation), mean optimisation time, MPC cost mean and 90 % CI; the
+ratios virtual / real of the mean lag and of the mean optimisation time; whether the lag ratio
+is within 10 % of 1 and whether the two cost intervals overlap. Exits 1 if a trial failed, 2
+on a bad flag.
 
     python experiments/clock_check.py --task clutter --preset paper \\
         --rows baseline,rand-t5,sum-t10-r1 --trials 10 --out results/clock_check \\
@@ -94,6 +95,7 @@ def main(argv=None) -> int:
     write_summary({"experiment": "clock_check", "task": args.task,
                    **table1.protocol(args, clock_trials(args, "virtual")[0].params),
                    "real_threads": args.real_threads,
+                   "seeds": list(range(args.seed, args.seed + args.trials)),
                    "rows": compare(records, args.nominal_threads),
                    "failed": failed, "trial_commits": commits},
                   args.out, args.record, "experiments/clock_check.py", argv)
