@@ -588,6 +588,12 @@ def table1_section(results: list[Result], page: Path) -> list[str]:
             lines[-2] += f" rho {d.get('rho')}; theta: {theta_text}; slowdown {d.get('slowdown')}."
         lines += table(["method", *MPC_HEADER],
                        [[name, *mpc_cells(m)] for name, m in d["methods"].items()])
+        pairs = [(m.get("lag_steps_mean"), m.get("mpc_cost_normalised_mean"))
+                 for m in d["methods"].values()]
+        if len(pairs) >= 5 and all(None not in p for p in pairs):
+            tau = kendall_tau_b([p[0] for p in pairs], [p[1] for p in pairs])
+            lines += ["", f"Kendall tau of the rows' mean lag and mean normalised cost: "
+                          f"{num(tau)} (1: the less a row lags, the less it costs)."]
         fb = d.get("feedback_effect")
         if fb:
             lines += ["", "Feedback vs open loop, paired by seed (MPC cost ratio: geometric mean "
