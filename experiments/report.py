@@ -139,7 +139,8 @@ CATALOGUE = (
              "baseline,rand-t5,sum-t10-r1 --trials 10 --out docs/results/runs/clock-check-clutter "
              "--record docs/results/clock-check-clutter.json", "clock_check",
              {"nominal_threads": 2.0})]
-    + [Entry(SVR, "The virtual clock at 1.3 nominal threads (the first check's speed-up), on a second machine",
+    + [Entry(SVR, "The virtual clock at 1.3 nominal threads (the first check's speed-up), "
+                  "on a second machine",
              "python experiments/clock_check.py --task clutter --preset paper --rows "
              "baseline,rand-t5,sum-t10-r1 --seed 10 --trials 10 --nominal-threads 1.3 "
              "--out docs/results/runs/clock-check-clutter "
