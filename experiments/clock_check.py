@@ -86,16 +86,16 @@ def compare(records: dict[str, list[dict]], nominal_threads: float) -> dict:
 def main(argv=None) -> int:
     ap = parser()
     args = table1.parse_args(argv, ap, one_feedback=True)
+    trials = {clock: clock_trials(args, clock) for clock in ("real", "virtual")}
     records, failed, commits = {}, {}, {}
-    for clock in ("real", "virtual"):
-        records[clock], res = table1.run(args, clock_trials(args, clock), out=args.out / clock,
-                                         workers=1)
+    for clock, these in trials.items():
+        records[clock], res = table1.run(args, these, out=args.out / clock, workers=1)
         failed.update(res.failed)
         commits[clock] = res.commits
     write_summary({"experiment": "clock_check", "task": args.task,
-                   **table1.protocol(args, clock_trials(args, "virtual")[0].params),
+                   **table1.protocol(args, trials["virtual"][0].params),
                    "real_threads": args.real_threads,
-                   "seeds": list(range(args.seed, args.seed + args.trials)),
+                   "seeds": sorted({t.params["seed"] for t in trials["virtual"]}),
                    "rows": compare(records, args.nominal_threads),
                    "failed": failed, "trial_commits": commits},
                   args.out, args.record, "experiments/clock_check.py", argv)
