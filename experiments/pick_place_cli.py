@@ -103,6 +103,10 @@ def parser(task: str, doc: str, help_: dict) -> argparse.ArgumentParser:
                     help="stretch limit of the action constraint C(a_t): a sampled rollout "
                          "whose edge strain away from the grasp passes it is infeasible "
                          "(default: not judged; SoftGym's two-picker limit is 0.2)")
+    ap.add_argument("--picker-speed", type=positive_float, default=None, metavar="M_PER_S",
+                    help="the picker's average speed on the longest move (default: the "
+                         "protocol's, 0.5 m/s); an action's steps, and so a rollout's cost, "
+                         "go with its inverse")
     ap.add_argument("--threads", type=nonneg_int, default=0,
                     help="simulation threads (0: one per core, the default)")
     ap.add_argument("--no-render", action="store_true",
@@ -125,7 +129,8 @@ def parse(ap: argparse.ArgumentParser, task: str, argv) -> tuple[argparse.Namesp
                     n=args.n or s.n, bound=args.bound or s.bound,
                     physics=args.physics or s.physics,
                     planning_physics=args.planning_physics or s.planning_physics,
-                    max_stretch=args.max_stretch)
+                    max_stretch=args.max_stretch,
+                    picker_speed=args.picker_speed or s.picker_speed)
         if args.seeds is None:
             args.seeds = PROTOCOL_SEEDS[args.preset]
     except (ValueError, TypeError) as e:
@@ -146,7 +151,7 @@ def trial_key(method: str, seed: int, settings: PickPlaceSettings) -> str:
     (``PickPlaceSettings.resolved_physics``)."""
     d = settings.to_dict()
     d.pop("threads")
-    for name in ("planning_physics", "max_stretch"):    # unset: the key leaves them out
+    for name in ("planning_physics", "max_stretch", "picker_speed"):  # unset: left out
         if d.get(name) is None:
             d.pop(name, None)
     d["resolved"] = settings.resolved_physics()

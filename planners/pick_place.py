@@ -86,6 +86,9 @@ class PickPlaceSettings:
         max_stretch: the stretch limit of C(a_t) (relative edge elongation away from the grasp;
             a sampled rollout beyond it is infeasible, +inf); None: not judged
             (``dopt.tasks.pick.constraints``).
+        picker_speed: the picker's average speed on the longest move (m/s,
+            ``PickerConfig.speed``); it sets the steps of every action, so it sets the cost of
+            a rollout. None: ``PickerConfig``'s default.
     """
 
     task: str
@@ -101,6 +104,7 @@ class PickPlaceSettings:
     threads: int = 0
     planning_physics: str | None = None
     max_stretch: float | None = None
+    picker_speed: float | None = None
 
     def __post_init__(self):
         if not isinstance(self.task, str) or self.task not in GOALS:
@@ -115,7 +119,7 @@ class PickPlaceSettings:
                             f"{self.scripted!r}")
         # n an int >= 3, bound / side / length finite > 0 (m), threads an int >= 0 (0: one
         # per core), selfcollide a bool; TypeError or ValueError naming the field
-        check_config(self, positive=("bound", "side", "length", "max_stretch"),
+        check_config(self, positive=("bound", "side", "length", "max_stretch", "picker_speed"),
                      minimum={"n": 3, "threads": 0},
                      choices={"physics": tuple(PHYSICS_PRESETS)})
         if self.planning_physics is not None and self.planning_physics not in PHYSICS_PRESETS:
@@ -159,7 +163,8 @@ class PickPlaceSettings:
 
     def picker(self) -> PickerConfig:
         """The picker of the task's scenes: the bound per axis, limited to ``constraint()``."""
-        return PickerConfig(bound=(self.bound,) * 3, workspace=self.constraint())
+        speed = {} if self.picker_speed is None else {"speed": float(self.picker_speed)}
+        return PickerConfig(bound=(self.bound,) * 3, workspace=self.constraint(), **speed)
 
     def scene_config(self, physics: str | None = None,
                      overrides: dict | None = None) -> ClothSceneConfig | RopeSceneConfig:
