@@ -64,6 +64,9 @@ def main(argv=None) -> int:
                        help="random pick-and-place actions per setting and size")
         p.add_argument("--no-scripted", action="store_true",
                        help="skip the scripted policy on the task's goals")
+        p.add_argument("--picker-speeds", default=None,
+                       help="comma-separated picker speeds (m/s, the average on the longest "
+                            "move), a row each (default: the picker's 0.5)")
 
     args = ap.parse_args(argv)
     if args.bench == "ilqr":
@@ -90,7 +93,9 @@ def main(argv=None) -> int:
         from planners.bench.physics import bench_physics
         out = bench_physics(args.bench, [int(n) for n in args.sizes.split(",")],
                             args.settings.split(",") if args.settings else None, args.actions,
-                            args.threads, args.seed, scripted=not args.no_scripted)
+                            args.threads, args.seed, scripted=not args.no_scripted,
+                            picker_speeds=([float(v) for v in args.picker_speeds.split(",")]
+                                           if args.picker_speeds else [None]))
     print_json(out)
     return 0
 

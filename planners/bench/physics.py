@@ -140,11 +140,13 @@ def _differing_fields(config) -> dict:
 
 
 def random_actions(task: str, config, actions: int, threads: int, seed: int,
-                   bound: float) -> dict:
+                   bound: float, picker_speed: float | None = None) -> dict:
     """``actions`` random pick-and-place actions (two per sequence; half from the flat start,
     half after folding one corner onto the opposite one): unstable per 1000, strain
-    percentiles, CPU ms per step."""
-    picker = PickerConfig(bound=(bound,) * 3)
+    percentiles, CPU ms per step. ``picker_speed``: ``PickerConfig.speed`` (None: its
+    default)."""
+    picker = PickerConfig(bound=(bound,) * 3,
+                          **({} if picker_speed is None else {"speed": picker_speed}))
     scene = (make_cloth if task == "cloth" else make_rope)(config, picker)
     N = scene.n_particles
     svc = RolloutService(scene.scene, RolloutConfig(threads=threads))
@@ -195,12 +197,13 @@ def random_actions(task: str, config, actions: int, threads: int, seed: int,
 
 
 def scripted_goals(task: str, name: str, overrides: dict | None, n: int,
-                   threads: int) -> dict:
+                   threads: int, picker_speed: float | None = None) -> dict:
     """The scripted policy on every goal of ``task`` (Fig. 7 settings, one trial): error (mm)
     and verdict."""
     out = {}
     for goal in GOALS[task]:
-        s = replace(PickPlaceSettings.preset(task, goal), n=n, threads=threads)
+        s = replace(PickPlaceSettings.preset(task, goal), n=n, threads=threads,
+                    picker_speed=picker_speed)
         if overrides is None:
             s = replace(s, physics=name.split(":", 1)[1])
             problem = make_problem(s)
@@ -213,8 +216,10 @@ def scripted_goals(task: str, name: str, overrides: dict | None, n: int,
 
 
 def bench_physics(task: str, sizes: list[int], settings: list[str] | None, actions: int,
-                  threads: int, seed: int, scripted: bool = True) -> dict:
-    """The sweep: one row per (setting, size)."""
+                  threads: int, seed: int, scripted: bool = True,
+                  picker_speeds: list[float | None] = (None,)) -> dict:
+    """The sweep: one row per (setting, size, picker speed); a speed of None is
+    ``PickerConfig``'s default."""
     table = CLOTH_SETTINGS if task == "cloth" else ROPE_SETTINGS
     names = settings or list(table)
     unknown = [s for s in names if s not in table]
@@ -225,11 +230,14 @@ def bench_physics(task: str, sizes: list[int], settings: list[str] | None, actio
     for n in sizes:
         for name in names:
             config = _config(task, name, table[name], n)
-            row = {"setting": name, "n": n, "overrides": table[name],
-                   "fields": _differing_fields(config),
-                   **random_actions(task, config, actions, threads, seed, bound)}
-            if scripted:
-                row["scripted"] = scripted_goals(task, name, table[name], n, threads)
-            rows.append(row)
+            for speed in picker_speeds:
+                row = {"setting": name, "n": n, "overrides": table[name],
+                       "fields": _differing_fields(config),
+                       "picker_speed": PickerConfig.speed if speed is None else speed,
+                       **random_actions(task, config, actions, threads, seed, bound, speed)}
+                if scripted:
+                    row["scripted"] = scripted_goals(task, name, table[name], n, threads,
+                                                     speed)
+                rows.append(row)
     return {"experiment": "physics", "bench": task, "sizes": sizes, "seed": seed,
             "actions_per_setting": actions, "rows": rows, "provenance": provenance()}

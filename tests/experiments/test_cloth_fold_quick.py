@@ -142,3 +142,36 @@ def test_trial_key_follows_what_the_preset_and_picker_mean(monkeypatch):
     monkeypatch.setattr(PickPlaceSettings, "picker",
                         lambda self: picker.PickerConfig(bound=(self.bound,) * 3, snap=0.015))
     assert pick_place_cli.trial_key("simple", 0, s) != key
+
+
+def test_picker_speed_sets_the_steps_of_an_action_and_the_key():
+    """--picker-speed: the picker's average speed on the longest move; the move's steps go
+    with its inverse (ceil(|bound| / speed / dt)), an unset speed keeps the key of a trial
+    run before the setting existed, a set one changes it, and a bad one is a usage error."""
+    from dataclasses import replace
+
+    import numpy as np
+    import pick_place_cli
+
+    from planners.pick_place import PickPlaceSettings, make_problem
+
+    ap = pick_place_cli.parser("cloth", "", cloth_fold.HELP)
+    _, s = pick_place_cli.parse(ap, "cloth", ["--quick", "--out", "results/x"])
+    _, fast = pick_place_cli.parse(ap, "cloth", ["--quick", "--picker-speed", "1.25",
+                                                 "--out", "results/x"])
+    assert s.picker_speed is None and fast.picker_speed == 1.25
+    assert s.picker().speed == 0.5 and fast.picker().speed == 1.25
+    key = pick_place_cli.trial_key("simple", 0, s)
+    assert pick_place_cli.trial_key("simple", 0, replace(s, picker_speed=None)) == key
+    assert pick_place_cli.trial_key("simple", 0, fast) != key
+    steps = {}
+    for name, settings in (("slow", s), ("fast", fast)):
+        picker = make_problem(settings, 0).scene.picker
+        longest = float(np.linalg.norm([settings.bound] * 3))
+        assert picker.move_steps == int(np.ceil(longest / settings.picker().speed / picker.dt))
+        steps[name] = picker.steps_per_action
+    assert steps["fast"] < steps["slow"]
+    with pytest.raises(SystemExit):
+        pick_place_cli.parse(ap, "cloth", ["--picker-speed", "0", "--out", "results/x"])
+    with pytest.raises(ValueError, match="picker_speed"):
+        replace(PickPlaceSettings.preset("cloth", "diagonal"), picker_speed=-1.0)

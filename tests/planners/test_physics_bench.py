@@ -25,3 +25,16 @@ def test_rows_name_their_physics_and_count_the_actions():
 def test_unknown_setting_is_named():
     with pytest.raises(ValueError, match="unknown cloth settings"):
         bench_physics("cloth", [4], ["E9 nothing"], actions=4, threads=1, seed=0)
+
+
+def test_picker_speeds_give_a_row_each_with_the_moves_steps():
+    """--picker-speeds: one row per speed, each naming it; the move phase's steps go with
+    the inverse speed (ceil(|bound| sqrt 3 / speed / dt)), the other phases stay."""
+    import math
+
+    out = bench_physics("cloth", [4], ["preset:default"], actions=4, threads=1, seed=0,
+                        scripted=False, picker_speeds=[None, 1.0])
+    slow, fast = out["rows"]
+    assert (slow["picker_speed"], fast["picker_speed"]) == (0.5, 1.0)
+    move = {v: math.ceil(0.3 * math.sqrt(3) / v / 0.005) for v in (0.5, 1.0)}
+    assert slow["steps_per_action"] - fast["steps_per_action"] == move[0.5] - move[1.0]
