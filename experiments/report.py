@@ -451,6 +451,8 @@ def physics_section(results: list[Result], page: Path) -> list[str]:
                 setting += " (" + (", ".join(f"{k} {v:g}" if isinstance(v, float) else
                                              f"{k} {v}" for k, v in row["fields"].items())
                                    or "the config's defaults") + ")"
+            if "picker_speed" in row:
+                setting += f", picker {row['picker_speed']:g} m/s"
             rows.append([setting, str(row["n"]), num(row["cpu_ms_per_step"], 2),
                          str(row["steps_per_action"]),
                          num(row["unstable_per_1000_actions"], 0),
