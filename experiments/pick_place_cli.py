@@ -108,7 +108,11 @@ def parser(task: str, doc: str, help_: dict) -> argparse.ArgumentParser:
                          "protocol's, 0.5 m/s); an action's steps, and so a rollout's cost, "
                          "go with its inverse")
     ap.add_argument("--threads", type=nonneg_int, default=0,
-                    help="simulation threads (0: one per core, the default)")
+                    help="simulation threads per trial (0, the default: one per core, or one "
+                         "with --workers above 1)")
+    ap.add_argument("--workers", type=positive_int, default=1,
+                    help="trials run at once on a local process pool (default %(default)s: "
+                         "one after another in this process, with a bar of CEM iterations)")
     ap.add_argument("--no-render", action="store_true",
                     help="skip the renders (goal_vs_<method>.png, plan_<method>.gif)")
     ap.add_argument("-v", "--verbose", action="store_true", help="log the cost of each stage")
@@ -125,7 +129,8 @@ def parse(ap: argparse.ArgumentParser, task: str, argv) -> tuple[argparse.Namesp
                                      protocol=args.preset)
         cem = {k: getattr(args, k) for k in ("population", "elites", "iterations", "horizon")
                if getattr(args, k) is not None}
-        s = replace(s, cem=replace(s.cem, **cem), threads=args.threads,
+        threads = 1 if args.threads == 0 and args.workers > 1 else args.threads
+        s = replace(s, cem=replace(s.cem, **cem), threads=threads,
                     n=args.n or s.n, bound=args.bound or s.bound,
                     physics=args.physics or s.physics,
                     planning_physics=args.planning_physics or s.planning_physics,
@@ -182,7 +187,8 @@ def _main(task: str, script: str, doc: str, help_: dict, argv=None) -> int:
     trials = [Trial(trial_key(m, seed, settings),
                     {"settings": settings.to_dict(), "method": m, "seed": int(seed)})
               for seed in seeds for m in args.methods]
-    results, res = _run(trials, settings.cem.iterations * len(problem.stages), out, args.fresh)
+    results, res = _run(trials, settings.cem.iterations * len(problem.stages), out, args.fresh,
+                        args.workers)
     failed = res.failed
     summary = {"experiment": "fig7", "task": task, "goal": args.goal, "protocol": args.preset,
                "settings": settings.to_dict(), "physics": settings.resolved_physics(),
@@ -217,23 +223,29 @@ def _main(task: str, script: str, doc: str, help_: dict, argv=None) -> int:
 
 
 def _run(trials: list[Trial], iterations_per_trial: int, out: Path,
-         fresh: bool = False) -> tuple[list, SweepResult]:
+         fresh: bool = False, workers: int = 1) -> tuple[list, SweepResult]:
     """Every trial not finished yet under ``out`` (all of them when ``fresh``), with a progress
-    bar of CEM iterations. Returns the results of the given trials and the sweep's result
-    (``failed``: {key: error}, ``commits``: the code versions of the results)."""
+    bar of CEM iterations (``workers`` 1) or of trials (a pool of ``workers`` processes).
+    Returns the results of the given trials and the sweep's result (``failed``: {key: error},
+    ``commits``: the code versions of the results)."""
     from tqdm import tqdm
 
+    pool = workers > 1
     n_cem = sum(1 for t in trials if t.params["method"] != "scripted")
-    with tqdm(total=n_cem * iterations_per_trial, unit="it", desc="CEM iterations") as bar:
+    total, unit = (len(trials), "trial") if pool else (n_cem * iterations_per_trial, "it")
+    with tqdm(total=total, unit=unit, desc="trials" if pool else "CEM iterations") as bar:
         def tick(i, best):
             bar.update(1)
             bar.set_postfix(best_mm=f"{best * 1e3:.1f}")
 
         def done(key, rec):
+            bar.update(int(pool))
             bar.write(f"finished {key}" if rec else f"FAILED {key}")
 
-        res = run_sweep(partial(run_trial, on_iteration=tick), trials, out, progress=done,
-                        fresh=fresh)
+        # a pool's trials cannot call back into this process's bar: it counts whole trials
+        fn = run_trial if pool else partial(run_trial, on_iteration=tick)
+        res = run_sweep(fn, trials, out, workers=workers, progress=done, fresh=fresh)
+        bar.update(len(res.skipped) if pool else 0)
     keys = {t.key for t in trials}
     return [r["result"] for k, r in res.records.items() if k in keys], res
 

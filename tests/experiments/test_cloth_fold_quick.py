@@ -81,6 +81,20 @@ def test_rope_straighten_quick(tmp_path):
     assert summary["methods"]["simple"]["n_candidates"] == 2            # the two ends
 
 
+def test_workers_run_the_trials_on_a_pool_with_the_same_results(tmp_path):
+    """--workers 2: the trials run on two processes (one simulation thread each) and give the
+    results a run in this process gives, under the same trial keys."""
+    inline, pool = tmp_path / "inline", tmp_path / "pool"
+    flags = ["--quick", "--goal", "fold", "--methods", "simple,scripted", "--no-render"]
+    assert rope.main([*flags, "--out", str(inline)]) == 0
+    assert rope.main([*flags, "--workers", "2", "--out", str(pool)]) == 0
+    assert (sorted(p.name for p in (inline / "trials").glob("*.json"))
+            == sorted(p.name for p in (pool / "trials").glob("*.json")))
+    a, b = (json.loads((d / "summary.json").read_text())["methods"] for d in (inline, pool))
+    for m in ("simple", "scripted"):
+        assert a[m]["final_costs"] == b[m]["final_costs"]
+
+
 @pytest.mark.parametrize("script", ["cloth_fold.py", "rope.py"])
 def test_help_explains_every_flag(script):
     text = subprocess.run([sys.executable, str(ROOT / "experiments" / script), "--help"],
