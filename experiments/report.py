@@ -1332,8 +1332,8 @@ def readme_block(results: list[Result], readme: Path, results_md_path: Path) -> 
              f"Every table, per-seed number and setting: [{rel}]({rel}), generated like this "
              f"table from the result files by `{REGENERATE}`."]
     if claims:
-        lines += ["", "Fig. 7's claims on the recorded files (95 % intervals of the final cost "
-                      "separate or overlapping):", "", *claims]
+        lines += ["", "Fig. 7's claims on the recorded files (each panel on the paper's metric, "
+                      "named; 95 % intervals separate or overlapping):", "", *claims]
     if beside:
         lines += ["", f"Table 1 under `--preset paper` against the paper's printed Table 1 "
                       f"(MPC cost / baseline, means; [{rel}]({rel}) has the rows side by side):",
