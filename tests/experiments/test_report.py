@@ -517,3 +517,12 @@ def test_fig7_settings_say_what_the_physics_preset_meant():
     assert report._fig7_physics(judged).endswith("energy bound 0.5 J/kg)")
     old = {"settings": {"physics": "default"}, "provenance": {"git_commit": "b22f11ba0123"}}
     assert report._fig7_physics(old) == "preset default as defined at b22f11ba"
+
+
+def test_a_table_escapes_pipes_in_its_header_and_cells():
+    """A header such as |end-to-end - length| must not split the column: every line of the
+    table has as many unescaped separators as the header has columns plus one."""
+    import re
+    lines = report.table(["method", "|end-to-end - length| (mm)"], [["a|b", "1.0"]])
+    for line in lines:
+        assert len(re.findall(r"(?<!\\)\|", line)) == 3
