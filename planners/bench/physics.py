@@ -140,13 +140,11 @@ def _differing_fields(config) -> dict:
 
 
 def random_actions(task: str, config, actions: int, threads: int, seed: int,
-                   bound: float, picker_speed: float | None = None) -> dict:
+                   bound: float, picker_speed: float = PickerConfig.speed) -> dict:
     """``actions`` random pick-and-place actions (two per sequence; half from the flat start,
     half after folding one corner onto the opposite one): unstable per 1000, strain
-    percentiles, CPU ms per step. ``picker_speed``: ``PickerConfig.speed`` (None: its
-    default)."""
-    picker = PickerConfig(bound=(bound,) * 3,
-                          **({} if picker_speed is None else {"speed": picker_speed}))
+    percentiles, CPU ms per step. ``picker_speed``: ``PickerConfig.speed`` (m/s)."""
+    picker = PickerConfig(bound=(bound,) * 3, speed=picker_speed)
     scene = (make_cloth if task == "cloth" else make_rope)(config, picker)
     N = scene.n_particles
     svc = RolloutService(scene.scene, RolloutConfig(threads=threads))
@@ -231,9 +229,9 @@ def bench_physics(task: str, sizes: list[int], settings: list[str] | None, actio
         for name in names:
             config = _config(task, name, table[name], n)
             for speed in picker_speeds:
+                speed = PickerConfig.speed if speed is None else float(speed)
                 row = {"setting": name, "n": n, "overrides": table[name],
-                       "fields": _differing_fields(config),
-                       "picker_speed": PickerConfig.speed if speed is None else speed,
+                       "fields": _differing_fields(config), "picker_speed": speed,
                        **random_actions(task, config, actions, threads, seed, bound, speed)}
                 if scripted:
                     row["scripted"] = scripted_goals(task, name, table[name], n, threads,
