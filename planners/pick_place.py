@@ -261,8 +261,10 @@ PRESETS = {
 #: method (``PROTOCOL_SEEDS``), on a 20 x 20 cloth (400 candidates for CEM(Original)); even at
 #: this size the four folds x three CEM methods x ten runs take days of CPU on 2 cores, and
 #: the paper's 100 x 100 does not simulate without MuJoCo's flex-solve warnings
-#: (docs/DESIGN-NOTES.md, "Large cloths"). Population, elites and horizon stay ours (the paper
-#: does not give them).
+#: (docs/DESIGN-NOTES.md, "Large cloths"). Population, elites and horizon stay ours: the
+#: paper's T (20 rope, 15 cloth) counts short drags of a picked particle, not pick-and-place
+#: actions, and the authors' population (200 rope, 333 cloth) would cost the 20 x 20 cloth ten
+#: times more (docs/DESIGN-NOTES.md, "The paper's CEM budget").
 #: The cloth runs the default physics, whose scripted folds of the diagonal and side goals the
 #: stability verdict leaves unflagged at 20 x 20 (docs/results/physics-cloth-20.json).
 PAPER_PRESETS = {
