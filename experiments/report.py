@@ -554,13 +554,17 @@ def fig7_claims(results: list[Result]) -> dict:
                                       else f"{n} particles")
                              if (n := (r.data.get("settings") or {}).get("n")) else "size ?"}
         if r.data.get("task") == "cloth" and r.data.get("goal") in CLOTH_DIFFICULTY:
-            gaps.append((CLOTH_DIFFICULTY.index(r.data["goal"]), r.data["goal"], gap))
+            gaps.append((CLOTH_DIFFICULTY.index(r.data["goal"]), r.data["goal"], gap,
+                         (r.data.get("settings") or {}).get("n")))
     gaps.sort()
-    values = [g for _, _, g in gaps]
-    grows = (None if len(values) < 2 or any(g is None for g in values)
+    values = [g for _, _, g, _ in gaps]
+    sizes = {n for *_, n in gaps}
+    # a gap at another cloth size (another N_O) is another experiment: judged only when all
+    # folds share one size
+    grows = (None if len(values) < 2 or any(g is None for g in values) or len(sizes) != 1
              else all(b > a for a, b in zip(values, values[1:], strict=False)))
-    return {"panels": panels, "cloth_gaps": [(goal, g) for _, goal, g in gaps],
-            "gap_grows": grows}
+    return {"panels": panels, "cloth_gaps": [(goal, g) for _, goal, g, _ in gaps],
+            "cloth_sizes": [(goal, n) for _, goal, _, n in gaps], "gap_grows": grows}
 
 
 def fig7_claims_lines(results: list[Result], page: Path) -> list[str]:
@@ -574,8 +578,15 @@ def fig7_claims_lines(results: list[Result], page: Path) -> list[str]:
              f"{source(p['file'], page)}" for panel, p in c["panels"].items()]
     if c["cloth_gaps"]:
         gaps = ", ".join(f"{goal} {mm(g)}" for goal, g in c["cloth_gaps"])
-        verdict = {True: "grows", False: "does not grow", None: "cannot be judged"}[
-            c["gap_grows"]]
+        sizes = {n for _, n in c["cloth_sizes"]}
+        if len(sizes) > 1:
+            size = dict(c["cloth_sizes"])
+            gaps = ", ".join(f"{goal} {mm(g)} at {size[goal]} x {size[goal]}"
+                             for goal, g in c["cloth_gaps"])
+            verdict = "cannot be judged until all folds are run at one cloth size"
+        else:
+            verdict = {True: "grows", False: "does not grow", None: "cannot be judged"}[
+                c["gap_grows"]]
         lines.append(f"- The gap Original - Simple (mm) over the cloth folds in the paper's "
                      f"order of difficulty: {gaps}; it {verdict} with difficulty (the paper: "
                      f"it grows).")

@@ -399,6 +399,25 @@ def test_fig7_claims_check_whether_the_gap_grows_with_difficulty(site):
     assert report.fig7_claims(report.load_results(site["results"]))["gap_grows"] is True
 
 
+def test_fig7_gap_is_not_judged_across_cloth_sizes(site):
+    """A fold run on another cloth (another number of candidates) is another experiment: gaps
+    that would grow are not called growing when the folds' sizes differ."""
+    for goal, gap, n in (("diagonal", 0.010, 20), ("side", 0.020, 12), ("reflective", 0.030, 12),
+                         ("underneath", 0.040, 12)):
+        data = fig7(goal=goal, settings={**fig7()["settings"], "goal": goal, "n": n})
+        data["methods"]["original"]["final_cost_mean"] = (
+            data["methods"]["simple"]["final_cost_mean"] + gap)
+        write(site["results"], f"fig7-cloth-{goal}.json", data)
+    claims = report.fig7_claims(report.load_results(site["results"]))
+    assert claims["gap_grows"] is None
+    assert claims["cloth_sizes"] == [("diagonal", 20), ("side", 12), ("reflective", 12),
+                                     ("underneath", 12)]
+    assert run(site) == 0
+    assert ("diagonal 10.0 at 20 x 20, side 20.0 at 12 x 12, reflective 30.0 at 12 x 12, "
+            "underneath 40.0 at 12 x 12; it cannot be judged until all folds are run at one "
+            "cloth size") in block(site["readme"])
+
+
 def test_rope_panels_are_judged_on_the_papers_metric(site):
     """Rope folding: Simple < Original on the bipartite-matching distance (Sec. IV-B), which
     may disagree with the mean particle distance; the claim line names the metric."""
