@@ -538,6 +538,7 @@ def fig7_claims(results: list[Result]) -> dict:
         if r.kind != "fig7" or r.quick:
             continue
         ms = r.data["methods"]
+        n = (r.data.get("settings") or {}).get("n")
         s, o = ms.get("simple"), ms.get("original")
         gap = (o["final_cost_mean"] - s["final_cost_mean"]
                if s and o and _finite(s.get("final_cost_mean"))
@@ -552,10 +553,9 @@ def fig7_claims(results: list[Result]) -> dict:
                              "seeds": max((e.get("n") or 0) for e in ms.values()),
                              "size": (f"{n} x {n} particles" if r.data.get("task") == "cloth"
                                       else f"{n} particles")
-                             if (n := (r.data.get("settings") or {}).get("n")) else "size ?"}
+                             if n else "size ?"}
         if r.data.get("task") == "cloth" and r.data.get("goal") in CLOTH_DIFFICULTY:
-            gaps.append((CLOTH_DIFFICULTY.index(r.data["goal"]), r.data["goal"], gap,
-                         (r.data.get("settings") or {}).get("n")))
+            gaps.append((CLOTH_DIFFICULTY.index(r.data["goal"]), r.data["goal"], gap, n))
     gaps.sort()
     values = [g for _, _, g, _ in gaps]
     sizes = {n for *_, n in gaps}
