@@ -191,7 +191,10 @@ def _main(task: str, script: str, doc: str, help_: dict, argv=None) -> int:
                         args.workers)
     failed = res.failed
     summary = {"experiment": "fig7", "task": task, "goal": args.goal, "protocol": args.preset,
-               "settings": settings.to_dict(), "physics": settings.resolved_physics(),
+               "settings": settings.to_dict(),
+               # the flags that changed the protocol: such a run is judged apart from it
+               "departures": settings.departures(args.preset, args.quick),
+               "physics": settings.resolved_physics(),
                "methods": summarize(results, args.methods, problem.metric_names),
                "failed": failed, "trial_commits": res.commits,
                # this run's wall time (a resumed run reuses finished trials), and the trials'

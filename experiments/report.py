@@ -29,6 +29,7 @@ import argparse
 import json
 import math
 import os
+import statistics
 import sys
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -344,7 +345,7 @@ def fig7_section(results: list[Result], page: Path) -> list[str]:
     for r in results:
         ms = r.data["methods"]
         seeds = [str(ms[m].get("n", "?")) for m in methods if m in ms]
-        rows.append([_panel(r) + (" (quick)" if r.quick else ""),
+        rows.append([f"{_panel(r)} ({fig7_setup(r)})" + (" (quick)" if r.quick else ""),
                      *[fig7_cell(ms.get(m)) for m in methods],
                      seeds[0] if len(set(seeds)) == 1 else " / ".join(seeds),
                      " / ".join(str(ms[m].get("n_candidates", "?")) for m in methods
@@ -356,7 +357,7 @@ def fig7_section(results: list[Result], page: Path) -> list[str]:
         lines += ["", "The paper's claims on these files (Simple's 95 % interval wholly below "
                       "the other's: separate):", "", *claims]
     for r in results:
-        lines += ["", *fig7_detail(r, page)]
+        lines += ["", *fig7_detail(r, page, results)]
     return lines
 
 
@@ -379,11 +380,11 @@ def _fig7_physics(d: dict) -> str:
     return f"preset {name} ({', '.join(what)})"
 
 
-def fig7_detail(r: Result, page: Path) -> list[str]:
+def fig7_detail(r: Result, page: Path, results: list[Result]) -> list[str]:
     d = r.data
     s = d.get("settings") or {}
     cem = s.get("cem") or {}
-    lines = [f"### Fig. 7 {_panel(r)}: `{r.name}`", ""]
+    lines = [f"### Fig. 7 {_panel(r)}, {fig7_setup(r)}: `{r.name}`", ""]
     if s:
         lines += [f"Settings: {s.get('task')} {s.get('goal')}, n {s.get('n')}, bound "
                   f"{s.get('bound')} m, self-collision {'on' if s.get('selfcollide') else 'off'}, "
@@ -399,8 +400,10 @@ def fig7_detail(r: Result, page: Path) -> list[str]:
                                ("matching_distance", "matching distance (mm)"))
              if any(f"{k}_mean" in e for e in d["methods"].values())}
     infeasible = any(e.get("n_infeasible_rollouts") for e in d["methods"].values())
+    last = any(e.get("last_improvements") for e in d["methods"].values())
     header = ["method", "final cost (mm)", "per seed (mm)", "seeds", "candidates",
               "s / CEM iteration", "unstable trials", "unstable rollouts"] + (
+        [f"last improvement (iteration of {cem.get('iterations')})"] if last else []) + (
         ["infeasible rollouts (stretch)"] if infeasible else []) + (
         ["end-to-end / length"] if rope_ratio else []) + list(extra.values())
     rows = []
@@ -412,6 +415,8 @@ def fig7_detail(r: Result, page: Path) -> list[str]:
                _unstable_trials(e),
                f"{e['n_unstable_rollouts']} / {e['n_rollouts']}" if "n_rollouts" in e
                else "not judged"]
+        if last:
+            row.append(_last_improvement(e))
         if infeasible:
             row.append(f"{e.get('n_infeasible_rollouts', 0)} / {e.get('n_rollouts', '?')}")
         if rope_ratio:
@@ -423,7 +428,46 @@ def fig7_detail(r: Result, page: Path) -> list[str]:
                           num(None if ci is None else 1e3 * ci, 1)))
         rows.append(row)
     lines += table(header, rows)
+    lines += fig7_against_protocol(r, results, page)
     return lines + [""] + source_lines([r], page) + failed_lines(r)
+
+
+def _last_improvement(e: dict) -> str:
+    """The CEM iteration after which the last stage's best cost last fell: its range and
+    median over the seeds ("-" for the scripted policy)."""
+    its = [i for i in e.get("last_improvements") or [] if i is not None]
+    if not its:
+        return "-"
+    return f"{min(its)}-{max(its)} (median {statistics.median(its):g})"
+
+
+def fig7_against_protocol(r: Result, results: list[Result], page: Path) -> list[str]:
+    """For a file with departures from its protocol: each method's final cost against the
+    file of the same panel and protocol without departures, seed by seed (lower on k of the
+    n seeds both ran); empty otherwise."""
+    if not fig7_departures(r):
+        return []
+    key = (r.data.get("task"), r.data.get("goal"), r.data.get("protocol", "ours"))
+    base = [b for b in results if b.kind == "fig7" and not b.quick and not fig7_departures(b)
+            and (b.data.get("task"), b.data.get("goal"), b.data.get("protocol", "ours")) == key]
+    if not base:
+        return []
+    b = base[0]
+    out = []
+    for m, e in r.data["methods"].items():
+        other = b.data["methods"].get(m)
+        if not other:
+            continue
+        mine = dict(zip(e.get("seeds", []), e.get("final_costs", []), strict=False))
+        theirs = dict(zip(other.get("seeds", []), other.get("final_costs", []), strict=False))
+        shared = sorted(set(mine) & set(theirs))
+        if shared:
+            lower = sum(mine[k] < theirs[k] for k in shared)
+            out.append(f"{_label(m)} at {fig7_departures(r)}: final cost lower than under "
+                       f"preset {r.data.get('protocol', 'ours')} as it stands "
+                       f"({link(b, page)}) on {lower} of the {len(shared)} seeds both "
+                       f"ran.")
+    return ["", *out] if out else []
 
 
 def _unstable_trials(e: dict) -> str:
@@ -525,13 +569,33 @@ def comparison(a: dict | None, b: dict | None, metric: str = "final_cost") -> st
     return f"{'yes' if ma < mb else 'no'} ({'separate' if separate else 'overlap'})"
 
 
+def fig7_departures(r: Result) -> str:
+    """The settings a Fig. 7 file changed from its protocol's preset (its "departures",
+    ``PickPlaceSettings.departures``), e.g. "population 200, elites 20"; "" when none (or a
+    file from before the field was recorded: its command names any flags)."""
+    return ", ".join(f"{k.rsplit('.', 1)[-1].replace('_', ' ')} {v}"
+                     for k, v in (r.data.get("departures") or {}).items())
+
+
+def fig7_setup(r: Result) -> str:
+    """The protocol a Fig. 7 file ran ("preset paper", "preset ours") and its
+    departures: files of one setup are one experiment, judged together."""
+    dep = fig7_departures(r)
+    return f"preset {r.data.get('protocol', 'ours')}" + (f", {dep}" if dep else "")
+
+
 def fig7_claims(results: list[Result]) -> dict:
-    """The paper's Fig. 7 claims checked on the recorded files (not quick): per panel whether
-    Simple < Original and Simple < Random (``comparison``) on the panel's paper metric
-    (``PAPER_METRICS``; a file without it: the mean particle distance) and the gap Original -
-    Simple of the mean particle distance (m); for the cloth folds in the paper's order of
-    difficulty, whether that gap grows."""
-    panels, gaps = {}, []
+    """The paper's Fig. 7 claims checked on the recorded files (not quick), per setup
+    (``fig7_setup``: protocol and departures; one panel may be run under several).
+
+    "panels": {"<panel>, <setup>": whether Simple < Original and Simple < Random
+    (``comparison``) on the panel's paper metric (``PAPER_METRICS``; a file without it: the
+    mean particle distance), the gap Original - Simple of the mean particle distance (m), the
+    seeds and the size}; "cloth": per setup with cloth folds, the gaps in the paper's order of
+    difficulty, each fold's cloth size and whether the gap grows (None: not judged; a gap at
+    another cloth size, another N_O, is another experiment: judged only when all four folds
+    share one size)."""
+    panels, gaps = {}, {}
     for r in sorted(results, key=lambda r: list(FIG7_PANELS).index(
             (r.data.get("task"), r.data.get("goal")))
             if (r.data.get("task"), r.data.get("goal")) in FIG7_PANELS else 99):
@@ -546,25 +610,28 @@ def fig7_claims(results: list[Result]) -> dict:
         metric = PAPER_METRICS.get((r.data.get("task"), r.data.get("goal")), "final_cost")
         if not (s and f"{metric}_mean" in s):
             metric = "final_cost"
-        panels[_panel(r)] = {"file": r, "metric": metric,
-                             "simple_vs_original": comparison(s, o, metric),
-                             "simple_vs_random": comparison(s, ms.get("random"), metric),
-                             "gap": gap,
-                             "seeds": max((e.get("n") or 0) for e in ms.values()),
-                             "size": (f"{n} x {n} particles" if r.data.get("task") == "cloth"
-                                      else f"{n} particles")
-                             if n else "size ?"}
+        setup = fig7_setup(r)
+        panels[f"{_panel(r)}, {setup}"] = {
+            "file": r, "metric": metric, "setup": setup,
+            "simple_vs_original": comparison(s, o, metric),
+            "simple_vs_random": comparison(s, ms.get("random"), metric),
+            "gap": gap, "seeds": max((e.get("n") or 0) for e in ms.values()),
+            "size": (f"{n} x {n} particles" if r.data.get("task") == "cloth"
+                     else f"{n} particles") if n else "size ?"}
         if r.data.get("task") == "cloth" and r.data.get("goal") in CLOTH_DIFFICULTY:
-            gaps.append((CLOTH_DIFFICULTY.index(r.data["goal"]), r.data["goal"], gap, n))
-    gaps.sort()
-    values = [g for _, _, g, _ in gaps]
-    sizes = {n for *_, n in gaps}
-    # a gap at another cloth size (another N_O) is another experiment: judged only when all
-    # folds share one size
-    grows = (None if len(values) < 2 or any(g is None for g in values) or len(sizes) != 1
-             else all(b > a for a, b in zip(values, values[1:], strict=False)))
-    return {"panels": panels, "cloth_gaps": [(goal, g) for _, goal, g, _ in gaps],
-            "cloth_sizes": [(goal, n) for _, goal, _, n in gaps], "gap_grows": grows}
+            gaps.setdefault(setup, []).append(
+                (CLOTH_DIFFICULTY.index(r.data["goal"]), r.data["goal"], gap, n))
+    cloth = []
+    for setup, folds in gaps.items():
+        folds.sort()
+        values = [g for _, _, g, _ in folds]
+        sizes = {n for *_, n in folds}
+        grows = (None if len(values) < len(CLOTH_DIFFICULTY) or len(sizes) != 1
+                 or any(g is None for g in values)
+                 else all(b > a for a, b in zip(values, values[1:], strict=False)))
+        cloth.append({"setup": setup, "gaps": [(goal, g) for _, goal, g, _ in folds],
+                      "sizes": [(goal, n) for _, goal, _, n in folds], "grows": grows})
+    return {"panels": panels, "cloth": cloth}
 
 
 def fig7_claims_lines(results: list[Result], page: Path) -> list[str]:
@@ -576,20 +643,23 @@ def fig7_claims_lines(results: list[Result], page: Path) -> list[str]:
              f"Simple < Original "
              f"{p['simple_vs_original']}, Simple < Random {p['simple_vs_random']}; "
              f"{source(p['file'], page)}" for panel, p in c["panels"].items()]
-    if c["cloth_gaps"]:
-        gaps = ", ".join(f"{goal} {mm(g)}" for goal, g in c["cloth_gaps"])
-        sizes = {n for _, n in c["cloth_sizes"]}
-        if len(sizes) > 1:
-            size = dict(c["cloth_sizes"])
-            gaps = ", ".join(f"{goal} {mm(g)} at {size[goal]} x {size[goal]}"
-                             for goal, g in c["cloth_gaps"])
+    for g in c["cloth"]:
+        size = dict(g["sizes"])
+        mixed = len(set(size.values())) > 1
+        gaps = ", ".join(f"{goal} {mm(gap)}" + (f" at {size[goal]} x {size[goal]}" if mixed
+                                                else "") for goal, gap in g["gaps"])
+        missing = [goal for goal in CLOTH_DIFFICULTY if goal not in size]
+        if mixed:
             verdict = "cannot be judged until all folds are run at one cloth size"
+        elif missing:
+            verdict = (f"cannot be judged until {', '.join(missing)} "
+                       f"{'is' if len(missing) == 1 else 'are'} run")
         else:
             verdict = {True: "grows", False: "does not grow", None: "cannot be judged"}[
-                c["gap_grows"]]
-        lines.append(f"- The gap Original - Simple (mm) over the cloth folds in the paper's "
-                     f"order of difficulty: {gaps}; it {verdict} with difficulty (the paper: "
-                     f"it grows).")
+                g["grows"]]
+        lines.append(f"- {g['setup']}: the gap Original - Simple (mm) over the cloth folds in "
+                     f"the paper's order of difficulty: {gaps}; it {verdict} with difficulty "
+                     f"(the paper: it grows).")
     return lines
 
 

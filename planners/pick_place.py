@@ -155,6 +155,14 @@ class PickPlaceSettings:
         return cls(task, goal, n, p.bound, cem, ScriptedConfig(), p.selfcollide,
                    physics=p.physics, planning_physics=p.planning_physics)
 
+    def departures(self, protocol: str = "ours", quick: bool = False) -> dict:
+        """{field: value} of these settings that differ from ``preset(task, goal, quick,
+        protocol)``, nested configs as dotted names ("cem.population"); the thread count is
+        not a setting of the experiment and is left out. Empty: the protocol as it stands."""
+        base = _flatten(type(self).preset(self.task, self.goal, quick, protocol).to_dict())
+        mine = _flatten(self.to_dict())
+        return {k: v for k, v in mine.items() if k != "threads" and base.get(k) != v}
+
     def constraint(self) -> ActionConstraint:
         """C(a_t) of the task (``dopt.tasks.pick.constraints``): SoftGym's workspace, the
         object's size on each side of its centre (cloth: side, rope: length), 0.5 m high."""
@@ -627,7 +635,8 @@ def summarize(results: Sequence[dict], methods: Sequence[str],
               metric_names: Sequence[str]) -> dict:
     """Per method (in ``methods`` order, those with results): the mean, 95 % CI half-width
     (None with one seed) and per-seed values of each metric, the candidates (last stage and
-    per stage), the mean seconds per CEM iteration (None when scripted), the seeds, the
+    per stage), the mean seconds per CEM iteration (None when scripted), the seeds, each
+    seed's ``last_improvement`` (None when scripted), the
     rollouts simulated and flagged unstable, and the trials whose executed plan was unstable.
     The means and intervals are over the stable trials only; the per-seed values list every
     trial (``unstable_seeds`` marks the others).
@@ -650,6 +659,7 @@ def summarize(results: Sequence[dict], methods: Sequence[str],
         secs = [r["s_per_iteration"] for r in runs if r["s_per_iteration"] is not None]
         entry["s_per_iteration"] = float(np.mean(secs)) if secs else None
         entry["seeds"] = [r["seed"] for r in runs]
+        entry["last_improvements"] = [last_improvement(r) for r in runs]
         entry["n"] = len(runs)
         entry["n_stable"] = len(stable)
         entry["n_unstable_trials"] = len(runs) - len(stable)
@@ -660,6 +670,20 @@ def summarize(results: Sequence[dict], methods: Sequence[str],
                                                  for r in runs))
         out[m] = entry
     return out
+
+
+def last_improvement(result: dict) -> int | None:
+    """The CEM iteration (1-based, within the last stage) after which that stage's best cost
+    last fell: the stage's iteration count means it was still falling at the end. None for a
+    trial without CEM iterations (scripted).
+
+    result: ``PickPlaceResult.to_dict()``."""
+    if result.get("s_per_iteration") is None:
+        return None
+    stages = result["stage_of_iteration"]
+    last = [c for c, k in zip(result["cost_history"], stages, strict=True) if k == stages[-1]]
+    falls = [i for i in range(1, len(last)) if last[i] < last[i - 1]]
+    return (falls[-1] if falls else 0) + 1
 
 
 def _check_seed(seed) -> None:
@@ -687,6 +711,17 @@ def _check_fields(cls, d: dict, name: str) -> None:
         raise ValueError(f"{name} does not match {cls.__name__}: "
                          + "; ".join(([f"missing {missing}"] if missing else [])
                                      + ([f"unknown {unknown}"] if unknown else [])))
+
+
+def _flatten(d: dict, prefix: str = "") -> dict:
+    """{"a.b": value} of a nested dict's leaves."""
+    out = {}
+    for k, v in d.items():
+        if isinstance(v, dict):
+            out.update(_flatten(v, f"{prefix}{k}."))
+        else:
+            out[f"{prefix}{k}"] = v
+    return out
 
 
 def _finite(x: float | None) -> float | None:

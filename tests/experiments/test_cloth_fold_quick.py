@@ -35,6 +35,9 @@ def _check_summary(out: Path, goal: str, extra=()):
         for key in extra:
             assert key in entry
         assert (entry["s_per_iteration"] is None) == (name == "scripted")
+        # the CEM iteration after which each seed's best cost last fell (None: scripted)
+        assert len(entry["last_improvements"]) == entry["n"]
+        assert all((i is None) == (name == "scripted") for i in entry["last_improvements"])
     assert summary["methods"]["original"]["n_candidates"] > summary["methods"]["simple"][
         "n_candidates"] == summary["methods"]["random"]["n_candidates"]
     lines = (out / "curves.csv").read_text().splitlines()
@@ -77,6 +80,7 @@ def test_rope_straighten_quick(tmp_path):
     out = tmp_path / "rope"
     assert rope.main(["--quick", "--goal", "straighten", "--out", str(out), "--no-render"]) == 0
     summary = _check_summary(out, "straighten", extra=("end_to_end_ratio_mean",))
+    assert summary["departures"] == {}                  # the quick preset as it stands
     assert not list(out.glob("goal_vs_*.png")) and not list(out.glob("*.gif"))  # --no-render
     assert summary["methods"]["simple"]["n_candidates"] == 2            # the two ends
 
@@ -91,6 +95,7 @@ def test_workers_run_the_trials_on_a_pool_with_the_same_results(tmp_path):
     assert (sorted(p.name for p in (inline / "trials").glob("*.json"))
             == sorted(p.name for p in (pool / "trials").glob("*.json")))
     a, b = (json.loads((d / "summary.json").read_text())["methods"] for d in (inline, pool))
+    assert json.loads((pool / "summary.json").read_text())["departures"] == {}  # not threads
     for m in ("simple", "scripted"):
         assert a[m]["final_costs"] == b[m]["final_costs"]
 
@@ -125,7 +130,11 @@ def test_paper_protocol_runs_the_papers_budget():
     rope_ap = pick_place_cli.parser("rope", "", rope.HELP)
     _, s = pick_place_cli.parse(rope_ap, "rope", ["--preset", "paper", "--goal", "fold",
                                                   "--out", "results/x"])
-    assert s.cem.iterations == 30
+    assert s.cem.iterations == 30 and s.departures("paper") == {}
+    _, s = pick_place_cli.parse(rope_ap, "rope", ["--preset", "paper", "--goal", "fold",
+                                                  "--population", "200", "--elites", "20",
+                                                  "--out", "results/x"])
+    assert s.departures("paper") == {"cem.population": 200, "cem.elites": 20}
     with pytest.raises(ValueError, match="protocol"):
         PickPlaceSettings.preset("cloth", "diagonal", protocol="theirs")
 
