@@ -442,9 +442,10 @@ def _last_improvement(e: dict) -> str:
 
 
 def fig7_against_protocol(r: Result, results: list[Result], page: Path) -> list[str]:
-    """For a file with departures from its protocol: each method's final cost against the
-    file of the same panel and protocol without departures, seed by seed (lower on k of the
-    n seeds both ran); empty otherwise."""
+    """For a file with departures from its protocol: each method's score on the panel's paper
+    metric (``PAPER_METRICS``; else the mean particle distance) against the file of the same
+    panel and protocol without departures, seed by seed (lower on k of the n seeds both ran);
+    empty otherwise."""
     if not fig7_departures(r):
         return []
     key = (r.data.get("task"), r.data.get("goal"), r.data.get("protocol", "ours"))
@@ -458,13 +459,17 @@ def fig7_against_protocol(r: Result, results: list[Result], page: Path) -> list[
         other = b.data["methods"].get(m)
         if not other:
             continue
-        mine = dict(zip(e.get("seeds", []), e.get("final_costs", []), strict=False))
-        theirs = dict(zip(other.get("seeds", []), other.get("final_costs", []), strict=False))
+        # the panel's paper metric where both files hold it per seed
+        metric = PAPER_METRICS.get(key[:2], "final_cost")
+        if not (e.get(f"{metric}s") and other.get(f"{metric}s")):
+            metric = "final_cost"
+        mine = dict(zip(e.get("seeds", []), e.get(f"{metric}s", []), strict=False))
+        theirs = dict(zip(other.get("seeds", []), other.get(f"{metric}s", []), strict=False))
         shared = sorted(set(mine) & set(theirs))
         if shared:
             lower = sum(mine[k] < theirs[k] for k in shared)
-            out.append(f"{_label(m)} at {fig7_departures(r)}: final cost lower than under "
-                       f"preset {r.data.get('protocol', 'ours')} as it stands "
+            out.append(f"{_label(m)} at {fig7_departures(r)}: {METRIC_NAMES[metric]} lower "
+                       f"than under preset {r.data.get('protocol', 'ours')} as it stands "
                        f"({link(b, page)}) on {lower} of the {len(shared)} seeds both "
                        f"ran.")
     return ["", *out] if out else []
@@ -639,10 +644,12 @@ def fig7_claims_lines(results: list[Result], page: Path) -> list[str]:
     c = fig7_claims(results)
     if not c["panels"]:
         return []
+    # a file without Original or Random (a run of Simple alone) claims nothing here
     lines = [f"- {panel} ({p['size']}, {p['seeds']} seeds, {METRIC_NAMES[p['metric']]}): "
              f"Simple < Original "
              f"{p['simple_vs_original']}, Simple < Random {p['simple_vs_random']}; "
-             f"{source(p['file'], page)}" for panel, p in c["panels"].items()]
+             f"{source(p['file'], page)}" for panel, p in c["panels"].items()
+             if {p["simple_vs_original"], p["simple_vs_random"]} != {"n/a"}]
     for g in c["cloth"]:
         size = dict(g["sizes"])
         mixed = len(set(size.values())) > 1
@@ -1390,12 +1397,16 @@ def readme_block(results: list[Result], readme: Path, results_md_path: Path) -> 
     """The README's headline table (between the markers, markers excluded)."""
     rows = []
     for e in CATALOGUE:
-        matched = [r for r in results if e.match(r)]
+        # a run that departs from its protocol after the protocol's own
+        matched = sorted((r for r in results if e.match(r)),
+                         key=lambda r: r.kind == "fig7" and bool(fig7_departures(r)))
         if not matched:
             rows.append([e.paper, e.item, f"`{e.command}`", "not recorded yet"])
         for r in matched:
             headline = _rendered(r, HEADLINES[r.kind], r)
-            rows.append([e.paper, e.item + (" (quick run)" if r.quick else ""),
+            dep = fig7_departures(r) if r.kind == "fig7" else ""
+            rows.append([e.paper, e.item + (f" ({dep})" if dep else "")
+                         + (" (quick run)" if r.quick else ""),
                          f"`{r.command}`", f"{headline}; {source(r, readme)}"])
     for r in results:                  # a known kind the catalogue has no row for
         if r.kind in HEADLINES and not any(e.match(r) for e in CATALOGUE):
