@@ -468,10 +468,15 @@ def fig7_against_protocol(r: Result, results: list[Result], page: Path) -> list[
         shared = sorted(set(mine) & set(theirs))
         if shared:
             lower = sum(mine[k] < theirs[k] for k in shared)
+            secs = ((e.get("s_per_iteration"), other.get("s_per_iteration"))
+                    if _finite(e.get("s_per_iteration"))
+                    and _finite(other.get("s_per_iteration")) else None)
             out.append(f"{_label(m)} at {fig7_departures(r)}: {METRIC_NAMES[metric]} lower "
                        f"than under preset {r.data.get('protocol', 'ours')} as it stands "
                        f"({link(b, page)}) on {lower} of the {len(shared)} seeds both "
-                       f"ran.")
+                       f"ran" + (f"; {num(secs[0], 1)} s per CEM iteration against "
+                                 f"{num(secs[1], 1)} ({num(secs[0] / secs[1])} times)"
+                                 if secs else "") + ".")
     return ["", *out] if out else []
 
 
@@ -580,6 +585,11 @@ def fig7_departures(r: Result) -> str:
     file from before the field was recorded: its command names any flags)."""
     return ", ".join(f"{k.rsplit('.', 1)[-1].replace('_', ' ')} {v}"
                      for k, v in (r.data.get("departures") or {}).items())
+
+
+def _departs(r: Result) -> bool:
+    """A Fig. 7 file whose flags changed its protocol's settings."""
+    return r.kind == "fig7" and bool(fig7_departures(r))
 
 
 def fig7_setup(r: Result) -> str:
@@ -1397,22 +1407,20 @@ def readme_block(results: list[Result], readme: Path, results_md_path: Path) -> 
     """The README's headline table (between the markers, markers excluded)."""
     rows = []
     for e in CATALOGUE:
-        # a run that departs from its protocol after the protocol's own
-        matched = sorted((r for r in results if e.match(r)),
-                         key=lambda r: r.kind == "fig7" and bool(fig7_departures(r)))
+        # a Fig. 7 run that departs from its protocol is in RESULTS.md, beside the protocol's
+        matched = [r for r in results if e.match(r) and not _departs(r)]
         if not matched:
             rows.append([e.paper, e.item, f"`{e.command}`", "not recorded yet"])
         for r in matched:
             headline = _rendered(r, HEADLINES[r.kind], r)
-            dep = fig7_departures(r) if r.kind == "fig7" else ""
-            rows.append([e.paper, e.item + (f" ({dep})" if dep else "")
-                         + (" (quick run)" if r.quick else ""),
+            rows.append([e.paper, e.item + (" (quick run)" if r.quick else ""),
                          f"`{r.command}`", f"{headline}; {source(r, readme)}"])
     for r in results:                  # a known kind the catalogue has no row for
-        if r.kind in HEADLINES and not any(e.match(r) for e in CATALOGUE):
+        if r.kind in HEADLINES and not _departs(r) and not any(e.match(r) for e in CATALOGUE):
             rows.append(["-", f"{r.kind}: {r.data.get('task', '')} {r.data.get('goal', '')}"
                          .strip(), f"`{r.command}`",
                          f"{_rendered(r, HEADLINES[r.kind], r)}; {source(r, readme)}"])
+    departing = "; ".join(sorted({fig7_departures(r) for r in results if _departs(r)}))
     claims = fig7_claims_lines(results, readme)
     ref, published = paper_table1(results)
     beside = [(t, r) for t in published if (r := paper_preset_table1(results, t))]
@@ -1422,7 +1430,9 @@ def readme_block(results: list[Result], readme: Path, results_md_path: Path) -> 
              *table(["paper", "figure / table", "command", "headline numbers (source file, "
                      "commit)"], rows), "",
              f"Every table, per-seed number and setting: [{rel}]({rel}), generated like this "
-             f"table from the result files by `{REGENERATE}`."]
+             f"table from the result files by `{REGENERATE}`."
+             + (f" Fig. 7 runs that change a protocol's settings ({departing}) are there, "
+                f"each beside its protocol's file." if departing else "")]
     if claims:
         lines += ["", "Fig. 7's claims on the recorded files (each panel on the paper's metric, "
                       "named; 95 % intervals separate or overlapping):", "", *claims]
