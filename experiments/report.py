@@ -388,8 +388,12 @@ def fig7_detail(r: Result, page: Path, results: list[Result]) -> list[str]:
     if s:
         lines += [f"Settings: {s.get('task')} {s.get('goal')}, n {s.get('n')}, bound "
                   f"{s.get('bound')} m, self-collision {'on' if s.get('selfcollide') else 'off'}, "
-                  f"physics {_fig7_physics(d)};"
-                  f" CEM population {cem.get('population')}, elites {cem.get('elites')}, "
+                  f"physics {_fig7_physics(d)}"
+                  + "".join(f", {label} {s[k]}" for k, label in (
+                      ("planning_physics", "CEM plans on preset"),
+                      ("picker_speed", "picker speed (m/s)"),
+                      ("max_stretch", "stretch limit")) if s.get(k) is not None)
+                  + f"; CEM population {cem.get('population')}, elites {cem.get('elites')}, "
                   f"{cem.get('iterations')} iterations per stage, horizon {cem.get('horizon')}."
                   + (f" Trials' wall time {num(d['trials_wall_s'], 0)} s in total."
                      if "trials_wall_s" in d else

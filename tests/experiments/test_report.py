@@ -489,9 +489,13 @@ def test_fig7_detail_gives_the_last_improving_iteration(site):
     m = fig7()["methods"]
     methods = {"simple": {**m["simple"], "last_improvements": [15, 9, 14]},
                "scripted": {**m["scripted"], "last_improvements": [None]}}
-    write(site["results"], "fig7-cloth-diagonal.json", fig7(methods=methods))
+    write(site["results"], "fig7-cloth-diagonal.json", fig7(methods=methods, settings={
+        **fig7()["settings"], "planning_physics": "fast", "picker_speed": None}))
     assert run(site) == 0
     text = site["md"].read_text()
+    # a planning model other than the scene is named; an unset picker speed is not
+    assert "defined at 01234567, CEM plans on preset fast; CEM population 32" in text
+    assert "picker speed" not in text
     assert "last improvement (iteration of 15)" in text
     assert "| 9-15 (median 14) |" in text
 
