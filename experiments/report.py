@@ -653,6 +653,11 @@ def fig7_claims(results: list[Result]) -> dict:
     return {"panels": panels, "cloth": cloth}
 
 
+def _and(words: list[str]) -> str:
+    """"a", "a and b", "a, b and c"."""
+    return words[0] if len(words) == 1 else f"{', '.join(words[:-1])} and {words[-1]}"
+
+
 def fig7_claims_lines(results: list[Result], page: Path) -> list[str]:
     """The claims as a bulleted list (empty without Fig. 7 files)."""
     c = fig7_claims(results)
@@ -665,22 +670,25 @@ def fig7_claims_lines(results: list[Result], page: Path) -> list[str]:
              f"{source(p['file'], page)}" for panel, p in c["panels"].items()
              if {p["simple_vs_original"], p["simple_vs_random"]} != {"n/a"}]
     for g in c["cloth"]:
+        if all(gap is None for _, gap in g["gaps"]):   # no Original in this setup
+            continue
         size = dict(g["sizes"])
         mixed = len(set(size.values())) > 1
         gaps = ", ".join(f"{goal} {mm(gap)}" + (f" at {size[goal]} x {size[goal]}" if mixed
                                                 else "") for goal, gap in g["gaps"])
         missing = [goal for goal in CLOTH_DIFFICULTY if goal not in size]
         if mixed:
-            verdict = "cannot be judged until all folds are run at one cloth size"
+            verdict = "whether it grows cannot be judged until all folds are run at one size"
         elif missing:
-            verdict = (f"cannot be judged until {', '.join(missing)} "
+            verdict = (f"whether it grows cannot be judged until {_and(missing)} "
                        f"{'is' if len(missing) == 1 else 'are'} run")
         else:
-            verdict = {True: "grows", False: "does not grow", None: "cannot be judged"}[
-                g["grows"]]
+            verdict = {True: "it grows with difficulty",
+                       False: "it does not grow with difficulty",
+                       None: "whether it grows cannot be judged"}[g["grows"]]
         lines.append(f"- {g['setup']}: the gap Original - Simple (mm) over the cloth folds in "
-                     f"the paper's order of difficulty: {gaps}; it {verdict} with difficulty "
-                     f"(the paper: it grows).")
+                     f"the paper's order of difficulty: {gaps}; {verdict} (the paper: it "
+                     f"grows).")
     return lines
 
 

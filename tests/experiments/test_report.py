@@ -403,7 +403,8 @@ def test_fig7_claims_check_whether_the_gap_grows_with_difficulty(site):
     (claims,) = report.fig7_claims(report.load_results(site["results"]))["cloth"]
     assert claims["grows"] is None
     assert run(site) == 0
-    assert "it cannot be judged until underneath is run" in block(site["readme"])
+    assert "; whether it grows cannot be judged until underneath is run (the paper" in \
+        block(site["readme"])
 
 
 def test_fig7_gap_is_not_judged_across_cloth_sizes(site):
@@ -421,8 +422,8 @@ def test_fig7_gap_is_not_judged_across_cloth_sizes(site):
                                ("underneath", 12)]
     assert run(site) == 0
     assert ("diagonal 10.0 at 20 x 20, side 20.0 at 12 x 12, reflective 30.0 at 12 x 12, "
-            "underneath 40.0 at 12 x 12; it cannot be judged until all folds are run at one "
-            "cloth size") in block(site["readme"])
+            "underneath 40.0 at 12 x 12; whether it grows cannot be judged until all folds are "
+            "run at one size") in block(site["readme"])
 
 
 def test_a_run_that_departs_from_its_protocol_is_judged_apart_and_seed_by_seed(site):
@@ -467,6 +468,11 @@ def test_a_run_that_departs_from_its_protocol_is_judged_apart_and_seed_by_seed(s
             "there") in block(site["readme"])
     assert "preset ours: the gap Original - Simple (mm) over the cloth folds" in text
     assert "it grows with difficulty" in text
+    assert ("preset paper: the gap Original - Simple (mm) over the cloth folds in the paper's "
+            "order of difficulty: diagonal 26.5; whether it grows cannot be judged until side, "
+            "reflective and underneath are run") in text
+    # the Simple-only run has no gap to report
+    assert "preset paper, population 200, elites 20: the gap" not in text
 
 
 def test_a_departing_rope_fold_is_compared_on_the_matching_distance(site):
