@@ -452,9 +452,11 @@ def fig7_against_protocol(r: Result, results: list[Result], page: Path) -> list[
     empty otherwise."""
     if not fig7_departures(r):
         return []
-    key = (r.data.get("task"), r.data.get("goal"), r.data.get("protocol", "ours"))
+    def key(f: Result) -> tuple:
+        return f.data.get("task"), f.data.get("goal"), f.data.get("protocol", "ours")
+
     base = [b for b in results if b.kind == "fig7" and not b.quick and not fig7_departures(b)
-            and (b.data.get("task"), b.data.get("goal"), b.data.get("protocol", "ours")) == key]
+            and key(b) == key(r)]
     if not base:
         return []
     b = base[0]
@@ -464,9 +466,7 @@ def fig7_against_protocol(r: Result, results: list[Result], page: Path) -> list[
         if not other:
             continue
         # the panel's paper metric where both files hold it per seed
-        metric = PAPER_METRICS.get(key[:2], "final_cost")
-        if not (e.get(f"{metric}s") and other.get(f"{metric}s")):
-            metric = "final_cost"
+        metric = paper_metric(r, "s", e, other)
         mine = dict(zip(e.get("seeds", []), e.get(f"{metric}s", []), strict=False))
         theirs = dict(zip(other.get("seeds", []), other.get(f"{metric}s", []), strict=False))
         shared = sorted(set(mine) & set(theirs))
@@ -570,6 +570,14 @@ METRIC_NAMES = {"final_cost": "mean particle distance",
                 "matching_distance": "matching distance"}
 
 
+def paper_metric(r: Result, field: str, *entries: dict | None) -> str:
+    """The paper's metric of a Fig. 7 file's panel (``PAPER_METRICS``) where every method entry
+    to compare holds it as ``<metric><field>`` ("_mean", or "s": per seed); otherwise the
+    mean particle distance."""
+    metric = PAPER_METRICS.get((r.data.get("task"), r.data.get("goal")), "final_cost")
+    return metric if all(e and f"{metric}{field}" in e for e in entries) else "final_cost"
+
+
 def comparison(a: dict | None, b: dict | None, metric: str = "final_cost") -> str:
     """Whether method a's ``metric`` (its ``<metric>_mean`` and ``_ci95``) is below b's:
     "yes (separate)" when a's 95 % interval lies wholly below b's, "yes (overlap)",
@@ -626,9 +634,7 @@ def fig7_claims(results: list[Result]) -> dict:
         gap = (o["final_cost_mean"] - s["final_cost_mean"]
                if s and o and _finite(s.get("final_cost_mean"))
                and _finite(o.get("final_cost_mean")) else None)
-        metric = PAPER_METRICS.get((r.data.get("task"), r.data.get("goal")), "final_cost")
-        if not (s and f"{metric}_mean" in s):
-            metric = "final_cost"
+        metric = paper_metric(r, "_mean", s)
         setup = fig7_setup(r)
         panels[f"{_panel(r)}, {setup}"] = {
             "file": r, "metric": metric, "setup": setup,
