@@ -5,7 +5,9 @@ wrote itself (``--record PATH``; each file holds a "provenance": command, git co
 versions, date, machine). This script reads them all and writes
 
 - ``docs/RESULTS.md``: every table behind the papers' figures, each naming its source file,
-  the file's commit and the command that produced it (generated: never edit it by hand);
+  the file's commit and the command that produced it (generated: never edit it by hand),
+  and, for each Fig. 7 sweep whose trials are committed under ``docs/results/runs/`` but whose
+  summary is not recorded yet, its seeds so far and what a trial cost;
 - the block between ``<!-- results:begin -->`` and ``<!-- results:end -->`` in README.md:
   the headline table, paper figure / table -> script -> headline numbers (README.md is left
   alone, with a note, when it has no such markers).
@@ -1352,6 +1354,97 @@ def clock_model_section(results: list[Result], page: Path) -> list[str]:
 
 
 
+# ----------------------------------------------------------------- sweeps in progress
+def unrecorded_sweeps(results_dir: Path) -> dict[str, list[dict]]:
+    """{folder name: its trial records} of every ``runs/fig7-*`` folder under ``results_dir``
+    that has committed trials (``trials/*.json``, as ``dopt.sweep`` writes them) but no
+    recorded summary ``<folder>.json`` beside ``runs/`` yet; folders in name order, records
+    in file-name order."""
+    out = {}
+    for folder in sorted(Path(results_dir).glob("runs/fig7-*")):
+        files = sorted(folder.glob("trials/*.json"))
+        if not files or (Path(results_dir) / f"{folder.name}.json").exists():
+            continue
+        records = []
+        for path in files:
+            try:
+                data = json.loads(path.read_text())
+                params, result = data["params"], data["result"]
+                records.append({"key": data["key"], "settings": params["settings"],
+                                "method": result["method"], "seed": result["seed"],
+                                "result": result})
+            except (OSError, ValueError, KeyError, TypeError) as e:
+                raise ReportError(f"{path}: not a trial record of a Fig. 7 sweep "
+                                  f"({type(e).__name__}: {e})") from e
+        out[folder.name] = records
+    return out
+
+
+def _median(xs: list) -> float | None:
+    xs = [x for x in xs if _finite(x)]
+    return statistics.median(xs) if xs else None
+
+
+def sweeps_in_progress_section(results_dir: Path) -> list[str]:
+    """Per unrecorded Fig. 7 sweep (``unrecorded_sweeps``) and per settings key in it: each
+    method's committed seeds with their final costs, and the measured cost of a trial. No
+    means or claims: those wait for the recorded summary."""
+    sweeps = unrecorded_sweeps(results_dir)
+    if not sweeps:
+        return []
+    lines = ["## Fig. 7 sweeps in progress", "",
+             "Trials committed under `docs/results/runs/<sweep>/trials/` whose summary "
+             "(`docs/results/<sweep>.json`) is not recorded yet: each seed's final cost (mean "
+             "particle distance, mm) as its trial file holds it, and what a trial cost. Means, "
+             "intervals and the paper's claims wait for the recorded summary; the command in "
+             "the results table above resumes the sweep where it stopped."]
+    order = list(FIG7_PANELS)
+
+    def panel_order(item) -> tuple:
+        s = item[1][0]["settings"]
+        where = (s.get("task"), s.get("goal"))
+        return (order.index(where) if where in order else len(order), item[0])
+
+    for name, records in sorted(sweeps.items(), key=panel_order):
+        by_settings: dict[str, list[dict]] = {}
+        for rec in records:
+            by_settings.setdefault(json.dumps(rec["settings"], sort_keys=True), []).append(rec)
+        for group in by_settings.values():
+            s = group[0]["settings"]
+            cem = s.get("cem") or {}
+            size = (f"{s.get('n')} x {s.get('n')}" if s.get("task") == "cloth"
+                    else str(s.get("n")))
+            panel = FIG7_PANELS.get((s.get("task"), s.get("goal")),
+                                    f"{s.get('task')} {s.get('goal')}")
+            lines += ["", f"### `{name}`: Fig. 7 {panel}", "",
+                      f"{size} particles, self-collision "
+                      f"{'on' if s.get('selfcollide') else 'off'}, physics {s.get('physics')}; "
+                      f"CEM population {cem.get('population')}, elites {cem.get('elites')}, "
+                      f"{cem.get('iterations')} iterations per stage, horizon "
+                      f"{cem.get('horizon')}.", ""]
+            rows = []
+            for m in [m for m in FIG7_LABELS if any(r["method"] == m for r in group)] + sorted(
+                    {r["method"] for r in group} - set(FIG7_LABELS)):
+                runs = sorted((r for r in group if r["method"] == m), key=lambda r: r["seed"])
+                res = [r["result"] for r in runs]
+                flagged = [x.get("n_unstable_rollouts") for x in res]
+                rollouts = [x.get("n_rollouts") for x in res]
+                rows.append([_label(m), ", ".join(str(r["seed"]) for r in runs),
+                             ", ".join(mm(x.get("final_cost")) for x in res),
+                             num(_median([x.get("s_per_iteration") for x in res]), 1),
+                             num(_median([x.get("wall_s") for x in res]), 0),
+                             f"{sum(flagged)} / {sum(rollouts)}"
+                             if all(_finite(x) for x in flagged + rollouts) else "not judged",
+                             str(sum(bool(x.get("unstable")) for x in res))])
+            lines += table(["method", "seeds", "final cost per seed (mm)",
+                            "s / CEM iteration (median)", "s / trial (median)",
+                            "planning rollouts flagged", "executed plans unstable"], rows)
+            wall = sum(x for r in group if _finite(x := r["result"].get("wall_s")))
+            lines += ["", f"{len(group)} trials, {num(wall, 0)} s of trials "
+                          f"({num(wall / 3600, 1)} h of one core)."]
+    return lines
+
+
 # ----------------------------------------------------------------------------- pages
 SECTIONS = {"key_particles": kp_section, "kp_compare": kp_compare_section,
             "kp_paper_scale": kp_paper_scale_section, "fig7": fig7_section,
@@ -1407,6 +1500,9 @@ def results_md(results: list[Result], results_dir: Path, page: Path) -> str:
     beside = table1_vs_paper_section(results, page)
     if beside:
         lines += ["", *beside]
+    in_progress = sweeps_in_progress_section(results_dir)
+    if in_progress:
+        lines += ["", *in_progress]
     other = [r for r in results if r.kind not in SECTIONS]
     if other:
         lines += ["", "## Other result files", "",

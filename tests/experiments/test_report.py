@@ -633,3 +633,46 @@ def test_a_table_escapes_pipes_in_its_header_and_cells():
     lines = report.table(["method", "|end-to-end - length| (mm)"], [["a|b", "1.0"]])
     for line in lines:
         assert len(re.findall(r"(?<!\\)\|", line)) == 3
+
+
+def trial_record(method: str, seed: int, final_cost: float, wall_s: float, goal="side") -> dict:
+    """A trial file as dopt.sweep writes it for experiments/cloth_fold.py."""
+    settings = {"task": "cloth", "goal": goal, "n": 20, "selfcollide": False,
+                "physics": "default", "cem": {"population": 32, "elites": 6,
+                                              "iterations": 30, "horizon": 3}}
+    return {"key": f"{method}-seed{seed}-abc", "params": {"settings": settings,
+                                                          "method": method, "seed": seed},
+            "result": {"method": method, "seed": seed, "final_cost": final_cost,
+                       "s_per_iteration": wall_s / 30, "wall_s": wall_s, "n_rollouts": 961,
+                       "n_unstable_rollouts": seed % 2, "unstable": False},
+            "code": {"version": "0", "commit": "abc"}}
+
+
+def test_a_sweep_without_its_summary_is_shown_seed_by_seed_until_recorded(site):
+    trials = site["results"] / "runs" / "fig7-cloth-side" / "trials"
+    for method, seed, cost, wall in (("simple", 3, 0.0049, 2000.0), ("simple", 0, 0.0069, 2100.0),
+                                     ("random", 1, 0.0304, 1500.0)):
+        write(trials, f"{method}-seed{seed}-abc.json", trial_record(method, seed, cost, wall))
+    write(site["results"], "fig7_cloth_diagonal.json", fig7())
+    assert run(site) == 0
+    md = site["md"].read_text()
+    part = md[md.index("## Fig. 7 sweeps in progress"):]
+    assert "### `fig7-cloth-side`: Fig. 7 (d) cloth side fold" in part
+    assert "20 x 20 particles" in part and "horizon 3" in part
+    # seeds in order with their own costs; the medians of 2000 and 2100 s
+    assert "| CEM(Simple) | 0, 3 | 6.9, 4.9 | 68.3 | 2050 | 1 / 1922 | 0 |" in part
+    assert "| CEM(Random) | 1 | 30.4 |" in part
+    assert "3 trials, 5600 s of trials (1.6 h of one core)." in part
+    assert "fig7-cloth-side" not in block(site["readme"])   # partial: never a headline
+    # recording the summary takes the sweep out of this section
+    write(site["results"], "fig7-cloth-side.json", fig7(goal="side"))
+    assert run(site) == 0
+    assert "sweeps in progress" not in site["md"].read_text()
+
+
+def test_a_malformed_trial_file_of_a_sweep_in_progress_is_named(site, capsys):
+    write(site["results"], "fig7_cloth_diagonal.json", fig7())
+    bad = write(site["results"] / "runs" / "fig7-cloth-side" / "trials", "x.json",
+                {"key": "x"})
+    assert run(site) == 2
+    assert str(bad) in capsys.readouterr().err
