@@ -314,15 +314,30 @@ def _label(method: str) -> str:
     return FIG7_LABELS.get(method, method)
 
 
-def _methods_in_order(results: list[Result]) -> list[str]:
-    seen = [m for r in results for m in r.data["methods"]]
+def _in_label_order(methods) -> list[str]:
+    """The distinct ``methods`` in the figures' order (``FIG7_LABELS``), unknown ones after,
+    sorted."""
+    seen = set(methods)
     known = [m for m in FIG7_LABELS if m in seen]
-    return known + sorted(set(seen) - set(known))
+    return known + sorted(seen - set(known))
+
+
+def _methods_in_order(results: list[Result]) -> list[str]:
+    return _in_label_order(m for r in results for m in r.data["methods"])
+
+
+def _panel_of(task, goal) -> str:
+    return FIG7_PANELS.get((task, goal), f"{task} {goal}")
+
+
+def _panel_rank(task, goal) -> int:
+    """The place of (task, goal) in the paper's Fig. 7 (``FIG7_PANELS``); unknown ones last."""
+    order = list(FIG7_PANELS)
+    return order.index((task, goal)) if (task, goal) in order else len(order)
 
 
 def _panel(r: Result) -> str:
-    return FIG7_PANELS.get((r.data.get("task"), r.data.get("goal")),
-                           f"{r.data.get('task')} {r.data.get('goal')}")
+    return _panel_of(r.data.get("task"), r.data.get("goal"))
 
 
 # --------------------------------------------------------------------------- fig7 (KP)
@@ -333,9 +348,8 @@ def fig7_cell(e: dict | None) -> str:
 
 
 def fig7_section(results: list[Result], page: Path) -> list[str]:
-    results = sorted(results, key=lambda r: (list(FIG7_PANELS).index(
-        (r.data.get("task"), r.data.get("goal")))
-        if (r.data.get("task"), r.data.get("goal")) in FIG7_PANELS else 99, r.name))
+    results = sorted(results, key=lambda r: (_panel_rank(r.data.get("task"),
+                                                         r.data.get("goal")), r.name))
     methods = _methods_in_order(results)
     lines = ["## Key particles, Fig. 7: final cost of pick-and-place", "",
              "Mean particle distance to the goal after the whole plan (Eq. 2), in mm: mean ± "
@@ -625,9 +639,7 @@ def fig7_claims(results: list[Result]) -> dict:
     another cloth size, another N_O, is another experiment: judged only when all four folds
     share one size)."""
     panels, gaps = {}, {}
-    for r in sorted(results, key=lambda r: list(FIG7_PANELS).index(
-            (r.data.get("task"), r.data.get("goal")))
-            if (r.data.get("task"), r.data.get("goal")) in FIG7_PANELS else 99):
+    for r in sorted(results, key=lambda r: _panel_rank(r.data.get("task"), r.data.get("goal"))):
         if r.kind != "fig7" or r.quick:
             continue
         ms = r.data["methods"]
@@ -1369,8 +1381,12 @@ def unrecorded_sweeps(results_dir: Path) -> dict[str, list[dict]]:
         for path in files:
             try:
                 data = json.loads(path.read_text())
+                # dopt.sweep.RECORD_FIELDS (copied: this script needs no dopt)
+                missing = [k for k in ("key", "params", "result") if k not in data]
+                if missing:
+                    raise KeyError(", ".join(missing))
                 params, result = data["params"], data["result"]
-                records.append({"key": data["key"], "settings": params["settings"],
+                records.append({"settings": params["settings"],
                                 "method": result["method"], "seed": result["seed"],
                                 "result": result})
             except (OSError, ValueError, KeyError, TypeError) as e:
@@ -1398,12 +1414,9 @@ def sweeps_in_progress_section(results_dir: Path) -> list[str]:
              "particle distance, mm) as its trial file holds it, and what a trial cost. Means, "
              "intervals and the paper's claims wait for the recorded summary; the command in "
              "the results table above resumes the sweep where it stopped."]
-    order = list(FIG7_PANELS)
-
     def panel_order(item) -> tuple:
         s = item[1][0]["settings"]
-        where = (s.get("task"), s.get("goal"))
-        return (order.index(where) if where in order else len(order), item[0])
+        return _panel_rank(s.get("task"), s.get("goal")), item[0]
 
     for name, records in sorted(sweeps.items(), key=panel_order):
         by_settings: dict[str, list[dict]] = {}
@@ -1414,17 +1427,14 @@ def sweeps_in_progress_section(results_dir: Path) -> list[str]:
             cem = s.get("cem") or {}
             size = (f"{s.get('n')} x {s.get('n')}" if s.get("task") == "cloth"
                     else str(s.get("n")))
-            panel = FIG7_PANELS.get((s.get("task"), s.get("goal")),
-                                    f"{s.get('task')} {s.get('goal')}")
-            lines += ["", f"### `{name}`: Fig. 7 {panel}", "",
+            lines += ["", f"### `{name}`: Fig. 7 {_panel_of(s.get('task'), s.get('goal'))}", "",
                       f"{size} particles, self-collision "
                       f"{'on' if s.get('selfcollide') else 'off'}, physics {s.get('physics')}; "
                       f"CEM population {cem.get('population')}, elites {cem.get('elites')}, "
                       f"{cem.get('iterations')} iterations per stage, horizon "
                       f"{cem.get('horizon')}.", ""]
             rows = []
-            for m in [m for m in FIG7_LABELS if any(r["method"] == m for r in group)] + sorted(
-                    {r["method"] for r in group} - set(FIG7_LABELS)):
+            for m in _in_label_order(r["method"] for r in group):
                 runs = sorted((r for r in group if r["method"] == m), key=lambda r: r["seed"])
                 res = [r["result"] for r in runs]
                 flagged = [x.get("n_unstable_rollouts") for x in res]
