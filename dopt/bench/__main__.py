@@ -1,4 +1,5 @@
-"""python -m dopt.bench {rollout,derivatives,cloth-steps} [options]: print timings as JSON.
+"""python -m dopt.bench {rollout,derivatives,cloth-steps,cloth-warp} [options]: print timings
+as JSON.
 
 The planner benches (ilqr, cem) are ``python -m planners.bench``."""
 
@@ -39,6 +40,18 @@ def main(argv=None) -> int:
                    help="also write the rows with their provenance to PATH (experiment "
                         "\"cloth_steps\")")
 
+    p = sub.add_parser("cloth-warp", help="a cloth action on MuJoCo Warp (GPU), W worlds in "
+                                          "lockstep, beside MuJoCo's CPU step")
+    p.add_argument("--sizes", default="20,100",
+                   help="comma-separated particles per side (default %(default)s)")
+    p.add_argument("--nworlds", default="1,32,1024",
+                   help="comma-separated batch sizes W (default %(default)s)")
+    p.add_argument("--preset", default="default", help="cloth physics preset")
+    p.add_argument("--device", default=None, help="warp device (default: warp's, a GPU if any)")
+    p.add_argument("--record", default=None, metavar="PATH",
+                   help="also write the rows with their provenance to PATH as each size "
+                        "finishes (experiment \"cloth_warp\")")
+
     args = ap.parse_args(argv)
     if args.bench == "rollout":
         from dopt.bench.rollout import bench_rollout
@@ -53,14 +66,35 @@ def main(argv=None) -> int:
                                 args.presets.split(","),
                                 [v for v in args.variants.split(",") if v])
         if args.record:
-            import json
+            _record(args.record, "cloth_steps", out)
+    elif args.bench == "cloth-warp":
+        from dopt.bench.cloth_warp import bench_cloth_warp
+        try:
+            sizes = [int(n) for n in args.sizes.split(",")]
+            nworlds = [int(w) for w in args.nworlds.split(",")]
+        except ValueError:
+            ap.error(f"--sizes and --nworlds take comma-separated integers, got "
+                     f"{args.sizes!r} and {args.nworlds!r}")
+        done: list[dict] = []
 
-            from dopt.provenance import provenance
-            with open(args.record, "w") as f:
-                json.dump({"experiment": "cloth_steps", "rows": out,
-                           "provenance": provenance()}, f, indent=1)
+        def on_row(row: dict) -> None:
+            done.append(row)
+            if args.record:
+                _record(args.record, "cloth_warp", done)
+
+        out = bench_cloth_warp(sizes, nworlds, args.preset, args.device, on_row=on_row)
     print_json(out)
     return 0
+
+
+def _record(path: str, experiment: str, rows: list[dict]) -> None:
+    """Write ``rows`` with their provenance to ``path`` as a result file."""
+    import json
+
+    from dopt.provenance import provenance
+    with open(path, "w") as f:
+        json.dump({"experiment": experiment, "rows": rows, "provenance": provenance()}, f,
+                  indent=1)
 
 
 if __name__ == "__main__":

@@ -13,6 +13,7 @@ stiffness is too ill-conditioned ...") with its count.
 
 from __future__ import annotations
 
+import contextlib
 import re
 import time
 from collections import Counter
@@ -71,15 +72,11 @@ def bench_cloth_steps(sizes: list[int], presets: list[str],
     for preset, variant in runs:
         for n in sizes:
             config = ClothSceneConfig.preset(preset, n=n, **VARIANTS.get(variant, {}))
-            messages: Counter = Counter()
-            mujoco.set_mju_user_warning(lambda text, seen=messages: seen.update([text.strip()]))
-            try:
+            with mujoco_messages() as messages:
                 t0 = time.perf_counter()
                 scene = make_cloth(config)
                 build = time.perf_counter() - t0
                 row = _step_action(scene, CONTROL_SPEC)
-            finally:
-                mujoco.set_mju_user_warning(None)
             residuals = [float(x) for text in messages for x in _RESIDUAL.findall(text)]
             rows.append({"preset": preset, "variant": variant, "n": n, "particles": n * n,
                          "fields": {k: getattr(config, k) for k in
@@ -90,15 +87,34 @@ def bench_cloth_steps(sizes: list[int], presets: list[str],
     return rows
 
 
-def _step_action(scene, control_spec) -> dict:
-    """ms per step by stage, steps and ms per action and warning counters of one action."""
-    m = scene.model
-    d = mujoco.MjData(m)
-    mujoco.mj_setState(m, d, scene.initial_state, INTEGRATION)
-    mujoco.mj_forward(m, d)
+@contextlib.contextmanager
+def mujoco_messages():
+    """Collect every message MuJoCo's warning hook receives inside the block: yields a
+    Counter {message: times}; the hook is restored to none on exit."""
+    messages: Counter = Counter()
+    mujoco.set_mju_user_warning(lambda text: messages.update([text.strip()]))
+    try:
+        yield messages
+    finally:
+        mujoco.set_mju_user_warning(None)
+
+
+def action_rows(scene) -> np.ndarray:
+    """The benched action's control rows, (steps_per_action, ncontrol) for CONTROL_SPEC:
+    corner particle 0 moved 10 cm toward the sheet's centre and 5 cm up."""
     start = scene.positions(scene.initial_state)
     toward = -start[0, :2] / max(float(np.linalg.norm(start[0, :2])), 1e-9)
-    rows_u = scene.picker.encode(np.array([[0]]), np.array([[[*(0.1 * toward), 0.05]]]))[0]
+    return scene.picker.encode(np.array([[0]]), np.array([[[*(0.1 * toward), 0.05]]]))[0]
+
+
+def _step_action(scene, control_spec, d: mujoco.MjData | None = None) -> dict:
+    """ms per step by stage, steps and ms per action and warning counters of one action,
+    stepped from the scene's initial state in ``d`` (a new MjData if None)."""
+    m = scene.model
+    d = mujoco.MjData(m) if d is None else d
+    mujoco.mj_setState(m, d, scene.initial_state, INTEGRATION)
+    mujoco.mj_forward(m, d)
+    rows_u = action_rows(scene)
     for i in range(len(d.timer)):
         d.timer[i].duration, d.timer[i].number = 0.0, 0
     for u in rows_u:

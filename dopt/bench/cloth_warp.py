@@ -1,0 +1,164 @@
+"""Bench of a cloth action on MuJoCo Warp (a GPU) beside MuJoCo's own CPU step.
+
+Per size n (particles per side): the scene is built and settled on the CPU (``make_cloth``),
+then the action ``python -m dopt.bench cloth-steps`` times (``cloth_steps.action_rows``) is
+stepped from the settled state
+
+- on the CPU by ``mj_step`` (this process's one thread): ms per step, MuJoCo's warnings (the
+  messages its hook received and its counters) and the final particle positions;
+- on MuJoCo Warp once per batch size W (W worlds step the same action in lockstep, as CEM's
+  population would): the first step alone (it compiles the kernels), then the remaining
+  steps, each a CUDA graph of ``mujoco_warp.step`` after copying that step's control row:
+  ms per batched step and per world-step, MuJoCo Warp's overflow flags, whether every world
+  stayed finite, and world 0's final particle distance to the CPU run (mean and max over the
+  particles; MuJoCo Warp computes in float32, MuJoCo in float64).
+
+Nothing else in dopt imports warp or mujoco_warp; without them this bench raises ImportError
+with the install line. The contact and constraint buffers are sized from the sheet (one
+contact per particle against the floor, four pyramid rows per contact) plus the picker's.
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+
+import mujoco
+import numpy as np
+
+from dopt.bench.cloth_steps import _step_action, action_rows, mujoco_messages
+from dopt.state import INTEGRATION
+
+#: condim-3 pyramidal contact rows, and the non-zeros per row a particle contact needs
+#: (its 3 slider dofs, padded for the picker's equality rows)
+_ROWS_PER_CONTACT = 4
+_NNZ_PER_ROW = 8
+
+logger = logging.getLogger(__name__)
+
+
+def _import_warp():
+    try:
+        import mujoco_warp
+        import warp
+    except ImportError as err:
+        raise ImportError("the cloth-warp bench needs MuJoCo Warp: pip install mujoco-warp "
+                          "(it brings warp-lang); a CUDA GPU runs it, the CPU only slowly"
+                          ) from err
+    return warp, mujoco_warp
+
+
+def bench_cloth_warp(sizes: list[int], nworlds: list[int], preset: str = "default",
+                     device: str | None = None, on_row=None) -> list[dict]:
+    """One row per size: the CPU step's timings and warnings, and per W in ``nworlds`` the
+    MuJoCo Warp step's (``device``: warp's device name, None its default). ``on_row(row)``
+    is called as each size finishes (a long bench writes as it goes)."""
+    from dopt.tasks.pick.cloth_scene import ClothSceneConfig, make_cloth
+    from dopt.tasks.pick.picker import CONTROL_SPEC
+
+    if not sizes or any(int(n) < 2 for n in sizes):
+        raise ValueError(f"sizes must be particle counts per side >= 2, got {sizes}")
+    if not nworlds or any(int(w) < 1 for w in nworlds):
+        raise ValueError(f"nworlds must be world counts >= 1, got {nworlds}")
+    wp, mjw = _import_warp()
+    wp.config.quiet = True
+    wp.init()
+    dev = wp.get_device(device)
+    rows = []
+    for n in sizes:
+        config = ClothSceneConfig.preset(preset, n=int(n))
+        with mujoco_messages() as messages:
+            t0 = time.perf_counter()
+            scene = make_cloth(config)
+            build = time.perf_counter() - t0
+            d_cpu = mujoco.MjData(scene.model)
+            t0 = time.perf_counter()
+            cpu = _step_action(scene, CONTROL_SPEC, d_cpu)
+            cpu["wall_ms_per_step"] = 1e3 * (time.perf_counter() - t0) / cpu["steps_per_action"]
+        cpu["messages"] = dict(messages)
+        final_cpu = scene.positions(_state(scene.model, d_cpu))
+        row = {"preset": preset, "n": int(n), "particles": int(n) * int(n),
+               "nv": int(scene.model.nv), "neq": int(scene.model.neq), "build_s": build,
+               "cpu": cpu, "warp": []}
+        for w in nworlds:
+            try:
+                row["warp"].append(_warp_action(wp, mjw, dev, scene, int(w), final_cpu))
+            except Exception as err:        # out of memory, an unsupported feature: say which
+                logger.warning("cloth-warp n=%d W=%d failed: %s", n, w, err)
+                row["warp"].append({"nworld": int(w), "error": f"{type(err).__name__}: {err}"})
+        rows.append(row)
+        if on_row is not None:
+            on_row(row)
+    return rows
+
+
+def _state(m: mujoco.MjModel, d: mujoco.MjData) -> np.ndarray:
+    out = np.empty(mujoco.mj_stateSize(m, INTEGRATION))
+    mujoco.mj_getState(m, d, out, INTEGRATION)
+    return out
+
+
+def _warp_action(wp, mjw, dev, scene, nworld: int, final_cpu: np.ndarray) -> dict:
+    """The benched action on ``nworld`` MuJoCo Warp worlds; see the module docstring."""
+    from dopt.tasks.pick.picker import CONTROL_SPEC
+
+    m = scene.model
+    d0 = mujoco.MjData(m)
+    mujoco.mj_setState(m, d0, scene.initial_state, INTEGRATION)
+    mujoco.mj_forward(m, d0)
+    # the control rows decoded into ctrl and eq_active, one block per step: (T, W, nu|neq)
+    rows_u = action_rows(scene)
+    scratch = mujoco.MjData(m)
+    ctrl = np.empty((len(rows_u), m.nu))
+    eq = np.empty((len(rows_u), m.neq), dtype=bool)
+    for t, u in enumerate(rows_u):
+        mujoco.mj_setState(m, scratch, u, CONTROL_SPEC)
+        ctrl[t], eq[t] = scratch.ctrl, scratch.eq_active
+    nconmax = scene.n_particles + 64
+    njmax = _ROWS_PER_CONTACT * nconmax + 64          # one grasp equality (3 rows) is on
+    t0 = time.perf_counter()
+    with wp.ScopedDevice(dev):
+        wm = mjw.put_model(m)
+        wm.opt.warn_overflow = 0        # the flags are read from wd.overflow, not printed per step
+        wd = mjw.put_data(m, d0, nworld=nworld, nconmax=nconmax, njmax=njmax,
+                          njmax_nnz=_NNZ_PER_ROW * njmax)
+        ctrl_all = wp.array(np.repeat(ctrl[:, None], nworld, 1), dtype=wd.ctrl.dtype)
+        eq_all = wp.array(np.repeat(eq[:, None], nworld, 1), dtype=wd.eq_active.dtype)
+        wp.synchronize_device(dev)
+        upload = time.perf_counter() - t0
+
+        def controls(t: int) -> None:
+            wp.copy(wd.ctrl, ctrl_all[t])
+            wp.copy(wd.eq_active, eq_all[t])
+
+        t0 = time.perf_counter()
+        controls(0)
+        mjw.step(wm, wd)
+        wp.synchronize_device(dev)
+        first = time.perf_counter() - t0
+        graph = None
+        if dev.is_cuda:
+            with wp.ScopedCapture(device=dev) as capture:
+                mjw.step(wm, wd)
+            graph = capture.graph
+        t0 = time.perf_counter()
+        for t in range(1, len(rows_u)):
+            controls(t)
+            if graph is not None:
+                wp.capture_launch(graph)
+            else:
+                mjw.step(wm, wd)
+        wp.synchronize_device(dev)
+        ms = 1e3 * (time.perf_counter() - t0) / max(len(rows_u) - 1, 1)
+        qpos = wd.qpos.numpy()
+        d_gpu = mujoco.MjData(m)
+        mjw.get_data_into(d_gpu, m, wd, world_id=0)
+        overflow = int(np.bitwise_or.reduce(wd.overflow.numpy().ravel()))
+    gap = np.linalg.norm(scene.positions(_state(m, d_gpu)) - final_cpu, axis=-1)
+    return {"nworld": nworld, "device": str(dev), "upload_s": upload, "first_step_s": first,
+            "cuda_graph": graph is not None, "ms_per_step": ms,
+            "ms_per_world_step": ms / nworld, "steps_timed": len(rows_u) - 1,
+            "all_finite": bool(np.isfinite(qpos).all()),
+            "overflow_flags": [f.name for f in mjw.OverflowType
+                               if f and f != mjw.OverflowType.ALL and overflow & f],
+            "gap_to_cpu_mean_m": float(gap.mean()), "gap_to_cpu_max_m": float(gap.max())}
