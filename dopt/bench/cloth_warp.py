@@ -4,7 +4,8 @@ Per size n (particles per side): the scene is built and settled on the CPU (``ma
 then the action ``python -m dopt.bench cloth-steps`` times (``cloth_steps.action_rows``) is
 stepped from the settled state
 
-- on the CPU by ``mj_step`` (this process's one thread): ms per step, MuJoCo's warnings (the
+- on the CPU by ``mj_step`` (this process's one thread; the row names the processor and the
+  GPU): ms per step, MuJoCo's warnings (the
   messages its hook received and its counters) and the final particle positions;
 - on MuJoCo Warp once per batch size W (W worlds step the same action in lockstep, as CEM's
   population would): the first step alone (it compiles the kernels), then the remaining
@@ -20,7 +21,9 @@ contact per particle against the floor, four pyramid rows per contact) plus the 
 
 from __future__ import annotations
 
+import importlib.metadata
 import logging
+import os
 import time
 
 import mujoco
@@ -64,6 +67,8 @@ def bench_cloth_warp(sizes: list[int], nworlds: list[int], preset: str = "defaul
     wp.config.quiet = True
     wp.init()
     dev = wp.get_device(device)
+    machine = {"cpu": _cpu_model(), "cpu_count": os.cpu_count(), "warp_device": dev.name,
+               "warp": wp.__version__, "mujoco_warp": importlib.metadata.version("mujoco-warp")}
     rows = []
     for n in sizes:
         config = ClothSceneConfig.preset(preset, n=int(n))
@@ -79,7 +84,7 @@ def bench_cloth_warp(sizes: list[int], nworlds: list[int], preset: str = "defaul
         final_cpu = scene.positions(_state(scene.model, d_cpu))
         row = {"preset": preset, "n": int(n), "particles": int(n) * int(n),
                "nv": int(scene.model.nv), "neq": int(scene.model.neq), "build_s": build,
-               "cpu": cpu, "warp": []}
+               "machine": machine, "cpu": cpu, "warp": []}
         for w in nworlds:
             try:
                 row["warp"].append(_warp_action(wp, mjw, dev, scene, int(w), final_cpu))
@@ -90,6 +95,16 @@ def bench_cloth_warp(sizes: list[int], nworlds: list[int], preset: str = "defaul
         if on_row is not None:
             on_row(row)
     return rows
+
+
+def _cpu_model() -> str | None:
+    """The processor's model name from /proc/cpuinfo (None where there is none)."""
+    try:
+        with open("/proc/cpuinfo") as f:
+            return next((ln.split(":", 1)[1].strip() for ln in f
+                         if ln.startswith("model name")), None)
+    except OSError:
+        return None
 
 
 def _state(m: mujoco.MjModel, d: mujoco.MjData) -> np.ndarray:
