@@ -86,11 +86,13 @@ def bench_cloth_warp(sizes: list[int], nworlds: list[int], preset: str = "defaul
                "nv": int(scene.model.nv), "neq": int(scene.model.neq), "build_s": build,
                "machine": machine, "cpu": cpu, "warp": []}
         for w in nworlds:
+            out = {"nworld": int(w)}
+            row["warp"].append(out)
             try:
-                row["warp"].append(_warp_action(wp, mjw, dev, scene, int(w), final_cpu))
+                _warp_action(wp, mjw, dev, scene, out, final_cpu)
             except Exception as err:        # out of memory, an unsupported feature: say which
-                logger.warning("cloth-warp n=%d W=%d failed: %s", n, w, err)
-                row["warp"].append({"nworld": int(w), "error": f"{type(err).__name__}: {err}"})
+                logger.warning("cloth-warp n=%d W=%d failed in %s: %s", n, w, out["phase"], err)
+                out["error"] = f"{type(err).__name__}: {err}"
         rows.append(row)
         if on_row is not None:
             on_row(row)
@@ -113,11 +115,14 @@ def _state(m: mujoco.MjModel, d: mujoco.MjData) -> np.ndarray:
     return out
 
 
-def _warp_action(wp, mjw, dev, scene, nworld: int, final_cpu: np.ndarray) -> dict:
-    """The benched action on ``nworld`` MuJoCo Warp worlds; see the module docstring."""
+def _warp_action(wp, mjw, dev, scene, out: dict, final_cpu: np.ndarray) -> None:
+    """The benched action on ``out["nworld"]`` MuJoCo Warp worlds, filling ``out`` as it goes
+    (``out["phase"]``: the phase reached, so a failure says where); see the module
+    docstring."""
     from dopt.tasks.pick.picker import CONTROL_SPEC
 
-    m = scene.model
+    m, nworld = scene.model, out["nworld"]
+    out.update(device=str(dev), phase="upload")
     d0 = mujoco.MjData(m)
     mujoco.mj_setState(m, d0, scene.initial_state, INTEGRATION)
     mujoco.mj_forward(m, d0)
@@ -140,7 +145,7 @@ def _warp_action(wp, mjw, dev, scene, nworld: int, final_cpu: np.ndarray) -> dic
         ctrl_all = wp.array(np.repeat(ctrl[:, None], nworld, 1), dtype=wd.ctrl.dtype)
         eq_all = wp.array(np.repeat(eq[:, None], nworld, 1), dtype=wd.eq_active.dtype)
         wp.synchronize_device(dev)
-        upload = time.perf_counter() - t0
+        out.update(upload_s=time.perf_counter() - t0, phase="first step")
 
         def controls(t: int) -> None:
             wp.copy(wd.ctrl, ctrl_all[t])
@@ -150,7 +155,7 @@ def _warp_action(wp, mjw, dev, scene, nworld: int, final_cpu: np.ndarray) -> dic
         controls(0)
         mjw.step(wm, wd)
         wp.synchronize_device(dev)
-        first = time.perf_counter() - t0
+        out.update(first_step_s=time.perf_counter() - t0, phase="steps")
         graph = None
         if dev.is_cuda:
             with wp.ScopedCapture(device=dev) as capture:
@@ -165,15 +170,15 @@ def _warp_action(wp, mjw, dev, scene, nworld: int, final_cpu: np.ndarray) -> dic
                 mjw.step(wm, wd)
         wp.synchronize_device(dev)
         ms = 1e3 * (time.perf_counter() - t0) / max(len(rows_u) - 1, 1)
+        out.update(cuda_graph=graph is not None, ms_per_step=ms, ms_per_world_step=ms / nworld,
+                   steps_timed=len(rows_u) - 1, phase="read back")
         qpos = wd.qpos.numpy()
-        d_gpu = mujoco.MjData(m)
-        mjw.get_data_into(d_gpu, m, wd, world_id=0)
         overflow = int(np.bitwise_or.reduce(wd.overflow.numpy().ravel()))
-    gap = np.linalg.norm(scene.positions(_state(m, d_gpu)) - final_cpu, axis=-1)
-    return {"nworld": nworld, "device": str(dev), "upload_s": upload, "first_step_s": first,
-            "cuda_graph": graph is not None, "ms_per_step": ms,
-            "ms_per_world_step": ms / nworld, "steps_timed": len(rows_u) - 1,
-            "all_finite": bool(np.isfinite(qpos).all()),
-            "overflow_flags": [f.name for f in mjw.OverflowType
+    state = np.array(scene.initial_state, dtype=float)       # world 0's qpos in a state row
+    state[scene.scene.layout["qpos"]] = qpos[0]
+    gap = np.linalg.norm(scene.positions(state) - final_cpu, axis=-1)
+    out.update(all_finite=bool(np.isfinite(qpos).all()),
+               overflow_flags=[f.name for f in mjw.OverflowType
                                if f and f != mjw.OverflowType.ALL and overflow & f],
-            "gap_to_cpu_mean_m": float(gap.mean()), "gap_to_cpu_max_m": float(gap.max())}
+               gap_to_cpu_mean_m=float(gap.mean()), gap_to_cpu_max_m=float(gap.max()),
+               phase="done")
