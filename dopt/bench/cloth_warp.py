@@ -30,7 +30,7 @@ import mujoco
 import numpy as np
 
 from dopt.bench.cloth_steps import _step_action, action_rows, mujoco_messages
-from dopt.state import INTEGRATION
+from dopt.state import INTEGRATION, get_state
 
 #: condim-3 pyramidal contact rows, and the non-zeros per row a particle contact needs
 #: (its 3 slider dofs, padded for the picker's equality rows)
@@ -81,7 +81,7 @@ def bench_cloth_warp(sizes: list[int], nworlds: list[int], preset: str = "defaul
             cpu = _step_action(scene, CONTROL_SPEC, d_cpu)
             cpu["wall_ms_per_step"] = 1e3 * (time.perf_counter() - t0) / cpu["steps_per_action"]
         cpu["messages"] = dict(messages)
-        final_cpu = scene.positions(_state(scene.model, d_cpu))
+        final_cpu = scene.positions(get_state(scene.model, d_cpu))
         row = {"preset": preset, "n": int(n), "particles": int(n) * int(n),
                "nv": int(scene.model.nv), "neq": int(scene.model.neq), "build_s": build,
                "machine": machine, "cpu": cpu, "warp": []}
@@ -107,12 +107,6 @@ def _cpu_model() -> str | None:
                          if ln.startswith("model name")), None)
     except OSError:
         return None
-
-
-def _state(m: mujoco.MjModel, d: mujoco.MjData) -> np.ndarray:
-    out = np.empty(mujoco.mj_stateSize(m, INTEGRATION))
-    mujoco.mj_getState(m, d, out, INTEGRATION)
-    return out
 
 
 def _warp_action(wp, mjw, dev, scene, out: dict, final_cpu: np.ndarray) -> None:
