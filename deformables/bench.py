@@ -26,11 +26,21 @@ from __future__ import annotations
 import argparse
 import json
 import statistics
+import sys
 import time
 from collections import Counter
 
 import numpy as np
 
+from dopt.cli import (
+    EPILOG,
+    guarded,
+    int_at_least,
+    nonneg_float,
+    number_list,
+    output_file,
+    positive_int,
+)
 from dopt.provenance import provenance
 
 from .cloth import ClothConfig, cloth_key_particles
@@ -173,46 +183,28 @@ def _histogram(values) -> dict:
     return {str(k): v for k, v in sorted(Counter(values).items())}
 
 
-def _positive_int(text: str) -> int:
-    value = int(text)
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"must be an integer >= 1, got {text}")
-    return value
-
-
-def _resolutions(text: str) -> tuple[int, ...]:
-    try:
-        values = tuple(int(v) for v in text.split(","))
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not a comma list of integers: {text!r}") from None
-    if not values or min(values) < 2:
-        raise argparse.ArgumentTypeError(f"particles per side must be >= 2, got {text!r}")
-    return values
-
-
-def main(argv=None) -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+@guarded("python -m deformables.bench")
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(prog="python -m deformables.bench",
+                                     description=__doc__.splitlines()[0], epilog=EPILOG)
     parser.add_argument("mode", nargs="?", choices=MODES, default="tasks",
                         help="tasks (default), paper-scale or compare (see the module doc)")
-    parser.add_argument("--repeats", type=_positive_int, default=None,
+    parser.add_argument("--repeats", type=positive_int, default=None,
                         help="timed runs per goal (median reported); tasks: 5 after one "
                              "warm-up run, paper-scale: 1")
-    parser.add_argument("--cloth-n", type=_positive_int, default=None,
+    parser.add_argument("--cloth-n", type=int_at_least(2), default=None,
                         help="cloth particles per side (tasks: 40, paper-scale: 100)")
     parser.add_argument("--task", choices=TASKS, action="append",
                         help="tasks mode: task to time (repeatable); default: all")
-    parser.add_argument("--noise", type=float, default=None,
+    parser.add_argument("--noise", type=nonneg_float, default=None,
                         help="Gaussian goal noise per coordinate, metres (tasks: 0; "
                              "paper-scale and compare: the noisy level, 0.001)")
-    parser.add_argument("--resolutions", type=_resolutions, default=(16, 25, 40),
+    parser.add_argument("--resolutions", type=number_list(int, 2, "particles per side"),
+                        default=[16, 25, 40],
                         help="compare mode: comma list of particles per side (16,25,40)")
-    parser.add_argument("--out", default=None,
+    parser.add_argument("--out", type=output_file, default=None,
                         help="also write the whole record as one JSON file here")
     args = parser.parse_args(argv)
-    if args.noise is not None and not args.noise >= 0:
-        parser.error("--noise must be >= 0")
-    if args.cloth_n is not None and args.cloth_n < 2:
-        parser.error("--cloth-n must be >= 2")
     if args.mode == "tasks":
         noise = args.noise or 0.0
         record = [bench(task, args.repeats or 5, args.cloth_n or 40, noise)
@@ -232,7 +224,8 @@ def main(argv=None) -> None:
         with open(args.out, "w") as handle:
             json.dump(record, handle, indent=1)
             handle.write("\n")
+    return 0
 
 
 if __name__ == "__main__":
-    main()
+    sys.exit(main())

@@ -17,7 +17,7 @@ import importlib
 __version__ = "0.2.0"
 
 #: public name -> the module that defines it; loaded on first use, so that the pure-Python
-#: modules (dopt.validation, dopt.stats, dopt.provenance) import without MuJoCo or torch
+#: modules (dopt.validation, dopt.stats, dopt.provenance, dopt.cli) import without MuJoCo or torch
 _EXPORTS = {
     "RolloutError": "dopt.errors", "UnstableRolloutError": "dopt.errors",
     "Derivatives": "dopt.rollout", "FDConfig": "dopt.rollout", "RolloutConfig": "dopt.rollout",

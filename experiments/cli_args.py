@@ -1,177 +1,35 @@
-"""Command-line helpers shared by the experiment scripts (standard library only, so the
-MuJoCo-free key-particle experiment can use them without importing torch or MuJoCo).
-
-The ``*_int`` / ``*_float``, ``number_list``, ``output_dir`` and ``output_file`` functions are
-argparse ``type=`` callables: a bad value becomes an argparse usage error (exit 2) naming the
-flag, before anything runs or any folder is created. ``guarded`` turns a failure of a script's
-main into one line on stderr and exit status 1 (the traceback with ``DOPT_TRACEBACK=1``).
+"""Command-line helpers of the experiment scripts: the shared argparse types and one-line
+errors of ``dopt.cli`` (re-exported here, so a script imports its CLI pieces from one place),
+plus what only experiments do: check --record against --out and write OUT/summary.json with
+the run's provenance. Standard library and ``dopt.cli`` / ``dopt.provenance`` only, so the
+MuJoCo-free key-particle experiment can use them without importing torch or MuJoCo.
 """
 from __future__ import annotations
 
-import argparse
-import functools
 import json
-import math
-import os
 import sys
-import traceback
-from collections.abc import Callable, Sequence
 from pathlib import Path
 
-#: set to 1 for the full traceback of a failed script instead of its one-line error
-TRACEBACK_ENV = "DOPT_TRACEBACK"
-#: the --help epilog of every script: exit codes and how to see a traceback
-EPILOG = (f"Exit status: 0 done; 1 a trial or the run failed (one line 'SCRIPT: error: ...' on "
-          f"stderr;\n{TRACEBACK_ENV}=1 in the environment prints the full traceback); 2 bad "
-          "arguments.")
-
-
-def choices_list(text: str, choices: Sequence[str], what: str) -> list[str]:
-    """Comma-separated names -> list, each one of ``choices``.
-
-    Raises:
-        ValueError: an unknown name, or none at all (the message names ``what`` and lists
-            ``choices``).
-    """
-    names = [name.strip() for name in text.split(",")]
-    bad = [name for name in names if name not in choices]
-    if bad or not names:
-        raise ValueError(f"unknown {what} {bad}; choose from {', '.join(choices)}")
-    return no_repeats(names, what)
-
-
-def no_repeats(names: list[str], what: str) -> list[str]:
-    """``names`` unchanged. Raises ValueError naming ``what`` and the names given twice."""
-    repeated = sorted({name for name in names if names.count(name) > 1})
-    if repeated:
-        raise ValueError(f"{what} {', '.join(repeated)} given twice")
-    return names
-
-
-def choices_type(choices: Sequence[str], what: str) -> Callable[[str], list[str]]:
-    """``choices_list`` as an argparse ``type=`` (the message names ``what``)."""
-    def parse(text: str) -> list[str]:
-        try:
-            return choices_list(text, choices, what)
-        except ValueError as e:
-            raise argparse.ArgumentTypeError(str(e)) from None
-    return parse
-
-
-def _number(kind, low: float, strict: bool):
-    def parse(text: str):
-        try:
-            v = kind(text)
-        except ValueError:
-            what = "an integer" if kind is int else "a number"
-            raise argparse.ArgumentTypeError(f"{text!r} is not {what}") from None
-        if not math.isfinite(v) or (v <= low if strict else v < low):
-            least = f">= {low + 1:g}" if strict and kind is int else \
-                f"{'>' if strict else '>='} {low:g}"
-            raise argparse.ArgumentTypeError(f"must be {least}, got {text}")
-        return v
-    return parse
-
-
-#: an int >= 1
-positive_int = _number(int, 0, strict=True)
-#: an int >= 0
-nonneg_int = _number(int, 0, strict=False)
-#: a finite float > 0
-positive_float = _number(float, 0.0, strict=True)
-#: a finite float >= 0
-nonneg_float = _number(float, 0.0, strict=False)
-
-
-def int_at_least(low: int) -> Callable[[str], int]:
-    """An argparse ``type=``: an int >= ``low``."""
-    return _number(int, low, strict=False)
-
-
-def number_list(kind, low: float, what: str = "values") -> Callable[[str], list]:
-    """An argparse ``type=``: comma-separated finite numbers of ``kind`` (int or float), each
-    >= ``low``, none given twice, no empty item."""
-    def parse(text: str) -> list:
-        items = [item.strip() for item in text.split(",")]
-        if not text.strip() or any(not item for item in items):
-            raise argparse.ArgumentTypeError(f"{text!r} is not a comma-separated list of "
-                                             f"{what} (empty item)")
-        vals = []
-        where = f" in {text!r}" if len(items) > 1 else ""
-        for item in items:
-            try:
-                v = kind(item)
-            except ValueError:
-                raise argparse.ArgumentTypeError(
-                    f"{item!r}{where} is not {'an integer' if kind is int else 'a number'}"
-                ) from None
-            if not math.isfinite(v) or v < low:
-                raise argparse.ArgumentTypeError(f"{what} must be finite and >= {low:g}, got "
-                                                 f"{item}{where}")
-            vals.append(v)
-        repeated = sorted({v for v in vals if vals.count(v) > 1})
-        if repeated:
-            raise argparse.ArgumentTypeError(f"{', '.join(f'{v:g}' for v in repeated)} given "
-                                             f"twice in {text!r}")
-        return vals
-    return parse
-
-
-def _nearest_existing(path: Path) -> Path:
-    for p in (path, *path.parents):
-        if p.exists():
-            return p
-    return Path.cwd()
-
-
-def folder_problem(path: Path) -> str | None:
-    """Why ``path`` cannot be an output folder (exists as a file, not writable, under a file
-    or an unwritable folder), or None; creates nothing."""
-    path = Path(path).absolute()
-    if path.exists():
-        if not path.is_dir():
-            return f"{path} exists and is not a folder"
-        if not os.access(path, os.W_OK | os.X_OK):
-            return f"{path} is not writable"
-        return None
-    parent = _nearest_existing(path)
-    if not parent.is_dir():
-        return f"cannot create {path}: {parent} is not a folder"
-    if not os.access(parent, os.W_OK | os.X_OK):
-        return f"cannot create {path}: {parent} is not writable"
-    return None
-
-
-def file_problem(path: Path) -> str | None:
-    """Why a file cannot be written at ``path`` (a folder there, not writable, its folder
-    cannot be created or written), or None; creates nothing."""
-    path = Path(path).absolute()
-    if path.is_dir():
-        return f"{path} is a folder"
-    if path.exists():
-        return None if os.access(path, os.W_OK) else f"{path} is not writable"
-    return folder_problem(path.parent)
-
-
-def output_dir(text: str) -> Path:
-    """An argparse ``type=``: a folder that exists and is writable or can be created (it is
-    not created here)."""
-    if not text.strip():
-        raise argparse.ArgumentTypeError("an empty path is not a folder")
-    problem = folder_problem(Path(text))
-    if problem:
-        raise argparse.ArgumentTypeError(problem)
-    return Path(text)
-
-
-def output_file(text: str) -> Path:
-    """An argparse ``type=``: a file that can be written (or created, with its folder)."""
-    if not text.strip():
-        raise argparse.ArgumentTypeError("an empty path is not a file")
-    problem = file_problem(Path(text))
-    if problem:
-        raise argparse.ArgumentTypeError(problem)
-    return Path(text)
+from dopt.cli import (  # noqa: F401  (re-exported for the scripts)
+    EPILOG,
+    TRACEBACK_ENV,
+    choices_list,
+    choices_type,
+    existing_dir,
+    file_problem,
+    folder_problem,
+    guarded,
+    int_at_least,
+    no_repeats,
+    nonneg_float,
+    nonneg_int,
+    number_list,
+    one_line,
+    output_dir,
+    output_file,
+    positive_float,
+    positive_int,
+)
 
 
 def record_problem(record: Path | None, out: Path) -> str | None:
@@ -179,41 +37,6 @@ def record_problem(record: Path | None, out: Path) -> str | None:
     if record is not None and Path(record).absolute() == Path(out).absolute():
         return f"argument --record: {record} is the --out folder"
     return None
-
-
-def existing_dir(text: str) -> Path:
-    """An argparse ``type=``: a folder that exists."""
-    if not Path(text).is_dir():
-        raise argparse.ArgumentTypeError(f"{text} is not a folder" if Path(text).exists()
-                                         else f"{text} does not exist")
-    return Path(text)
-
-
-def one_line(e: BaseException) -> str:
-    """"ErrorType: message" on one line."""
-    return f"{type(e).__name__}: {' '.join(str(e).split())}"
-
-
-def guarded(script: str):
-    """Decorator of a script's ``main(argv) -> int``: an exception becomes one line
-    "SCRIPT: error: ErrorType: message" on stderr and exit status 1 (the traceback first when
-    the environment sets DOPT_TRACEBACK=1); Ctrl-C exits 130 with one line. Usage errors
-    (argparse's SystemExit 2) pass through."""
-    def wrap(main):
-        @functools.wraps(main)
-        def run(*args, **kwargs) -> int:
-            try:
-                return main(*args, **kwargs)
-            except KeyboardInterrupt:
-                print(f"{script}: interrupted", file=sys.stderr)
-                return 130
-            except Exception as e:
-                if os.environ.get(TRACEBACK_ENV, "") not in ("", "0"):
-                    traceback.print_exc()
-                print(f"{script}: error: {one_line(e)}", file=sys.stderr)
-                return 1
-        return run
-    return wrap
 
 
 def write_summary(summary: dict, out: Path, record: Path | None, script: str, argv,

@@ -8,49 +8,51 @@ from __future__ import annotations
 import argparse
 import sys
 
-from dopt.bench.cli import add_common_args, print_json
+from dopt.bench.cli import add_common_args, add_record_arg, print_json, write_record
+from dopt.cli import EPILOG, guarded, nonneg_int, number_list, positive_int
+
+#: a comma list of particles per side (a cloth needs two per side)
+SIZES = number_list(int, 2, "particles per side")
 
 
+@guarded("python -m dopt.bench")
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(prog="python -m dopt.bench", description=__doc__)
+    ap = argparse.ArgumentParser(prog="python -m dopt.bench", description=__doc__,
+                                 epilog=EPILOG)
     sub = ap.add_subparsers(dest="bench", required=True)
 
     p = sub.add_parser("rollout", help="P open-loop rollouts of T steps in one batched call")
     add_common_args(p)
-    p.add_argument("--P", type=int, default=64, help="number of rollouts")
-    p.add_argument("--T", type=int, default=80, help="steps per rollout")
+    p.add_argument("--P", type=positive_int, default=64, help="number of rollouts")
+    p.add_argument("--T", type=positive_int, default=80, help="steps per rollout")
 
     p = sub.add_parser("derivatives", help="reduced FD derivatives over a horizon vs full set")
     add_common_args(p)
-    p.add_argument("--T", type=int, default=80, help="horizon")
-    p.add_argument("--objects", type=int, default=2,
+    p.add_argument("--T", type=positive_int, default=80, help="horizon")
+    p.add_argument("--objects", type=nonneg_int, default=2,
                    help="objects in the active set besides the robot (2 -> |C| = 7 + 12 = 19)")
     p.add_argument("--centered", action="store_true", help="centred differences")
 
     p = sub.add_parser("cloth-steps", help="ms per cloth step by MuJoCo stage and the warnings, "
                                            "per physics preset and resolution")
-    p.add_argument("--sizes", default="12,25,40,64,100",
+    p.add_argument("--sizes", type=SIZES, default=[12, 25, 40, 64, 100],
                    help="comma-separated particles per side (default %(default)s)")
     p.add_argument("--presets", default="default,fast,accurate",
                    help="comma-separated cloth physics presets (default %(default)s)")
     p.add_argument("--variants", default="",
                    help="comma-separated settings tried on top of the first preset "
                         "(dopt.bench.cloth_steps.VARIANTS, e.g. \"iterations 300,dt 5 ms\")")
-    p.add_argument("--record", default=None, metavar="PATH",
-                   help="also write the rows with their provenance to PATH (experiment "
-                        "\"cloth_steps\")")
+    add_record_arg(p, "cloth_steps")
 
     p = sub.add_parser("cloth-warp", help="a cloth action on MuJoCo Warp (GPU), W worlds in "
                                           "lockstep, beside MuJoCo's CPU step")
-    p.add_argument("--sizes", default="20,100",
+    p.add_argument("--sizes", type=SIZES, default=[20, 100],
                    help="comma-separated particles per side (default %(default)s)")
-    p.add_argument("--nworlds", default="1,32,1024",
+    p.add_argument("--nworlds", type=number_list(int, 1, "world counts"), default=[1, 32, 1024],
                    help="comma-separated batch sizes W (default %(default)s)")
     p.add_argument("--preset", default="default", help="cloth physics preset")
     p.add_argument("--device", default=None, help="warp device (default: warp's, a GPU if any)")
-    p.add_argument("--record", default=None, metavar="PATH",
-                   help="also write the rows with their provenance to PATH as each size "
-                        "finishes (experiment \"cloth_warp\")")
+    add_record_arg(p, "cloth_warp", "as each size finishes")
 
     args = ap.parse_args(argv)
     if args.bench == "rollout":
@@ -62,39 +64,22 @@ def main(argv=None) -> int:
                                 args.centered, args.seed)
     elif args.bench == "cloth-steps":
         from dopt.bench.cloth_steps import bench_cloth_steps
-        out = bench_cloth_steps([int(n) for n in args.sizes.split(",")],
-                                args.presets.split(","),
+        out = bench_cloth_steps(args.sizes, args.presets.split(","),
                                 [v for v in args.variants.split(",") if v])
         if args.record:
-            _record(args.record, "cloth_steps", out)
+            write_record(args.record, "cloth_steps", out)
     elif args.bench == "cloth-warp":
         from dopt.bench.cloth_warp import bench_cloth_warp
-        try:
-            sizes = [int(n) for n in args.sizes.split(",")]
-            nworlds = [int(w) for w in args.nworlds.split(",")]
-        except ValueError:
-            ap.error(f"--sizes and --nworlds take comma-separated integers, got "
-                     f"{args.sizes!r} and {args.nworlds!r}")
         done: list[dict] = []
 
         def on_row(row: dict) -> None:
             done.append(row)
             if args.record:
-                _record(args.record, "cloth_warp", done)
+                write_record(args.record, "cloth_warp", done)
 
-        out = bench_cloth_warp(sizes, nworlds, args.preset, args.device, on_row=on_row)
+        out = bench_cloth_warp(args.sizes, args.nworlds, args.preset, args.device, on_row=on_row)
     print_json(out)
     return 0
-
-
-def _record(path: str, experiment: str, rows: list[dict]) -> None:
-    """Write ``rows`` with their provenance to ``path`` as a result file."""
-    import json
-
-    from dopt.provenance import provenance
-    with open(path, "w") as f:
-        json.dump({"experiment": experiment, "rows": rows, "provenance": provenance()}, f,
-                  indent=1)
 
 
 if __name__ == "__main__":

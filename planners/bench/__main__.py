@@ -5,19 +5,30 @@ from __future__ import annotations
 import argparse
 import sys
 
-from dopt.bench.cli import add_common_args, print_json
+from dopt.bench.cli import add_common_args, add_record_arg, print_json, write_record
+from dopt.cli import (
+    EPILOG,
+    guarded,
+    int_at_least,
+    nonneg_int,
+    number_list,
+    positive_float,
+    positive_int,
+)
 
 
+@guarded("python -m planners.bench")
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(prog="python -m planners.bench", description=__doc__)
+    ap = argparse.ArgumentParser(prog="python -m planners.bench", description=__doc__,
+                                 epilog=EPILOG)
     sub = ap.add_subparsers(dest="bench", required=True)
 
     p = sub.add_parser("ilqr", help="one iLQR(-SVR) iteration per DoF-selection method")
     add_common_args(p)
     p.add_argument("--methods", default="baseline,rand,naive,svr-sum,svr-svd",
                    help="comma-separated methods (default %(default)s)")
-    p.add_argument("--rho", type=float, default=1.0, help="SVR importance threshold")
-    p.add_argument("--theta", type=int, default=None,
+    p.add_argument("--rho", type=positive_float, default=1.0, help="SVR importance threshold")
+    p.add_argument("--theta", type=nonneg_int, default=None,
                    help="random DoFs re-added per iteration (rand: DoFs besides the robot); "
                         "default: the paper's Table 1 value per method (rand 5, svr 10)")
     p.add_argument("--keypoints", default="every",
@@ -25,46 +36,50 @@ def main(argv=None) -> int:
                         "(default %(default)s)")
     p.add_argument("--box-qp", action="store_true",
                    help="control limits in the backward pass (mju_boxQP)")
-    p.add_argument("--record", default=None, metavar="PATH",
-                   help="also write the rows with their provenance to PATH (a result file, "
-                        "experiment \"ilqr_bench\")")
-    p.add_argument("--iterations", type=int, default=5, help="timed iterations per method")
-    p.add_argument("--warmup", type=int, default=3, help="untimed iterations per method first")
+    add_record_arg(p, "ilqr_bench")
+    p.add_argument("--iterations", type=positive_int, default=5,
+                   help="timed iterations per method")
+    p.add_argument("--warmup", type=nonneg_int, default=3,
+                   help="untimed iterations per method first")
 
     p = sub.add_parser("clock", help="CPU time of an MPC optimisation against |C| per push "
                                      "task, and the model clock's fit ms = a + b |C|")
     p.add_argument("--tasks", default="clutter,soft,soft_rigid",
                    help="comma-separated push tasks (default %(default)s)")
-    p.add_argument("--sizes", type=int, default=6, help="DoF counts per task, 7 to nv")
-    p.add_argument("--iterations", type=int, default=8, help="timed optimisations per count")
-    p.add_argument("--warmup", type=int, default=2, help="untimed optimisations first")
-    p.add_argument("--nominal-threads", type=float, default=2.0,
+    p.add_argument("--sizes", type=int_at_least(2), default=6,
+                   help="DoF counts per task, 7 to nv")
+    p.add_argument("--iterations", type=positive_int, default=8,
+                   help="timed optimisations per count")
+    p.add_argument("--warmup", type=nonneg_int, default=2, help="untimed optimisations first")
+    p.add_argument("--nominal-threads", type=positive_float, default=2.0,
                    help="threads the CPU time is divided by (default %(default)s)")
-    p.add_argument("--seed", type=int, default=0, help="seed of the task instances")
+    p.add_argument("--seed", type=nonneg_int, default=0, help="seed of the task instances")
 
     p = sub.add_parser("cem", help="one CEM iteration of the cloth or rope pick-and-place task")
     add_common_args(p, task="cloth")
-    p.add_argument("--n", type=int, default=None,
+    p.add_argument("--n", type=int_at_least(2), default=None,
                    help="cloth particles per side (default 12) or rope particles (default 40)")
-    p.add_argument("--P", type=int, default=32, help="CEM population")
-    p.add_argument("--H", type=int, default=2, help="actions per sequence")
-    p.add_argument("--bound", type=float, default=None,
+    p.add_argument("--P", type=positive_int, default=32, help="CEM population")
+    p.add_argument("--H", type=positive_int, default=2, help="actions per sequence")
+    p.add_argument("--bound", type=positive_float, default=None,
                    help="picker displacement bound per axis, m (default: cloth 0.3, rope 0.1)")
 
     for task in ("cloth", "rope"):
         p = sub.add_parser(task, help=f"the {task} physics presets: speed, blow-ups per 1000 "
                                       f"random actions, strain, scripted error")
         add_common_args(p)
-        p.add_argument("--sizes", default="12" if task == "cloth" else "40",
+        p.add_argument("--sizes", type=number_list(int, 2, "particle counts"),
+                       default=[12] if task == "cloth" else [40],
                        help="comma-separated particles per side / along the rope")
         p.add_argument("--settings", default=None,
                        help="comma-separated setting names (default: all of "
                             "planners.bench.physics' table)")
-        p.add_argument("--actions", type=int, default=1000,
+        p.add_argument("--actions", type=positive_int, default=1000,
                        help="random pick-and-place actions per setting and size")
         p.add_argument("--no-scripted", action="store_true",
                        help="skip the scripted policy on the task's goals")
         p.add_argument("--picker-speeds", default=None,
+                       type=number_list(float, 0.0, "picker speeds", strict=True),
                        help="comma-separated picker speeds (m/s, the average on the longest "
                             "move), a row each (default: the picker's 0.5)")
 
@@ -75,12 +90,7 @@ def main(argv=None) -> int:
                          args.iterations, args.warmup, args.threads, args.seed,
                          tuple(args.keypoints.split(",")), args.box_qp)
         if args.record:
-            import json
-
-            from dopt.provenance import provenance
-            with open(args.record, "w") as f:
-                json.dump({"experiment": "ilqr_bench", "task": args.task, "rows": out,
-                           "provenance": provenance()}, f, indent=1)
+            write_record(args.record, "ilqr_bench", out, task=args.task)
     elif args.bench == "clock":
         from planners.bench.clock import bench_clock
         out = bench_clock(args.tasks.split(","), args.sizes, args.iterations, args.warmup,
@@ -91,11 +101,10 @@ def main(argv=None) -> int:
                         args.repeats, args.seed)
     elif args.bench in ("cloth", "rope"):
         from planners.bench.physics import bench_physics
-        out = bench_physics(args.bench, [int(n) for n in args.sizes.split(",")],
+        out = bench_physics(args.bench, args.sizes,
                             args.settings.split(",") if args.settings else None, args.actions,
                             args.threads, args.seed, scripted=not args.no_scripted,
-                            picker_speeds=([float(v) for v in args.picker_speeds.split(",")]
-                                           if args.picker_speeds else [None]))
+                            picker_speeds=args.picker_speeds or [None])
     print_json(out)
     return 0
 

@@ -28,6 +28,8 @@ import rho_sweep
 import rope
 import svr_explain
 
+import dopt.cli
+
 ROOT = Path(__file__).resolve().parents[2]
 EXPERIMENTS = ROOT / "experiments"
 SCRIPTS = {"cloth_fold": cloth_fold, "rope": rope, "mpc": mpc, "rho_sweep": rho_sweep,
@@ -180,7 +182,7 @@ def test_an_unwritable_out_is_a_usage_error_even_for_root(tmp_path, capsys, no_r
     ro = tmp_path / "ro"
     ro.mkdir()
     real = os.access
-    monkeypatch.setattr(cli_args.os, "access",
+    monkeypatch.setattr(dopt.cli.os, "access",
                         lambda p, mode: False if Path(p) == ro else real(p, mode))
     assert f"argument --out: {ro} is not writable" in usage_error(capsys, script,
                                                                   ["--out", ro])
