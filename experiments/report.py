@@ -22,7 +22,8 @@ Result kinds (the file's "experiment" field): "fig7" (experiments/cloth_fold.py,
 
 A result file that cannot be read exits 2 naming it; one whose provenance lacks the command,
 the git commit or the versions of dopt, mujoco and torch is named in a note on stderr.
-Standard library only, so it runs anywhere (no torch, no MuJoCo).
+Standard library only (with dopt.cli, the command-line types, itself standard library), so it
+runs without torch, numpy or MuJoCo.
 """
 
 from __future__ import annotations
