@@ -200,8 +200,9 @@ def main(argv=None) -> int:
                         help="Gaussian goal noise per coordinate, metres (tasks: 0; "
                              "paper-scale and compare: the noisy level, 0.001)")
     parser.add_argument("--resolutions", type=number_list(int, 2, "particles per side"),
-                        default=[16, 25, 40],
-                        help="compare mode: comma list of particles per side (16,25,40)")
+                        default="16,25,40",
+                        help="compare mode: comma list of particles per side "
+                             "(default %(default)s)")
     parser.add_argument("--out", type=output_file, default=None,
                         help="also write the whole record as one JSON file here")
     args = parser.parse_args(argv)

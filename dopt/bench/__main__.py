@@ -35,7 +35,7 @@ def main(argv=None) -> int:
 
     p = sub.add_parser("cloth-steps", help="ms per cloth step by MuJoCo stage and the warnings, "
                                            "per physics preset and resolution")
-    p.add_argument("--sizes", type=SIZES, default=[12, 25, 40, 64, 100],
+    p.add_argument("--sizes", type=SIZES, default="12,25,40,64,100",
                    help="comma-separated particles per side (default %(default)s)")
     p.add_argument("--presets", default="default,fast,accurate",
                    help="comma-separated cloth physics presets (default %(default)s)")
@@ -46,9 +46,9 @@ def main(argv=None) -> int:
 
     p = sub.add_parser("cloth-warp", help="a cloth action on MuJoCo Warp (GPU), W worlds in "
                                           "lockstep, beside MuJoCo's CPU step")
-    p.add_argument("--sizes", type=SIZES, default=[20, 100],
+    p.add_argument("--sizes", type=SIZES, default="20,100",
                    help="comma-separated particles per side (default %(default)s)")
-    p.add_argument("--nworlds", type=number_list(int, 1, "world counts"), default=[1, 32, 1024],
+    p.add_argument("--nworlds", type=number_list(int, 1, "world counts"), default="1,32,1024",
                    help="comma-separated batch sizes W (default %(default)s)")
     p.add_argument("--preset", default="default", help="cloth physics preset")
     p.add_argument("--device", default=None, help="warp device (default: warp's, a GPU if any)")
