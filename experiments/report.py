@@ -1370,14 +1370,16 @@ def clock_model_section(results: list[Result], page: Path) -> list[str]:
 # ----------------------------------------------------------------- sweeps in progress
 def unrecorded_sweeps(results_dir: Path) -> dict[str, list[dict]]:
     """{folder name: its trial records} of every ``runs/fig7-*`` folder under ``results_dir``
-    that has committed trials (``trials/*.json``, as ``dopt.sweep`` writes them) but no
-    recorded summary ``<folder>.json`` beside ``runs/`` yet; folders in name order, records
-    in file-name order."""
+    with committed trials (``trials/*.json``, as ``dopt.sweep`` writes them) that its recorded
+    summary ``<folder>.json`` beside ``runs/`` does not hold: all of them while no summary is
+    recorded, else those whose method and seed the summary lacks (a sweep recorded for some
+    methods or seeds, more committed since). Folders in name order, records in file-name
+    order; a folder whose trials the summary holds all of is left out."""
     out = {}
     for folder in sorted(Path(results_dir).glob("runs/fig7-*")):
         files = sorted(folder.glob("trials/*.json"))
-        if not files or (Path(results_dir) / f"{folder.name}.json").exists():
-            continue
+        summary_path = Path(results_dir) / f"{folder.name}.json"
+        held = _recorded_seeds(summary_path) if summary_path.exists() else {}
         records = []
         for path in files:
             try:
@@ -1387,14 +1389,27 @@ def unrecorded_sweeps(results_dir: Path) -> dict[str, list[dict]]:
                 if missing:
                     raise KeyError(", ".join(missing))
                 params, result = data["params"], data["result"]
-                records.append({"settings": params["settings"],
-                                "method": result["method"], "seed": result["seed"],
-                                "result": result})
+                record = {"settings": params["settings"], "method": result["method"],
+                          "seed": result["seed"], "result": result}
             except (OSError, ValueError, KeyError, TypeError) as e:
                 raise ReportError(f"{path}: not a trial record of a Fig. 7 sweep "
                                   f"({type(e).__name__}: {e})") from e
-        out[folder.name] = records
+            if record["seed"] not in held.get(record["method"], ()):
+                records.append(record)
+        if records:
+            out[folder.name] = records
     return out
+
+
+def _recorded_seeds(path: Path) -> dict[str, set]:
+    """{method: seeds} a recorded Fig. 7 summary holds (its ``methods.<m>.seeds``; the file
+    itself is read and checked as a result file by ``load_results``)."""
+    try:
+        methods = json.loads(path.read_text()).get("methods") or {}
+        return {m: set(row.get("seeds") or ()) for m, row in methods.items()}
+    except (OSError, ValueError, AttributeError, TypeError) as e:
+        raise ReportError(f"{path}: no methods with their seeds ({type(e).__name__}: {e})") \
+            from e
 
 
 def _median(xs: list) -> float | None:
@@ -1410,11 +1425,13 @@ def sweeps_in_progress_section(results_dir: Path) -> list[str]:
     if not sweeps:
         return []
     lines = ["## Fig. 7 sweeps in progress", "",
-             "Trials committed under `docs/results/runs/<sweep>/trials/` whose summary "
-             "(`docs/results/<sweep>.json`) is not recorded yet: each seed's final cost (mean "
-             "particle distance, mm) as its trial file holds it, and what a trial cost. Means, "
-             "intervals and the paper's claims wait for the recorded summary; the command in "
-             "the results table above resumes the sweep where it stopped."]
+             "Trials committed under `docs/results/runs/<sweep>/trials/` that the sweep's "
+             "summary (`docs/results/<sweep>.json`) does not hold yet (not recorded, or recorded "
+             "for other methods or seeds): each seed's final cost (mean particle distance, mm) "
+             "as its trial file holds it, and what a trial cost. Means, intervals and the "
+             "paper's claims wait for the recorded summary; the command in the results table "
+             "above (with these methods in `--methods` and enough `--seeds`) resumes the sweep "
+             "where it stopped."]
     def panel_order(item) -> tuple:
         s = item[1][0]["settings"]
         return _panel_rank(s.get("task"), s.get("goal")), item[0]
@@ -1451,7 +1468,8 @@ def sweeps_in_progress_section(results_dir: Path) -> list[str]:
                             "s / CEM iteration (median)", "s / trial (median)",
                             "planning rollouts flagged", "executed plans unstable"], rows)
             wall = sum(x for r in group if _finite(x := r["result"].get("wall_s")))
-            lines += ["", f"{len(group)} trials, {num(wall, 0)} s of trials "
+            n = len(group)
+            lines += ["", f"{n} trial{'s' if n != 1 else ''}, {num(wall, 0)} s of trials "
                           f"({num(wall / 3600, 1)} h of one core)."]
     return lines
 

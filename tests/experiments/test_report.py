@@ -668,8 +668,18 @@ def test_a_sweep_without_its_summary_is_shown_seed_by_seed_until_recorded(site):
     assert "| CEM(Random) | 1 | 30.4 |" in part
     assert "3 trials, 5600 s of trials (1.6 h of one core)." in part
     assert "fig7-cloth-side" not in block(site["readme"])   # partial: never a headline
-    # recording the summary takes the sweep out of this section
-    write(site["results"], "fig7-cloth-side.json", fig7(goal="side"))
+    # a summary recorded for some of them leaves the others listed
+    partial = fig7(goal="side")
+    partial["methods"]["simple"]["seeds"] = [0, 1, 2]
+    write(site["results"], "fig7-cloth-side.json", partial)
+    assert run(site) == 0
+    part = site["md"].read_text().split("## Fig. 7 sweeps in progress")[1]
+    assert "| CEM(Simple) | 3 | 4.9 |" in part and "| CEM(Random) | 1 | 30.4 |" in part
+    assert "2 trials, 3500 s of trials" in part
+    # a summary that holds every committed trial takes the sweep out of this section
+    partial["methods"]["simple"]["seeds"] = [0, 1, 2, 3]
+    partial["methods"]["random"] = {**partial["methods"]["original"], "seeds": [1]}
+    write(site["results"], "fig7-cloth-side.json", partial)
     assert run(site) == 0
     assert "sweeps in progress" not in site["md"].read_text()
 
