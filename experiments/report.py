@@ -1368,18 +1368,20 @@ def clock_model_section(results: list[Result], page: Path) -> list[str]:
 
 
 # ----------------------------------------------------------------- sweeps in progress
-def unrecorded_sweeps(results_dir: Path) -> dict[str, list[dict]]:
+def unrecorded_sweeps(results_dir: Path, results: list[Result]) -> dict[str, list[dict]]:
     """{folder name: its trial records} of every ``runs/fig7-*`` folder under ``results_dir``
     with committed trials (``trials/*.json``, as ``dopt.sweep`` writes them) that its recorded
-    summary ``<folder>.json`` beside ``runs/`` does not hold: all of them while no summary is
-    recorded, else those whose method and seed the summary lacks (a sweep recorded for some
-    methods or seeds, more committed since). Folders in name order, records in file-name
-    order; a folder whose trials the summary holds all of is left out."""
+    summary ``<folder>.json`` among ``results`` (``load_results(results_dir)``) does not hold:
+    all of them while no summary is recorded, else those whose method and seed the summary
+    lacks (a sweep recorded for some methods or seeds, more committed since). Folders in name
+    order, records in file-name order; a folder whose trials the summary holds all of is left
+    out."""
+    recorded = {r.path.stem: r.data for r in results}
     out = {}
     for folder in sorted(Path(results_dir).glob("runs/fig7-*")):
         files = sorted(folder.glob("trials/*.json"))
-        summary_path = Path(results_dir) / f"{folder.name}.json"
-        held = _recorded_seeds(summary_path) if summary_path.exists() else {}
+        held = {m: set(row.get("seeds") or ())
+                for m, row in recorded.get(folder.name, {}).get("methods", {}).items()}
         records = []
         for path in files:
             try:
@@ -1401,27 +1403,16 @@ def unrecorded_sweeps(results_dir: Path) -> dict[str, list[dict]]:
     return out
 
 
-def _recorded_seeds(path: Path) -> dict[str, set]:
-    """{method: seeds} a recorded Fig. 7 summary holds (its ``methods.<m>.seeds``; the file
-    itself is read and checked as a result file by ``load_results``)."""
-    try:
-        methods = json.loads(path.read_text()).get("methods") or {}
-        return {m: set(row.get("seeds") or ()) for m, row in methods.items()}
-    except (OSError, ValueError, AttributeError, TypeError) as e:
-        raise ReportError(f"{path}: no methods with their seeds ({type(e).__name__}: {e})") \
-            from e
-
-
 def _median(xs: list) -> float | None:
     xs = [x for x in xs if _finite(x)]
     return statistics.median(xs) if xs else None
 
 
-def sweeps_in_progress_section(results_dir: Path) -> list[str]:
+def sweeps_in_progress_section(results_dir: Path, results: list[Result]) -> list[str]:
     """Per unrecorded Fig. 7 sweep (``unrecorded_sweeps``) and per settings key in it: each
     method's committed seeds with their final costs, and the measured cost of a trial. No
     means or claims: those wait for the recorded summary."""
-    sweeps = unrecorded_sweeps(results_dir)
+    sweeps = unrecorded_sweeps(results_dir, results)
     if not sweeps:
         return []
     lines = ["## Fig. 7 sweeps in progress", "",
@@ -1529,7 +1520,7 @@ def results_md(results: list[Result], results_dir: Path, page: Path) -> str:
     beside = table1_vs_paper_section(results, page)
     if beside:
         lines += ["", *beside]
-    in_progress = sweeps_in_progress_section(results_dir)
+    in_progress = sweeps_in_progress_section(results_dir, results)
     if in_progress:
         lines += ["", *in_progress]
     other = [r for r in results if r.kind not in SECTIONS]
