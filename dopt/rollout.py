@@ -196,8 +196,10 @@ class RolloutService:
 
         Returns:
             RolloutResult; its ``stability`` flags every rollout that broke the scene's
-            ``StabilityBounds``, made MuJoCo warn or went non-finite, with the step and reason;
-            the other rollouts are unaffected by them (bit-identical to a call without them).
+            ``StabilityBounds``, made MuJoCo warn or raise (reason "MuJoCo error: ...", e.g. an
+            arena overflow; its records after the error are its last, NaN where none) or went
+            non-finite, with the step and reason; the other rollouts are unaffected by them
+            (bit-identical to a call without them).
 
         Raises:
             ValueError: bad shapes or dtypes, NaN/inf inputs.

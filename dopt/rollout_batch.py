@@ -42,6 +42,11 @@ def ctrl_bounds(model: mujoco.MjModel) -> tuple[np.ndarray, np.ndarray]:
             np.where(limited, model.actuator_ctrlrange[:, 1], np.inf))
 
 
+def _missing(dtype: np.dtype):
+    """What a record holds for steps a simulation never took: NaN, or 0 for integer items."""
+    return np.nan if np.issubdtype(dtype, np.floating) else 0
+
+
 def first_unstable(batch: Batch, n: int, states: np.ndarray,
                    layout: StateLayout) -> tuple[int, str] | None:
     """(i, reason) of the first of the batch's first n simulations that raised a MuJoCo
@@ -87,8 +92,9 @@ class BatchRoute:
 
         Runs in chunks of steps so that the fields the stability monitor reads are checked
         after every step without holding all T of them. Every rollout runs its T steps (a
-        broken bound is only flagged) unless MuJoCo warns, where ``Batch.rollout`` stops it
-        (its later records repeat its last); results do not depend on the chunk length.
+        broken bound is only flagged) unless MuJoCo warns or raises, where it stops (its later
+        records repeat its last; NaN, or 0 for integer items, where it has none);
+        results do not depend on the chunk length.
 
         Returns (final states (P, ns), records: item -> (P, T, ...), the verdict)."""
         P, T = u.shape[:2]
@@ -103,17 +109,29 @@ class BatchRoute:
         active = np.arange(P, dtype=np.int32)
         for s in range(0, T, K):
             k = min(K, T - s)
-            ids = active if len(active) < batch.nsim else None
-            try:
-                out = batch.rollout(k, control=np.ascontiguousarray(u[active, s:s + k]),
-                                    control_spec=control_spec, record=items, ids=ids)
-            except SimulationError as e:
-                raise RolloutError(f"rollout: {e}") from e
+            out, raised = self._chunk_rollout(batch, active, k, u[:, s:s + k], control_spec,
+                                              items)
+            for i, why in raised.items():        # MuJoCo raised: flagged, stopped at its state
+                start = x0 if x0.ndim == 1 else x0[i if len(x0) > 1 else 0]   # before the chunk
+                step, reason = self._replay(start, u[i, :s + k], control_spec) or \
+                    (s, f"MuJoCo error: {why}")
+                scan.flag(i, step, reason)
+            if raised:
+                stopped = np.array(sorted(raised))
+                active = active[~np.isin(active, stopped)]
+                rows = stopped if len(active) else slice(None)    # none left: all rows stop
+                for item in record:
+                    if item not in rec:
+                        rec[item] = self._record(item, P, T)
+                    rec[item][rows, s:] = rec[item][rows, s - 1:s] if s else \
+                        _missing(rec[item].dtype)
+                if not len(active):
+                    break
             for item in record:
                 if item not in rec:
                     rec[item] = np.empty((P, T) + out[item].shape[2:], out[item].dtype)
                 rec[item][active, s:s + k] = out[item]
-                if len(active) < P:     # stopped rollouts repeat their last record
+                if len(active) < P and s:     # stopped rollouts repeat their last record
                     stopped = np.setdiff1d(np.arange(P), active)
                     rec[item][stopped, s:s + k] = rec[item][stopped, s - 1:s]
             scan.update(active, s, {f: out[f] for f in mon.record})
@@ -133,6 +151,40 @@ class BatchRoute:
             step, reason = self._replay(start, u[i], control_spec) or (T - 1, fallback)
             scan.flag(int(i), step, reason)
         return final, rec, scan.result()
+
+    def _chunk_rollout(self, batch: Batch, active: np.ndarray, k: int, u: np.ndarray,
+                       control_spec: int, items: list) -> tuple[dict, dict[int, str]]:
+        """k steps of the simulations ``active`` (n,) under controls u (P, k, ncontrol).
+
+        Where MuJoCo raises in some of them (e.g. an exploding sheet's contacts overflow the
+        arena), ``Batch.rollout`` leaves those at their state before the call and loses the
+        call's records: the chunk is run again from the saved states without them. Returns
+        (records of the simulations still active: item -> (n', k, ...), {simulation: MuJoCo's
+        message} of those that raised)."""
+        raised: dict[int, str] = {}
+        state, warning = batch.state[active].copy(), batch.warning[active].copy()
+        while True:
+            run = active[~np.isin(active, list(raised))]
+            if not len(run):
+                return {item: None for item in items}, raised
+            try:
+                return batch.rollout(k, control=np.ascontiguousarray(u[run]),
+                                     control_spec=control_spec, record=items,
+                                     ids=run if len(run) < batch.nsim else None), raised
+            except SimulationError as e:
+                for i in e.ids:
+                    raised[int(i)] = batch.error(int(i))
+                log.warning("rollout: MuJoCo raised in simulations %s (%s); flagged unstable",
+                            list(map(int, e.ids)), batch.error(int(e.ids[0])))
+                batch.state[active], batch.warning[active] = state, warning
+
+    def _record(self, item, P: int, T: int) -> np.ndarray:
+        """An empty record (P, T, ...) of one ``Batch.rollout`` item (a field name or a state
+        spec)."""
+        if isinstance(item, str):
+            field = np.asarray(getattr(self._data(), item))
+            return np.empty((P, T) + field.shape, field.dtype)
+        return np.empty((P, T, mujoco.mj_stateSize(self.model, int(item))))
 
     def _chunk(self, P: int, T: int, items: list) -> int:
         """Steps per Batch.rollout call so that the records of one call stay under
@@ -154,7 +206,7 @@ class BatchRoute:
         can come a step after the step that caused it); None if none does."""
         m, lay = self.model, self.scene.layout
         d = mujoco.MjData(m)
-        row = np.empty(lay.size)
+        row, t = np.empty(lay.size), 0
         try:
             mujoco.mj_setState(m, d, x0, lay.spec)
             for t, ut in enumerate(u):
@@ -165,7 +217,9 @@ class BatchRoute:
                 mujoco.mj_getState(m, d, row, lay.spec)
                 if reason := fault(lay, row):
                     return t, reason
-        except Exception:  # a MuJoCo error in the replay: the batch's report stands
+        except mujoco.FatalError as e:   # MuJoCo raised at step t (as the batch did)
+            return t, f"MuJoCo error: {e}"
+        except Exception:  # the replay itself failed: the batch's report stands
             log.debug("replay of an unstable rollout failed", exc_info=True)
         return None
 

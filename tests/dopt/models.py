@@ -58,3 +58,11 @@ def moving_state(scene):
         mujoco.mj_step(m, d)
     assert d.ncon > 0
     return scene.state_of(d)
+
+# TINY_ARENA's boxes apart (one 1 cm above the floor) in a 10 KB arena, and a mocap box: set
+# onto the low box (mocap_pos 0 0 .1), the contacts overflow the arena in PrimalAllocate
+# (mju_error) on the step it moves
+MOCAP_ARENA = """<mujoco><size memory="10K"/><worldbody><geom type="plane" size="1 1 .1"/>
+<body pos="0 0 .06"><freejoint/><geom type="box" size=".05 .05 .05"/></body>
+<body pos="0 0 2"><freejoint/><geom type="box" size=".05 .05 .05"/></body>
+<body mocap="true" pos="3 0 1"><geom type="box" size=".05 .05 .05"/></body></worldbody></mujoco>"""

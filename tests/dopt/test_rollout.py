@@ -9,7 +9,7 @@ from dopt.rollout import RolloutConfig, RolloutService
 from dopt.rollout_batch import ctrl_bounds
 from dopt.scene import Scene
 from dopt.state import INTEGRATION
-from tests.dopt.models import TINY_ARENA
+from tests.dopt.models import MOCAP_ARENA, TINY_ARENA
 
 
 def step_loop(scene, x0, u):
@@ -266,3 +266,41 @@ def test_context_manager_closes(scene, moving_state, c_kernels):
     assert svc.closed
     # closing an unused service (nothing allocated yet) is fine
     RolloutService(scene, RolloutConfig(c_kernels=c_kernels)).close()
+
+
+
+@pytest.mark.parametrize("chunk_bytes", [None, 2000])
+def test_mujoco_error_in_one_rollout_is_flagged_and_spares_the_others(monkeypatch, chunk_bytes):
+    """mju_error in one simulation of a batch (arena overflow: models.MOCAP_ARENA's mocap box
+    pushed onto a box near the floor at step 6) flags that rollout with MuJoCo's message at that
+    step and keeps its state from before; the other rollouts equal a batch without it, in one
+    chunk or in many; on_unstable="raise" names it."""
+    import dopt.rollout_batch as rollout_batch
+    if chunk_bytes:
+        monkeypatch.setattr(rollout_batch, "CHUNK_BYTES", chunk_bytes)
+    scene = Scene.from_xml(MOCAP_ARENA)
+    x0 = scene.state_of(mujoco.MjData(scene.model))
+    T, spec = 12, int(mujoco.mjtState.mjSTATE_MOCAP_POS)
+    u = np.zeros((3, T, 3))
+    u[:, :, 0] = [[3.0], [3.1], [3.2]]                 # far from the boxes ...
+    u[:, :, 2] = 1.0
+    u[1, 6:] = [0.0, 0.0, 0.1]                         # ... but rollout 1's, from step 6
+    svc = RolloutService(scene, RolloutConfig(threads=2))
+    res = svc.rollout(x0, u, control_spec=spec, record=("qpos",))
+    assert res.stability.unstable.tolist() == [False, True, False]
+    assert res.stability.step[1] == 6
+    assert "MuJoCo error" in res.stability.reason[1] and "memory" in res.stability.reason[1]
+    alone = svc.rollout(x0, u[[0, 2]], control_spec=spec, record=("qpos",))
+    assert not alone.stability.unstable.any()
+    assert np.array_equal(res.final_states[[0, 2]], alone.final_states)
+    assert np.array_equal(res.records["qpos"][[0, 2]], alone.records["qpos"])
+    qpos = scene.layout["qpos"]
+    if chunk_bytes:   # stopped after the last chunk before the error, at a state it recorded
+        assert any(np.array_equal(res.final_states[1, qpos], q) for q in res.records["qpos"][1, :6])
+    else:             # the error came in the first chunk: its start state, records unknown
+        np.testing.assert_array_equal(res.final_states[1], x0)
+        assert np.isnan(res.records["qpos"][1]).all()
+    strict = RolloutService(scene, RolloutConfig(threads=1, on_unstable="raise"))
+    with pytest.raises(UnstableRolloutError, match="MuJoCo error") as info:
+        strict.rollout(x0, u, control_spec=spec)
+    assert info.value.rollout == 1 and info.value.step == 6
