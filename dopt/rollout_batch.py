@@ -129,7 +129,7 @@ class BatchRoute:
                     break
             for item in record:
                 if item not in rec:
-                    rec[item] = np.empty((P, T) + out[item].shape[2:], out[item].dtype)
+                    rec[item] = self._record(item, P, T)
                 rec[item][active, s:s + k] = out[item]
                 if len(active) < P and s:     # stopped rollouts repeat their last record
                     stopped = np.setdiff1d(np.arange(P), active)
@@ -175,7 +175,7 @@ class BatchRoute:
                 for i in e.ids:
                     raised[int(i)] = batch.error(int(i))
                 log.warning("rollout: MuJoCo raised in simulations %s (%s); flagged unstable",
-                            list(map(int, e.ids)), batch.error(int(e.ids[0])))
+                            list(map(int, e.ids)), raised[int(e.ids[0])])
                 batch.state[active], batch.warning[active] = state, warning
 
     def _record(self, item, P: int, T: int) -> np.ndarray:
