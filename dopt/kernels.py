@@ -257,7 +257,7 @@ class Kernels:
             t = self.lib.dopt_fd(m, d._address, lay, ctypes.byref(self._warnings[i]), states,
                                  ts, len(ts), C, c, eps, int(centered), lo, hi, F, work, info)
             if t <= -2:
-                self._raise_mujoco_error(i, f"derivatives t={-2 - t}")
+                raise RolloutError(f"derivatives t={-2 - t}: MuJoCo error: {self._recover(i)}")
             return [] if t < 0 else [(t, int(info[0]), _reasons(d, int(info[1])))]
 
         bad = sorted(b for share in self._map(job, T) for b in share)
@@ -269,8 +269,10 @@ class Kernels:
 
         Returns (states (P, T+1, ns), applied (P, T, nu), stats (P, NSTAT) (columns
         ``STATS``), bad): bad lists (step, p, fault, reasons) of the rollouts that failed or
-        broke a bound, sorted, with the step, the C file's FAULT_* code and the reasons
-        (warning names, or the fault's name); their rows after step + 1 are undefined."""
+        broke a bound, sorted, with the step, the C file's FAULT_* code (FAULT_MUJOCO_ERROR
+        where MuJoCo raised during the step) and the reasons (warning names, the fault's name,
+        or MuJoCo's message); their rows after step + 1 (after step, where MuJoCo raised) are
+        undefined."""
         P, T, nu = ff.shape
         out = np.empty((P, T + 1, self.layout.nstate))
         applied = np.empty((P, T, nu))
@@ -281,32 +283,33 @@ class Kernels:
         m = self.model._address
 
         def job(i, ps):
-            d, w, bad, info = self._datas[i], work[i], [], np.zeros(1, np.int32)
+            w, bad, info = work[i], [], np.zeros(1, np.int32)
             for p in ps:
+                d = self._datas[i]
                 d.warning.number[:] = 0
                 step = self.lib.dopt_feedback(m, d._address, lay, ctypes.byref(self._warnings[i]),
                                               ctypes.byref(self.bounds),
                                               ctypes.byref(self._probes[i]), x0, T, ff[p], ref,
                                               K, C, len(C), lo, hi, out[p], applied[p], w,
                                               stats[p], info)
-                if step <= -2:
-                    self._raise_mujoco_error(
-                        i, f"rollout_feedback: simulation {p} step {-2 - step}")
-                if step >= 0:
+                if step <= -2:      # MuJoCo raised in step -2 - step: flagged, the rest go on
+                    bad.append((-2 - step, int(p), FAULT_MUJOCO_ERROR,
+                                [f"MuJoCo error: {self._recover(i)}"]))
+                elif step >= 0:
                     bad.append((step, int(p), int(info[0]), _reasons(d, int(info[0]))))
             return bad
 
         bad = sorted(b for share in self._map(job, P) for b in share)
         return out, applied, stats, bad
 
-    def _raise_mujoco_error(self, i: int, where: str):
+    def _recover(self, i: int) -> str:
         """MuJoCo raised inside a call on MjData i: replace it (its stack is left mid-call)
-        and raise RolloutError with MuJoCo's message. Runs on the thread of that call."""
+        and return MuJoCo's message. Runs on the thread of that call."""
         message = self.lib.dopt_error_message().decode(errors="replace")
         self._datas[i] = mujoco.MjData(self.model)
         self._warnings[i] = Warnings.of(self._datas[i])
         self._probes[i] = Probe.of(self._datas[i])
-        raise RolloutError(f"{where}: MuJoCo error: {message}")
+        return message
 
 
 _WARNING_NAMES = [n for n in mujoco.mjtWarning.__members__ if n != "mjNWARNING"]
@@ -325,6 +328,8 @@ def _warnings(d: mujoco.MjData) -> list[str]:
 # then the stability bounds (in the order dopt.stability.Scan.update checks them)
 _FAULTS = {1: "mjWARN_BADQPOS", 2: "mjWARN_BADQVEL", 3: "non-finite state"}
 FAULT_BOUNDS = {4: "speed", 5: "penetration", 6: "strain", 7: "capped_steps", 8: "energy"}
+# not a C code: MuJoCo raised an error during the step (the call returned -2 - step)
+FAULT_MUJOCO_ERROR = -2
 
 
 def _reasons(d: mujoco.MjData, fault: int) -> list[str]:

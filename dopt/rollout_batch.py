@@ -229,7 +229,9 @@ class BatchRoute:
         (T, ns), K (T, nu, 2|C|), C (|C|,); u_t = clip(u[p, t] + K_t dx_C(x_t, ref_t)).
 
         A rollout that warns, leaves a bad state or breaks a bound at step t is not stepped
-        further: its rows after t + 1 repeat row t + 1, its later controls repeat u_t.
+        further: its rows after t + 1 repeat row t + 1, its later controls repeat u_t. One in
+        which MuJoCo raises during step t (e.g. its contacts overflow the arena) is flagged
+        with MuJoCo's message and holds row t; the others go on as if it were not there.
 
         Returns (states (P, T+1, ns), applied controls (P, T, nu), the verdict)."""
         P, T, nu = u.shape
@@ -244,37 +246,43 @@ class BatchRoute:
         rows[:P] = x0
         batch.warning[:P] = 0
         active = np.arange(P, dtype=np.int32)
-        try:
-            for t in range(T):
-                x = rows[active]
-                dx = np.concatenate([diff(ref_q[t], x[:, self._qpos], 1.0, C),
-                                     x[:, self._qvel][:, C] - ref_v[t]], axis=1)
-                ut = np.clip(u[active, t] + dx @ K[t].T, self.lo, self.hi)
-                x[:, self._ctrl] = ut
-                rows[active] = x
-                applied[active, t] = ut
-                out[active, t] = x
-                # one-step rollout: the step, and the fields the monitor reads (a
-                # non-persistent Batch keeps no MjData fields between calls)
-                rec = batch.rollout(1, control=ut[:, None], control_spec=CTRL,
-                                    record=list(mon.record), ids=active)
-                nxt = rows[active]
-                out[active, t + 1] = nxt
-                warned = (batch.warning[active, :, 1] > 0).any(axis=1)
-                bad = warned | faulty_rows(lay, nxt)
-                for j in np.flatnonzero(bad):
-                    scan.flag(int(active[j]), t, why_unstable(batch, active[j], nxt[j], lay))
-                ok = active[~bad]
-                scan.update(ok, t, {f: rec[f][~bad] for f in mon.record})
-                stopped = active[scan.unstable[active]]
-                if len(stopped):
-                    out[stopped, t + 2:] = out[stopped, t + 1:t + 2]
-                    applied[stopped, t + 1:] = applied[stopped, t:t + 1]
-                    active = active[~scan.unstable[active]]
-                    if not len(active):
-                        break
-        except SimulationError as e:
-            raise RolloutError(f"rollout_feedback: {e}") from e
+        step_u = np.zeros((P, 1, nu))
+        for t in range(T):
+            x = rows[active]
+            dx = np.concatenate([diff(ref_q[t], x[:, self._qpos], 1.0, C),
+                                 x[:, self._qvel][:, C] - ref_v[t]], axis=1)
+            ut = np.clip(u[active, t] + dx @ K[t].T, self.lo, self.hi)
+            x[:, self._ctrl] = ut
+            rows[active] = x
+            applied[active, t] = ut
+            out[active, t] = x
+            step_u[active, 0] = ut
+            # one-step rollout: the step, and the fields the monitor reads (a
+            # non-persistent Batch keeps no MjData fields between calls)
+            rec, raised = self._chunk_rollout(batch, active, 1, step_u, CTRL, list(mon.record))
+            for i, why in raised.items():      # MuJoCo raised: stopped before the step
+                scan.flag(i, t, f"MuJoCo error: {why}")
+                out[i, t + 1:] = out[i, t]
+                applied[i, t + 1:] = applied[i, t]
+            if raised:
+                active = active[~np.isin(active, list(raised))]
+                if not len(active):
+                    break
+            nxt = rows[active]
+            out[active, t + 1] = nxt
+            warned = (batch.warning[active, :, 1] > 0).any(axis=1)
+            bad = warned | faulty_rows(lay, nxt)
+            for j in np.flatnonzero(bad):
+                scan.flag(int(active[j]), t, why_unstable(batch, active[j], nxt[j], lay))
+            ok = active[~bad]
+            scan.update(ok, t, {f: rec[f][~bad] for f in mon.record})
+            stopped = active[scan.unstable[active]]
+            if len(stopped):
+                out[stopped, t + 2:] = out[stopped, t + 1:t + 2]
+                applied[stopped, t + 1:] = applied[stopped, t:t + 1]
+                active = active[~scan.unstable[active]]
+                if not len(active):
+                    break
         return out, applied, scan.result()
 
     # --------------------------------------------------------------- derivatives

@@ -45,7 +45,10 @@ class CRoute(BatchRoute):
             bound = kernels.FAULT_BOUNDS.get(code)
             reason[p] = (mon.reason(bound, stats[p, col["value"]], int(stats[p, col["index"]]))
                          if bound else names[0])
-            out[p, t + 2:] = out[p, t + 1]       # as the Batch route: stopped where it failed
+            if code == kernels.FAULT_MUJOCO_ERROR:   # as the Batch route: held before the step
+                out[p, t + 1:] = out[p, t]
+            else:                                    # as the Batch route: stopped where it failed
+                out[p, t + 2:] = out[p, t + 1]
             applied[p, t + 1:] = applied[p, t]
         verdict = Stability(step >= 0, step, tuple(reason), stats[:, col["speed"]].copy(),
                             stats[:, col["penetration"]].copy(), stats[:, col["strain"]].copy(),

@@ -66,3 +66,13 @@ MOCAP_ARENA = """<mujoco><size memory="10K"/><worldbody><geom type="plane" size=
 <body pos="0 0 .06"><freejoint/><geom type="box" size=".05 .05 .05"/></body>
 <body pos="0 0 2"><freejoint/><geom type="box" size=".05 .05 .05"/></body>
 <body mocap="true" pos="3 0 1"><geom type="box" size=".05 .05 .05"/></body></worldbody></mujoco>"""
+
+# A box on a slide joint, position-actuated, 10 cm beside a free box, no gravity, in a 9 KB
+# arena: held at ctrl 0 it fits; driven to ctrl -0.2 (onto the free box) the contacts overflow
+# the arena in PrimalAllocate (mju_error) at step 37
+ACTUATED_ARENA = """<mujoco><size memory="9K"/><option gravity="0 0 0"/><worldbody>
+<geom type="plane" size="1 1 .1"/>
+<body pos="0 0 .06"><freejoint/><geom type="box" size=".05 .05 .05"/></body>
+<body pos=".2 0 .06"><joint name="x" type="slide" axis="1 0 0"/>
+<geom type="box" size=".05 .05 .05"/></body></worldbody>
+<actuator><position joint="x" kp="200" ctrlrange="-1 1"/></actuator></mujoco>"""

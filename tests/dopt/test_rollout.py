@@ -9,7 +9,7 @@ from dopt.rollout import RolloutConfig, RolloutService
 from dopt.rollout_batch import ctrl_bounds
 from dopt.scene import Scene
 from dopt.state import INTEGRATION
-from tests.dopt.models import MOCAP_ARENA, TINY_ARENA
+from tests.dopt.models import ACTUATED_ARENA, MOCAP_ARENA, TINY_ARENA
 
 
 def step_loop(scene, x0, u):
@@ -205,17 +205,38 @@ def test_c_kernels_built_where_a_compiler_is():
         assert kernels.load() is not None, kernels.load_error()
 
 
-def test_mujoco_error_in_feedback_rollouts_raises(c_kernels):
-    """mju_error (arena overflow, see models.TINY_ARENA) is a RolloutError that names the call,
-    not a process exit."""
-    from dopt.errors import RolloutError
-    scene = Scene.from_xml(TINY_ARENA)
-    svc = RolloutService(scene, RolloutConfig(threads=2, c_kernels=c_kernels))
+def test_mujoco_error_in_one_feedback_rollout_is_flagged_and_spares_the_others(c_kernels):
+    """mju_error in one closed-loop rollout (arena overflow: models.ACTUATED_ARENA's slider
+    driven onto the free box raises at step 37) flags that rollout with MuJoCo's message at
+    that step, holds its state from before the step, and leaves the others as a call without
+    it gives, on both routes; on_unstable="raise" names it."""
+    scene = Scene.from_xml(ACTUATED_ARENA)
     x0 = scene.state_of(mujoco.MjData(scene.model))
-    T = 4
-    with pytest.raises(RolloutError, match="rollout_feedback.*out of memory"):
-        svc.rollout_feedback(x0, np.zeros((3, T, 0)), np.repeat(x0[None], T, 0),
-                             np.zeros((T, 0, 2)), [0])
+    T = 45
+    ff = np.zeros((3, T, 1))
+    ff[1] = -0.2                                      # rollout 1 drives onto the free box
+    ref, K = np.repeat(x0[None], T, 0), np.zeros((T, 1, 2))
+    svc = RolloutService(scene, RolloutConfig(threads=2, c_kernels=c_kernels))
+    res = svc.rollout_feedback(x0, ff, ref, K, [6])
+    assert res.stability.unstable.tolist() == [False, True, False]
+    assert res.stability.step[1] == 37
+    assert res.stability.reason[1].startswith("MuJoCo error") and "memory" in res.stability.reason[1]
+    assert (res.states[1, 38:] == res.states[1, 37]).all()   # stopped before the step that raised
+    assert (res.controls[1, 37:] == -0.2).all()
+    loop = step_loop(scene, x0[None], ff[1:2, :37])[0]       # its rows up to there are mj_step's
+    qpos = scene.layout["qpos"]
+    np.testing.assert_array_equal(res.states[1, 1:38, qpos], loop[:, qpos])
+    alone = svc.rollout_feedback(x0, ff[[0, 2]], ref, K, [6])
+    assert not alone.stability.unstable.any()
+    assert np.array_equal(res.states[[0, 2]], alone.states)
+    assert np.array_equal(res.controls[[0, 2]], alone.controls)
+    again = svc.rollout_feedback(x0, ff, ref, K, [6])          # the route recovered
+    assert np.array_equal(again.states, res.states)
+    strict = RolloutService(scene, RolloutConfig(threads=1, c_kernels=c_kernels,
+                                                 on_unstable="raise"))
+    with pytest.raises(UnstableRolloutError, match="MuJoCo error") as info:
+        strict.rollout_feedback(x0, ff, ref, K, [6])
+    assert info.value.rollout == 1 and info.value.step == 37
 
 
 def _use_every_call(svc, scene, x0):

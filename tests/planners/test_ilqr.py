@@ -7,10 +7,10 @@ import numpy as np
 import pytest
 import torch
 
-from dopt import FDConfig, RolloutService, Scene
+from dopt import FDConfig, RolloutConfig, RolloutService, Scene
 from dopt.costs import QuadraticCost
 from planners.ilqr import ILQR, ILQRConfig, backward_pass
-from tests.dopt.models import MIXED_JOINTS
+from tests.dopt.models import ACTUATED_ARENA, MIXED_JOINTS
 
 # two damped point masses on slides, no gravity, no contacts: linear dynamics under Euler
 LINEAR = """<mujoco><option timestep="0.02" gravity="0 0 0"/><worldbody>
@@ -144,6 +144,35 @@ def test_reduced_gains_match_subset_problem_and_solve_descends():
     res = ILQR(svc, cost).solve(x0, U, C, max_iterations=6)
     assert res.costs[-1] < res.costs[0]
     assert all(b >= a for a, b in zip(res.costs[1:], res.costs[:-1], strict=True))
+
+
+@pytest.mark.parametrize("c_kernels", [True, False], ids=["c-kernels", "batch"])
+def test_line_search_scores_an_alpha_mujoco_raises_on_as_unstable(c_kernels):
+    """models.ACTUATED_ARENA: the cost pulls the slider 30 cm onto the free box; the three
+    largest alphas drive it there and MuJoCo raises (arena overflow). Those are flagged and
+    scored +inf, the next alpha is accepted, and both routes agree."""
+    scene = Scene.from_xml(ACTUATED_ARENA)
+    m = scene.model
+    d = mujoco.MjData(m)
+    x0, T = scene.state_of(d), 45
+    q_ref = d.qpos.copy()
+    q_ref[7] = -0.3
+    w = np.zeros(2 * m.nv)
+    w[6] = 1.0
+    cost = QuadraticCost(scene, q_ref, w, 100 * w, np.array([1e-4]))
+    svc = RolloutService(scene, RolloutConfig(c_kernels=c_kernels))
+    ilqr = ILQR(svc, cost)
+    U = np.zeros((T, 1))
+    step = ilqr.iterate(x0, U, [6])
+    alphas = np.asarray(ILQRConfig().alphas)
+    assert step.accepted and step.cost_after < step.cost_before
+    assert step.n_unstable == 3 and step.alpha == alphas[3]
+    X = svc.trajectory(x0, U).states[:-1]
+    ff = U[None] + alphas[:4, None, None] * step.k.numpy()[None]
+    trial = svc.rollout_feedback(x0, ff, X, step.K.numpy(), [6])
+    assert all(r.startswith("MuJoCo error") for r in trial.stability.reason[:3])
+    assert not trial.stability.unstable[3]
+    np.testing.assert_array_equal(trial.states[3], step.states)
 
 
 def test_bad_config():
