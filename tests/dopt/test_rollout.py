@@ -9,7 +9,7 @@ from dopt.rollout import RolloutConfig, RolloutService
 from dopt.rollout_batch import ctrl_bounds
 from dopt.scene import Scene
 from dopt.state import INTEGRATION
-from tests.dopt.models import ACTUATED_ARENA, MOCAP_ARENA, TINY_ARENA
+from tests.dopt.models import ACTUATED_ARENA, MOCAP_ARENA
 
 
 def step_loop(scene, x0, u):
@@ -220,7 +220,8 @@ def test_mujoco_error_in_one_feedback_rollout_is_flagged_and_spares_the_others(c
     res = svc.rollout_feedback(x0, ff, ref, K, [6])
     assert res.stability.unstable.tolist() == [False, True, False]
     assert res.stability.step[1] == 37
-    assert res.stability.reason[1].startswith("MuJoCo error") and "memory" in res.stability.reason[1]
+    reason = res.stability.reason[1]
+    assert reason.startswith("MuJoCo error") and "memory" in reason
     assert (res.states[1, 38:] == res.states[1, 37]).all()   # stopped before the step that raised
     assert (res.controls[1, 37:] == -0.2).all()
     loop = step_loop(scene, x0[None], ff[1:2, :37])[0]       # its rows up to there are mj_step's
