@@ -105,7 +105,7 @@ class BatchRoute:
         scan = mon.start(P)
         items = list(dict.fromkeys(list(record) + list(mon.record)))
         K = self._chunk(P, T, items)
-        rec: dict = {}
+        rec = {item: self._record(item, P, T) for item in record}
         active = np.arange(P, dtype=np.int32)
         for s in range(0, T, K):
             k = min(K, T - s)
@@ -121,15 +121,11 @@ class BatchRoute:
                 active = active[~np.isin(active, stopped)]
                 rows = stopped if len(active) else slice(None)    # none left: all rows stop
                 for item in record:
-                    if item not in rec:
-                        rec[item] = self._record(item, P, T)
                     rec[item][rows, s:] = rec[item][rows, s - 1:s] if s else \
                         _missing(rec[item].dtype)
                 if not len(active):
                     break
             for item in record:
-                if item not in rec:
-                    rec[item] = self._record(item, P, T)
                 rec[item][active, s:s + k] = out[item]
                 if len(active) < P and s:     # stopped rollouts repeat their last record
                     stopped = np.setdiff1d(np.arange(P), active)

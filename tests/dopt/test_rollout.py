@@ -290,7 +290,6 @@ def test_context_manager_closes(scene, moving_state, c_kernels):
     RolloutService(scene, RolloutConfig(c_kernels=c_kernels)).close()
 
 
-
 @pytest.mark.parametrize("chunk_bytes", [None, 2000])
 def test_mujoco_error_in_one_rollout_is_flagged_and_spares_the_others(monkeypatch, chunk_bytes):
     """mju_error in one simulation of a batch (arena overflow: models.MOCAP_ARENA's mocap box

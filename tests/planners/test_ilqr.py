@@ -146,7 +146,6 @@ def test_reduced_gains_match_subset_problem_and_solve_descends():
     assert all(b >= a for a, b in zip(res.costs[1:], res.costs[:-1], strict=True))
 
 
-@pytest.mark.parametrize("c_kernels", [True, False], ids=["c-kernels", "batch"])
 def test_line_search_scores_an_alpha_mujoco_raises_on_as_unstable(c_kernels):
     """models.ACTUATED_ARENA: the cost pulls the slider 30 cm onto the free box; the three
     largest alphas drive it there and MuJoCo raises (arena overflow). Those are flagged and
