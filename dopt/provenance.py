@@ -11,6 +11,7 @@ from __future__ import annotations
 import datetime
 import functools
 import importlib.metadata
+import os
 import platform
 import shlex
 import subprocess
@@ -26,17 +27,20 @@ _ROOT = Path(__file__).resolve().parents[1]
 
 @functools.lru_cache(maxsize=1)
 def git_commit() -> str | None:
-    """The checkout's HEAD commit, with "-dirty" when tracked files differ from it; None
-    outside a git checkout (an installed wheel) or without git."""
+    """The checkout's HEAD commit, with "-dirty" when tracked files differ from it. Outside a
+    git checkout (an installed wheel, or a source tree copied to a cluster or GPU machine
+    without its .git) or without git: the environment variable ``DOPT_GIT_COMMIT`` (the
+    commit the copy was made from, set by whoever copied it), else None."""
+    fallback = os.environ.get("DOPT_GIT_COMMIT") or None
     try:
         head = subprocess.run(["git", "rev-parse", "HEAD"], cwd=_ROOT, capture_output=True,
                               text=True, timeout=10)
         if head.returncode != 0:
-            return None
+            return fallback
         dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"],
                                cwd=_ROOT, capture_output=True, text=True, timeout=10)
     except (OSError, subprocess.SubprocessError):
-        return None
+        return fallback
     return head.stdout.strip() + ("-dirty" if dirty.stdout.strip() else "")
 
 

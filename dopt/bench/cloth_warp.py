@@ -52,10 +52,16 @@ def _import_warp():
 
 
 def bench_cloth_warp(sizes: list[int], nworlds: list[int], preset: str = "default",
-                     device: str | None = None, on_row=None) -> list[dict]:
+                     device: str | None = None, on_rows=None,
+                     preload_workers: int = 0) -> list[dict]:
     """One row per size: the CPU step's timings and warnings, and per W in ``nworlds`` the
-    MuJoCo Warp step's (``device``: warp's device name, None its default). ``on_row(row)``
-    is called as each size finishes (a long bench writes as it goes)."""
+    MuJoCo Warp step's (``device``: warp's device name, None its default). ``on_rows(rows)``
+    is called with the rows so far after the CPU run and after each batch size, the last row
+    possibly unfinished (a long bench writes as it goes; a run stopped mid-size keeps what it
+    measured). ``preload_workers`` > 0 on a CUDA device compiles and loads every kernel module
+    MuJoCo Warp registers at import on that many threads before the first size
+    (``warp.force_load``; ``machine["preload_s"]``), so the first step compiles only the kernels
+    MuJoCo Warp generates for the model."""
     from dopt.tasks.pick.cloth_scene import ClothSceneConfig, make_cloth
     from dopt.tasks.pick.picker import CONTROL_SPEC
 
@@ -63,13 +69,23 @@ def bench_cloth_warp(sizes: list[int], nworlds: list[int], preset: str = "defaul
         raise ValueError(f"sizes must be particle counts per side >= 2, got {sizes}")
     if not nworlds or any(int(w) < 1 for w in nworlds):
         raise ValueError(f"nworlds must be world counts >= 1, got {nworlds}")
+    if int(preload_workers) < 0:
+        raise ValueError(f"preload_workers must be >= 0, got {preload_workers}")
     wp, mjw = _import_warp()
     wp.config.quiet = True
     wp.init()
     dev = wp.get_device(device)
     machine = {"cpu": _cpu_model(), "cpu_count": os.cpu_count(), "warp_device": dev.name,
                "warp": wp.__version__, "mujoco_warp": importlib.metadata.version("mujoco-warp")}
-    rows = []
+    if preload_workers and dev.is_cuda:
+        t0 = time.perf_counter()
+        try:
+            wp.force_load(device=dev, max_workers=int(preload_workers))
+        except Exception as err:            # a module that does not compile: the steps say
+            logger.warning("cloth-warp kernel preload failed: %s", err)
+            machine["preload_error"] = f"{type(err).__name__}: {err}"
+        machine.update(preload_s=time.perf_counter() - t0, preload_workers=int(preload_workers))
+    rows: list[dict] = []
     for n in sizes:
         config = ClothSceneConfig.preset(preset, n=int(n))
         with mujoco_messages() as messages:
@@ -85,6 +101,9 @@ def bench_cloth_warp(sizes: list[int], nworlds: list[int], preset: str = "defaul
         row = {"preset": preset, "n": int(n), "particles": int(n) * int(n),
                "nv": int(scene.model.nv), "neq": int(scene.model.neq), "build_s": build,
                "machine": machine, "cpu": cpu, "warp": []}
+        rows.append(row)
+        if on_rows is not None:
+            on_rows(rows)
         for w in nworlds:
             out = {"nworld": int(w)}
             row["warp"].append(out)
@@ -93,9 +112,8 @@ def bench_cloth_warp(sizes: list[int], nworlds: list[int], preset: str = "defaul
             except Exception as err:        # out of memory, an unsupported feature: say which
                 logger.warning("cloth-warp n=%d W=%d failed in %s: %s", n, w, out["phase"], err)
                 out["error"] = f"{type(err).__name__}: {err}"
-        rows.append(row)
-        if on_row is not None:
-            on_row(row)
+            if on_rows is not None:
+                on_rows(rows)
     return rows
 
 

@@ -8,10 +8,11 @@ import pytest
 from dopt.bench.cloth_warp import bench_cloth_warp
 
 
-@pytest.mark.parametrize("sizes, nworlds", [([], [1]), ([1], [1]), ([6], []), ([6], [0])])
-def test_bad_sizes_and_world_counts_raise_before_any_import(sizes, nworlds):
-    with pytest.raises(ValueError, match="sizes|nworlds"):
-        bench_cloth_warp(sizes, nworlds)
+@pytest.mark.parametrize("sizes, nworlds, preload", [([], [1], 0), ([1], [1], 0), ([6], [], 0),
+                                                    ([6], [0], 0), ([6], [1], -1)])
+def test_bad_sizes_world_counts_and_workers_raise_before_any_import(sizes, nworlds, preload):
+    with pytest.raises(ValueError, match="sizes|nworlds|preload_workers"):
+        bench_cloth_warp(sizes, nworlds, preload_workers=preload)
 
 
 def test_warp_worlds_match_the_cpu_step():

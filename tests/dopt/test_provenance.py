@@ -35,3 +35,15 @@ def test_relative_and_outside_paths_are_kept_as_given(root, tmp_path_factory):
 def test_provenance_records_this_processes_command_line(root, monkeypatch):
     monkeypatch.setattr(sys, "argv", [str(root / "planners" / "bench" / "__main__.py"), "rope"])
     assert provenance.provenance()["command"] == "python -m planners.bench rope"
+
+
+def test_a_copy_without_git_records_the_commit_its_copier_names(root, monkeypatch):
+    """A source tree copied without .git (a cluster, a GPU machine) has no HEAD to read: the
+    commit comes from DOPT_GIT_COMMIT where set, else it is None; a checkout ignores it."""
+    git_commit = provenance.git_commit.__wrapped__
+    monkeypatch.delenv("DOPT_GIT_COMMIT", raising=False)
+    assert git_commit() is None
+    monkeypatch.setenv("DOPT_GIT_COMMIT", "0123abc")
+    assert git_commit() == "0123abc"
+    monkeypatch.setattr(provenance, "_ROOT", provenance.Path(provenance.__file__).parents[1])
+    assert git_commit() != "0123abc"
