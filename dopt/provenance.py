@@ -27,20 +27,21 @@ _ROOT = Path(__file__).resolve().parents[1]
 
 @functools.lru_cache(maxsize=1)
 def git_commit() -> str | None:
-    """The checkout's HEAD commit, with "-dirty" when tracked files differ from it. Outside a
-    git checkout (an installed wheel, or a source tree copied to a cluster or GPU machine
-    without its .git) or without git: the environment variable ``DOPT_GIT_COMMIT`` (the
-    commit the copy was made from, set by whoever copied it), else None."""
-    fallback = os.environ.get("DOPT_GIT_COMMIT") or None
+    """The commit this code is: the environment variable ``DOPT_GIT_COMMIT`` where set (a
+    source tree copied to a cluster or GPU machine: whoever copied it names the commit, since
+    the copy's own .git, if any, may be another commit's), else the checkout's HEAD with
+    "-dirty" when tracked files differ from it, else (an installed wheel, no git) None."""
+    if os.environ.get("DOPT_GIT_COMMIT"):
+        return os.environ["DOPT_GIT_COMMIT"]
     try:
         head = subprocess.run(["git", "rev-parse", "HEAD"], cwd=_ROOT, capture_output=True,
                               text=True, timeout=10)
         if head.returncode != 0:
-            return fallback
+            return None
         dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"],
                                cwd=_ROOT, capture_output=True, text=True, timeout=10)
     except (OSError, subprocess.SubprocessError):
-        return fallback
+        return None
     return head.stdout.strip() + ("-dirty" if dirty.stdout.strip() else "")
 
 

@@ -859,6 +859,55 @@ def cloth_steps_section(results: list[Result], page: Path) -> list[str]:
                    results, page, body)
 
 
+# ------------------------------------------------------ cloth step on MuJoCo Warp (KP)
+def cloth_warp_section(results: list[Result], page: Path) -> list[str]:
+    def body(r: Result) -> list[str]:
+        rows, machines = [], {}
+        for row in r.data["rows"]:
+            mach = row["machine"]
+            machines[f"{mach.get('warp_device')}, CPU {mach.get('cpu')}"] = mach
+            cpu_ms = row["cpu"]["ms_per_step"]["step"]
+            for w in row["warp"]:
+                per_world = w.get("ms_per_world_step")
+                failed = w.get("error", "")
+                rows.append([
+                    f"{row['n']} x {row['n']}", num(cpu_ms, 2), str(w["nworld"]),
+                    "yes" if w.get("cuda_graph") else ("no" if "cuda_graph" in w else "-"),
+                    num(w.get("ms_per_step"), 2), num(per_world, 3),
+                    num(cpu_ms / per_world if _finite(per_world) and per_world else None, 1),
+                    num(w.get("first_step_s"), 1),
+                    ", ".join(w.get("overflow_flags", [])) or ("none" if "overflow_flags" in w
+                                                               else "-"),
+                    f"{mm(w.get('gap_to_cpu_mean_m'), 2)} / {mm(w.get('gap_to_cpu_max_m'), 2)}",
+                    f"{w.get('phase')}: {failed[:90]}{'...' if len(failed) > 90 else ''}"
+                    if failed else "-"])
+        sized = {row["n"] for row in r.data["rows"] if not row["warp"]}
+        notes = [f"Machine: {name}" + (f"; every kernel module MuJoCo Warp registers compiled "
+                                        f"on {m['preload_workers']} threads first in "
+                                        f"{num(m['preload_s'], 1)} s" if "preload_s" in m
+                                        else "") + "." for name, m in machines.items()]
+        if sized:
+            notes.append("CPU step only (the run stopped before MuJoCo Warp stepped it): "
+                         + ", ".join(f"{n} x {n}" for n in sorted(sized)) + ".")
+        return [f"### `{r.name}`", "", *notes, "",
+                *table(["cloth", "CPU ms / step (one thread)", "worlds W", "CUDA graph",
+                        "GPU ms / batched step", "GPU ms / world-step",
+                        "world-steps per CPU step", "first step s (kernels compiled or loaded)",
+                        "overflow flags", "world 0 vs CPU, mean / max (mm)", "failed"], rows)]
+
+    return section("Key particles: a cloth step on MuJoCo Warp beside MuJoCo's CPU step",
+                   "`python -m dopt.bench cloth-warp`: the action of `cloth-steps` stepped by "
+                   "`mj_step` on one CPU thread and by MuJoCo Warp on W worlds in lockstep on "
+                   "the same machine's GPU; world-steps per CPU step is the CPU step's time "
+                   "over the GPU's time per world-step (what W worlds on the GPU give against "
+                   "one core), the first step includes compiling the kernels it needs (or loading "
+                   "them from warp's kernel cache), "
+                   "overflow flags are MuJoCo Warp's (ITERATIONS: its solver stopped at its "
+                   "iteration limit), and the last column the particle distance between "
+                   "world 0 (float32) and the CPU run (float64) after the action.",
+                   results, page, body)
+
+
 # ------------------------------------------------------------------- Panda execution (KP)
 def panda_section(results: list[Result], page: Path) -> list[str]:
     def body(r: Result) -> list[str]:
@@ -1472,7 +1521,7 @@ SECTIONS = {"key_particles": kp_section, "kp_compare": kp_compare_section,
             "clock_model": clock_model_section, "svr_explain": svr_explain_section,
             "ilqr_bench": ilqr_bench_section, "clock_check": clock_check_section,
             "paper_svr": paper_svr_section, "panda_execute": panda_section,
-            "cloth_steps": cloth_steps_section}
+            "cloth_steps": cloth_steps_section, "cloth_warp": cloth_warp_section}
 HEADLINES = {"key_particles": kp_headline, "fig7": fig7_headline, "table1": table1_headline,
              "fig4": fig4_headline, "panda_execute": panda_headline,
              "clock_check": clock_check_headline}

@@ -12,7 +12,9 @@ stepped from the settled state
   steps, each a CUDA graph of ``mujoco_warp.step`` after copying that step's control row:
   ms per batched step and per world-step, MuJoCo Warp's overflow flags, whether every world
   stayed finite, and world 0's final particle distance to the CPU run (mean and max over the
-  particles; MuJoCo Warp computes in float32, MuJoCo in float64).
+  particles; MuJoCo Warp computes in float32, MuJoCo in float64). Where the step cannot be
+  captured as a CUDA graph, its kernels are launched one by one (``cuda_graph`` false, and
+  ``cuda_graph_error`` says why).
 
 Nothing else in dopt imports warp or mujoco_warp; without them this bench raises ImportError
 with the install line. The contact and constraint buffers are sized from the sheet (one
@@ -127,6 +129,24 @@ def _cpu_model() -> str | None:
         return None
 
 
+def _captured_step(wp, mjw, dev, wm, wd, out: dict):
+    """``mujoco_warp.step`` captured as a CUDA graph, or None where the capture fails (MuJoCo
+    Warp 4.0's flex cloth on an H200: CUDA error 906, a memset on the legacy stream, which a
+    capture refuses): the steps then launch their kernels one by one, and
+    ``out["cuda_graph_error"]`` says why. A capture executes nothing, so the worlds' state
+    is the first step's either way."""
+    try:
+        with wp.ScopedCapture(device=dev) as capture:
+            mjw.step(wm, wd)
+        return capture.graph
+    except Exception as err:                # a CUDA graph is a speed-up, not the measurement
+        logger.warning("cloth-warp: the step could not be captured as a CUDA graph, "
+                       "timing it launch by launch: %s", err)
+        out["cuda_graph_error"] = f"{type(err).__name__}: {err}"
+        wp.synchronize_device(dev)
+        return None
+
+
 def _warp_action(wp, mjw, dev, scene, out: dict, final_cpu: np.ndarray) -> None:
     """The benched action on ``out["nworld"]`` MuJoCo Warp worlds, filling ``out`` as it goes
     (``out["phase"]``: the phase reached, so a failure says where); see the module
@@ -170,9 +190,7 @@ def _warp_action(wp, mjw, dev, scene, out: dict, final_cpu: np.ndarray) -> None:
         out.update(first_step_s=time.perf_counter() - t0, phase="steps")
         graph = None
         if dev.is_cuda:
-            with wp.ScopedCapture(device=dev) as capture:
-                mjw.step(wm, wd)
-            graph = capture.graph
+            graph = _captured_step(wp, mjw, dev, wm, wd, out)
         t0 = time.perf_counter()
         for t in range(1, len(rows_u)):
             controls(t)

@@ -27,3 +27,40 @@ def test_warp_worlds_match_the_cpu_step():
         assert "error" not in w and w["all_finite"] and w["steps_timed"] == 132
         assert w["gap_to_cpu_max_m"] < 1e-3
     assert one["gap_to_cpu_mean_m"] == pytest.approx(two["gap_to_cpu_mean_m"], rel=1e-6)
+
+
+class _Capture:
+    """warp.ScopedCapture's stand-in: records the steps issued inside it, fails on exit
+    where told to (as CUDA refuses a capture that touches the legacy stream)."""
+
+    def __init__(self, fail):
+        self.fail, self.graph, self.steps = fail, "graph", 0
+
+    def __call__(self, device):
+        return self
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        if self.fail:
+            raise RuntimeError("Warp CUDA error 906")
+        return False
+
+
+@pytest.mark.parametrize("fail", [False, True])
+def test_a_step_that_cannot_be_captured_is_timed_launch_by_launch(fail):
+    from types import SimpleNamespace
+
+    from dopt.bench.cloth_warp import _captured_step
+
+    capture = _Capture(fail)
+    wp = SimpleNamespace(ScopedCapture=capture, synchronize_device=lambda dev: None)
+    mjw = SimpleNamespace(step=lambda m, d: setattr(capture, "steps", capture.steps + 1))
+    out = {}
+    graph = _captured_step(wp, mjw, "cuda:0", None, None, out)
+    assert capture.steps == 1
+    assert (graph is None) == fail
+    assert ("cuda_graph_error" in out) == fail
+    if fail:
+        assert "906" in out["cuda_graph_error"]
