@@ -247,6 +247,11 @@ def sci(x) -> str:
     return "-" if x is None else (f"{x:.1e}" if _finite(x) else "n/a")
 
 
+def clip(text: str, n: int) -> str:
+    """``text`` cut to its first ``n`` characters, "..." marking a cut."""
+    return text[:n] + ("..." if len(text) > n else "")
+
+
 def mm(x, digits: int = 1) -> str:
     """Metres as millimetres, one decimal."""
     return num(x, digits, 1e3)
@@ -830,7 +835,7 @@ def cloth_steps_section(results: list[Result], page: Path) -> list[str]:
             for row in mine:
                 ms = row["ms_per_step"]
                 warned = {**row.get("warnings", {}),
-                          **{k[:60] + ("..." if len(k) > 60 else ""): v
+                          **{clip(k, 60): v
                              for k, v in row.get("messages", {}).items()}}
                 rows.append([name, f"{row['n']} x {row['n']}", num(ms["step"], 2),
                              num(ms["step"] / small if small else None, 1),
@@ -879,16 +884,16 @@ def cloth_warp_section(results: list[Result], page: Path) -> list[str]:
                     ", ".join(w.get("overflow_flags", [])) or ("none" if "overflow_flags" in w
                                                                else "-"),
                     f"{mm(w.get('gap_to_cpu_mean_m'), 2)} / {mm(w.get('gap_to_cpu_max_m'), 2)}",
-                    f"{w.get('phase')}: {failed[:90]}{'...' if len(failed) > 90 else ''}"
+                    f"{w.get('phase')}: {clip(failed, 90)}"
                     if failed else "-"])
-        sized = {row["n"] for row in r.data["rows"] if not row["warp"]}
+        cpu_only = {row["n"] for row in r.data["rows"] if not row["warp"]}
         notes = [f"Machine: {name}" + (f"; every kernel module MuJoCo Warp registers compiled "
                                         f"on {m['preload_workers']} threads first in "
                                         f"{num(m['preload_s'], 1)} s" if "preload_s" in m
                                         else "") + "." for name, m in machines.items()]
-        if sized:
+        if cpu_only:
             notes.append("CPU step only (the run stopped before MuJoCo Warp stepped it): "
-                         + ", ".join(f"{n} x {n}" for n in sorted(sized)) + ".")
+                         + ", ".join(f"{n} x {n}" for n in sorted(cpu_only)) + ".")
         return [f"### `{r.name}`", "", *notes, "",
                 *table(["cloth", "CPU ms / step (one thread)", "worlds W", "CUDA graph",
                         "GPU ms / batched step", "GPU ms / world-step",
