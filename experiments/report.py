@@ -866,17 +866,23 @@ def cloth_steps_section(results: list[Result], page: Path) -> list[str]:
 
 # ------------------------------------------------------ cloth step on MuJoCo Warp (KP)
 def cloth_warp_section(results: list[Result], page: Path) -> list[str]:
+    def warned(row: dict) -> str:
+        """MuJoCo's warning counters over the CPU run of the action (its forward and steps)."""
+        return "; ".join(f"{k} ({v})" for k, v in row["cpu"].get("warnings", {}).items()) \
+            or "none"
+
     def body(r: Result) -> list[str]:
         rows, machines = [], {}
         for row in r.data["rows"]:
             mach = row["machine"]
             machines[f"{mach.get('warp_device')}, CPU {mach.get('cpu')}"] = mach
             cpu_ms = row["cpu"]["ms_per_step"]["step"]
+            cpu_warned = warned(row)
             for w in row["warp"]:
                 per_world = w.get("ms_per_world_step")
                 failed = w.get("error", "")
                 rows.append([
-                    f"{row['n']} x {row['n']}", num(cpu_ms, 2), str(w["nworld"]),
+                    f"{row['n']} x {row['n']}", num(cpu_ms, 2), cpu_warned, str(w["nworld"]),
                     "yes" if w.get("cuda_graph") else ("no" if "cuda_graph" in w else "-"),
                     num(w.get("ms_per_step"), 2), num(per_world, 3),
                     num(cpu_ms / per_world if _finite(per_world) and per_world else None, 1),
@@ -886,16 +892,19 @@ def cloth_warp_section(results: list[Result], page: Path) -> list[str]:
                     f"{mm(w.get('gap_to_cpu_mean_m'), 2)} / {mm(w.get('gap_to_cpu_max_m'), 2)}",
                     f"{w.get('phase')}: {clip(failed, 90)}"
                     if failed else "-"])
-        cpu_only = {row["n"] for row in r.data["rows"] if not row["warp"]}
+        cpu_only = {row["n"]: (row["cpu"]["ms_per_step"]["step"], warned(row))
+                    for row in r.data["rows"] if not row["warp"]}
         notes = [f"Machine: {name}" + (f"; every kernel module MuJoCo Warp registers compiled "
                                         f"on {m['preload_workers']} threads first in "
                                         f"{num(m['preload_s'], 1)} s" if "preload_s" in m
                                         else "") + "." for name, m in machines.items()]
         if cpu_only:
             notes.append("CPU step only (the run stopped before MuJoCo Warp stepped it): "
-                         + ", ".join(f"{n} x {n}" for n in sorted(cpu_only)) + ".")
+                         + ", ".join(f"{n} x {n} ({num(ms, 2)} ms / step, warnings: {w})"
+                                     for n, (ms, w) in sorted(cpu_only.items())) + ".")
         return [f"### `{r.name}`", "", *notes, "",
-                *table(["cloth", "CPU ms / step (one thread)", "worlds W", "CUDA graph",
+                *table(["cloth", "CPU ms / step (one thread)", "CPU warnings (count)",
+                        "worlds W", "CUDA graph",
                         "GPU ms / batched step", "GPU ms / world-step",
                         "world-steps per CPU step", "first step s (kernels compiled or loaded)",
                         "overflow flags", "world 0 vs CPU, mean / max (mm)", "failed"], rows)]

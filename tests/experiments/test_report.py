@@ -696,23 +696,27 @@ def test_cloth_warp_bench_renders_world_steps_per_cpu_step(site):
     machine = {"warp_device": "NVIDIA H200", "cpu": "Xeon", "preload_s": 28.8,
                "preload_workers": 16}
 
-    def row(n, cpu_ms, warp):
+    def row(n, cpu_ms, warp, warnings=None):
         return {"preset": "default", "n": n, "machine": machine,
-                "cpu": {"ms_per_step": {"step": cpu_ms}}, "warp": warp}
+                "cpu": {"ms_per_step": {"step": cpu_ms}, "warnings": warnings or {}},
+                "warp": warp}
     ran = {"nworld": 256, "phase": "done", "cuda_graph": False, "ms_per_step": 32.0,
            "ms_per_world_step": 0.125, "first_step_s": 0.03, "overflow_flags": ["ITERATIONS"],
            "gap_to_cpu_mean_m": 8e-5, "gap_to_cpu_max_m": 2.1e-3}
     failed = {"nworld": 1, "phase": "steps", "first_step_s": 275.0,
               "error": "RuntimeError: Warp CUDA error 901"}
     write(site["results"], "cloth-warp.json",
-          {"experiment": "cloth_warp", "rows": [row(20, 4.0, [ran, failed]), row(64, 130.0, [])],
+          {"experiment": "cloth_warp", "rows": [row(20, 4.0, [ran, failed]),
+                                               row(100, 150.0, [], {"mjWARN_INERTIA": 134})],
            "provenance": provenance("python -m dopt.bench cloth-warp")})
     assert run(site) == 0
     md = site["md"].read_text()
     # 4 ms on one CPU thread against 0.125 ms per world-step: 32 world-steps per CPU step
-    assert ("| 20 x 20 | 4.00 | 256 | no | 32.00 | 0.125 | 32.0 | 0.0 | ITERATIONS | "
+    assert ("| 20 x 20 | 4.00 | none | 256 | no | 32.00 | 0.125 | 32.0 | 0.0 | ITERATIONS | "
             "0.08 / 2.10 | - |") in md
-    assert ("| 20 x 20 | 4.00 | 1 | - | n/a | n/a | n/a | 275.0 | - | n/a / n/a | "
+    assert ("| 20 x 20 | 4.00 | none | 1 | - | n/a | n/a | n/a | 275.0 | - | n/a / n/a | "
             "steps: RuntimeError: Warp CUDA error 901 |") in md
     assert "compiled on 16 threads first in 28.8 s" in md
-    assert "CPU step only (the run stopped before MuJoCo Warp stepped it): 64 x 64." in md
+    # a size the run stopped at after its CPU step, and MuJoCo's warnings there
+    assert ("CPU step only (the run stopped before MuJoCo Warp stepped it): 100 x 100 "
+            "(150.00 ms / step, warnings: mjWARN_INERTIA (134)).") in md
