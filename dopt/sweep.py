@@ -15,10 +15,18 @@ recomputes a trial written by another dopt version (its record is moved to
 ``OUT/trials/outdated/``), reuses one written by another commit of the same version and counts
 the commits of all records (``SweepResult.commits``), so a summary can say when it mixes code.
 A record written before records held "code" is reused and counted as commit "unknown".
+
+A long trial can save its progress as it goes: a trial function with a ``checkpoint``
+parameter is given a ``Checkpoint`` (``OUT/trials/checkpoints/<key>.json``) to ``save`` to and
+``load`` from, so that a rerun of a killed sweep, on this machine or on another one that has
+the file, resumes the trial where it stopped instead of starting it again. The file is
+deleted once the trial's record is written; one written by another dopt version is not
+resumed (moved to ``OUT/trials/outdated/``).
 """
 
 from __future__ import annotations
 
+import inspect
 import json
 import logging
 import os
@@ -37,6 +45,8 @@ log = logging.getLogger(__name__)
 
 #: folders under OUT/trials where unusable trial files are moved (never deleted)
 CORRUPT_DIR, OUTDATED_DIR = "corrupt", "outdated"
+#: folder under OUT/trials of the unfinished trials' saved progress
+CHECKPOINT_DIR = "checkpoints"
 #: the fields every trial record has
 RECORD_FIELDS = ("key", "params", "result")
 
@@ -80,6 +90,73 @@ class SweepResult:
 
 def trial_path(out_dir: Path | str, key: str) -> Path:
     return Path(out_dir) / "trials" / f"{key}.json"
+
+
+class Checkpoint:
+    """The saved progress of one unfinished trial, ``OUT/trials/checkpoints/<key>.json``.
+
+    ``save(progress)`` writes the JSON-able dict atomically with the trial's key and the dopt
+    version; ``load()`` returns the dict last saved, or None when there is none or it cannot
+    be resumed (unreadable, another key, another dopt version: logged and moved aside, never
+    deleted). Picklable: a process pool's workers get it with their trial.
+    """
+
+    def __init__(self, out_dir: Path | str, key: str):
+        Trial(key, {})                                   # the key's checks
+        self.key = key
+        self.path = Path(out_dir) / "trials" / CHECKPOINT_DIR / f"{key}.json"
+        self._version: str | None = None
+
+    def __repr__(self) -> str:
+        return f"Checkpoint({str(self.path)!r})"
+
+    @property
+    def version(self) -> str:
+        if self._version is None:
+            self._version = code_version()["version"]
+        return self._version
+
+    def save(self, progress: dict) -> None:
+        _write_json_atomic(self.path, {"key": self.key, "code": {"version": self.version},
+                                       "progress": progress})
+
+    def load(self) -> dict | None:
+        if not self.path.is_file():
+            return None
+        try:
+            rec = json.loads(self.path.read_text())
+            key, version, progress = rec["key"], rec["code"]["version"], rec["progress"]
+        except (OSError, ValueError, TypeError, KeyError) as e:
+            problem, folder = f"not a checkpoint ({type(e).__name__}: {e})", CORRUPT_DIR
+        else:
+            if key != self.key:
+                problem, folder = f"the checkpoint of {key!r}", CORRUPT_DIR
+            elif version != self.version:
+                problem = f"written by dopt {version}, this is dopt {self.version}"
+                folder = OUTDATED_DIR
+            elif not isinstance(progress, dict):
+                problem, folder = "its progress is not an object", CORRUPT_DIR
+            else:
+                return progress
+        where = _move_aside(self.path, folder)
+        log.warning("checkpoint %s is not resumed (%s): %s", self.path, problem,
+                    f"moved to {where}" if where else "it could not be moved aside")
+        return None
+
+    def clear(self) -> None:
+        """Delete the file (the trial's record is written)."""
+        try:
+            self.path.unlink()
+        except FileNotFoundError:
+            pass
+
+
+def takes_checkpoint(fn: Callable) -> bool:
+    """Whether the trial function ``fn`` has a ``checkpoint`` parameter."""
+    try:
+        return "checkpoint" in inspect.signature(fn).parameters
+    except (TypeError, ValueError):             # no signature (a builtin): it has none
+        return False
 
 
 def check_record(path: Path | str) -> tuple[dict | None, str | None]:
@@ -141,13 +218,15 @@ def run_sweep(fn: Callable[[dict], dict], trials: Sequence[Trial], out_dir: Path
     """Run the trials not yet finished under ``out_dir``.
 
     Args:
-        fn: module-level function params -> JSON-able dict (picklable by reference).
+        fn: module-level function params -> JSON-able dict (picklable by reference); with a
+            ``checkpoint`` parameter it is called as ``fn(params, checkpoint=Checkpoint)``.
         trials: the sweep; keys must be unique.
         out_dir: results folder; OUT/trials/<key>.json per finished trial.
         workers: processes of the local pool (1: run inline in this process).
         ray_address: run on Ray instead ("local" for a local instance).
         progress: called with (key, record or None on failure) as each trial ends.
-        fresh: recompute every trial (the old files are moved to OUT/trials/outdated/).
+        fresh: recompute every trial (the old files, and the checkpoints of unfinished
+            trials, are moved to OUT/trials/outdated/).
 
     A trial whose file is corrupt, or was written by another dopt version, is recomputed
     (``SweepResult.recomputed``); a trial that raises, or returns something that is not
@@ -182,6 +261,14 @@ def run_sweep(fn: Callable[[dict], dict], trials: Sequence[Trial], out_dir: Path
                 "file moved to %s)", t.key, reason, where)
     todo = [t for t in trials if t.key not in done]
     skipped = [t.key for t in trials if t.key in done]
+    checkpoints = {t.key: Checkpoint(out_dir, t.key) for t in todo}
+    if fresh:
+        for c in checkpoints.values():
+            if c.path.exists():
+                log.info("trial %s starts afresh (its checkpoint moved to %s)", c.key,
+                         _move_aside(c.path, OUTDATED_DIR))
+    kwargs = ((lambda t: {"checkpoint": checkpoints[t.key]}) if takes_checkpoint(fn)
+              else (lambda t: {}))
     log.info("sweep: %d trials, %d already finished, %d to run (%d recomputed)", len(trials),
              len(skipped), len(todo), len(recomputed))
     records = {k: done[k] for k in skipped}
@@ -195,6 +282,8 @@ def run_sweep(fn: Callable[[dict], dict], trials: Sequence[Trial], out_dir: Path
                 _write_json_atomic(trial_path(out_dir, trial.key), rec)
             except (TypeError, ValueError) as e:        # not JSON-able: a failure, not a result
                 error, rec = TypeError(f"its result is not JSON-able ({e})"), None
+            else:
+                checkpoints[trial.key].clear()
         if error is not None:
             failed[trial.key] = f"{type(error).__name__}: {error}"
             log.error("trial %s failed: %s", trial.key, failed[trial.key])
@@ -204,18 +293,18 @@ def run_sweep(fn: Callable[[dict], dict], trials: Sequence[Trial], out_dir: Path
             progress(trial.key, rec)
 
     if ray_address is not None:
-        _run_ray(fn, todo, ray_address, finish)
+        _run_ray(fn, todo, ray_address, finish, kwargs)
     elif workers == 1:
         for t in todo:
             try:
-                result = fn(t.params)
+                result = fn(t.params, **kwargs(t))
             except Exception as e:  # recorded, the sweep goes on
                 finish(t, error=e)
             else:
                 finish(t, result)
     else:
         with ProcessPoolExecutor(workers, mp_context=get_context("spawn")) as pool:
-            futures = {pool.submit(fn, t.params): t for t in todo}
+            futures = {pool.submit(fn, t.params, **kwargs(t)): t for t in todo}
             for fut in as_completed(futures):
                 err = fut.exception()
                 finish(futures[fut], None if err else fut.result(), err)
@@ -243,7 +332,7 @@ def _move_aside(path: Path, folder: str) -> Path | None:
     return dest
 
 
-def _run_ray(fn, todo, address, finish) -> None:
+def _run_ray(fn, todo, address, finish, kwargs) -> None:
     import ray
     if not ray.is_initialized():
         if address == "local":
@@ -255,7 +344,7 @@ def _run_ray(fn, todo, address, finish) -> None:
         # the trial module lives in a script folder, not an installed package: ship it by value
         ray.cloudpickle.register_pickle_by_value(module)
     remote = ray.remote(fn)
-    pending = {remote.remote(t.params): t for t in todo}
+    pending = {remote.remote(t.params, **kwargs(t)): t for t in todo}
     while pending:
         ready, _ = ray.wait(list(pending), num_returns=1)
         trial = pending.pop(ready[0])

@@ -1466,6 +1466,25 @@ def unrecorded_sweeps(results_dir: Path, results: list[Result]) -> dict[str, lis
     return out
 
 
+def checkpointed_trials(folder: Path) -> list[str]:
+    """"<method label> seed <s>: <n> CEM iterations done, <t> s" per checkpoint under
+    ``folder/trials/checkpoints/`` (``dopt.sweep.Checkpoint``: a trial stopped part-way that
+    a rerun resumes), in file-name order."""
+    out = []
+    for path in sorted(Path(folder).glob("trials/checkpoints/*.json")):
+        try:
+            progress = json.loads(path.read_text())["progress"]
+            trial, stage = progress["trial"], progress["stage"]
+            iterations = sum(len(st["cost_history"]) for st in progress["stages"]) + (
+                stage["cem"]["iteration"] if stage else 0)
+            out.append(f"{_label(trial['method'])} seed {trial['seed']}: {iterations} CEM "
+                       f"iterations done, {num(progress['wall_s'], 0)} s")
+        except (OSError, ValueError, KeyError, TypeError) as e:
+            raise ReportError(f"{path}: not a checkpoint of a Fig. 7 trial "
+                              f"({type(e).__name__}: {e})") from e
+    return out
+
+
 def _median(xs: list) -> float | None:
     xs = [x for x in xs if _finite(x)]
     return statistics.median(xs) if xs else None
@@ -1525,6 +1544,11 @@ def sweeps_in_progress_section(results_dir: Path, results: list[Result]) -> list
             n = len(group)
             lines += ["", f"{n} trial{'s' if n != 1 else ''}, {num(wall, 0)} s of trials "
                           f"({num(wall / 3600, 1)} h of one core)."]
+        stopped = checkpointed_trials(Path(results_dir) / "runs" / name)
+        if stopped:
+            lines += ["", "Stopped part-way, their progress committed under "
+                          "`trials/checkpoints/` (a rerun resumes each where it stopped): "
+                      + "; ".join(stopped) + "."]
     return lines
 
 

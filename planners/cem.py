@@ -160,6 +160,64 @@ class CEMResult:
     n_nonfinite: int = 0
 
 
+@dataclass
+class CEMProgress:
+    """Where ``CEM.plan`` stands after ``iteration`` iterations: all it needs to go on exactly
+    as if it had not stopped (``CEM.plan(..., resume=progress)``).
+
+    Attributes:
+        iteration: iterations done.
+        dist: the sampling distribution after them.
+        best: (choice (H,), particles (H,), displacements (H, 3)) of the best sample so far.
+        best_cost: its cost.
+        cost_history, elite_history, seconds: one entry per iteration done (``CEMResult``).
+        n_nonfinite: samples so far whose cost was not finite.
+        generator_state: the torch generator's state after the last iteration done (uint8).
+    """
+
+    iteration: int
+    dist: Distribution
+    best: tuple
+    best_cost: float
+    cost_history: list
+    elite_history: list
+    seconds: list
+    n_nonfinite: int
+    generator_state: torch.Tensor
+
+    def to_dict(self) -> dict:
+        """JSON-able form: tensors as nested lists (float64 lists round-trip exactly)."""
+        return {"iteration": self.iteration,
+                "dist": {k: getattr(self.dist, k).tolist() for k in ("probs", "mean", "std")},
+                "best": [t.tolist() for t in self.best], "best_cost": self.best_cost,
+                "cost_history": list(self.cost_history),
+                "elite_history": list(self.elite_history), "seconds": list(self.seconds),
+                "n_nonfinite": self.n_nonfinite,
+                "generator_state": self.generator_state.tolist()}
+
+    @classmethod
+    def from_dict(cls, d: dict) -> CEMProgress:
+        """Inverse of ``to_dict``.
+
+        Raises:
+            ValueError: a dict that is not a ``to_dict`` form (a key missing, a bad value).
+        """
+        try:
+            dist = Distribution(*(torch.tensor(d["dist"][k], dtype=torch.float64)
+                                  for k in ("probs", "mean", "std")))
+            choice, particles, disp = d["best"]
+            best = (torch.tensor(choice, dtype=torch.int64),
+                    torch.tensor(particles, dtype=torch.int64),
+                    torch.tensor(disp, dtype=torch.float64))
+            return cls(int(d["iteration"]), dist, best, float(d["best_cost"]),
+                       [float(c) for c in d["cost_history"]],
+                       [float(c) for c in d["elite_history"]],
+                       [float(c) for c in d["seconds"]], int(d["n_nonfinite"]),
+                       torch.tensor(d["generator_state"], dtype=torch.uint8))
+        except (KeyError, TypeError, ValueError, RuntimeError) as e:
+            raise ValueError(f"not a CEM progress record ({type(e).__name__}: {e})") from e
+
+
 class CEM:
     """Cross-entropy method over pick-and-place sequences (see the module docstring)."""
 
@@ -236,7 +294,9 @@ class CEM:
 
     # ------------------------------------------------------------------- plan
     def plan(self, task: PickTask, candidates, generator: torch.Generator,
-             on_iteration: Callable[[int, float], None] | None = None) -> CEMResult:
+             on_iteration: Callable[[int, float], None] | None = None, *,
+             resume: CEMProgress | None = None,
+             on_progress: Callable[[CEMProgress], None] | None = None) -> CEMResult:
         """Optimise H-action sequences over the candidate particles.
 
         Samples whose cost is NaN or inf score +inf: they are never elites nor the best. An
@@ -252,13 +312,19 @@ class CEM:
                 the same result.
             on_iteration: called as ``on_iteration(i, best_cost)`` after every iteration
                 (progress bars live in the caller).
+            resume: a ``CEMProgress`` of this plan (same task, candidates and config) to go on
+                from: the generator is set to its state, and the result is the one the
+                uninterrupted plan gives.
+            on_progress: called with a ``CEMProgress`` after every iteration (a long plan
+                saves it, so that a rerun can resume).
 
         Raises:
             TypeError: candidates that are not integers (floats, bools), a generator that is not
                 a ``torch.Generator``, an ``on_iteration`` that is not callable, or costs from
                 ``task.evaluate`` that are not numbers.
-            ValueError: empty, repeated, negative or out-of-range candidates, a bad bound, or
-                ``task.evaluate`` returning costs of another shape than (P,).
+            ValueError: empty, repeated, negative or out-of-range candidates, a bad bound,
+                ``task.evaluate`` returning costs of another shape than (P,), or a ``resume``
+                that does not fit this plan (its shapes or iteration count).
             RuntimeError: every sample of an iteration had a non-finite cost.
             whatever ``task.evaluate`` raises (bad actions, an unstable simulation).
         """
@@ -270,13 +336,23 @@ class CEM:
         if not isinstance(generator, torch.Generator):
             raise TypeError(f"generator must be a torch.Generator (the only source of "
                             f"randomness), got {type(generator).__name__}")
-        if on_iteration is not None and not callable(on_iteration):
-            raise TypeError(f"on_iteration must be callable or None, got {on_iteration!r}")
+        for name, f in (("on_iteration", on_iteration), ("on_progress", on_progress)):
+            if f is not None and not callable(f):
+                raise TypeError(f"{name} must be callable or None, got {f!r}")
         dist = self.initial(cand.numel(), bound)
         best_cost, best = float("inf"), None
         history, elite_hist, seconds = [], [], []
-        n_nonfinite = 0
-        for it in range(cfg.iterations):
+        n_nonfinite, start = 0, 0
+        if resume is not None:
+            self._check_resume(resume, dist)
+            dist, best, best_cost = resume.dist, resume.best, resume.best_cost
+            history, elite_hist = list(resume.cost_history), list(resume.elite_history)
+            seconds, n_nonfinite = list(resume.seconds), resume.n_nonfinite
+            start = resume.iteration
+            generator.set_state(resume.generator_state)
+            log.info("CEM resumes after iteration %d of %d (best %.4g)", start,
+                     cfg.iterations, best_cost)
+        for it in range(start, cfg.iterations):
             t0 = time.perf_counter()
             s = self.sample(dist, cand, bound, generator)
             if cfg.keep_best and best is not None:
@@ -306,9 +382,34 @@ class CEM:
                       elite_hist[-1], seconds[-1])
             if on_iteration is not None:
                 on_iteration(it, best_cost)
+            if on_progress is not None:
+                on_progress(CEMProgress(it + 1, dist, best, best_cost, list(history),
+                                        list(elite_hist), list(seconds), n_nonfinite,
+                                        generator.get_state()))
         return CEMResult(best[1].numpy().copy(), best[2].numpy().copy(), best_cost,
                          np.array(history), np.array(elite_hist), np.array(seconds),
                          cand.numpy().copy(), cfg.iterations * cfg.population, n_nonfinite)
+
+
+    def _check_resume(self, resume, initial: Distribution) -> None:
+        """ValueError unless ``resume`` is a CEMProgress of a plan shaped like this one."""
+        if not isinstance(resume, CEMProgress):
+            raise TypeError(f"resume must be a CEMProgress or None, got "
+                            f"{type(resume).__name__}")
+        n = resume.iteration
+        problems = [f"{name} {tuple(getattr(resume.dist, name).shape)} against "
+                    f"{tuple(getattr(initial, name).shape)}"
+                    for name in ("probs", "mean", "std")
+                    if getattr(resume.dist, name).shape != getattr(initial, name).shape]
+        if not 1 <= n <= self.config.iterations:
+            problems.append(f"iteration {n} outside 1..{self.config.iterations}")
+        if any(len(h) != n for h in (resume.cost_history, resume.elite_history,
+                                     resume.seconds)):
+            problems.append(f"histories of another length than its {n} iterations")
+        if resume.best is None or resume.best[2].shape != (self.config.horizon, 3):
+            problems.append("no best sample of this horizon")
+        if problems:
+            raise ValueError("resume does not fit this plan: " + "; ".join(problems))
 
 
 def _evaluate_name(task) -> str:

@@ -48,7 +48,7 @@ from dopt.tasks.pick.scene import (
     mean_distance,
 )
 from dopt.validation import check_config, check_int
-from planners.cem import CEM, CEMConfig
+from planners.cem import CEM, CEMConfig, CEMProgress
 from planners.scripted import ScriptedConfig, scripted
 
 log = logging.getLogger(__name__)
@@ -431,10 +431,30 @@ class StagePlan:
     unstable_reason: str = ""
     n_infeasible_rollouts: int = 0
 
+    def to_dict(self) -> dict:
+        """JSON-able form (arrays as lists; float64 round-trips exactly)."""
+        d = asdict(self)
+        for name in ("particles", "displacements", "final_state"):
+            d[name] = np.asarray(d[name]).tolist()
+        return d
+
+    @classmethod
+    def from_dict(cls, d: dict) -> StagePlan:
+        d = dict(d)
+        d["particles"] = np.asarray(d["particles"], dtype=int)
+        for name in ("displacements", "final_state"):
+            d[name] = np.asarray(d[name], dtype=float)
+        return cls(**d)
+
 
 class PickPlanner(Protocol):
     """Plans one stage: ``plan(task, keys, on_iteration)``, where ``task`` holds the start
-    state and the stage's goal and ``keys`` (K,) are its key particles."""
+    state and the stage's goal and ``keys`` (K,) are its key particles.
+
+    A planner that can be stopped and resumed (``run_problem``'s ``checkpoint``) also has
+    ``rng_state()`` / ``set_rng_state(state)`` (its random generators' state, JSON-able)
+    and takes ``resume`` (a progress dict it gave ``on_progress``) and ``on_progress``
+    (called with a JSON-able dict after each step of its planning) in ``plan``."""
 
     def plan(self, task: PickPlaceTask, keys: np.ndarray,
              on_iteration: Callable[[int, float], None] | None = None) -> StagePlan: ...
@@ -469,9 +489,38 @@ class CEMPlanner:
             return np.arange(n_particles)
         return np.sort(self.rng.choice(n_particles, size=len(keys), replace=False))
 
-    def plan(self, task, keys, on_iteration=None) -> StagePlan:
+    def rng_state(self) -> dict:
+        """The torch and numpy generators' state (JSON-able)."""
+        return {"torch": self.generator.get_state().tolist(),
+                "numpy": self.rng.bit_generator.state}
+
+    def set_rng_state(self, state: dict) -> None:
+        """Inverse of ``rng_state``."""
+        self.generator.set_state(torch.tensor(state["torch"], dtype=torch.uint8))
+        self.rng.bit_generator.state = state["numpy"]
+
+    def plan(self, task, keys, on_iteration=None, *, resume: dict | None = None,
+             on_progress: Callable[[dict], None] | None = None) -> StagePlan:
+        """CEM over the candidates, then the best plan executed on the task's scene.
+        ``resume``: a dict ``on_progress`` gave while planning this stage from the same rng
+        state (candidates, CEM progress, the task's rollout counters), to go on from."""
         cand = self.candidate_particles(keys, task.n_particles)
-        res = self.cem.plan(task, cand, self.generator, on_iteration)
+        counters = ("n_evaluated", "n_unstable", "n_infeasible")
+        cem_resume = None
+        if resume is not None:
+            if np.asarray(resume["candidates"]).tolist() != cand.tolist():
+                raise ValueError("the saved progress planned over other candidates than this "
+                                 "planner draws: not a progress of this stage and seed")
+            cem_resume = CEMProgress.from_dict(resume["cem"])
+            for name in counters:
+                setattr(task, name, int(resume["task"][name]))
+
+        def progress(p: CEMProgress) -> None:
+            on_progress({"candidates": cand.tolist(), "cem": p.to_dict(),
+                         "task": {name: getattr(task, name) for name in counters}})
+
+        res = self.cem.plan(task, cand, self.generator, on_iteration, resume=cem_resume,
+                            on_progress=progress if on_progress is not None else None)
         done = task.execute(res.particles, res.displacements)
         # the executed plan's cost, on the task's own scene (CEM may have planned on a cheaper
         # model; without one the two are the same rollout)
@@ -520,7 +569,9 @@ class PickPlaceResult:
     stage's cost, candidates and actions, seconds per CEM iteration (None when scripted), the
     final state (ns,), the wall time (s), the rollouts simulated and how many the stability
     verdict flagged, and whether an executed plan was unstable (``unstable_reason`` names the
-    stage, step and bound): such a trial's metrics are not those of a physical result."""
+    stage, step and bound): such a trial's metrics are not those of a physical result.
+    ``segments``: the runs the trial took (more than 1 when it was resumed from a checkpoint;
+    ``wall_s`` is then their sum, and the same result as in one run)."""
 
     method: str
     seed: int
@@ -538,6 +589,7 @@ class PickPlaceResult:
     unstable: bool = False
     unstable_reason: str = ""
     n_infeasible_rollouts: int = 0
+    segments: int = 1
 
     def to_dict(self) -> dict:
         """JSON-able form: the metrics at the top level, the final state as a list."""
@@ -549,11 +601,16 @@ class PickPlaceResult:
 
 def run_problem(problem: Problem, planner: PickPlanner, *, method: str = "", seed: int = 0,
                 service: RolloutService | None = None,
-                on_iteration: Callable[[int, float], None] | None = None) -> PickPlaceResult:
+                on_iteration: Callable[[int, float], None] | None = None,
+                checkpoint=None) -> PickPlaceResult:
     """Plan and execute every stage of ``problem`` in turn with ``planner``.
 
     ``service`` defaults to a new one with the settings' threads (closed at the end);
-    ``method`` and ``seed`` only label the result.
+    ``method`` and ``seed`` only label the result. ``checkpoint`` (``dopt.sweep.Checkpoint``,
+    or anything with ``load() -> dict | None`` and ``save(dict)``): the trial's progress is
+    saved after every stage and, with a resumable planner (``PickPlanner``), after every step
+    of its planning; a progress found there is resumed, and the result is the one the trial
+    gives without a stop (only ``wall_s``, summed over the runs, and ``segments`` differ).
     """
     if not isinstance(problem, Problem):
         raise TypeError(f"problem must be a Problem (make_problem), got {type(problem).__name__}")
@@ -561,7 +618,38 @@ def run_problem(problem: Problem, planner: PickPlanner, *, method: str = "", see
         raise TypeError(f"planner must be a PickPlanner (with plan), got {type(planner).__name__}")
     if on_iteration is not None and not callable(on_iteration):
         raise TypeError(f"on_iteration must be callable or None, got {on_iteration!r}")
+    resumable = callable(getattr(planner, "rng_state", None))
+    if checkpoint is not None and not (callable(getattr(checkpoint, "load", None))
+                                       and callable(getattr(checkpoint, "save", None))):
+        raise TypeError(f"checkpoint must have load() and save(progress), got "
+                        f"{type(checkpoint).__name__}")
+    if checkpoint is not None and not resumable:
+        log.info("%s: the planner has no rng_state, so the trial is not checkpointed",
+                 type(planner).__name__)
+        checkpoint = None
     start = time.perf_counter()
+    saved = checkpoint.load() if checkpoint is not None else None
+    done: list[StagePlan] = []
+    earlier_s, segments, partial = 0.0, 1, None
+    # what the progress must be of (threads do not change results)
+    trial = {"method": method, "seed": int(seed),
+             "settings": {k: v for k, v in problem.settings.to_dict().items() if k != "threads"}}
+    if saved is not None:
+        if saved.get("trial") != trial:
+            raise ValueError(f"the checkpoint holds the progress of another trial: "
+                             f"{_trial_difference(saved.get('trial'), trial)}")
+        done = [StagePlan.from_dict(d) for d in saved["stages"]]
+        earlier_s, segments = float(saved["wall_s"]), int(saved["segments"]) + 1
+        partial = saved["stage"]
+        planner.set_rng_state(saved["planner"])
+        log.info("%s seed %d resumes after %d of %d stages%s", method, seed, len(done),
+                 len(problem.stages), " and part of the next" if partial else "")
+
+    def save(stage_progress: dict | None, rng: dict) -> None:
+        checkpoint.save({"trial": trial, "stages": [p.to_dict() for p in done], "planner": rng,
+                         "stage": stage_progress, "segments": segments,
+                         "wall_s": earlier_s + time.perf_counter() - start})
+
     own = service is None
     svc = service or RolloutService(problem.scene.scene,
                                     RolloutConfig(threads=problem.settings.threads))
@@ -569,49 +657,72 @@ def run_problem(problem: Problem, planner: PickPlanner, *, method: str = "", see
                                RolloutConfig(threads=problem.settings.threads))
                 if problem.planning_scene is not None else None)
     try:
-        state = problem.start_state
-        history, stage_of, n_cand, seconds, actions, stage_costs = [], [], [], [], [], []
-        n_rollouts = n_unstable = n_infeasible = 0
-        reasons = []
-        for k, stage in enumerate(problem.stages):
+        state = done[-1].final_state if done else problem.start_state
+        for stage in problem.stages[len(done):]:
             task = PickPlaceTask(problem.scene, stage.goal, state, svc,
                                  problem.planning_scene, plan_svc)
-            plan = planner.plan(task, stage.keys, on_iteration)
+            kwargs = {}
+            if checkpoint is not None:
+                rng = planner.rng_state()           # the stage's start: a resume redraws
+                kwargs = {"resume": partial,
+                          "on_progress": lambda progress, rng=rng: save(progress, rng)}
+            plan = planner.plan(task, stage.keys, on_iteration, **kwargs)
+            partial = None
             state = plan.final_state
-            history += plan.cost_history
-            stage_of += [k] * len(plan.cost_history)
-            seconds += plan.seconds_per_iteration
-            n_cand.append(plan.n_candidates)
-            stage_costs.append(plan.cost)
-            n_rollouts += plan.n_rollouts
-            n_unstable += plan.n_unstable_rollouts
-            n_infeasible += plan.n_infeasible_rollouts
+            done.append(plan)
             if plan.unstable:
-                reasons.append(f"stage {stage.name}: {plan.unstable_reason}")
                 log.warning("%s seed %d stage %s: the executed plan went unstable (%s)", method,
                             seed, stage.name, plan.unstable_reason)
-            # full precision: a cloth amplifies a micrometre of rounding into centimetres, and
-            # the recorded actions must replay to the recorded final state
-            actions.append({"stage": stage.name, "particles": plan.particles.tolist(),
-                            "displacements": np.asarray(plan.displacements, float).tolist()})
             log.info("%s seed %d stage %s: cost %.1f mm", method, seed, stage.name,
                      plan.cost * 1e3)
+            if checkpoint is not None:
+                save(None, planner.rng_state())
     finally:
         if own and hasattr(svc, "close"):
             svc.close()
         if plan_svc is not None:
             plan_svc.close()
+    history = [c for p in done for c in p.cost_history]
+    stage_of = [k for k, p in enumerate(done) for _ in p.cost_history]
+    seconds = [t for p in done for t in p.seconds_per_iteration]
+    reasons = [f"stage {stage.name}: {p.unstable_reason}"
+               for stage, p in zip(problem.stages, done, strict=True) if p.unstable]
+    # full precision: a cloth amplifies a micrometre of rounding into centimetres, and the
+    # recorded actions must replay to the recorded final state
+    actions = [{"stage": stage.name, "particles": p.particles.tolist(),
+                "displacements": np.asarray(p.displacements, float).tolist()}
+               for stage, p in zip(problem.stages, done, strict=True)]
     return PickPlaceResult(method, int(seed), problem.metrics(state), history, stage_of,
-                           stage_costs, n_cand, float(np.mean(seconds)) if seconds else None,
-                           actions, np.asarray(state), time.perf_counter() - start,
-                           n_rollouts, n_unstable, bool(reasons), "; ".join(reasons),
-                           n_infeasible)
+                           [p.cost for p in done], [p.n_candidates for p in done],
+                           float(np.mean(seconds)) if seconds else None,
+                           actions, np.asarray(state),
+                           earlier_s + time.perf_counter() - start,
+                           sum(p.n_rollouts for p in done),
+                           sum(p.n_unstable_rollouts for p in done), bool(reasons),
+                           "; ".join(reasons), sum(p.n_infeasible_rollouts for p in done),
+                           segments)
+
+
+def _trial_difference(saved, trial: dict) -> str:
+    """How a checkpoint's trial identity ``saved`` differs from ``trial``'s."""
+    if not isinstance(saved, dict):
+        return "it names no trial"
+    parts = [f"{k} {saved.get(k)!r}, not {trial[k]!r}" for k in ("method", "seed")
+             if saved.get(k) != trial[k]]
+    theirs = saved.get("settings") if isinstance(saved.get("settings"), dict) else {}
+    other = sorted(k for k in set(theirs) | set(trial["settings"])
+                   if theirs.get(k) != trial["settings"].get(k))
+    if other:
+        parts.append("other settings: " + ", ".join(other))
+    return "; ".join(parts)
 
 
 def solve(settings: PickPlaceSettings, method: str = "simple", seed: int = 0,
-          on_iteration: Callable[[int, float], None] | None = None) -> PickPlaceResult:
+          on_iteration: Callable[[int, float], None] | None = None,
+          checkpoint=None) -> PickPlaceResult:
     """One trial in one call: build the problem, plan every stage with ``method``, execute,
-    measure. The same settings, method and seed give the same result.
+    measure. The same settings, method and seed give the same result, also when the trial
+    is stopped and resumed from its ``checkpoint`` (``run_problem``).
 
     Raises:
         TypeError / ValueError: settings that are not PickPlaceSettings, an unknown method, a
@@ -621,14 +732,18 @@ def solve(settings: PickPlaceSettings, method: str = "simple", seed: int = 0,
         raise TypeError(f"on_iteration must be callable or None, got {on_iteration!r}")
     planner = make_planner(method, settings, seed)      # checks all three before any scene
     problem = make_problem(settings, seed)
-    return run_problem(problem, planner, method=method, seed=seed, on_iteration=on_iteration)
+    return run_problem(problem, planner, method=method, seed=seed, on_iteration=on_iteration,
+                       checkpoint=checkpoint)
 
 
-def run_trial(params: dict, on_iteration: Callable[[int, float], None] | None = None) -> dict:
+def run_trial(params: dict, on_iteration: Callable[[int, float], None] | None = None,
+              checkpoint=None) -> dict:
     """``solve`` for ``dopt.sweep``: params {"settings": PickPlaceSettings.to_dict(),
-    "method", "seed"} -> ``PickPlaceResult.to_dict()``."""
+    "method", "seed"} -> ``PickPlaceResult.to_dict()``; the sweep's ``checkpoint`` lets a
+    stopped trial resume."""
     settings = PickPlaceSettings.from_dict(params["settings"])
-    return solve(settings, params["method"], int(params["seed"]), on_iteration).to_dict()
+    return solve(settings, params["method"], int(params["seed"]), on_iteration,
+                 checkpoint).to_dict()
 
 
 def summarize(results: Sequence[dict], methods: Sequence[str],

@@ -14,3 +14,19 @@ def square(params):
     if params["x"] < 0:
         raise ValueError("negative")
     return {"y": params["x"] ** 2, "pid": os.getpid()}
+
+
+def count(params, checkpoint=None):
+    """Counts to params['n'], saving {"i", "runs"} to its checkpoint after each step; raises
+    once i reaches params['stop_at'] (a run killed there). Returns the count, the runs it
+    took and the process id."""
+    progress = checkpoint.load() if checkpoint is not None else None
+    i = progress["i"] if progress else 0
+    runs = (progress["runs"] if progress else 0) + 1
+    while i < params["n"]:
+        i += 1
+        if checkpoint is not None:
+            checkpoint.save({"i": i, "runs": runs})
+        if i == params.get("stop_at"):
+            raise RuntimeError(f"killed at {i}")
+    return {"i": i, "runs": runs, "pid": os.getpid()}

@@ -15,8 +15,8 @@ import pytest
 
 from dopt import sweep
 from dopt.provenance import code_version
-from dopt.sweep import Trial, check_record, load_finished, run_sweep
-from tests.dopt.sweep_trials import square
+from dopt.sweep import Checkpoint, Trial, check_record, load_finished, run_sweep, takes_checkpoint
+from tests.dopt.sweep_trials import count, square
 
 
 def not_json(params):
@@ -221,3 +221,53 @@ def test_a_result_that_is_not_json_is_a_failure(tmp_path, code):
     assert res.records == {} and "not JSON-able" in res.failed["x1"]
     assert not (tmp_path / "trials" / "x1.json").exists()
     assert not [p for p in (tmp_path / "trials").iterdir() if p.name.startswith(".tmp")]
+
+
+@pytest.mark.parametrize("workers", [1, 2])
+def test_a_stopped_trial_resumes_from_its_checkpoint(tmp_path, workers):
+    first = run_sweep(count, [Trial("c", {"n": 5, "stop_at": 2}), Trial("d", {"n": 1})],
+                      tmp_path, workers=workers)
+    assert list(first.failed) == ["c"] and first.records["d"]["result"]["runs"] == 1
+    where = tmp_path / "trials" / "checkpoints" / "c.json"
+    assert json.loads(where.read_text())["progress"] == {"i": 2, "runs": 1}
+    assert not (tmp_path / "trials" / "checkpoints" / "d.json").exists()   # cleared when done
+    res = run_sweep(count, [Trial("c", {"n": 5})], tmp_path, workers=workers)
+    assert res.records["c"]["result"]["i"] == 5 and res.records["c"]["result"]["runs"] == 2
+    assert not where.exists()
+
+
+def test_fresh_moves_checkpoints_aside(tmp_path):
+    run_sweep(count, [Trial("c", {"n": 5, "stop_at": 3})], tmp_path)
+    res = run_sweep(count, [Trial("c", {"n": 5})], tmp_path, fresh=True)
+    assert res.records["c"]["result"]["runs"] == 1          # started afresh
+    kept = json.loads((tmp_path / "trials" / "checkpoints" / "outdated" / "c.json").read_text())
+    assert kept["progress"]["i"] == 3
+
+
+@pytest.mark.parametrize("text, folder, reason", [
+    ("{not json", "corrupt", "not a checkpoint"),
+    (json.dumps({"key": "other", "code": {"version": "1.0.0"}, "progress": {}}), "corrupt",
+     "the checkpoint of 'other'"),
+    (json.dumps({"key": "c", "code": {"version": "0.9.0"}, "progress": {}}), "outdated",
+     "written by dopt 0.9.0, this is dopt 1.0.0"),
+    (json.dumps({"key": "c", "code": {"version": "1.0.0"}, "progress": [1]}), "corrupt",
+     "progress is not an object"),
+])
+def test_a_checkpoint_that_cannot_be_resumed_is_named_and_moved_aside(tmp_path, code, caplog,
+                                                                    text, folder, reason):
+    c = Checkpoint(tmp_path, "c")
+    c.path.parent.mkdir(parents=True)
+    c.path.write_text(text)
+    with caplog.at_level(logging.WARNING, logger="dopt.sweep"):
+        assert c.load() is None
+    assert reason in caplog.text
+    assert (c.path.parent / folder / "c.json").read_text() == text and not c.path.exists()
+    c.save({"i": 1})
+    assert c.load() == {"i": 1}
+
+
+def test_only_functions_with_a_checkpoint_parameter_get_one(tmp_path):
+    assert takes_checkpoint(count) and not takes_checkpoint(square)
+    assert not takes_checkpoint(len)
+    with pytest.raises(ValueError, match="not a valid file name"):
+        Checkpoint(tmp_path, "../c")

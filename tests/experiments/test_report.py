@@ -684,6 +684,26 @@ def test_a_sweep_without_its_summary_is_shown_seed_by_seed_until_recorded(site):
     assert "sweeps in progress" not in site["md"].read_text()
 
 
+def test_a_sweep_lists_its_checkpointed_trials(site, capsys):
+    trials = site["results"] / "runs" / "fig7-cloth-side" / "trials"
+    write(trials, "simple-seed0-abc.json", trial_record("simple", 0, 0.0069, 2100.0))
+    # dopt.sweep.Checkpoint's file: two stages done (30 iterations each), 12 of the third
+    progress = {"trial": {"method": "original", "seed": 4, "settings": {}},
+                "stages": [{"cost_history": [0.1] * 30}, {"cost_history": [0.1] * 30}],
+                "stage": {"cem": {"iteration": 12}}, "wall_s": 3456.4, "segments": 1}
+    write(trials / "checkpoints", "original-seed4-abc.json",
+          {"key": "original-seed4-abc", "code": {"version": "0"}, "progress": progress})
+    write(site["results"], "fig7_cloth_diagonal.json", fig7())
+    assert run(site) == 0
+    part = site["md"].read_text().split("## Fig. 7 sweeps in progress")[1]
+    assert ("Stopped part-way, their progress committed under `trials/checkpoints/` (a rerun "
+            "resumes each where it stopped): CEM(Original) seed 4: 72 CEM iterations done, "
+            "3456 s.") in part
+    bad = write(trials / "checkpoints", "x.json", {"key": "x", "progress": {}})
+    assert run(site) == 2
+    assert str(bad) in capsys.readouterr().err
+
+
 def test_a_malformed_trial_file_of_a_sweep_in_progress_is_named(site, capsys):
     write(site["results"], "fig7_cloth_diagonal.json", fig7())
     bad = write(site["results"] / "runs" / "fig7-cloth-side" / "trials", "x.json",

@@ -1,11 +1,13 @@
 """CEM over pick actions: reproducibility, bounds, refit, convergence on a toy task with a known
 optimum, and a reproducible iteration on a small cloth."""
 
+import json
+
 import numpy as np
 import pytest
 import torch
 
-from planners.cem import CEM, NONE, CEMConfig, Distribution, Samples
+from planners.cem import CEM, NONE, CEMConfig, CEMProgress, Distribution, Samples
 
 
 class PointsTask:
@@ -143,3 +145,49 @@ def test_cloth_iteration_is_reproducible():
     batched = task.rollout(runs[0].particles[None], runs[0].displacements[None])
     assert np.array_equal(batched.final_states[0], final)
     assert task.cost(final) == pytest.approx(runs[0].cost, rel=1e-12, abs=0)
+
+
+@pytest.mark.parametrize("stop_after", [1, 4])
+def test_a_plan_resumed_from_its_progress_is_the_uninterrupted_plan(stop_after):
+    cfg = CEMConfig(population=12, elites=3, iterations=6, horizon=2)
+    ref = _plan(7, cfg)
+    saved = []
+
+    class Stop(Exception):
+        pass
+
+    def keep(progress):
+        # through its JSON form, as a checkpoint file holds it
+        saved.append(CEMProgress.from_dict(json.loads(json.dumps(progress.to_dict()))))
+        if len(saved) == stop_after:
+            raise Stop
+
+    with pytest.raises(Stop):
+        CEM(cfg).plan(PointsTask(), list(range(10)), torch.Generator().manual_seed(7),
+                      on_progress=keep)
+    task = PointsTask()
+    # a fresh generator with another seed: the progress carries the generator's state
+    res = CEM(cfg).plan(task, list(range(10)), torch.Generator().manual_seed(99),
+                        resume=saved[-1])
+    assert task.calls == cfg.iterations - stop_after
+    assert np.array_equal(res.particles, ref.particles)
+    assert np.array_equal(res.displacements, ref.displacements)
+    assert np.array_equal(res.cost_history, ref.cost_history)
+    assert np.array_equal(res.elite_history, ref.elite_history)
+
+
+def test_a_resume_of_another_plan_is_refused():
+    cfg = CEMConfig(population=6, elites=2, iterations=3, horizon=2)
+    saved = []
+    CEM(cfg).plan(PointsTask(), list(range(10)), torch.Generator().manual_seed(0),
+                  on_progress=saved.append)
+    with pytest.raises(ValueError, match="probs"):          # other candidates
+        CEM(cfg).plan(PointsTask(), list(range(5)), torch.Generator(), resume=saved[0])
+    longer = CEMConfig(population=6, elites=2, iterations=3, horizon=3)
+    with pytest.raises(ValueError, match="resume does not fit"):
+        CEM(longer).plan(PointsTask(), list(range(10)), torch.Generator(), resume=saved[0])
+    with pytest.raises(TypeError, match="CEMProgress"):
+        CEM(cfg).plan(PointsTask(), list(range(10)), torch.Generator(),
+                      resume=saved[0].to_dict())
+    with pytest.raises(ValueError, match="not a CEM progress record"):
+        CEMProgress.from_dict({"iteration": 1})
