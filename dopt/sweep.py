@@ -21,7 +21,7 @@ parameter is given a ``Checkpoint`` (``OUT/trials/checkpoints/<key>.json``) to `
 ``load`` from, so that a rerun of a killed sweep, on this machine or on another one that has
 the file, resumes the trial where it stopped instead of starting it again. The file is
 deleted once the trial's record is written; one written by another dopt version is not
-resumed (moved to ``OUT/trials/outdated/``).
+resumed (moved to ``OUT/trials/checkpoints/outdated/``).
 """
 
 from __future__ import annotations
@@ -225,8 +225,8 @@ def run_sweep(fn: Callable[[dict], dict], trials: Sequence[Trial], out_dir: Path
         workers: processes of the local pool (1: run inline in this process).
         ray_address: run on Ray instead ("local" for a local instance).
         progress: called with (key, record or None on failure) as each trial ends.
-        fresh: recompute every trial (the old files, and the checkpoints of unfinished
-            trials, are moved to OUT/trials/outdated/).
+        fresh: recompute every trial (the old files are moved to OUT/trials/outdated/, the
+            checkpoints of unfinished trials to OUT/trials/checkpoints/outdated/).
 
     A trial whose file is corrupt, or was written by another dopt version, is recomputed
     (``SweepResult.recomputed``); a trial that raises, or returns something that is not
