@@ -151,16 +151,11 @@ def parse(ap: argparse.ArgumentParser, task: str, argv) -> tuple[argparse.Namesp
 
 
 def trial_key(method: str, seed: int, settings: PickPlaceSettings) -> str:
-    """<method>-seed<seed>-<hash of the settings that change results (not threads)>: the
-    settings and what their physics preset and picker resolve to
-    (``PickPlaceSettings.resolved_physics``)."""
-    d = settings.to_dict()
-    d.pop("threads")
-    for name in ("planning_physics", "max_stretch", "picker_speed"):  # unset: left out
-        if d.get(name) is None:
-            d.pop(name, None)
-    d["resolved"] = settings.resolved_physics()
-    digest = hashlib.sha1(json.dumps(d, sort_keys=True).encode()).hexdigest()[:8]
+    """<method>-seed<seed>-<hash of the settings that change results>
+    (``PickPlaceSettings.identity``: not the threads; what the presets and picker resolve
+    to)."""
+    digest = hashlib.sha1(json.dumps(settings.identity(), sort_keys=True).encode()
+                          ).hexdigest()[:8]
     return f"{method}-seed{seed}-{digest}"
 
 

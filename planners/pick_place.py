@@ -24,6 +24,7 @@ Shapes: N particles, K key particles, H actions per plan, ns state row.
 
 from __future__ import annotations
 
+import json
 import logging
 import time
 from collections.abc import Callable, Sequence
@@ -206,6 +207,18 @@ class PickPlaceSettings:
             out["planning_scene"] = _scene_identity(planning)
         return out
 
+    def identity(self) -> dict:
+        """JSON-able: the settings that change a trial's result, which name its trial (the
+        sweep's key hashes it, a checkpoint must hold it): ``to_dict()`` without ``threads``
+        and without the optional fields ``UNSET_SETTINGS`` at None (a trial run before such
+        a field existed stays valid), plus what the presets and picker resolve to today
+        (``resolved_physics``, under "resolved"). Plain JSON types (tuples as lists), so it
+        equals itself read back from a file."""
+        out = {k: v for k, v in self.to_dict().items()
+               if k != "threads" and not (k in UNSET_SETTINGS and v is None)}
+        out["resolved"] = self.resolved_physics()
+        return json.loads(json.dumps(out))
+
     def to_dict(self) -> dict:
         """JSON-able form (nested configs as dicts); ``from_dict`` inverts it."""
         return asdict(self)
@@ -224,9 +237,10 @@ class PickPlaceSettings:
         return cls(**d)
 
 
-#: scene-config fields a trial's identity leaves out at these values, as ``trial_key`` leaves
-#: out an unset planning model: options whose unset value is the scene every trial ran before
-#: they existed, so those trials stay valid
+#: optional settings ``PickPlaceSettings.identity`` leaves out at None: options whose unset
+#: value is what every trial ran before they existed, so those trials stay valid
+UNSET_SETTINGS = ("planning_physics", "max_stretch", "picker_speed")
+#: scene-config fields a trial's identity leaves out at these values, for the same reason
 UNSET_SCENE_FIELDS = {"passive": False}
 
 
@@ -632,8 +646,7 @@ def run_problem(problem: Problem, planner: PickPlanner, *, method: str = "", see
     done: list[StagePlan] = []
     earlier_s, segments, partial = 0.0, 1, None
     # what the progress must be of (threads do not change results)
-    trial = {"method": method, "seed": int(seed),
-             "settings": {k: v for k, v in problem.settings.to_dict().items() if k != "threads"}}
+    trial = {"method": method, "seed": int(seed), "settings": problem.settings.identity()}
     if saved is not None:
         if saved.get("trial") != trial:
             raise ValueError(f"the checkpoint holds the progress of another trial: "

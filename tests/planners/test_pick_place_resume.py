@@ -78,6 +78,18 @@ def test_the_progress_of_another_trial_is_refused(settings):
                  checkpoint=checkpoint).segments == 2
 
 
+def test_the_progress_of_physics_that_resolved_otherwise_is_refused(settings):
+    # the same settings, saved when their physics preset meant another scene (as after a
+    # preset's change): the progress is not resumed on today's scene
+    checkpoint = MemoryCheckpoint(stop_after=1)
+    with pytest.raises(Stop):
+        solve(settings, "random", 3, checkpoint=checkpoint)
+    scene = checkpoint.saved["trial"]["settings"]["resolved"]["scene"]
+    scene["damping"] = 2 * scene["damping"] + 1.0
+    with pytest.raises(ValueError, match="other settings: resolved"):
+        solve(settings, "random", 3, checkpoint=checkpoint)
+
+
 def test_a_planner_without_rng_state_runs_without_checkpoints(settings):
     checkpoint = MemoryCheckpoint()
     res = run_problem(make_problem(settings), ScriptedPlanner(settings.scripted),
