@@ -121,27 +121,35 @@ class Checkpoint:
                                        "progress": progress})
 
     def load(self) -> dict | None:
-        if not self.path.is_file():
-            return None
-        try:
-            rec = json.loads(self.path.read_text())
-            key, version, progress = rec["key"], rec["code"]["version"], rec["progress"]
-        except (OSError, ValueError, TypeError, KeyError) as e:
-            problem, folder = f"not a checkpoint ({type(e).__name__}: {e})", CORRUPT_DIR
-        else:
-            if key != self.key:
-                problem, folder = f"the checkpoint of {key!r}", CORRUPT_DIR
-            elif version != self.version:
-                problem = f"written by dopt {version}, this is dopt {self.version}"
-                folder = OUTDATED_DIR
-            elif not isinstance(progress, dict):
-                problem, folder = "its progress is not an object", CORRUPT_DIR
-            else:
-                return progress
+        progress, problem, folder = self._read()
+        if problem is None:
+            return progress
         where = _move_aside(self.path, folder)
         log.warning("checkpoint %s is not resumed (%s): %s", self.path, problem,
                     f"moved to {where}" if where else "it could not be moved aside")
         return None
+
+    def peek(self) -> dict | None:
+        """The progress ``load`` would resume, or None; reads only (moves and logs nothing)."""
+        return self._read()[0]
+
+    def _read(self) -> tuple[dict | None, str | None, str | None]:
+        """(progress, None, None) of a resumable file, else (None, what is wrong, the folder
+        it belongs in); (None, None, None) when there is none."""
+        if not self.path.is_file():
+            return None, None, None
+        try:
+            rec = json.loads(self.path.read_text())
+            key, version, progress = rec["key"], rec["code"]["version"], rec["progress"]
+        except (OSError, ValueError, TypeError, KeyError) as e:
+            return None, f"not a checkpoint ({type(e).__name__}: {e})", CORRUPT_DIR
+        if key != self.key:
+            return None, f"the checkpoint of {key!r}", CORRUPT_DIR
+        if version != self.version:
+            return None, f"written by dopt {version}, this is dopt {self.version}", OUTDATED_DIR
+        if not isinstance(progress, dict):
+            return None, "its progress is not an object", CORRUPT_DIR
+        return progress, None, None
 
     def clear(self) -> None:
         """Delete the file (the trial's record is written)."""
@@ -203,6 +211,16 @@ def check_trial_files(out_dir: Path | str) -> tuple[dict, dict]:
         log.warning("trial file %s is not used (%s): %s", path, problem,
                     f"moved to {where}" if where else "it could not be moved aside")
     return records, corrupt
+
+
+def is_finished(out_dir: Path | str, key: str) -> bool:
+    """Whether ``run_sweep`` (not fresh) would skip trial ``key``: its file under OUT/trials
+    is a valid record written by this dopt version. Reads only."""
+    rec, _ = check_record(trial_path(out_dir, key))
+    if rec is None:
+        return False
+    version = code_version()["version"]
+    return (rec.get("code") or {}).get("version", version) == version
 
 
 def load_finished(out_dir: Path | str) -> dict:

@@ -39,7 +39,7 @@ from cli_args import (
 )
 
 from dopt.stats import mean_ci
-from dopt.sweep import SweepResult, Trial, run_sweep
+from dopt.sweep import Checkpoint, SweepResult, Trial, is_finished, run_sweep
 from dopt.tasks.pick.cloth_scene import PHYSICS_PRESETS
 from planners.pick_place import (
     GOALS,
@@ -52,6 +52,7 @@ from planners.pick_place import (
     run_trial,
     summarize,
 )
+from planners.trial_progress import iterations_done
 
 log = logging.getLogger(__name__)
 COLOURS = {"simple": "tab:blue", "original": "tab:red", "random": "tab:green",
@@ -229,9 +230,17 @@ def _run(trials: list[Trial], iterations_per_trial: int, out: Path,
     from tqdm import tqdm
 
     pool = workers > 1
-    n_cem = sum(1 for t in trials if t.params["method"] != "scripted")
-    total, unit = (len(trials), "trial") if pool else (n_cem * iterations_per_trial, "it")
-    with tqdm(total=total, unit=unit, desc="trials" if pool else "CEM iterations") as bar:
+    cem = [t for t in trials if t.params["method"] != "scripted"]
+    total, unit = (len(trials), "trial") if pool else (len(cem) * iterations_per_trial, "it")
+    # the bar starts at what the sweep will not run again (a pool's: whole trials)
+    if fresh:
+        initial = 0
+    elif pool:
+        initial = sum(is_finished(out, t.key) for t in trials)
+    else:
+        initial = _iterations_held(cem, iterations_per_trial, out)
+    with tqdm(total=total, initial=initial, unit=unit,
+              desc="trials" if pool else "CEM iterations") as bar:
         def tick(i, best):
             bar.update(1)
             bar.set_postfix(best_mm=f"{best * 1e3:.1f}")
@@ -243,9 +252,23 @@ def _run(trials: list[Trial], iterations_per_trial: int, out: Path,
         # a pool's trials cannot call back into this process's bar: it counts whole trials
         fn = run_trial if pool else partial(run_trial, on_iteration=tick)
         res = run_sweep(fn, trials, out, workers=workers, progress=done, fresh=fresh)
-        bar.update(len(res.skipped) if pool else 0)
     keys = {t.key for t in trials}
     return [r["result"] for k, r in res.records.items() if k in keys], res
+
+
+def _iterations_held(trials: list[Trial], iterations_per_trial: int, out: Path) -> int:
+    """The CEM iterations of ``trials`` that a (not fresh) sweep under ``out`` holds already:
+    all of a finished trial's, those of a checkpoint it resumes."""
+    held = 0
+    for t in trials:
+        if is_finished(out, t.key):
+            held += iterations_per_trial
+        elif (progress := Checkpoint(out, t.key).peek()) is not None:
+            try:
+                held += iterations_done(progress)
+            except (KeyError, TypeError):       # the run refuses it and says why
+                pass
+    return held
 
 
 # --------------------------------------------------------------------------------- report

@@ -22,8 +22,9 @@ Result kinds (the file's "experiment" field): "fig7" (experiments/cloth_fold.py,
 
 A result file that cannot be read exits 2 naming it; one whose provenance lacks the command,
 the git commit or the versions of dopt, mujoco and torch is named in a note on stderr.
-Standard library only (with dopt.cli, the command-line types, itself standard library), so it
-runs without torch, numpy or MuJoCo.
+Standard library only (with dopt.cli, the command-line types, and planners.trial_progress, the
+reader of a trial's checkpoint, both standard library themselves), so it runs without torch,
+numpy or MuJoCo.
 """
 
 from __future__ import annotations
@@ -39,6 +40,8 @@ from pathlib import Path
 
 # experiments/ is on the path: it is the script's folder (pytest: pythonpath in pyproject)
 from cli_args import EPILOG, existing_dir, file_problem, guarded
+
+from planners.trial_progress import iterations_done
 
 ROOT = Path(__file__).resolve().parents[1]
 BEGIN, END = "<!-- results:begin -->", "<!-- results:end -->"
@@ -1474,9 +1477,7 @@ def checkpointed_trials(folder: Path) -> list[str]:
     for path in sorted(Path(folder).glob("trials/checkpoints/*.json")):
         try:
             progress = json.loads(path.read_text())["progress"]
-            trial, stage = progress["trial"], progress["stage"]
-            iterations = sum(len(st["cost_history"]) for st in progress["stages"]) + (
-                stage["cem"]["iteration"] if stage else 0)
+            trial, iterations = progress["trial"], iterations_done(progress)
             out.append(f"{_label(trial['method'])} seed {trial['seed']}: {iterations} CEM "
                        f"iterations done, {num(progress['wall_s'], 0)} s")
         except (OSError, ValueError, KeyError, TypeError) as e:

@@ -15,7 +15,15 @@ import pytest
 
 from dopt import sweep
 from dopt.provenance import code_version
-from dopt.sweep import Checkpoint, Trial, check_record, load_finished, run_sweep, takes_checkpoint
+from dopt.sweep import (
+    Checkpoint,
+    Trial,
+    check_record,
+    is_finished,
+    load_finished,
+    run_sweep,
+    takes_checkpoint,
+)
 from tests.dopt.sweep_trials import count, square
 
 
@@ -198,6 +206,18 @@ def test_resume_recomputes_other_versions_and_counts_other_commits(tmp_path, cod
     assert old["code"]["version"] == "0.9.0"                             # kept, not deleted
 
 
+def test_is_finished_names_the_trials_a_sweep_skips_and_reads_only(tmp_path, code):
+    _record(tmp_path, "x1", 1, {"version": "0.9.0", "commit": "old"})   # another version
+    _record(tmp_path, "x2", 2, {"version": "1.0.0", "commit": "beef"})  # another commit
+    _record(tmp_path, "x3", 3)                                           # before "code"
+    (tmp_path / "trials" / "x5.json").write_text("{")                    # corrupt
+    keys = [t.key for t in trials([1, 2, 3, 4, 5])]
+    before = {p.name: p.read_text() for p in (tmp_path / "trials").iterdir()}
+    finished = {k for k in keys if is_finished(tmp_path, k)}
+    assert {p.name: p.read_text() for p in (tmp_path / "trials").iterdir()} == before
+    assert finished == set(run_sweep(square, trials([1, 2, 3, 4, 5]), tmp_path).skipped)
+
+
 def test_fresh_recomputes_everything(tmp_path, code):
     run_sweep(square, trials([1, 2]), tmp_path)
     _record(tmp_path, "x2", 2, CODE)                          # a stale result of this version
@@ -259,11 +279,13 @@ def test_a_checkpoint_that_cannot_be_resumed_is_named_and_moved_aside(tmp_path, 
     c.path.parent.mkdir(parents=True)
     c.path.write_text(text)
     with caplog.at_level(logging.WARNING, logger="dopt.sweep"):
+        assert c.peek() is None                      # reads only: nothing moved or logged
+        assert c.path.read_text() == text and not caplog.text
         assert c.load() is None
     assert reason in caplog.text
     assert (c.path.parent / folder / "c.json").read_text() == text and not c.path.exists()
     c.save({"i": 1})
-    assert c.load() == {"i": 1}
+    assert c.peek() == c.load() == {"i": 1}
 
 
 def test_only_functions_with_a_checkpoint_parameter_get_one(tmp_path):

@@ -9,6 +9,7 @@ from dataclasses import replace
 import pytest
 
 from planners.pick_place import PickPlaceSettings, ScriptedPlanner, make_problem, run_problem, solve
+from planners.trial_progress import iterations_done
 
 #: what a resumed trial may differ in: its wall time (summed over its runs), the mean seconds
 #: per CEM iteration (measured in two runs) and the number of runs
@@ -53,10 +54,14 @@ def uninterrupted(settings):
 @pytest.mark.parametrize("stop_after", [1, 3, 4])
 def test_a_trial_stopped_anywhere_resumes_to_the_same_result(settings, uninterrupted,
                                                              stop_after):
-    checkpoint = MemoryCheckpoint(stop_after)
+    checkpoint, seen = MemoryCheckpoint(stop_after), []
     with pytest.raises(Stop):
-        solve(settings, "random", 3, checkpoint=checkpoint)
-    resumed = solve(settings, "random", 3, checkpoint=checkpoint).to_dict()
+        solve(settings, "random", 3, lambda i, best: seen.append(i), checkpoint=checkpoint)
+    # the progress holds the iterations run before the stop, and the resume runs the others
+    assert iterations_done(checkpoint.saved) == len(seen)
+    resumed = solve(settings, "random", 3, lambda i, best: seen.append(i),
+                    checkpoint=checkpoint).to_dict()
+    assert len(seen) == len(uninterrupted["cost_history"])
     assert checkpoint.saves == 6                 # each save once: the resume goes on after it
     assert resumed["segments"] == 2
     assert {k: v for k, v in resumed.items() if k not in TIMINGS} == \
