@@ -217,10 +217,14 @@ def is_finished(out_dir: Path | str, key: str) -> bool:
     """Whether ``run_sweep`` (not fresh) would skip trial ``key``: its file under OUT/trials
     is a valid record written by this dopt version. Reads only."""
     rec, _ = check_record(trial_path(out_dir, key))
-    if rec is None:
-        return False
     version = code_version()["version"]
-    return (rec.get("code") or {}).get("version", version) == version
+    return rec is not None and _written_by(rec, version) == version
+
+
+def _written_by(rec: dict, version: str) -> str:
+    """The dopt version a trial record was written by; one without a version stamp counts as
+    ``version`` (this one)."""
+    return (rec.get("code") or {}).get("version", version)
 
 
 def load_finished(out_dir: Path | str) -> dict:
@@ -265,7 +269,7 @@ def run_sweep(fn: Callable[[dict], dict], trials: Sequence[Trial], out_dir: Path
         rec = done.get(t.key)
         if rec is None:
             continue
-        old = (rec.get("code") or {}).get("version", code["version"])
+        old = _written_by(rec, code["version"])
         if fresh:
             reason = "fresh sweep"
         elif old != code["version"]:
