@@ -380,7 +380,9 @@ def fig7_section(results: list[Result], page: Path) -> list[str]:
     claims = fig7_claims_lines(results, page)
     if claims:
         lines += ["", "The paper's claims on these files (Simple's 95 % interval wholly below "
-                      "the other's: separate):", "", *claims]
+                      "the other's: separate; difference: the other's mean minus Simple's ± "
+                      "its Welch 95 % interval, which excludes zero where the half-width is "
+                      "smaller; the gaps likewise):", "", *claims]
     for r in results:
         lines += ["", *fig7_detail(r, page, results)]
     return lines
@@ -616,6 +618,26 @@ def comparison(a: dict | None, b: dict | None, metric: str = "final_cost") -> st
     return f"{'yes' if ma < mb else 'no'} ({'separate' if separate else 'overlap'})"
 
 
+def difference(a: dict | None, b: dict | None, metric: str = "final_cost") -> float | None:
+    """The half-width of the Welch 95 % interval of b's ``metric`` mean minus a's, as b's
+    entry records it against CEM(Simple) (``<metric>_minus_simple_ci95``, ``a`` being Simple's
+    entry); None where the file has none. Around the means' difference it says whether the
+    two methods differ where their own intervals (``comparison``) overlap."""
+    half = (b or {}).get(f"{metric}_minus_simple_ci95") if a else None
+    return half if _finite(half) else None
+
+
+def _claim(a: dict | None, b: dict | None, metric: str) -> str:
+    """``comparison`` with the difference b - a and its Welch interval, where recorded:
+    "yes (overlap; difference 12.9 ± 11.7 mm)"."""
+    c = comparison(a, b, metric)
+    half = difference(a, b, metric) if c != "n/a" else None
+    if half is None:
+        return c
+    diff = b[f"{metric}_mean"] - a[f"{metric}_mean"]
+    return f"{c[:-1]}; difference {mm(diff)} ± {mm(half)} mm)"
+
+
 def fig7_departures(r: Result) -> str:
     """The settings a Fig. 7 file changed from its protocol's preset (its "departures",
     ``PickPlaceSettings.departures``), e.g. "population 200, elites 20"; "" when none (or a
@@ -661,24 +683,35 @@ def fig7_claims(results: list[Result]) -> dict:
         setup = fig7_setup(r)
         panels[f"{_panel(r)}, {setup}"] = {
             "file": r, "metric": metric, "setup": setup,
-            "simple_vs_original": comparison(s, o, metric),
-            "simple_vs_random": comparison(s, ms.get("random"), metric),
+            "simple_vs_original": _claim(s, o, metric),
+            "simple_vs_random": _claim(s, ms.get("random"), metric),
             "gap": gap, "seeds": max((e.get("n") or 0) for e in ms.values()),
             "size": (f"{n} x {n} particles" if r.data.get("task") == "cloth"
                      else f"{n} particles") if n else "size ?"}
         if r.data.get("task") == "cloth" and r.data.get("goal") in CLOTH_DIFFICULTY:
             gaps.setdefault(setup, []).append(
-                (CLOTH_DIFFICULTY.index(r.data["goal"]), r.data["goal"], gap, n))
+                (CLOTH_DIFFICULTY.index(r.data["goal"]), r.data["goal"], gap, n,
+                 difference(s, o) if gap is not None else None))
     cloth = []
     for setup, folds in gaps.items():
         folds.sort()
-        values = [g for _, _, g, _ in folds]
-        sizes = {n for *_, n in folds}
+        values = [g for _, _, g, _, _ in folds]
+        sizes = {n for _, _, _, n, _ in folds}
         grows = (None if len(values) < len(CLOTH_DIFFICULTY) or len(sizes) != 1
                  or any(g is None for g in values)
                  else all(b > a for a, b in zip(values, values[1:], strict=False)))
-        cloth.append({"setup": setup, "gaps": [(goal, g) for _, goal, g, _ in folds],
-                      "sizes": [(goal, n) for _, goal, _, n in folds], "grows": grows})
+        halves = [h for *_, h in folds]
+        # pairs of folds whose gaps' 95 % intervals are separate; None where a gap or its
+        # interval is unknown
+        separate = (None if any(g is None or h is None
+                                for g, h in zip(values, halves, strict=True))
+                    else [(folds[i][1], folds[j][1]) for i in range(len(folds))
+                          for j in range(i + 1, len(folds))
+                          if abs(values[j] - values[i]) > halves[i] + halves[j]])
+        cloth.append({"setup": setup, "gaps": [(goal, g) for _, goal, g, _, _ in folds],
+                      "gap_ci95": [(goal, h) for _, goal, _, _, h in folds],
+                      "separate": separate,
+                      "sizes": [(goal, n) for _, goal, _, n, _ in folds], "grows": grows})
     return {"panels": panels, "cloth": cloth}
 
 
@@ -701,10 +734,12 @@ def fig7_claims_lines(results: list[Result], page: Path) -> list[str]:
     for g in c["cloth"]:
         if all(gap is None for _, gap in g["gaps"]):   # no Original in this setup
             continue
-        size = dict(g["sizes"])
+        size, half = dict(g["sizes"]), dict(g["gap_ci95"])
         mixed = len(set(size.values())) > 1
-        gaps = ", ".join(f"{goal} {mm(gap)}" + (f" at {size[goal]} x {size[goal]}" if mixed
-                                                else "") for goal, gap in g["gaps"])
+        gaps = ", ".join(f"{goal} {mm(gap)}"
+                         + (f" ± {mm(half[goal])}" if half[goal] is not None else "")
+                         + (f" at {size[goal]} x {size[goal]}" if mixed else "")
+                         for goal, gap in g["gaps"])
         missing = [goal for goal in CLOTH_DIFFICULTY if goal not in size]
         if mixed:
             verdict = "whether it grows cannot be judged until all folds are run at one size"
@@ -715,6 +750,12 @@ def fig7_claims_lines(results: list[Result], page: Path) -> list[str]:
             verdict = {True: "it grows with difficulty",
                        False: "it does not grow with difficulty",
                        None: "whether it grows cannot be judged"}[g["grows"]]
+            if g["separate"] == []:
+                verdict += ("; no two folds' gap intervals are separate, so these seeds "
+                            "cannot order the folds by their gap")
+            elif g["separate"]:
+                verdict += ("; gap intervals separate only for " + _and(
+                    [f"{a} vs {b}" for a, b in g["separate"]]))
         lines.append(f"- {g['setup']}: the gap Original - Simple (mm) over the cloth folds in "
                      f"the paper's order of difficulty: {gaps}; {verdict} (the paper: it "
                      f"grows).")
@@ -1657,7 +1698,8 @@ def readme_block(results: list[Result], readme: Path, results_md_path: Path) -> 
                 f"each beside its protocol's file." if departing else "")]
     if claims:
         lines += ["", "Fig. 7's claims on the recorded files (each panel on the paper's metric, "
-                      "named; 95 % intervals separate or overlapping):", "", *claims]
+                      "named; 95 % intervals separate or overlapping; difference: the other "
+                      "method's mean minus Simple's ± its Welch 95 % interval):", "", *claims]
     if beside:
         lines += ["", f"Table 1 under `--preset paper` against the paper's printed Table 1 "
                       f"(MPC cost / baseline, means; [{rel}]({rel}) has the rows side by side):",

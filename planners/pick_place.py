@@ -35,7 +35,7 @@ import numpy as np
 import torch
 
 from dopt.rollout import RolloutConfig, RolloutService
-from dopt.stats import mean_ci
+from dopt.stats import difference_ci, mean_ci
 from dopt.tasks.pick.cloth_scene import PHYSICS_PRESETS, ClothSceneConfig, make_cloth
 from dopt.tasks.pick.constraints import ActionConstraint
 from dopt.tasks.pick.picker import PickerConfig
@@ -767,11 +767,14 @@ def summarize(results: Sequence[dict], methods: Sequence[str],
     seed's ``last_improvement`` (None when scripted), the
     rollouts simulated and flagged unstable, and the trials whose executed plan was unstable.
     The means and intervals are over the stable trials only; the per-seed values list every
-    trial (``unstable_seeds`` marks the others).
+    trial (``unstable_seeds`` marks the others). Every method beside "simple" also holds each
+    metric's difference to CEM(Simple), ``<metric>_minus_simple_mean`` and ``_ci95`` (its mean
+    minus Simple's and the Welch 95 % half-width, ``dopt.stats.difference_ci``): whether the
+    two differ where their own intervals overlap.
 
     results: ``PickPlaceResult.to_dict()`` of finished trials.
     """
-    out = {}
+    out, stable_values = {}, {}
     for m in methods:
         runs = sorted((r for r in results if r["method"] == m), key=lambda r: r["seed"])
         if not runs:
@@ -782,6 +785,7 @@ def summarize(results: Sequence[dict], methods: Sequence[str],
             mean, ci = mean_ci([r[name] for r in stable]) if stable else (None, None)
             entry[f"{name}_mean"], entry[f"{name}_ci95"] = _finite(mean), _finite(ci)
             entry[f"{name}s"] = [r[name] for r in runs]
+            stable_values[m, name] = [r[name] for r in stable]
         entry["n_candidates"] = int(runs[0]["n_candidates"][-1])
         entry["n_candidates_per_stage"] = runs[0]["n_candidates"]
         secs = [r["s_per_iteration"] for r in runs if r["s_per_iteration"] is not None]
@@ -797,6 +801,12 @@ def summarize(results: Sequence[dict], methods: Sequence[str],
         entry["n_infeasible_rollouts"] = int(sum(r.get("n_infeasible_rollouts", 0)
                                                  for r in runs))
         out[m] = entry
+    for m, entry in out.items():
+        for name in metric_names if m != "simple" and "simple" in out else ():
+            xs, ys = stable_values["simple", name], stable_values[m, name]
+            diff, half = difference_ci(xs, ys) if xs and ys else (None, None)
+            entry[f"{name}_minus_simple_mean"] = _finite(diff)
+            entry[f"{name}_minus_simple_ci95"] = _finite(half)
     return out
 
 

@@ -742,3 +742,35 @@ def test_cloth_warp_bench_renders_world_steps_per_cpu_step(site):
     # a size the run stopped at after its CPU step, and MuJoCo's warnings there
     assert ("CPU step only (the run stopped before MuJoCo Warp stepped it): 100 x 100 "
             "(150.00 ms / step, warnings: mjWARN_INERTIA (134)).") in md
+
+
+def test_fig7_claims_give_the_welch_difference_and_which_gap_intervals_are_separate(site):
+    """A file's recorded difference to Simple (``<metric>_minus_simple_*``) is shown beside
+    the interval comparison, and the gap line says which folds' gaps differ beyond their
+    intervals."""
+    gaps = {"diagonal": (0.010, 0.004), "side": (0.020, 0.004), "reflective": (0.015, 0.004),
+            "underneath": (0.030, 0.004)}
+    for goal, (gap, half) in gaps.items():
+        data = fig7(goal=goal)
+        o = data["methods"]["original"]
+        o["final_cost_mean"] = data["methods"]["simple"]["final_cost_mean"] + gap
+        o["final_cost_minus_simple_mean"], o["final_cost_minus_simple_ci95"] = gap, half
+        write(site["results"], f"fig7-cloth-{goal}.json", data)
+    (claims,) = report.fig7_claims(report.load_results(site["results"]))["cloth"]
+    # |a - b| > 8 mm: diagonal-side, diagonal-underneath, side-underneath, reflective-underneath
+    assert claims["separate"] == [("diagonal", "side"), ("diagonal", "underneath"),
+                                  ("side", "underneath"), ("reflective", "underneath")]
+    assert run(site) == 0
+    text = block(site["readme"])
+    assert "Simple < Original yes (separate; difference 30.0 ± 4.0 mm)" in text
+    assert ("diagonal 10.0 ± 4.0, side 20.0 ± 4.0, reflective 15.0 ± 4.0, underneath "
+            "30.0 ± 4.0; it does not grow with difficulty; gap intervals separate only for "
+            "diagonal vs side, diagonal vs underneath, side vs underneath and reflective vs "
+            "underneath (the paper: it grows)") in text
+    for goal in gaps:                  # wide intervals: no fold's gap differs from another's
+        data = json.loads((site["results"] / f"fig7-cloth-{goal}.json").read_text())
+        data["methods"]["original"]["final_cost_minus_simple_ci95"] = 0.02
+        write(site["results"], f"fig7-cloth-{goal}.json", data)
+    assert run(site) == 0
+    assert ("it does not grow with difficulty; no two folds' gap intervals are separate, so "
+            "these seeds cannot order the folds by their gap") in block(site["readme"])

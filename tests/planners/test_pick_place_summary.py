@@ -6,6 +6,7 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
+from scipy import stats
 
 from planners.pick_place import PROTOCOLS, PickPlaceSettings, last_improvement, summarize
 
@@ -69,3 +70,28 @@ def test_summary_lists_each_seeds_last_improvement_and_none_for_the_scripted_pol
     assert out["simple"]["seeds"] == [0, 1]
     assert out["simple"]["last_improvements"] == [1, 2]
     assert out["scripted"]["last_improvements"] == [None]
+
+
+def test_summary_holds_each_methods_difference_to_simple_with_welchs_interval():
+    def result(method, seed, cost, unstable=False):
+        return {**_trial([cost], [0]), "method": method, "seed": seed, "final_cost": cost,
+                "n_candidates": [4], "n_rollouts": 10, "n_unstable_rollouts": 0,
+                "unstable": unstable}
+    simple, original = [0.010, 0.014, 0.012], [0.030, 0.020, 0.040, 0.026]
+    rs = ([result("simple", i, c) for i, c in enumerate(simple)]
+          + [result("original", i, c) for i, c in enumerate(original)]
+          + [result("original", 9, 5.0, unstable=True)]       # not in means or differences
+          + [result("scripted", 0, 0.015)])
+    out = summarize(rs, ["simple", "original", "scripted"], ["final_cost"])
+    o = out["original"]
+    # Welch by hand: variances of the means and the Welch-Satterthwaite degrees of freedom
+    va, vb = np.var(simple, ddof=1) / 3, np.var(original, ddof=1) / 4
+    dof = (va + vb) ** 2 / (va ** 2 / 2 + vb ** 2 / 3)
+    assert o["final_cost_minus_simple_mean"] == pytest.approx(np.mean(original) - np.mean(simple))
+    assert o["final_cost_minus_simple_ci95"] == pytest.approx(
+        stats.t.ppf(0.975, dof) * np.sqrt(va + vb))
+    assert out["scripted"]["final_cost_minus_simple_ci95"] is None      # one value: no spread
+    assert "final_cost_minus_simple_mean" not in out["simple"]
+    # without Simple there is nothing to differ from
+    assert "final_cost_minus_simple_mean" not in summarize(rs, ["original"],
+                                                           ["final_cost"])["original"]
