@@ -1,6 +1,7 @@
 """Intervals of dopt.stats against their textbook formulas and their coverage."""
 
 import math
+import warnings
 
 import numpy as np
 import pytest
@@ -43,3 +44,15 @@ def test_difference_ci_of_one_value_has_no_interval_and_of_none_raises():
     assert diff == pytest.approx(1.5) and math.isnan(half)
     with pytest.raises(ValueError, match="both sides"):
         difference_ci([], [1.0])
+
+
+def test_difference_ci_to_a_repeated_value_is_the_other_sides_interval_without_warning():
+    """A deterministic method (one value repeated) has no spread: Welch's interval is then
+    the other side's Student-t interval (degrees of freedom n - 1)."""
+    a = [0.0575] * 10
+    b = [0.0327, 0.0266, 0.0357, 0.0362, 0.0396, 0.0283, 0.0265, 0.0224, 0.0402, 0.0220]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        diff, half = difference_ci(a, b)
+    assert diff == pytest.approx(np.mean(b) - 0.0575)
+    assert half == pytest.approx(mean_ci(b)[1])
