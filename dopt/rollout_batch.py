@@ -247,7 +247,11 @@ class BatchRoute:
             x = rows[active]
             dx = np.concatenate([diff(ref_q[t], x[:, self._qpos], 1.0, C),
                                  x[:, self._qvel][:, C] - ref_v[t]], axis=1)
-            ut = np.clip(u[active, t] + dx @ K[t].T, self.lo, self.hi)
+            # K_t dx row by row (a product, then a sum over each row's own axis): a row's
+            # control must not depend on how many rows share the batch, and matmul and
+            # einsum round by the batch's shape (they vectorise across rows)
+            ut = np.clip(u[active, t] + (dx[:, None, :] * K[t]).sum(axis=2),
+                         self.lo, self.hi)
             x[:, self._ctrl] = ut
             rows[active] = x
             applied[active, t] = ut

@@ -170,6 +170,26 @@ def test_feedback_rollouts_equal_step_loop(scene, moving_state, c_kernels, threa
     np.testing.assert_array_equal(got.states[:, :-1, ctrl], got.controls)
 
 
+def test_a_feedback_rollout_does_not_depend_on_the_rows_beside_it(scene, moving_state,
+                                                                  c_kernels):
+    """Bit for bit: a rollout run among seven equals it run alone or among two (the iLQR line
+    search compares its alphas this way; a control law computed by BLAS on the whole batch
+    rounds by the batch's shape)."""
+    svc = RolloutService(scene, RolloutConfig(threads=1, c_kernels=c_kernels))
+    rng = np.random.default_rng(11)
+    T, dofs = 25, np.array([0, 2, 3, 4, 7, 8])
+    ref = svc.trajectory(moving_state, rng.uniform(-1, 1, (T, scene.nu))).states[:-1]
+    ff = rng.uniform(-1.0, 1.0, (7, T, scene.nu))
+    ff[:, :, 2] *= 0.05
+    K = rng.normal(0, 0.3, (T, scene.nu, 2 * len(dofs)))
+    K[:, 2] *= 0.05
+    together = svc.rollout_feedback(moving_state, ff, ref, K, dofs)
+    for rows in ([3], [5, 1], [0, 2, 4, 6]):
+        apart = svc.rollout_feedback(moving_state, ff[rows], ref, K, dofs)
+        np.testing.assert_array_equal(apart.states, together.states[rows])
+        np.testing.assert_array_equal(apart.controls, together.controls[rows])
+
+
 def test_unstable_feedback_is_flagged_and_spares_the_others(scene, moving_state, c_kernels):
     svc = RolloutService(scene, RolloutConfig(threads=2, c_kernels=c_kernels))
     T = 20
