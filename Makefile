@@ -1,6 +1,6 @@
 # One virtual environment for everything; created and filled on first use.
 #   make demo   -> the main job: diagonal cloth fold (small by default)
-#   make test   -> ruff, then the test suite
+#   make test   -> ruff, then the test suite on every core (pytest-xdist; tests are independent)
 PYTHON ?= python3
 VENV   ?= .venv
 PY     := $(VENV)/bin/python
@@ -24,7 +24,7 @@ demo: $(STAMP)
 
 test: $(STAMP)
 	$(VENV)/bin/ruff check .
-	MUJOCO_GL=egl OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 $(PY) -m pytest -q tests
+	MUJOCO_GL=egl OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 $(PY) -m pytest -q -n auto tests
 
 clean:
 	rm -rf $(VENV) results
