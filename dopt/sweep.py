@@ -3,25 +3,44 @@
 A trial is a pure function of its parameters (a JSON-able dict) that builds everything it needs
 and returns a JSON-able dict. Each finished trial is written at once to ``OUT/trials/<key>.json``
 (atomically), so a killed sweep loses only the trials that were running, and a rerun skips every
-trial whose file exists. The same code runs inline (``workers=1``), on a local process pool, or
-on Ray (``ray_address``: "local" starts a local instance, anything else is passed to
-``ray.init``), so a sweep of thousands of trials goes to many machines without code changes.
+trial whose file exists and may stand for this code. The same code runs inline (``workers=1``),
+on a local process pool, or on Ray (``ray_address``: "local" starts a local instance, anything
+else is passed to ``ray.init``), so a sweep of thousands of trials goes to many machines without
+code changes.
 
 Trial files are checked when read: a file that is not a trial record (truncated or invalid
 JSON, not an object, without "key", "params" or "result", or whose key is not its file name) is
 named in a logged warning and moved to ``OUT/trials/corrupt/`` (never deleted), and its trial is
-recomputed. Each record stores ``dopt.provenance.code_version()`` under "code": a rerun
-recomputes a trial written by another dopt version (its record is moved to
-``OUT/trials/outdated/``), reuses one written by another commit of the same version and counts
-the commits of all records (``SweepResult.commits``), so a summary can say when it mixes code.
-A record written before records held "code" is reused and counted as commit "unknown".
+recomputed.
+
+**Which code a record stands for.** Each record stores ``CodeState.stamp()`` under "code"
+(dopt's version, the git commit, "-dirty" with a fingerprint for uncommitted code; see
+``dopt.provenance`` for the exact rules). A stored trial is reused when its key matches (the
+key names its settings) and ``dopt.provenance.reuse_problem`` finds nothing that can change its
+result between its commit and HEAD (``git diff X HEAD -- dopt deformables planners experiments
+pyproject.toml setup.py`` empty, X an ancestor of HEAD, the working tree clean there). Anything
+else is recomputed and its old file moved to ``OUT/trials/outdated/`` (never deleted): a record
+of an unknown commit, of no commit (records older than the "code" stamp, "no git"), of another
+branch, or marked "-dirty" (except in the very tree it was written from, so that a killed run
+resumes before its code is committed). The dopt version is recorded but decides nothing.
+``reuse="any"`` reuses every valid record deliberately: ``SweepResult.reused_across`` (and
+``take_deliberate_reuse()``, which the experiments' ``write_summary`` puts in the summary) list
+the trials reused across a code change and why they would have been recomputed. No field of a
+stored record is ever rewritten.
+
+**Recording.** Trial files written into the checkout's docs/results/ (the committed results), or
+by a caller that passes ``record=True``, are refused before anything runs (``RuntimeError``, one
+line naming the changed files) when the tree is dirty or not a git checkout. Elsewhere (``--out``
+folders, the tests' temporary folders) a dirty tree runs and marks its records "-dirty".
 
 A long trial can save its progress as it goes: a trial function with a ``checkpoint``
 parameter is given a ``Checkpoint`` (``OUT/trials/checkpoints/<key>.json``) to ``save`` to and
 ``load`` from, so that a rerun of a killed sweep, on this machine or on another one that has
 the file, resumes the trial where it stopped instead of starting it again. The file is
-deleted once the trial's record is written; one written by another dopt version is not
-resumed (moved to ``OUT/trials/checkpoints/outdated/``).
+deleted once the trial's record is written. A checkpoint follows the same rule as a trial, but
+always the strict one (a resumed trial's record names this commit, so resuming across a code
+change would hide it): one that cannot stand for this code is moved to
+``OUT/trials/checkpoints/outdated/`` and its trial starts afresh.
 """
 
 from __future__ import annotations
@@ -39,7 +58,7 @@ from dataclasses import dataclass, field
 from multiprocessing import get_context
 from pathlib import Path
 
-from dopt.provenance import code_version
+from dopt.provenance import COMMIT_ENV, CodeState, code_state, repo_root, reuse_problem
 
 log = logging.getLogger(__name__)
 
@@ -49,6 +68,16 @@ CORRUPT_DIR, OUTDATED_DIR = "corrupt", "outdated"
 CHECKPOINT_DIR = "checkpoints"
 #: the fields every trial record has
 RECORD_FIELDS = ("key", "params", "result")
+#: run_sweep's reuse modes: git's rule, or every valid record (deliberately, listed)
+REUSE_MODES = ("same-code", "any")
+#: the folder, under a checkout's root, of the committed results
+RESULTS_DIR = Path("docs") / "results"
+
+#: {root: CodeState} this process last saw (run_sweep refreshes it; is_finished and
+#: Checkpoint read it, so that asking about many trials asks git once)
+_STATES: dict[str, CodeState] = {}
+#: {trial key: why it would have been recomputed} of the trials reused with reuse="any"
+_DELIBERATE: dict[str, str] = {}
 
 
 @dataclass(frozen=True)
@@ -72,11 +101,15 @@ class SweepResult:
             new).
         ran: keys run in this call; skipped: keys found finished and reused.
         failed: {key: "ErrorType: message"} of the trials that raised.
-        commits: {commit: number of records} over ``records`` (``code_version()["commit"]``;
-            "unknown" for records without one): more than one key means the results mix code.
-        recomputed: {key: reason} of trials that had a file but were run again (fresh, another
-            dopt version, a corrupt file).
+        commits: {commit: number of records} over ``records`` (their "code" "commit";
+            "unknown" for records without one): more than one key means the results were
+            written at several commits (reused because no result file changed in between, or
+            deliberately: ``reused_across``).
+        recomputed: {key: reason} of trials that had a file but were run again (fresh, written
+            by code that may give another result, a corrupt file).
         corrupt: {file name: reason} of the files moved to OUT/trials/corrupt in this call.
+        reused_across: {key: why it would have been recomputed} of the trials that
+            ``reuse="any"`` reused across a code change.
     """
 
     records: dict
@@ -86,38 +119,76 @@ class SweepResult:
     commits: dict = field(default_factory=dict)
     recomputed: dict = field(default_factory=dict)
     corrupt: dict = field(default_factory=dict)
+    reused_across: dict = field(default_factory=dict)
 
 
 def trial_path(out_dir: Path | str, key: str) -> Path:
     return Path(out_dir) / "trials" / f"{key}.json"
 
 
+def current_code(root: Path | str | None = None, refresh: bool = False) -> CodeState:
+    """The ``CodeState`` of ``root`` (default: this checkout) this process last saw; asked of
+    git again when ``refresh`` (``run_sweep`` does, once per call) or never asked before."""
+    where = str(repo_root(root))
+    if refresh or where not in _STATES or os.environ.get(COMMIT_ENV):
+        _STATES[where] = code_state(where)
+    return _STATES[where]
+
+
+def take_deliberate_reuse() -> dict:
+    """{trial key: why it would have been recomputed} of every trial this process reused with
+    ``reuse="any"`` since the last call, and forget them (``write_summary`` records them)."""
+    out = dict(_DELIBERATE)
+    _DELIBERATE.clear()
+    return out
+
+
+def record_refusal(out_dir: Path | str, state: CodeState, record: bool,
+                   root: Path | str | None = None) -> str | None:
+    """Why trial files cannot be written to ``out_dir`` from ``state``'s code (one line), or
+    None: only a recording (``record``, or ``out_dir`` inside the checkout's docs/results/)
+    from a dirty tree or outside git is refused."""
+    results = (repo_root(root) / RESULTS_DIR).resolve()
+    inside = Path(out_dir).resolve().is_relative_to(results)
+    if not (record or inside):
+        return None
+    problem = state.record_problem()
+    if problem is None:
+        return None
+    where = f"{out_dir} is inside {RESULTS_DIR}/" if inside else "the sweep is recorded"
+    return f"cannot write trial files ({where}): {problem}"
+
+
 class Checkpoint:
     """The saved progress of one unfinished trial, ``OUT/trials/checkpoints/<key>.json``.
 
-    ``save(progress)`` writes the JSON-able dict atomically with the trial's key and the dopt
-    version; ``load()`` returns the dict last saved, or None when there is none or it cannot
-    be resumed (unreadable, another key, another dopt version: logged and moved aside, never
-    deleted). Picklable: a process pool's workers get it with their trial.
+    ``save(progress)`` writes the JSON-able dict atomically with the trial's key and the code
+    stamp (``CodeState.stamp``); ``load()`` returns the dict last saved, or None when there is
+    none or it cannot be resumed (unreadable, another key, code that may give another result:
+    ``dopt.provenance.reuse_problem``; logged and moved aside, never deleted). ``root`` is the
+    repository asked (default: this checkout). Picklable: a process pool's workers get it with
+    their trial (and the code state its sweep saw).
     """
 
-    def __init__(self, out_dir: Path | str, key: str):
+    def __init__(self, out_dir: Path | str, key: str, root: Path | str | None = None,
+                 state: CodeState | None = None):
         Trial(key, {})                                   # the key's checks
         self.key = key
         self.path = Path(out_dir) / "trials" / CHECKPOINT_DIR / f"{key}.json"
-        self._version: str | None = None
+        self.root = None if root is None else str(root)
+        self._state = state
 
     def __repr__(self) -> str:
         return f"Checkpoint({str(self.path)!r})"
 
     @property
-    def version(self) -> str:
-        if self._version is None:
-            self._version = code_version()["version"]
-        return self._version
+    def state(self) -> CodeState:
+        if self._state is None:
+            self._state = current_code(self.root)
+        return self._state
 
     def save(self, progress: dict) -> None:
-        _write_json_atomic(self.path, {"key": self.key, "code": {"version": self.version},
+        _write_json_atomic(self.path, {"key": self.key, "code": self.state.stamp(),
                                        "progress": progress})
 
     def load(self) -> dict | None:
@@ -140,15 +211,16 @@ class Checkpoint:
             return None, None, None
         try:
             rec = json.loads(self.path.read_text())
-            key, version, progress = rec["key"], rec["code"]["version"], rec["progress"]
+            key, code, progress = rec["key"], rec["code"], rec["progress"]
         except (OSError, ValueError, TypeError, KeyError) as e:
             return None, f"not a checkpoint ({type(e).__name__}: {e})", CORRUPT_DIR
         if key != self.key:
             return None, f"the checkpoint of {key!r}", CORRUPT_DIR
-        if version != self.version:
-            return None, f"written by dopt {version}, this is dopt {self.version}", OUTDATED_DIR
         if not isinstance(progress, dict):
             return None, "its progress is not an object", CORRUPT_DIR
+        problem = reuse_problem(code, self.state, self.root)
+        if problem is not None:
+            return None, problem, OUTDATED_DIR
         return progress, None, None
 
     def clear(self) -> None:
@@ -213,18 +285,16 @@ def check_trial_files(out_dir: Path | str) -> tuple[dict, dict]:
     return records, corrupt
 
 
-def is_finished(out_dir: Path | str, key: str) -> bool:
-    """Whether ``run_sweep`` (not fresh) would skip trial ``key``: its file under OUT/trials
-    is a valid record written by this dopt version. Reads only."""
+def is_finished(out_dir: Path | str, key: str, *, root: Path | str | None = None,
+                reuse: str = "same-code") -> bool:
+    """Whether ``run_sweep`` (not fresh, same ``reuse`` and ``root``) would skip trial
+    ``key``: its file under OUT/trials is a valid record that may stand for this code (the
+    code state this process last saw, ``current_code``). Reads only."""
+    _check_reuse(reuse)
     rec, _ = check_record(trial_path(out_dir, key))
-    version = code_version()["version"]
-    return rec is not None and _written_by(rec, version) == version
-
-
-def _written_by(rec: dict, version: str) -> str:
-    """The dopt version a trial record was written by; one without a version stamp counts as
-    ``version`` (this one)."""
-    return (rec.get("code") or {}).get("version", version)
+    if rec is None:
+        return False
+    return reuse == "any" or reuse_problem(rec.get("code"), current_code(root), root) is None
 
 
 def load_finished(out_dir: Path | str) -> dict:
@@ -233,10 +303,43 @@ def load_finished(out_dir: Path | str) -> dict:
     return check_trial_files(out_dir)[0]
 
 
+def _check_reuse(reuse) -> None:
+    if reuse not in REUSE_MODES:
+        raise ValueError(f"reuse must be one of {', '.join(REUSE_MODES)}, got {reuse!r}")
+
+
+def _sort_stored(trials, out_dir, state, *, fresh, reuse, root) -> tuple[dict, dict, dict, dict]:
+    """({key: reused record}, {key: why recomputed}, {file name: why corrupt}, {key: why it
+    was reused across a code change}) of the stored trial files; the files of the trials to
+    recompute are moved to OUT/trials/outdated/."""
+    done, corrupt = check_trial_files(out_dir)
+    recomputed, across = {}, {}
+    for t in trials:
+        if f"{t.key}.json" in corrupt:
+            recomputed[t.key] = f"corrupt trial file: {corrupt[f'{t.key}.json']}"
+        rec = done.get(t.key)
+        if rec is None:
+            continue
+        reason = "fresh sweep" if fresh else reuse_problem(rec.get("code"), state, root)
+        if reason is None:
+            continue
+        if reuse == "any" and not fresh:
+            across[t.key] = reason
+            log.warning("trial %s is reused deliberately (reuse='any'): %s", t.key, reason)
+            continue
+        recomputed[t.key] = reason
+        del done[t.key]
+        where = _move_aside(trial_path(out_dir, t.key), OUTDATED_DIR)
+        log.log(logging.INFO if fresh else logging.WARNING, "trial %s is recomputed: %s (old "
+                "file moved to %s)", t.key, reason, where)
+    return done, recomputed, corrupt, across
+
+
 def run_sweep(fn: Callable[[dict], dict], trials: Sequence[Trial], out_dir: Path | str, *,
               workers: int = 1, ray_address: str | None = None,
               progress: Callable[[str, dict | None], None] | None = None,
-              fresh: bool = False) -> SweepResult:
+              fresh: bool = False, reuse: str = "same-code", record: bool = False,
+              root: Path | str | None = None) -> SweepResult:
     """Run the trials not yet finished under ``out_dir``.
 
     Args:
@@ -249,8 +352,16 @@ def run_sweep(fn: Callable[[dict], dict], trials: Sequence[Trial], out_dir: Path
         progress: called with (key, record or None on failure) as each trial ends.
         fresh: recompute every trial (the old files are moved to OUT/trials/outdated/, the
             checkpoints of unfinished trials to OUT/trials/checkpoints/outdated/).
+        reuse: "same-code" (git's rule, the module's docstring) or "any" (every valid record,
+            listed in ``SweepResult.reused_across``).
+        record: the trials are recorded: refused from a dirty tree (as for docs/results/).
+        root: the repository whose code runs (default: this checkout).
 
-    A trial whose file is corrupt, or was written by another dopt version, is recomputed
+    Raises:
+        RuntimeError: a recording (``record``, or ``out_dir`` inside docs/results/) from a
+            dirty tree or outside git; nothing is run or moved.
+
+    A trial whose file is corrupt, or cannot stand for this code, is recomputed
     (``SweepResult.recomputed``); a trial that raises, or returns something that is not
     JSON-able, is a failure (``SweepResult.failed``), never a result.
     """
@@ -259,42 +370,42 @@ def run_sweep(fn: Callable[[dict], dict], trials: Sequence[Trial], out_dir: Path
         raise ValueError("trial keys must be unique")
     if workers < 1:
         raise ValueError(f"workers must be >= 1, got {workers}")
+    _check_reuse(reuse)
+    state = current_code(root, refresh=True)
+    refusal = record_refusal(out_dir, state, record, root)
+    if refusal is not None:
+        raise RuntimeError(refusal)
     (Path(out_dir) / "trials").mkdir(parents=True, exist_ok=True)
-    code = code_version()
-    done, corrupt = check_trial_files(out_dir)
-    recomputed: dict = {}
-    for t in trials:
-        if f"{t.key}.json" in corrupt:
-            recomputed[t.key] = f"corrupt trial file: {corrupt[f'{t.key}.json']}"
-        rec = done.get(t.key)
-        if rec is None:
-            continue
-        old = _written_by(rec, code["version"])
-        if fresh:
-            reason = "fresh sweep"
-        elif old != code["version"]:
-            reason = f"written by dopt {old}, this is dopt {code['version']}"
-        else:
-            continue
-        recomputed[t.key] = reason
-        del done[t.key]
-        where = _move_aside(trial_path(out_dir, t.key), OUTDATED_DIR)
-        log.log(logging.INFO if fresh else logging.WARNING, "trial %s is recomputed: %s (old "
-                "file moved to %s)", t.key, reason, where)
+    done, recomputed, corrupt, across = _sort_stored(trials, out_dir, state, fresh=fresh,
+                                                     reuse=reuse, root=root)
+    _DELIBERATE.update(across)
     todo = [t for t in trials if t.key not in done]
     skipped = [t.key for t in trials if t.key in done]
-    checkpoints = {t.key: Checkpoint(out_dir, t.key) for t in todo}
+    checkpoints = {t.key: Checkpoint(out_dir, t.key, root, state) for t in todo}
     if fresh:
         for c in checkpoints.values():
             if c.path.exists():
                 log.info("trial %s starts afresh (its checkpoint moved to %s)", c.key,
                          _move_aside(c.path, OUTDATED_DIR))
+    log.info("sweep: %d trials, %d already finished, %d to run (%d recomputed, %d reused "
+             "across a code change)", len(trials), len(skipped), len(todo), len(recomputed),
+             len(across))
+    records = {k: done[k] for k in skipped}
+    failed = _execute(fn, todo, out_dir, state.stamp(), checkpoints, records, progress,
+                      workers=workers, ray_address=ray_address)
+    commits = Counter(str((r.get("code") or {}).get("commit") or "unknown")
+                      for r in records.values())
+    return SweepResult(records, [t.key for t in todo if t.key not in failed], skipped, failed,
+                       dict(commits), recomputed, corrupt, across)
+
+
+def _execute(fn, todo, out_dir, code, checkpoints, records, progress, *, workers,
+             ray_address) -> dict:
+    """Run ``todo`` (inline, on a pool or on Ray), write each record stamped ``code`` into
+    ``records`` and its file; returns {key: error} of the failures."""
+    failed: dict = {}
     kwargs = ((lambda t: {"checkpoint": checkpoints[t.key]}) if takes_checkpoint(fn)
               else (lambda t: {}))
-    log.info("sweep: %d trials, %d already finished, %d to run (%d recomputed)", len(trials),
-             len(skipped), len(todo), len(recomputed))
-    records = {k: done[k] for k in skipped}
-    failed: dict = {}
 
     def finish(trial: Trial, result=None, error: BaseException | None = None):
         rec = None
@@ -330,10 +441,7 @@ def run_sweep(fn: Callable[[dict], dict], trials: Sequence[Trial], out_dir: Path
             for fut in as_completed(futures):
                 err = fut.exception()
                 finish(futures[fut], None if err else fut.result(), err)
-    commits = Counter(str((r.get("code") or {}).get("commit") or "unknown")
-                      for r in records.values())
-    return SweepResult(records, [t.key for t in todo if t.key not in failed], skipped, failed,
-                       dict(commits), recomputed, corrupt)
+    return failed
 
 
 def _move_aside(path: Path, folder: str) -> Path | None:

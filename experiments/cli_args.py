@@ -1,8 +1,17 @@
 """Command-line helpers of the experiment scripts: the shared argparse types and one-line
 errors of ``dopt.cli`` (re-exported here, so a script imports its CLI pieces from one place),
-plus what only experiments do: check --record against --out and write OUT/summary.json with
-the run's provenance. Standard library and ``dopt.cli`` / ``dopt.provenance`` only, so the
-MuJoCo-free key-particle experiment can use them without importing torch or MuJoCo.
+plus what only experiments do: check --record (not the --out folder, and only from committed
+code), the sweeps' --reuse-any flag, and write OUT/summary.json with the run's provenance.
+
+Recording: ``--record PATH`` is refused, one line naming the changed files, when files that can
+change a result (dopt/, deformables/, planners/, experiments/, pyproject.toml, setup.py; the
+exact rule is ``dopt.provenance``'s) differ from HEAD, or outside a git checkout:
+``record_problem`` says so before anything runs, and ``write_summary`` checks again before it
+writes the copy (OUT/summary.json is written either way, marked "-dirty" in its provenance).
+A run with --out only is never refused.
+
+Standard library and ``dopt.cli`` / ``dopt.provenance`` / ``dopt.sweep`` only (all pure Python),
+so the MuJoCo-free key-particle experiment can use them without importing torch or MuJoCo.
 """
 from __future__ import annotations
 
@@ -32,24 +41,70 @@ from dopt.cli import (  # noqa: F401  (re-exported for the scripts)
 )
 
 
-def record_problem(record: Path | None, out: Path) -> str | None:
-    """Why --record PATH cannot be written next to the --out folder (it is that folder)."""
-    if record is not None and Path(record).absolute() == Path(out).absolute():
+def record_problem(record: Path | None, out: Path, root: Path | None = None) -> str | None:
+    """Why --record PATH cannot be written (one line, argparse's "argument --record: ..."):
+    it is the --out folder, or this code (``root``: default this checkout) is not committed
+    (``dopt.provenance.CodeState.record_problem``). None without --record."""
+    if record is None:
+        return None
+    if Path(record).absolute() == Path(out).absolute():
         return f"argument --record: {record} is the --out folder"
-    return None
+    from dopt.provenance import code_state  # pure Python: no MuJoCo, no torch
+
+    problem = code_state(root).record_problem()
+    return None if problem is None else f"argument --record: {problem}"
+
+
+def add_reuse_argument(ap) -> None:
+    """--reuse-any: a sweep's flag to reuse its finished trials across code changes
+    deliberately (``dopt.sweep.run_sweep(reuse="any")``; ``reuse_mode`` reads it)."""
+    ap.add_argument("--reuse-any", action="store_true",
+                    help="reuse every finished trial under --out, even one written by code "
+                         "that may give another result (listed in summary.json under "
+                         "reused_across_code); by default a trial is reused only when git "
+                         "shows no change since its commit to dopt/, deformables/, planners/, "
+                         "experiments/, pyproject.toml or setup.py")
+
+
+def reuse_mode(args) -> str:
+    """``run_sweep``'s ``reuse`` for parsed ``args``: "any" with --reuse-any, else
+    "same-code"."""
+    return "any" if getattr(args, "reuse_any", False) else "same-code"
 
 
 def write_summary(summary: dict, out: Path, record: Path | None, script: str, argv,
-                  indent: int = 2) -> str:
+                  indent: int = 2, root: Path | None = None) -> str:
     """Add this run's provenance (``script`` and its flags: ``argv``, or ``sys.argv[1:]`` when
-    None) to ``summary``, write it to OUT/summary.json and, with --record, to that path too.
-    Returns the JSON text."""
-    from dopt.provenance import provenance  # pure Python: no MuJoCo, no torch
+    None) and the trials its sweeps reused deliberately across code changes ("reused_across_code":
+    {key: why}, only when there are any) to ``summary``, write it to OUT/summary.json and, with
+    --record, to that path too. Returns the JSON text.
 
-    summary["provenance"] = provenance([script, *(sys.argv[1:] if argv is None else argv)])
+    Raises:
+        RuntimeError: --record from uncommitted code, outside git, or from code that changed
+            during the run (HEAD is not the commit the provenance names, or the one the last
+            sweep of this process ran at); the --record file is then not written
+            (OUT/summary.json is).
+    """
+    from dopt.provenance import code_state, provenance  # pure Python: no MuJoCo, no torch
+    from dopt.sweep import current_code, take_deliberate_reuse
+
+    reused = take_deliberate_reuse()
+    if reused:
+        summary["reused_across_code"] = reused
+    summary["provenance"] = provenance([script, *(sys.argv[1:] if argv is None else argv)],
+                                       root)
     text = json.dumps(summary, indent=indent)
     (Path(out) / "summary.json").write_text(text)
     if record:
+        state = code_state(root)
+        problem = state.record_problem()
+        # the commit the provenance names, and the one this process's last sweep ran at
+        for started in (summary["provenance"]["git_commit"], current_code(root).commit):
+            if problem is None and started != state.commit:
+                problem = (f"the code changed during the run (it started at {started}, "
+                           f"HEAD is now {state.commit})")
+        if problem is not None:
+            raise RuntimeError(f"{record} is not written: {problem}")
         Path(record).parent.mkdir(parents=True, exist_ok=True)
         Path(record).write_text(text)
     return text

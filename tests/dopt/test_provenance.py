@@ -39,16 +39,38 @@ def test_provenance_records_this_processes_command_line(root, monkeypatch):
 
 def test_a_copied_tree_records_the_commit_its_copier_names(root, monkeypatch):
     """A source tree copied elsewhere (a cluster, a GPU machine) may carry no .git, or another
-    commit's: DOPT_GIT_COMMIT, where set, is the commit recorded; unset, a tree without git
-    records None and a checkout its HEAD."""
-    git_commit = provenance.git_commit.__wrapped__
+    commit's: DOPT_GIT_COMMIT, where set, is the commit recorded (read on every call); unset,
+    a tree without git records None ("no git" in a trial's stamp) and a checkout its HEAD."""
     monkeypatch.delenv("DOPT_GIT_COMMIT", raising=False)
-    assert git_commit() is None
+    assert provenance.git_commit() is None
+    assert provenance.code_version()["commit"] == "no git"
+    assert provenance.code_state().record_problem().startswith(
+        "cannot record outside a git checkout")
+    checkout = provenance.Path(provenance.__file__).parents[1]
+    monkeypatch.setenv("DOPT_GIT_COMMIT", "0123abc")
+    assert provenance.git_commit() == "0123abc"
+    assert provenance.code_state().record_problem() is None      # the copier vouches
+    monkeypatch.setenv("DOPT_GIT_COMMIT", "0123abc-dirty")
+    state = provenance.code_state()
+    assert state.dirty and state.head == "0123abc" and "0123abc-dirty" in state.record_problem()
+    monkeypatch.delenv("DOPT_GIT_COMMIT")
+    if not (checkout / ".git").exists():
+        pytest.skip("the tests run outside a git checkout")
+    head = provenance.git_commit(checkout)
+    assert head is not None and len(head.split("-")[0]) == 40
+
+
+def test_a_tree_inside_another_checkout_is_not_that_checkout(tmp_path, monkeypatch):
+    """An installed package (a virtualenv's site-packages inside a checkout) names no commit:
+    git would find the enclosing checkout's."""
+    monkeypatch.delenv("DOPT_GIT_COMMIT", raising=False)
     checkout = provenance.Path(provenance.__file__).parents[1]
     if not (checkout / ".git").exists():
         pytest.skip("the tests run outside a git checkout")
-    monkeypatch.setattr(provenance, "_ROOT", checkout)
-    head = git_commit()
-    assert head is not None and len(head.split("-")[0]) == 40
-    monkeypatch.setenv("DOPT_GIT_COMMIT", "0123abc")
-    assert git_commit() == "0123abc"
+    assert provenance.code_state(checkout / "dopt").head is None
+
+
+def test_name_files_names_a_dozen_and_counts_the_rest():
+    assert provenance.name_files(["a", "b"]) == "a, b"
+    many = [f"f{i}" for i in range(15)]
+    assert provenance.name_files(many) == ", ".join(many[:12]) + " and 3 more"

@@ -1,5 +1,6 @@
 """Resumable sweeps: inline, process pool, Ray, a killed sweep that resumes, bad trial files
-(named, moved aside, recomputed) and the code-version rule of a resume."""
+(named, moved aside, recomputed) and the code rule of a resume (here with the commit named by
+DOPT_GIT_COMMIT; tests/dopt/test_reuse_rule.py asks a real temporary git repository)."""
 
 import json
 import logging
@@ -13,8 +14,8 @@ from pathlib import Path
 
 import pytest
 
-from dopt import sweep
-from dopt.provenance import code_version
+import dopt
+from dopt.provenance import COMMIT_ENV, code_version
 from dopt.sweep import (
     Checkpoint,
     Trial,
@@ -100,13 +101,16 @@ def test_bad_input(tmp_path):
 
 
 # ------------------------------------------------------------------ trial files on resume
-CODE = {"version": "1.0.0", "commit": "c0ffee"}
+COMMIT = "c0ffee"
+UNKNOWN = "feedface" * 5            # a commit no repository holds
+CODE = {"version": dopt.__version__, "commit": COMMIT}
 
 
 @pytest.fixture
 def code(monkeypatch):
-    """This process's code version, fixed (dopt.sweep reads it through code_version)."""
-    monkeypatch.setattr(sweep, "code_version", lambda: dict(CODE))
+    """This process's code, fixed: DOPT_GIT_COMMIT names a clean commit (as a copied tree's
+    copier would), so that nothing is asked of the checkout's git."""
+    monkeypatch.setenv(COMMIT_ENV, COMMIT)
     return CODE
 
 
@@ -191,30 +195,54 @@ def _record(tmp_path, key, x, code=None):
     return path
 
 
-def test_resume_recomputes_other_versions_and_counts_other_commits(tmp_path, code, caplog):
-    _record(tmp_path, "x1", 1, {"version": "0.9.0", "commit": "old"})   # another version
-    _record(tmp_path, "x2", 2, {"version": "1.0.0", "commit": "beef"})  # another commit
-    _record(tmp_path, "x3", 3)                                           # before "code"
+def test_resume_reuses_only_what_git_says_is_the_same_code(tmp_path, code, caplog):
+    """The dopt version decides nothing; a commit git does not know, a "-dirty" record and a
+    record of no commit are recomputed (moved aside unchanged), this commit's reused."""
+    _record(tmp_path, "x1", 1, {"version": "0.9.0", "commit": COMMIT})      # another version
+    _record(tmp_path, "x2", 2, {"version": "1.0.0", "commit": UNKNOWN})    # unknown commit
+    _record(tmp_path, "x3", 3)                                               # before "code"
+    _record(tmp_path, "x4", 4, {"version": "1.0.0", "commit": COMMIT + "-dirty",
+                                "tree": "0123"})                             # uncommitted
     with caplog.at_level(logging.WARNING, logger="dopt.sweep"):
-        res = run_sweep(square, trials([1, 2, 3, 4]), tmp_path)
-    assert sorted(res.ran) == ["x1", "x4"] and sorted(res.skipped) == ["x2", "x3"]
-    assert res.recomputed == {"x1": "written by dopt 0.9.0, this is dopt 1.0.0"}
-    assert "x1" in caplog.text and "0.9.0" in caplog.text
-    assert res.records["x1"]["result"]["y"] == 1 and res.records["x2"]["result"]["y"] == -1
-    assert res.commits == {"c0ffee": 2, "beef": 1, "unknown": 1}
-    old = json.loads((tmp_path / "trials" / "outdated" / "x1.json").read_text())
-    assert old["code"]["version"] == "0.9.0"                             # kept, not deleted
+        res = run_sweep(square, trials([1, 2, 3, 4, 5]), tmp_path)
+    assert sorted(res.ran) == ["x2", "x3", "x4", "x5"] and res.skipped == ["x1"]
+    assert res.recomputed == {
+        "x2": "its commit feedfacefeed is unknown to git here",
+        "x3": "written by code of no known commit (none recorded)",
+        "x4": "written from uncommitted code (c0ffee-dirty)"}
+    assert "x2" in caplog.text and "unknown to git" in caplog.text
+    assert res.records["x1"]["result"]["y"] == -1 and res.records["x2"]["result"]["y"] == 4
+    assert res.commits == {COMMIT: 5} and res.reused_across == {}
+    old = json.loads((tmp_path / "trials" / "outdated" / "x4.json").read_text())
+    assert old["code"] == {"version": "1.0.0", "commit": "c0ffee-dirty", "tree": "0123"}
+
+
+def test_reuse_any_reuses_every_valid_record_and_lists_it(tmp_path, code, caplog):
+    from dopt.sweep import take_deliberate_reuse
+    take_deliberate_reuse()
+    _record(tmp_path, "x1", 1, {"version": "1.0.0", "commit": "beef-dirty"})
+    _record(tmp_path, "x2", 2, CODE)
+    with caplog.at_level(logging.WARNING, logger="dopt.sweep"):
+        res = run_sweep(square, trials([1, 2, 3]), tmp_path, reuse="any")
+    assert res.ran == ["x3"] and sorted(res.skipped) == ["x1", "x2"]
+    assert res.reused_across == {"x1": "written from uncommitted code (beef-dirty)"}
+    assert res.commits == {"beef-dirty": 1, COMMIT: 2} and "reused deliberately" in caplog.text
+    assert take_deliberate_reuse() == res.reused_across and take_deliberate_reuse() == {}
+    assert is_finished(tmp_path, "x1", reuse="any") and not is_finished(tmp_path, "x1")
+    with pytest.raises(ValueError, match="reuse must be one of same-code, any"):
+        run_sweep(square, trials([1]), tmp_path, reuse="always")
 
 
 def test_is_finished_names_the_trials_a_sweep_skips_and_reads_only(tmp_path, code):
-    _record(tmp_path, "x1", 1, {"version": "0.9.0", "commit": "old"})   # another version
-    _record(tmp_path, "x2", 2, {"version": "1.0.0", "commit": "beef"})  # another commit
-    _record(tmp_path, "x3", 3)                                           # before "code"
-    (tmp_path / "trials" / "x5.json").write_text("{")                    # corrupt
+    _record(tmp_path, "x1", 1, {"version": "0.9.0", "commit": COMMIT})    # another version
+    _record(tmp_path, "x2", 2, {"version": "1.0.0", "commit": UNKNOWN})  # unknown commit
+    _record(tmp_path, "x3", 3)                                             # before "code"
+    (tmp_path / "trials" / "x5.json").write_text("{")                      # corrupt
     keys = [t.key for t in trials([1, 2, 3, 4, 5])]
     before = {p.name: p.read_text() for p in (tmp_path / "trials").iterdir()}
     finished = {k for k in keys if is_finished(tmp_path, k)}
     assert {p.name: p.read_text() for p in (tmp_path / "trials").iterdir()} == before
+    assert finished == {"x1"}
     assert finished == set(run_sweep(square, trials([1, 2, 3, 4, 5]), tmp_path).skipped)
 
 
@@ -230,7 +258,7 @@ def test_fresh_recomputes_everything(tmp_path, code):
 
 
 def test_a_failed_recompute_leaves_no_old_result(tmp_path, code):
-    _record(tmp_path, "x-1", -1, {"version": "0.9.0", "commit": "old"})
+    _record(tmp_path, "x-1", -1, {"version": "0.9.0", "commit": "old"})   # unknown commit
     res = run_sweep(square, trials([-1]), tmp_path)
     assert list(res.failed) == ["x-1"] and res.records == {}
     assert load_finished(tmp_path) == {}            # the next resume runs it again
@@ -266,11 +294,13 @@ def test_fresh_moves_checkpoints_aside(tmp_path):
 
 @pytest.mark.parametrize("text, folder, reason", [
     ("{not json", "corrupt", "not a checkpoint"),
-    (json.dumps({"key": "other", "code": {"version": "1.0.0"}, "progress": {}}), "corrupt",
+    (json.dumps({"key": "other", "code": CODE, "progress": {}}), "corrupt",
      "the checkpoint of 'other'"),
     (json.dumps({"key": "c", "code": {"version": "0.9.0"}, "progress": {}}), "outdated",
-     "written by dopt 0.9.0, this is dopt 1.0.0"),
-    (json.dumps({"key": "c", "code": {"version": "1.0.0"}, "progress": [1]}), "corrupt",
+     "written by code of no known commit (none recorded)"),
+    (json.dumps({"key": "c", "code": {"version": "0.9.0", "commit": "c0ffee-dirty"},
+                 "progress": {}}), "outdated", "written from uncommitted code (c0ffee-dirty)"),
+    (json.dumps({"key": "c", "code": CODE, "progress": [1]}), "corrupt",
      "progress is not an object"),
 ])
 def test_a_checkpoint_that_cannot_be_resumed_is_named_and_moved_aside(tmp_path, code, caplog,
