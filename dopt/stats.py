@@ -1,5 +1,6 @@
 """Summary statistics of trial results (mean and Student-t interval, Welch interval of a
-difference)."""
+difference) and the state-vector-reduction authors' Table 1 statistic (an outlier fence, then
+a normal 90 % interval)."""
 
 from __future__ import annotations
 
@@ -44,3 +45,75 @@ def difference_ci(a, b, level: float = 0.95) -> tuple[float, float]:
         warnings.filterwarnings("ignore", "Precision loss", RuntimeWarning)
         low, high = stats.ttest_ind(y, x, equal_var=False).confidence_interval(level)
     return diff, float(high - low) / 2
+
+
+#: the authors' outlier rule (``authors_kept``): their upper fence's quantile and multiplier
+AUTHORS_QUANTILE, AUTHORS_FENCE = 0.6, 1.5
+#: the authors' normal quantile for their 90 % interval (``authors_mean_ci``)
+AUTHORS_Z = 1.645
+
+
+def authors_kept(values) -> np.ndarray:
+    """The values the state-vector-reduction authors keep before averaging, shape (k,).
+
+    Their Table 1 statistic (DMackRus/iLQR_SVR, ``PaperData/scripts/plot_SVR.py``,
+    ``generate_table_data``; pandas ``Series.quantile``, linear interpolation) keeps the values
+    in ``[0, Q + 1.5 (Q - min)]`` with ``Q`` the 0.6 quantile: an interquartile-style fence
+    with the minimum as the lower "quartile" and no lower fence but zero.
+
+    Parameters
+    ----------
+    values : array_like, shape (n,)
+        One column of one run folder (e.g. the final costs of its episodes), finite.
+
+    Returns
+    -------
+    np.ndarray, shape (k,), k <= n
+        The kept values, in their input order.
+
+    Raises
+    ------
+    ValueError
+        ``values`` is empty, not one-dimensional or holds a non-finite value.
+    """
+    x = np.asarray(values, dtype=float)
+    if x.ndim != 1:
+        raise ValueError(f"authors_kept takes one column of values, shape (n,), got {x.shape}")
+    if x.size == 0:
+        raise ValueError("authors_kept of no values")
+    if not np.all(np.isfinite(x)):
+        raise ValueError(f"authors_kept: {int(np.sum(~np.isfinite(x)))} non-finite value(s)")
+    q = float(np.quantile(x, AUTHORS_QUANTILE, method="linear"))
+    upper = q + AUTHORS_FENCE * (q - float(x.min()))
+    return x[(x >= 0.0) & (x <= upper)]
+
+
+def authors_mean_ci(values) -> tuple[float, float]:
+    """The authors' Table 1 cell of one column: mean and half-width of the kept values.
+
+    Over ``authors_kept(values)`` (k of them): the mean and ``1.645 s / sqrt(k)`` with ``s``
+    the sample standard deviation (ddof 1, pandas ``Series.std``), a normal-approximation
+    90 % interval (their ``plot_SVR.py``, ``generate_table_data``). A cost cell of their
+    table is both numbers divided by the baseline row's kept mean. One kept value gives a
+    half-width of nan.
+
+    Parameters
+    ----------
+    values : array_like, shape (n,)
+        One column of one run folder, finite.
+
+    Returns
+    -------
+    (mean, half_width) : tuple of float
+
+    Raises
+    ------
+    ValueError
+        As ``authors_kept``, or no value is kept (all are negative).
+    """
+    kept = authors_kept(values)
+    if kept.size == 0:
+        raise ValueError("authors_mean_ci: no value kept (the rule keeps none below 0)")
+    if kept.size < 2:
+        return float(kept[0]), float("nan")
+    return float(kept.mean()), float(AUTHORS_Z * kept.std(ddof=1) / np.sqrt(kept.size))

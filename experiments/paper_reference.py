@@ -4,13 +4,19 @@ tables: Table 1 rows and the Fig. 4 curve of their data.
 Reads their summary table (tab-separated, one line per MPC run: task, method, theta_readd,
 K_threshold, svd, n_runs, final_cost_mean, final_cost_median, final_dist_mean, avg_dofs,
 opt_ms, ...) and writes, per task (clutter, soft, soft_rigid), the rows of their Table 1 by
-our names (``planners.svr_mpc.TABLE1_ROWS``; their ``svd`` flag picks svd or sum, theta and
-rho are theta_readd and K_threshold) with the ratio of each row's median final cost to the
-baseline's (the statistic their Table 1 follows), and for clutter the Fig. 4 points (svr-sum
-at every theta_readd and K_threshold). Their baseline is the plain iLQR run with the longest
-optimisation time (all DoFs); a second plain iLQR run per task is not identified in the data
-and is listed as "unidentified". Rows of Table 1 the data does not hold (rand, naive) are
-absent. The output records the input's path and SHA-256.
+our names (``planners.svr_mpc.TABLE1_ROWS``) with the ratio of each row's median final cost to
+the baseline's, and for clutter the Fig. 4 points (svr-sum at every theta_readd and
+K_threshold). Their two plain iLQR runs per task are baseline (the slower: all DoFs) and naive
+(the other); rand is the Sum run (svd false) with theta 5 and rho at least 1e6 (their 1e6 on
+clutter, 1e15 on the soft tasks); the SVD and Sum rows are named by their ``svd`` flag, theta
+(theta_readd) and rho (K_threshold). The output records the input's path and SHA-256.
+
+With ``--paper-data`` (their ``PaperData`` folder: ``MPC_push_{mcl,soft,soft_rigid}/{iLQR,
+iLQR_SVR}/<run>/summary.csv`` per episode), also the statistic their Table 1 prints
+("authors_statistic", ``planners.svr_mpc.authors_data.authors_table1``): per task and row the mean
+and 1.645 std / sqrt(n) of the values kept by their outlier fence, costs over the baseline's
+kept mean, for the final cost, optimisation time and DoFs; with the folder's path and a
+SHA-256 over the run files read. (The median ratio above is not their statistic.)
 
 With ``--paper`` (the paper's text), also its published Table 1 ("published"): per task and
 row (all nine, by our names) the MPC cost mean and 90 % CI as printed (normalised by the
@@ -18,7 +24,8 @@ baseline's; clutter with outliers removed), the optimisation time and the DoFs, 
 table's text; the file records that source's path and SHA-256 too.
 
     python experiments/paper_reference.py --tsv ../shared/notes/paper-data-svr-summary.tsv \\
-        --paper ../shared/seeds/state_vector_reduction_mpc.txt --record docs/results/paper-svr.json
+        --paper ../shared/seeds/state_vector_reduction_mpc.txt \\
+        --paper-data ../shared/external/ilqr_svr/paper_data --record docs/results/paper-svr.json
 """
 
 from __future__ import annotations
@@ -31,14 +38,14 @@ import re
 import sys
 from pathlib import Path
 
-from cli_args import EPILOG, guarded, output_file
+from cli_args import EPILOG, existing_dir, guarded, output_file
 
-from planners.svr_mpc import row_name
+from planners.svr_mpc import TABLE1_ROWS, row_name
+from planners.svr_mpc.authors_data import RAND_MIN_RHO, RAND_THETA, TASK_DIRS, authors_table1
 
 TASKS = {"MPC_push_mcl": "clutter", "MPC_push_soft": "soft",
          "MPC_push_soft_rigid": "soft_rigid"}
-TABLE1 = ("baseline", "svd-t10-r1", "svd-t10-r500", "svd-t5-r1", "sum-t10-r1",
-          "sum-t10-r500", "sum-t5-r1")
+TABLE1 = tuple(TABLE1_ROWS)
 
 
 def parser() -> argparse.ArgumentParser:
@@ -47,6 +54,9 @@ def parser() -> argparse.ArgumentParser:
     ap.add_argument("--tsv", type=Path, required=True, help="the authors' summary table")
     ap.add_argument("--paper", type=Path, default=None,
                     help="the paper's text, for its published Table 1")
+    ap.add_argument("--paper-data", type=existing_dir, default=None, metavar="DIR",
+                    help="the authors' per-episode PaperData folder (MPC_push_mcl/, ...), for "
+                         "their Table 1 statistic")
     ap.add_argument("--record", type=output_file, required=True, metavar="PATH",
                     help="the result file to write (docs/results/...)")
     return ap
@@ -58,7 +68,15 @@ def read(path: Path) -> list[dict]:
 
 
 def reference(lines: list[dict]) -> dict:
-    """{task: {"rows": {row: stats}, "fig4": [points], "unidentified": [stats]}}."""
+    """{task: {"rows": {row: stats}, "fig4": [points]}}: per task the Table 1 rows of the
+    summary table's lines (``read``) and, on clutter, the Fig. 4 points (every Sum run).
+
+    Baseline is the plain iLQR run with the longest optimisation time (all DoFs), naive the
+    second; rand the Sum run with theta ``RAND_THETA`` and rho at least ``RAND_MIN_RHO``.
+
+    Raises:
+        ValueError: a task has more than two plain iLQR runs (baseline and naive).
+    """
     out: dict = {}
     for task_key, task in TASKS.items():
         runs = [r for r in lines if r["task"] == task_key]
@@ -66,8 +84,10 @@ def reference(lines: list[dict]) -> dict:
                        key=lambda r: -float(r["opt_ms"]))
         if not plain:
             continue
-        base = plain[0]
-        base_median = float(base["final_cost_median"])
+        if len(plain) > 2:
+            raise ValueError(f"{task_key}: {len(plain)} plain iLQR runs, expected baseline "
+                             "and naive")
+        base_median = float(plain[0]["final_cost_median"])
 
         def stats(r: dict, base_median: float = base_median) -> dict:
             return {"n_runs": int(r["n_runs"]), "horizon": int(r["horizon"]),
@@ -78,7 +98,7 @@ def reference(lines: list[dict]) -> dict:
                     "avg_dofs": float(r["avg_dofs"]), "opt_ms": float(r["opt_ms"]),
                     "run_dir": r["run_dir"]}
 
-        rows = {"baseline": stats(base)}
+        rows = dict(zip(("baseline", "naive"), map(stats, plain), strict=False))
         fig4 = []
         for r in runs:
             if r["method"] != "iLQR_SVR":
@@ -86,14 +106,35 @@ def reference(lines: list[dict]) -> dict:
             theta, rho = int(r["theta_readd"]), float(r["K_threshold"])
             method = "svr-svd" if r["svd"] == "true" else "svr-sum"
             name = row_name(method, theta, rho)
+            if method == "svr-sum" and theta == RAND_THETA and rho >= RAND_MIN_RHO:
+                name = row_name("rand", theta, rho)
             if name in TABLE1:
                 rows[name] = stats(r)
             if task == "clutter" and method == "svr-sum":
                 fig4.append({"theta": theta, "rho": rho, **stats(r)})
         out[task] = {"rows": {k: rows[k] for k in TABLE1 if k in rows},
-                     "fig4": sorted(fig4, key=lambda p: (p["theta"], p["rho"])),
-                     "unidentified": [stats(r) for r in plain[1:]]}
+                     "fig4": sorted(fig4, key=lambda p: (p["theta"], p["rho"]))}
     return out
+
+
+def authors_statistic(paper_data: Path) -> dict:
+    """{task: ``authors_table1`` of its folder} for the tasks ``paper_data`` holds, and the
+    SHA-256 over the run files read ({"tasks": ..., "sha256": ...}).
+
+    Raises:
+        ValueError: ``paper_data`` holds none of the tasks' folders (``TASK_DIRS``).
+    """
+    tasks = {task: Path(paper_data) / d for task, d in TASK_DIRS.items()
+             if (Path(paper_data) / d).is_dir()}
+    if not tasks:
+        raise ValueError(f"{paper_data} holds none of {', '.join(TASK_DIRS.values())}")
+    digest = hashlib.sha256()
+    for folder in tasks.values():
+        for f in sorted(folder.glob("*/*/summary.*")):
+            digest.update(f.relative_to(paper_data).as_posix().encode() + b"\0")
+            digest.update(f.read_bytes())
+    return {"tasks": {task: authors_table1(folder) for task, folder in tasks.items()},
+            "sha256": digest.hexdigest()}
 
 
 #: the published table's columns, in order
@@ -169,6 +210,10 @@ def main(argv=None) -> int:
         text = args.paper.read_bytes()
         summary.update(paper=str(args.paper), paper_sha256=hashlib.sha256(text).hexdigest(),
                        published=published_table1(text.decode()))
+    if args.paper_data is not None:
+        stat = authors_statistic(args.paper_data)
+        summary.update(paper_data=str(args.paper_data), paper_data_sha256=stat["sha256"],
+                       authors_statistic=stat["tasks"])
     from dopt.provenance import provenance
 
     summary["provenance"] = provenance(["experiments/paper_reference.py",

@@ -1,4 +1,7 @@
-"""experiments/paper_reference.py: the authors' summary table read into Table 1 rows."""
+"""experiments/paper_reference.py: the authors' summary table read into Table 1 rows, and
+their per-episode data through their Table 1 statistic."""
+
+import json
 
 import paper_reference
 import pytest
@@ -18,13 +21,55 @@ def test_rows_are_named_and_normalised_by_the_slowest_plain_ilqr(tmp_path):
                               line("iLQR", "-", "-", "-", 900.0, 210.0),
                               line("iLQR_SVR", 10, 1, "true", 850.0, 300.0),
                               line("iLQR_SVR", 5, 1, "false", 800.0, 200.0),
-                              line("iLQR_SVR", 5, 100, "false", 700.0, 150.0)]) + "\n")
+                              line("iLQR_SVR", 5, 100, "false", 700.0, 150.0),
+                              line("iLQR_SVR", 5, 1000000, "false", 950.0, 140.0),
+                              line("iLQR_SVR", 10, 1000000, "false", 940.0, 145.0)]) + "\n")
     ref = paper_reference.reference(paper_reference.read(tsv))["clutter"]
-    assert list(ref["rows"]) == ["baseline", "svd-t10-r1", "sum-t5-r1"]
+    # naive: the second plain run; rand: Sum, theta 5, rho >= 1e6 (theta 10 there is Fig. 4)
+    assert list(ref["rows"]) == ["baseline", "rand-t5", "naive", "svd-t10-r1", "sum-t5-r1"]
     assert ref["rows"]["baseline"]["opt_ms"] == 480.0
     assert ref["rows"]["svd-t10-r1"]["median_ratio"] == pytest.approx(0.85)
-    assert [u["median_ratio"] for u in ref["unidentified"]] == [pytest.approx(0.9)]
-    assert [(p["theta"], p["rho"]) for p in ref["fig4"]] == [(5, 1.0), (5, 100.0)]
+    assert ref["rows"]["naive"]["median_ratio"] == pytest.approx(0.9)
+    assert ref["rows"]["rand-t5"]["median_ratio"] == pytest.approx(0.95)
+    assert "unidentified" not in ref
+    assert [(p["theta"], p["rho"]) for p in ref["fig4"]] == [(5, 1.0), (5, 100.0), (5, 1e6),
+                                                              (10, 1e6)]
+
+
+def test_a_third_plain_run_is_an_error(tmp_path):
+    tsv = tmp_path / "d.tsv"
+    tsv.write_text("\n".join([HEADER, *(line("iLQR", "-", "-", "-", 900.0, ms)
+                                        for ms in (480.0, 210.0, 200.0))]) + "\n")
+    with pytest.raises(ValueError, match="3 plain iLQR runs"):
+        paper_reference.reference(paper_reference.read(tsv))
+
+
+def write_run(folder, costs, ms, dofs, settings=""):
+    folder.mkdir(parents=True)
+    (folder / "summary.yaml").write_text("optimisation horizon: 80\n" + settings)
+    (folder / "summary.csv").write_text(
+        "Final cost,Final dist,Average dofs,Average optimisation time (ms)\n"
+        + "".join(f"{c},0.1,{dofs},{ms}\n" for c in costs))
+
+
+def test_paper_data_adds_the_authors_statistic(tmp_path):
+    data = tmp_path / "paper_data" / "MPC_push_mcl"
+    write_run(data / "iLQR" / "slow", [1.0, 2.0, 3.0, 4.0, 100.0], 480.0, 0)
+    write_run(data / "iLQR" / "fast", [2.0, 2.0], 210.0, 0)
+    write_run(data / "iLQR_SVR" / "r", [1.0, 1.0], 150.0, 12.5,
+              "num_dofs_readd: 5\nK_matrix_threshold: 1000000\nEigen vector method: false\n")
+    tsv = tmp_path / "d.tsv"
+    tsv.write_text("\n".join([HEADER, line("iLQR", "-", "-", "-", 1000.0, 480.0)]) + "\n")
+    record = tmp_path / "out.json"
+    assert paper_reference.main(["--tsv", str(tsv), "--paper-data", str(tmp_path / "paper_data"),
+                                 "--record", str(record)]) == 0
+    out = json.loads(record.read_text())
+    assert len(out["paper_data_sha256"]) == 64
+    rows = out["authors_statistic"]["clutter"]
+    assert list(rows) == ["baseline", "rand-t5", "naive"]
+    assert rows["baseline"]["n_kept_cost"] == 4                  # 100 is past the fence
+    assert rows["naive"]["cost_mean"] == pytest.approx(2.0 / 2.5)
+    assert rows["rand-t5"]["dofs_mean"] == 12.5 and rows["naive"]["dofs_mean"] is None
 
 
 PUBLISHED = "\n".join([
