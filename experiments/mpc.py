@@ -46,6 +46,7 @@ os.environ.setdefault("MUJOCO_GL", "egl")   # offscreen renders; read when mujoc
 
 from cli_args import (
     EPILOG,
+    add_reuse_argument,
     choices_type,
     guarded,
     no_repeats,
@@ -56,6 +57,7 @@ from cli_args import (
     positive_float,
     positive_int,
     record_problem,
+    reuse_mode,
     write_summary,
 )
 
@@ -78,6 +80,7 @@ from planners.svr_mpc import (
     trial_key,
     variant_settings,
 )
+from planners.svr_mpc.authors_data import authors_statistic
 
 log = logging.getLogger(__name__)
 FEEDBACK = {"off": (False,), "on": (True,), "both": (False, True)}
@@ -131,12 +134,21 @@ def add_run_arguments(ap: argparse.ArgumentParser) -> None:
     timing, feedback, workers, output."""
     ap.add_argument("--task", default="clutter", choices=list(PUSH_TASKS),
                     help="the pushing task (default %(default)s)")
-    ap.add_argument("--preset", default="ours", choices=["ours", "paper"],
-                    help="paper: the authors' protocol (Eq. 2 cost without the end-effector "
-                         "term, on soft with their terminal reach residual; their set-up motion "
-                         "and initial push plan, 5%% control noise, virtual clock); ours: cost "
-                         "with the end-effector term, zero initial plan, real clock (default "
+    ap.add_argument("--preset", default="ours", choices=["ours", "paper", "authors"],
+                    help="paper: the authors' protocol on our problems (Eq. 2 cost without the "
+                         "end-effector term, on soft with their terminal reach residual; their "
+                         "set-up motion and initial push plan, 5%% control noise, virtual "
+                         "clock); authors: the same protocol on the authors' own problems "
+                         "(their scenes, objects, contacts and cost weights, no control cost, "
+                         "no control noise; clutter needs --layouts); ours: cost with the "
+                         "end-effector term, zero initial plan, real clock (default "
                          "%(default)s). Flags below override it")
+    ap.add_argument("--layouts", type=Path, default=None, metavar="DIR",
+                    help="the authors' clutter scenes (a folder of {0..99}.csv, e.g. "
+                         "../shared/external/ilqr_svr/push_mcl_layouts); seed i runs scene i")
+    ap.add_argument("--islands", default="on", choices=["on", "off"],
+                    help="MuJoCo's constraint islands (default on); off: one monolithic "
+                         "constraint solve, as the authors' MuJoCo")
     ap.add_argument("--cost", default=None, choices=list(COST_PRESETS),
                     help="the cost: paper (Eq. 2), paper-reach (Eq. 2 with the authors' soft-task "
                          "reach residual) or ee (with the end-effector term)")
@@ -188,6 +200,7 @@ def add_run_arguments(ap: argparse.ArgumentParser) -> None:
                          "rerun resumes")
     ap.add_argument("--fresh", action="store_true",
                     help="recompute every trial (old trial files go to OUT/trials/outdated/)")
+    add_reuse_argument(ap)
     ap.add_argument("--record", type=output_file, default=None, metavar="PATH",
                     help="also write the summary to PATH (docs/results/...)")
 
@@ -220,7 +233,15 @@ def settings_of(args, method: str, theta: int, rho: float, feedback: bool,
                 row: dict | None = None) -> SVRMPCSettings:
     """The settings of one row under the flags: the preset's, then the flags that override
     it, then the row's own derivative variants (``row``, from ``parse_row``)."""
-    preset = SVRMPCSettings.paper(args.task) if args.preset == "paper" else SVRMPCSettings()
+    if args.preset == "authors":
+        preset = SVRMPCSettings.authors(
+            args.task, layouts=str(args.layouts) if args.layouts else None)
+    elif args.preset == "paper":
+        preset = SVRMPCSettings.paper(args.task)
+    else:
+        preset = SVRMPCSettings()
+    if args.islands == "off":
+        preset = replace(preset, islands=False)
     over = {"cost": args.cost, "control_noise": args.control_noise, "clock": args.clock}
     over = {k: v for k, v in over.items() if v is not None}
     if args.warm_start is not None:
@@ -249,7 +270,8 @@ def grid(args, methods=None, rhos=None, thetas=None) -> list[tuple]:
     --preset paper: the nine of Table 1; ``parse_row``), else every (method, rho, theta) of the
     arguments or flags, without variants of their own."""
     rows = getattr(args, "rows", None)
-    if rows is None and methods is None and args.preset == "paper" and hasattr(args, "rows"):
+    if (rows is None and methods is None and args.preset in ("paper", "authors")
+            and hasattr(args, "rows")):
         rows = list(TABLE1_ROWS)
     if rows:
         return [parse_row(r) for r in rows]
@@ -283,7 +305,9 @@ def protocol(args, params: dict) -> dict:
             "clock": params["clock"], "nominal_threads": params["nominal_threads"],
             "control_noise": params["control_noise"], "fd": args.fd,
             "keypoints": params["keypoints"], "fd_skip": params["fd_skip"],
-            "box_qp": params["box_qp"], "slowdown": params["slowdown"]}
+            "box_qp": params["box_qp"], "slowdown": params["slowdown"],
+            "problem": params["problem"], "layouts": params["layouts"],
+            "islands": params["islands"]}
 
 
 @functools.cache
@@ -302,7 +326,8 @@ def run(args, trials, fn=None, out: Path | None = None,
     bar = tqdm(total=len(trials), desc=f"{args.task} trials", unit="trial")
     res = run_sweep(fn or run_trial, trials, out or args.out, workers=workers or args.workers,
                     ray_address=None if workers else args.ray,
-                    progress=lambda key, rec: bar.update(1), fresh=args.fresh)
+                    progress=lambda key, rec: bar.update(1), fresh=args.fresh,
+                    reuse=reuse_mode(args))
     bar.update(len(res.skipped))
     bar.close()
     for key, err in res.failed.items():
@@ -355,7 +380,7 @@ def first_seed(records: list[dict], rows) -> dict:
     for r in sorted(records, key=lambda r: r["params"]["seed"]):
         label = row_label(r["params"])
         if label in rows and label not in out:
-            out[label] = {**r["result"], "seed": r["params"]["seed"]}
+            out[label] = {**r["result"], "seed": r["params"]["seed"], "params": r["params"]}
     return {k: out[k] for k in rows if k in out}
 
 
@@ -413,7 +438,7 @@ def write_plots(out: Path, task: str, records: list[dict], rows, render: bool = 
         log.warning("rendering failed (%s: %s); set MUJOCO_GL=egl", type(e).__name__, e)
 
 
-def final_panels(task: str, seed: int, final_state, size=(640, 480)):
+def final_panels(params: dict, final_state, size=(640, 480)):
     """(close-up from above, oblique) images (2, H, W, 3) of a push task's final state: the
     close-up frames the objects, the goal and the pusher, leaves the arm out and marks where
     each object (a soft body: its mean vertex) started (white rings; the goal object's black)
@@ -422,9 +447,8 @@ def final_panels(task: str, seed: int, final_state, size=(640, 480)):
 
     from dopt import render
     from dopt.scene import Scene
-    from dopt.tasks import get_task
-
-    tm = get_task(task)(np.random.default_rng(seed))
+    p = dict(params)
+    tm = SVRMPCSettings(**{k: v for k, v in p.items() if k != "seed"}).build_task(p["seed"])
     m = tm.model
     spec = Scene(m).layout.spec
     fovy, (w, h) = m.vis.global_.fovy, size
@@ -477,7 +501,7 @@ def write_final(path: Path, task: str, row: str, r: dict) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    panels = final_panels(task, r["seed"], r["final_state"])
+    panels = final_panels(r["params"], r["final_state"])
     n, h, w = panels.shape[:3]
     top, gap, bottom = 56, 6, 30
     W, H = n * w + (n - 1) * gap, top + h + bottom
@@ -514,6 +538,7 @@ def main(argv=None) -> int:
                               "rho": t.params["rho"]}
                         for t in trials for row in [row_label(t.params)]},
                "methods": rows, "paired": paired(records, baseline=baseline),
+               "authors_statistic": authors_statistic(records, baseline=baseline),
                "failed": failed, "trial_commits": res.commits}
     if args.feedback == "both":
         summary["feedback_effect"] = feedback_effect(records)

@@ -2,19 +2,28 @@
 importance magnitudes that rho cuts.
 
 For each row (``--rows``, default rand-t5, sum-t10-r1, sum-t10-r500, svd-t10-r1) and seed, one
-MPC episode under the protocol of ``experiments/mpc.py``'s flags (``--preset paper`` for the
-authors') records each optimisation's active set C and, for SVR, the importance of each DoF in
-C before the cut. Trials are resumable files under OUT/trials (one at a time).
+MPC episode under the protocol of ``experiments/mpc.py``'s flags (``--preset authors`` for the
+authors' problems, ``--preset paper`` for their protocol on ours) records each optimisation's
+active set C and, for SVR, the importance of each DoF in C before the cut, and what shows
+whether the optimiser engages: its line-search step alpha, the relative improvement dJ/J, the
+regularisation mu, and whether the new nominal trajectory touches the pushed object (under
+Eq. 2 the controls reach the cost only through contact). Trials are resumable files under
+OUT/trials (one at a time).
 
 Writes OUT/summary.json (experiment "svr_explain"): per row, |C| and the share of the goal
 object's planar DoFs in C, each averaged over seeds in ``--bins`` bins of the episode's agent
 steps; for SVR rows the importances pooled over optimisations and seeds: counts per decade,
 exact zeros, and the shares below 1, in [1, 500) (what raising rho from 1 to 500 removes) and
 at or above 500 (what no rho of the paper's grid below 1e6 removes); robot DoFs, never
-removed, are left out. And OUT/svr_explain.png. Exits 1 if a trial failed, 2 on a bad flag.
+removed, are left out; the shares of those importances that are 0, in (0, 0.1), [0.1, 1),
+[1, 500) and >= 500; per row under "mechanism": the median dJ/J while the goal object is more
+than 5 cm from the goal, the shares of accepted optimisations and of nominals in contact, the
+median mu, the goal object's median travel and final distance, and the median lag against the
+horizon T. And OUT/svr_explain.png. Exits 1 if a trial failed, 2 on a bad flag.
 
-    python experiments/svr_explain.py --task clutter --preset paper --trials 10 \\
-        --out results/svr_explain --record docs/results/svr-explain-clutter.json
+    python experiments/svr_explain.py --task clutter --preset authors \\
+        --layouts ../shared/external/ilqr_svr/push_mcl_layouts --trials 10 \\
+        --out results/svr_explain --record docs/results/svr-explain-clutter-authors.json
 """
 
 from __future__ import annotations
@@ -47,8 +56,10 @@ def parser() -> argparse.ArgumentParser:
 
 def explain_trial(params: dict) -> dict:
     """One episode with its optimisations' sets and importances, reduced to per-optimisation
-    (start step, |C|, share of the goal object's planar DoFs in C) and importance counts."""
-    from dopt.tasks import get_task
+    records (start step, |C|, share of the goal object's planar DoFs in C, the line-search
+    step alpha, the relative improvement dJ/J, the regularisation mu, the nominal's states in
+    contact with the pushed object, the goal object's distance to the goal when it started),
+    the goal object's travel and the importance counts."""
     from dopt.tasks.push.task_model import planar_dofs
 
     p = dict(params)
@@ -56,30 +67,102 @@ def explain_trial(params: dict) -> dict:
     settings = SVRMPCSettings(**p)
     history: list = []
     result = run_svr_mpc(settings, seed, history=history)
-    task = get_task(settings.task)(np.random.default_rng(seed))
+    task = settings.build_task(seed)
     goal = planar_dofs(task.model, task.goal_bodies)
     robot = set(task.robot_dofs.tolist())
     values = [v for h in history if h["importance"] is not None
               for d, v in zip(h["dofs"], h["importance"], strict=True) if d not in robot]
+    stride = result.goal_distance_stride
+    at_start = [result.goal_distance[min(s // stride, len(result.goal_distance) - 1)]
+                for s in result.opt_step]
     return {"steps": result.steps, "mpc_cost": result.mpc_cost, "success": result.success,
+            "goal_distance_start": result.goal_distance_start,
             "goal_distance_end": result.goal_distance_end,
+            "travel": goal_travel(task, result.final_state),
+            "lag_steps_mean": result.lag_steps_mean, "horizon": task.horizon,
             "opt_step": result.opt_step, "n_dofs": result.n_dofs,
             "goal_share": [round(float(np.isin(goal, h["dofs"]).mean()), 4) for h in history],
+            "alpha": [h["alpha"] for h in history],
+            "rel_improvement": [(h["cost_before"] - h["cost_after"]) / abs(h["cost_before"])
+                                if h["cost_before"] else 0.0 for h in history],
+            "mu": [h["mu"] for h in history],
+            "contact_steps": [h["contact_steps"] for h in history],
+            "goal_distance_at_opt": at_start,
             "importance": importance_counts(values)}
+
+
+def goal_travel(task, final_state) -> float:
+    """How far (m, in x and y) the goal object's centre (a flex: its mean vertex) moved from
+    the task's initial state to ``final_state``."""
+    import mujoco
+
+    from dopt.state import INTEGRATION
+
+    m = task.model
+    d = mujoco.MjData(m)
+    xy = []
+    for state in (task.initial_state, final_state):
+        mujoco.mj_setState(m, d, np.asarray(state, dtype=float), INTEGRATION)
+        mujoco.mj_kinematics(m, d)
+        xy.append(d.xpos[task.goal_bodies, :2].mean(axis=0))
+    return float(np.linalg.norm(xy[1] - xy[0]))
+
+
+#: the shares of non-robot importances reported: exactly 0, (0, 0.1), [0.1, 1), [1, 500),
+#: >= 500 (rho 1 and 500 are Table 1's cuts)
+SHARE_BINS = {"zero": (0.0, 0.0), "lt_0.1": (0.0, 0.1), "0.1_to_1": (0.1, 1.0),
+              "1_to_500": (1.0, 500.0), "ge_500": (500.0, np.inf)}
 
 
 def importance_counts(values) -> dict:
     """Counts of importance values: "zero", "below" (0 < v < 10^min), per decade "k" (10^k <= v
-    < 10^(k+1)), "above"; and the counts below 1, in [1, 500), at or above 500."""
+    < 10^(k+1)), "above"; the counts below 1, in [1, 500), at or above 500; and per
+    ``SHARE_BINS`` (open below for "lt_0.1", closed below elsewhere)."""
     v = np.asarray(values, dtype=float)
     pos = v[v > 0]
     k = np.floor(np.log10(pos)) if len(pos) else np.array([])
     lo, hi = RHO_CUTS
+    bins = {"zero": int((v == 0).sum()), "lt_0.1": int(((v > 0) & (v < 0.1)).sum())}
+    bins.update({name: int(((v >= a) & (v < b)).sum()) for name, (a, b) in SHARE_BINS.items()
+                 if name not in bins})
     return {"n": int(len(v)), "zero": int((v == 0).sum()),
             "below": int((k < DECADES[0]).sum()), "above": int((k > DECADES[-1]).sum()),
             "decades": {str(d): int((k == d).sum()) for d in DECADES},
             "lt_1": int((v < lo).sum()), "1_to_500": int(((v >= lo) & (v < hi)).sum()),
-            "ge_500": int((v >= hi).sum())}
+            "ge_500": int((v >= hi).sum()), "bins": bins}
+
+
+#: the goal object is "away from its goal" (where the optimiser should still be making
+#: progress) while farther than this (m)
+AWAY = 0.05
+
+
+def mechanism(results: list[dict]) -> dict:
+    """Per row, over every optimisation of its episodes: the median dJ/J while the goal object
+    is more than ``AWAY`` from the goal, the share of optimisations accepted (alpha > 0), whose
+    nominal touches the pushed object, the median mu; per episode: the median travel of the
+    goal object and the median lag (agent steps) against the horizon T; the mean over episodes
+    of each episode's mean |C|."""
+    away = [r for res in results for r, d in zip(res["rel_improvement"],
+                                                 res["goal_distance_at_opt"], strict=True)
+            if d > AWAY]
+    alphas = [a for res in results for a in res["alpha"]]
+    contact = [c > 0 for res in results for c in res["contact_steps"]]
+    mus = [m for res in results for m in res["mu"]]
+
+    def median(values):
+        return float(np.median(values)) if len(values) else None
+
+    return {"rel_improvement_median_away": median(away), "n_optimisations_away": len(away),
+            "accepted_share": float(np.mean([a > 0 for a in alphas])) if alphas else None,
+            "contact_share": float(np.mean(contact)) if contact else None,
+            "mu_median": median(mus),
+            "travel_median": median([res["travel"] for res in results]),
+            "goal_distance_end_median": median([res["goal_distance_end"] for res in results]),
+            "lag_steps_median": median([res["lag_steps_mean"] for res in results]),
+            "n_dofs_mean": float(np.mean([np.mean(res["n_dofs"]) for res in results
+                                          if len(res["n_dofs"])])),
+            "horizon": results[0]["horizon"]}
 
 
 def summarize_rows(records: list[dict], bins: int) -> dict:
@@ -104,13 +187,13 @@ def summarize_rows(records: list[dict], bins: int) -> dict:
         imp = _pool([r["importance"] for r in results])
         n = max(imp["n"], 1)
         out[row] = {"n_trials": len(results), "bin_edges": edges.tolist(),
+                    "mechanism": mechanism(results),
                     "n_dofs": _nan_to_none(n_dofs), "goal_share": _nan_to_none(share),
                     "goal_share_mean": float(np.mean([np.mean(r["goal_share"] or [0])
                                                       for r in results])),
                     "importance": imp,
-                    "importance_share": ({"lt_1": imp["lt_1"] / n, "1_to_500": imp["1_to_500"]
-                                          / n, "ge_500": imp["ge_500"] / n,
-                                          "zero": imp["zero"] / n} if imp["n"] else None)}
+                    "importance_share": ({k: v / n for k, v in imp["bins"].items()}
+                                         if imp["n"] else None)}
     return out
 
 
@@ -118,6 +201,7 @@ def _pool(counts: list[dict]) -> dict:
     out = {k: sum(c[k] for c in counts) for k in ("n", "zero", "below", "above", "lt_1",
                                                   "1_to_500", "ge_500")}
     out["decades"] = {d: sum(c["decades"][d] for c in counts) for d in counts[0]["decades"]}
+    out["bins"] = {b: sum(c["bins"][b] for c in counts) for b in SHARE_BINS}
     return out
 
 

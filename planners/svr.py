@@ -170,10 +170,14 @@ class SVROptimiser:
 
     ``n_unstable_rollouts`` counts the line-search rollouts the stability verdict flagged.
     With ``keep_history``, ``history`` gets one entry per optimisation: {"dofs": the set it
-    optimised (c,), "importance": the importance of each of them (c,) for SVR, else None}.
+    optimised (c,), "importance": the importance of each of them (c,) for SVR, else None,
+    "alpha": the accepted line-search step (0: rejected), "mu": the regularisation after it,
+    "cost_before", "cost_after": J of the old and the new nominal}, and, with a ``probe``
+    (a function of the new nominal's (T+1, ns) states returning a dict), that dict's items.
     """
 
-    def __init__(self, ilqr, selector: DofSelector, keep_history: bool = False):
+    def __init__(self, ilqr, selector: DofSelector, keep_history: bool = False,
+                 probe=None):
         if not callable(getattr(ilqr, "iterate", None)):
             raise TypeError(f"ilqr must be a planners.ilqr.ILQR (with iterate), got "
                             f"{type(ilqr).__name__}")
@@ -182,6 +186,9 @@ class SVROptimiser:
         self.ilqr, self.selector = ilqr, selector
         self.n_unstable_rollouts = 0
         self.keep_history, self.history = bool(keep_history), []
+        if probe is not None and not callable(probe):
+            raise TypeError(f"probe must be callable or None, got {type(probe).__name__}")
+        self.probe = probe
 
     def optimise(self, state: np.ndarray, plan: Plan) -> Plan:
         C = self.selector.before()
@@ -190,9 +197,15 @@ class SVROptimiser:
         self.n_unstable_rollouts += step.n_unstable
         if self.keep_history:
             imp = self.selector.importance
-            self.history.append({"dofs": np.asarray(step.dofs).tolist(),
-                                 "importance": None if imp is None or len(imp) != len(step.dofs)
-                                 else np.asarray(imp, dtype=float).tolist()})
+            entry = {"dofs": np.asarray(step.dofs).tolist(),
+                     "importance": None if imp is None or len(imp) != len(step.dofs)
+                     else np.asarray(imp, dtype=float).tolist(),
+                     "alpha": float(step.alpha), "mu": float(step.mu),
+                     "cost_before": float(step.cost_before),
+                     "cost_after": float(step.cost_after)}
+            if self.probe is not None:
+                entry.update(self.probe(step.states))
+            self.history.append(entry)
         info = dict(step.seconds, cost=step.cost_after, alpha=step.alpha, n_dofs=len(C))
         return Plan(controls=step.controls, states=step.states, K=step.K.numpy(),
                     dofs=step.dofs, info=info)

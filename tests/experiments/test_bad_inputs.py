@@ -116,7 +116,7 @@ BAD = [
     ("mpc", ["--methods", "naive,naive"], "argument --methods: method(s) naive given twice"),
     ("rho_sweep", ["--method", "rand"], "argument --method: invalid choice: 'rand'"),
     # the paper protocol's flags, and the scripts built on mpc.py's run flags
-    ("mpc", ["--preset", "authors"], "argument --preset: invalid choice: 'authors'"),
+    ("mpc", ["--preset", "theirs"], "argument --preset: invalid choice: 'theirs'"),
     ("mpc", ["--fd-skip", "0"], "argument --fd-skip: must be >= 1, got 0"),
     ("mpc", ["--nominal-threads", "0"], "argument --nominal-threads: must be > 0"),
     ("mpc", ["--keypoints", "often"], "argument --keypoints: invalid choice: 'often'"),

@@ -21,6 +21,8 @@ def test_importance_counts_split_at_the_rho_cuts_and_decades():
     assert (c["lt_1"], c["1_to_500"], c["ge_500"]) == (4, 2, 2)
     assert c["decades"]["-1"] == 1 and c["decades"]["0"] == 1 and c["decades"]["2"] == 2
     assert sum(c["decades"].values()) + c["zero"] + c["below"] + c["above"] == c["n"]
+    # the share bins: 0 | (0, 0.1) | [0.1, 1) | [1, 500) | >= 500, every value in one
+    assert c["bins"] == {"zero": 2, "lt_0.1": 1, "0.1_to_1": 1, "1_to_500": 2, "ge_500": 2}
 
 
 def test_timelines_average_over_seeds_per_bin():
@@ -28,7 +30,11 @@ def test_timelines_average_over_seeds_per_bin():
         return {"params": {"method": "svr-sum", "theta": 10, "rho": 1.0, "seed": seed},
                 "result": {"steps": 100, "opt_step": steps, "n_dofs": n_dofs,
                            "goal_share": share,
-                           "importance": svr_explain.importance_counts([0.0, 2.0])}}
+                           "importance": svr_explain.importance_counts([0.0, 2.0]),
+                           "rel_improvement": [0.1, 1e-6], "goal_distance_at_opt": [0.2, 0.01],
+                           "alpha": [1.0, 0.0], "mu": [0.1, 1.0], "contact_steps": [3, 0],
+                           "travel": 0.1 + seed, "goal_distance_end": 0.01,
+                           "lag_steps_mean": 10.0, "horizon": 80}}
     rows = svr_explain.summarize_rows(
         [rec(0, [0, 60], [55, 20], [1.0, 0.0]), rec(1, [10, 90], [45, 10], [0.5, 0.5])], bins=2)
     r = rows["sum-t10-r1"]
@@ -37,6 +43,11 @@ def test_timelines_average_over_seeds_per_bin():
     assert r["goal_share"] == pytest.approx([0.75, 0.25])
     assert r["importance_share"]["zero"] == pytest.approx(0.5)
     assert r["n_trials"] == 2
+    mech = r["mechanism"]
+    # dJ/J only while the object was more than 5 cm away: the 0.1 of each seed
+    assert mech["n_optimisations_away"] == 2 and mech["rel_improvement_median_away"] == 0.1
+    assert mech["accepted_share"] == 0.5 and mech["contact_share"] == 0.5
+    assert mech["travel_median"] == pytest.approx(0.6) and mech["horizon"] == 80
 
 
 def test_short_run_writes_summary_and_plot(tmp_path):
@@ -52,5 +63,8 @@ def test_short_run_writes_summary_and_plot(tmp_path):
     assert d["rows"]["rand-t5"]["importance_share"] is None        # rand has no importance
     svr = d["rows"]["sum-t10-r1"]
     assert svr["importance"]["n"] > 0 and 0 <= svr["goal_share_mean"] <= 1
-    assert np.isclose(sum(svr["importance_share"][k] for k in ("lt_1", "1_to_500", "ge_500")), 1)
+    assert np.isclose(sum(svr["importance_share"].values()), 1)
+    assert set(svr["importance_share"]) == set(svr_explain.SHARE_BINS)
+    mech = svr["mechanism"]
+    assert 0 <= mech["contact_share"] <= 1 and mech["travel_median"] >= 0
     assert (out / "svr_explain.png").stat().st_size > 10_000

@@ -4,6 +4,10 @@
     task_model.py  TaskModel (one built task: model, initial state, what the cost looks at),
                    planar_dofs, require_generator
     clutter.py     build_clutter; soft.py: build_soft, build_soft_rigid
+    authors.py     the authors' own problems: build_clutter_authors (their scene files),
+                   build_soft_authors, build_soft_rigid_authors
+    warm_start.py  the set-up motion and the first push plan (its last control keeps pushing)
+    contact.py     robot_contact: whether the robot touches the pushed object, per state
     costs.py       push_cost (Eq. 2-3), PushWeights, goal_distance (imports torch)
 
 The builders are registered by CLI name in ``dopt.tasks.PUSH_TASKS``.

@@ -18,11 +18,13 @@ Every cost is diagonal-quadratic in the full tangent state, plus (``PushWeights(
   which the pusher touches it (``contact_distance``; theirs is 0.28 m from their gripper body's
   origin, ours is measured from the pusher tip), squared.
 
-The weights are ours (the paper does not give its W, R, W_f); they are in ``PushWeights``.
-``COST_PRESETS`` names the costs: ``paper`` (Eq. 2, no end-effector term; the pushing then
-relies on the initial plan of ``dopt.tasks.push.warm_start`` to bring the pusher into
-contact), ``paper-reach`` (Eq. 2 with the reach residual at the authors' terminal weight, 100
-times the goal's) and ``ee`` (with the end-effector term).
+The paper does not give its W, R, W_f; ``PushWeights()`` are ours, ``AUTHORS_COSTS`` the
+authors' code's. ``COST_PRESETS`` names the costs: ``authors-<task>`` (the authors' own weights
+of each task: no control cost, no end-effector term), ``paper`` (Eq. 2 with our weights and
+torque cost, no end-effector term; the pushing then relies on the initial plan of
+``dopt.tasks.push.warm_start`` to bring the pusher into contact), ``paper-reach`` (Eq. 2 with
+the reach residual at the authors' terminal weight, 100 times the goal's) and ``ee`` (with the
+end-effector term).
 """
 
 from __future__ import annotations
@@ -56,6 +58,7 @@ class PushWeights:
     ee_f: float = 10.0
     reach: float = 0.0
     reach_f: float = 0.0
+    joint_velocity: tuple[float, ...] | None = None   # per arm joint, replaces arm_velocity(_f)
     success_radius: float = 0.02     # m: goal object centre within this of the goal ends the task
 
     @classmethod
@@ -68,6 +71,14 @@ class PushWeights:
     def __post_init__(self):
         check_config(self, minimum=dict.fromkeys((f.name for f in fields(self)), 0),
                      positive=("success_radius",))
+        if self.joint_velocity is not None and len(self.joint_velocity) != len(TAU_MAX):
+            raise ValueError(f"PushWeights.joint_velocity needs one weight per arm joint "
+                             f"({len(TAU_MAX)}), got {len(self.joint_velocity)}")
+
+    @property
+    def has_control_cost(self) -> bool:
+        """Whether the cost has a control term (R != 0 in Eq. 2)."""
+        return self.torque > 0
 
 
 #: the pushing costs by name: the paper's Eq. 2; Eq. 2 with the authors' soft-task "reach"
@@ -75,6 +86,27 @@ class PushWeights:
 #: with the end-effector term
 COST_PRESETS = {"paper": PushWeights.paper(), "paper-reach": PushWeights.paper(reach_f=1e5),
                 "ee": PushWeights()}
+
+#: the authors' own weights per task (DMackRus/iLQR_SVR), with no control cost (their code has
+#: none in any version) and no end-effector term; residuals are w r^2 without dt, as ours.
+#: clutter: ``PaperData/MPC_push_mcl/Cost config`` of the paper's runs (goal position 8, goal
+#: velocity 1.5, distractor position 4, joint velocities 0.1 0.1 0.1 0.01 0 0.1 0; the file
+#: says its terminal costs served only the final evaluation, so the terminal weights equal the
+#: running ones). soft_rigid: ``push_soft_into_rigid.yaml`` at 838e034 (goal position 100
+#: running, 0 terminal; goal velocity 0.1; no arm term). soft: ``push_soft.yaml`` (goal 10
+#: running, 1000 terminal; reach residual 0 running, 1e5 terminal; no velocity terms). The
+#: clutter weights moved between their commits (838e034: goal 0/1000, obstacles 0/10; HEAD:
+#: goal 4/4, obstacles 0.1); the ones above are those the paper's runs record.
+_NONE = dict(goal_velocity=0.0, goal_velocity_f=0.0, distractor=0.0, distractor_f=0.0,
+             arm_velocity=0.0, arm_velocity_f=0.0, torque=0.0, ee=0.0, ee_f=0.0)
+AUTHORS_COSTS = {
+    "clutter": PushWeights(**{**_NONE, "goal": 8.0, "goal_f": 8.0, "goal_velocity": 1.5,
+                              "goal_velocity_f": 1.5, "distractor": 4.0, "distractor_f": 4.0,
+                              "joint_velocity": (0.1, 0.1, 0.1, 0.01, 0.0, 0.1, 0.0)}),
+    "soft_rigid": PushWeights(**{**_NONE, "goal": 100.0, "goal_f": 0.0, "goal_velocity": 0.1}),
+    "soft": PushWeights(**{**_NONE, "goal": 10.0, "goal_f": 1000.0, "reach_f": 1e5}),
+}
+COST_PRESETS.update({f"authors-{task}": w for task, w in AUTHORS_COSTS.items()})
 
 
 def _xy(scene: Scene, bodies: list[int]) -> tuple[np.ndarray, np.ndarray]:
@@ -121,7 +153,10 @@ def push_cost(tm: TaskModel, scene: Scene, weights: PushWeights = PushWeights())
         _, dis_d = _xy(scene, [m.body(n).id for n in tm.distractors])
         w[dis_d], w_f[dis_d] = W.distractor, W.distractor_f
     arm = tm.robot_dofs
-    w[nv + arm], w_f[nv + arm] = W.arm_velocity, W.arm_velocity_f
+    if W.joint_velocity is None:
+        w[nv + arm], w_f[nv + arm] = W.arm_velocity, W.arm_velocity_f
+    else:
+        w[nv + arm] = w_f[nv + arm] = np.asarray(W.joint_velocity, dtype=float)
     r = W.torque / TAU_MAX ** 2
     terms = []
     if W.ee or W.ee_f or W.reach or W.reach_f:

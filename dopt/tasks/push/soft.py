@@ -11,7 +11,8 @@ Both use dt = 0.004 s and MuJoCo's ``discrete`` integrator: in MuJoCo 4.0 the el
 flex raises an error under ``implicit``/``implicitfast`` and explodes under Euler at this step.
 Each layout is drawn from the caller's generator: the block in front of the robot, turned to a
 pushing heading within 30 degrees of +x, the goal ahead of it along that heading and the pusher
-tip just above the table behind it.
+tip just above the table behind it. What a block is made of is a ``SoftMaterial`` (default: ours);
+``dopt.tasks.push.authors`` builds the authors' blocks with these helpers.
 """
 
 from __future__ import annotations
@@ -51,6 +52,26 @@ POISSON = 0.2
 ELASTIC_DAMPING = 0.002  # s, Rayleigh damping of the elasticity
 SOFT_RGBA = (0.85, 0.15, 0.15, 1.0)
 SETTLE_STEPS = 100  # steps of zero control before the initial state is taken
+
+
+@dataclass(frozen=True)
+class SoftMaterial:
+    """What a soft block is made of (the defaults: ours).
+
+    Attributes:
+        spacing: distance between neighbouring vertices (m).
+        radius: collision radius of the flex (m).
+        young, poisson: Young's modulus (Pa) and Poisson's ratio of its elasticity.
+        damping: Rayleigh damping of the elasticity (s).
+        mass: total mass (kg); None: ``DENSITY`` times the block's volume.
+    """
+
+    spacing: float = SPACING
+    radius: float = VERTEX_RADIUS
+    young: float = YOUNG
+    poisson: float = POISSON
+    damping: float = ELASTIC_DAMPING
+    mass: float | None = None
 
 
 def block_mesh(counts: tuple[int, int, int], spacing: float,
@@ -94,12 +115,13 @@ def block_mesh(counts: tuple[int, int, int], spacing: float,
 
 
 def add_soft_block(spec: mujoco.MjSpec, points: np.ndarray, tets: np.ndarray, xy: np.ndarray,
-                   heading: float) -> None:
+                   heading: float, material: SoftMaterial = SoftMaterial()) -> None:
     """Add the soft body ``SOFT_BODY``: a flex with one 3-DoF body per point (``dof="full"``).
 
     ``points`` (N, 3) and ``tets`` (E, 4) as from ``block_mesh``; the block is turned by
     ``heading`` (rad) about z and placed with its origin at ``xy``, resting on the table.
-    Its mass is ``DENSITY`` times its volume.
+    Its radius, elasticity and mass are ``material``'s (by default, ``DENSITY`` times its
+    volume).
     """
     corners = points[tets]
     volume = np.abs(np.linalg.det(corners[:, 1:] - corners[:, :1])).sum() / 6
@@ -114,15 +136,15 @@ def add_soft_block(spec: mujoco.MjSpec, points: np.ndarray, tets: np.ndarray, xy
         dim=3,
         dof="full",
         mesh=mesh.name,
-        radius=VERTEX_RADIUS,
-        mass=DENSITY * volume,
-        pos=[xy[0], xy[1], VERTEX_RADIUS],
+        radius=material.radius,
+        mass=DENSITY * volume if material.mass is None else material.mass,
+        pos=[xy[0], xy[1], material.radius],
         quat=[math.cos(heading / 2), 0.0, 0.0, math.sin(heading / 2)],
     )
     spec.delete(mesh)  # make_flex has copied the points; the mesh asset is not part of the model
-    flex.young = YOUNG
-    flex.poisson = POISSON
-    flex.damping = ELASTIC_DAMPING
+    flex.young = material.young
+    flex.poisson = material.poisson
+    flex.damping = material.damping
     flex.selfcollide = mujoco.mjtFlexSelf.mjFLEXSELF_NONE
     flex.friction = [0.5, 0.005, 0.0001]
     flex.solref = [0.01, 1.0]
@@ -144,26 +166,29 @@ class _Block:
 
 
 def _draw_block(rng: np.random.Generator, counts: tuple[int, int, int], notch: bool, x: float,
-                half_x: float, half_y: float) -> _Block:
-    """Draw a block centred in [x +- half_x] x [+- half_y] (m), pushed along a heading within 30
-    degrees of +x, with the pusher tip ``STANDOFF`` behind its back face."""
+                half_x: float, half_y: float, material: SoftMaterial = SoftMaterial()) -> _Block:
+    """Draw a block (vertices ``material.spacing`` apart) centred in [x +- half_x] x [+- half_y]
+    (m), pushed along a heading within 30 degrees of +x, with the pusher tip ``STANDOFF``
+    behind its back face."""
     centre = np.array([rng.uniform(x - half_x, x + half_x), rng.uniform(-half_y, half_y)])
     heading, along = draw_heading(rng)
-    points, tets = block_mesh(counts, SPACING, notch=notch)
-    tip = centre - (_half_depth(points) + TOOL_RADIUS + STANDOFF) * along
+    points, tets = block_mesh(counts, material.spacing, notch=notch)
+    tip = centre - (_half_depth(points, material.radius) + TOOL_RADIUS + STANDOFF) * along
     return _Block(points, tets, centre, heading, along, tip)
 
 
-def _half_depth(points: np.ndarray) -> float:
-    """Distance from a block's centre to its front face along the push, vertex radius included."""
-    return float(points[:, 0].max()) + VERTEX_RADIUS
+def _half_depth(points: np.ndarray, radius: float = VERTEX_RADIUS) -> float:
+    """Distance from a block's centre to its front face along the push, vertex ``radius``
+    included."""
+    return float(points[:, 0].max()) + radius
 
 
 def _finish(name: str, spec: mujoco.MjSpec, block: _Block, goal: np.ndarray, goal_object: str,
-            horizon: int, slowdown: int) -> TaskModel:
-    """Compile the scene, settle it with the pusher tip at ``block.tip``, and describe the task."""
+            horizon: int, slowdown: int, settle_steps: int = SETTLE_STEPS) -> TaskModel:
+    """Compile the scene, settle it with the pusher tip at ``block.tip`` (``settle_steps`` of
+    zero control), and describe the task."""
     model = spec.compile()
-    state = rest_state(model, ik_pointing_down(np.array([*block.tip, EE_HEIGHT])), SETTLE_STEPS)
+    state = rest_state(model, ik_pointing_down(np.array([*block.tip, EE_HEIGHT])), settle_steps)
     log.debug("%s: block at %s, heading %.3f, goal %s", name, block.centre, block.heading, goal)
     return TaskModel(
         name=name,

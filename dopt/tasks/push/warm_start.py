@@ -11,10 +11,21 @@ controller here are ours.
   object's back face, at ``height`` above the table, in ``setup_steps`` steps, then holds it
   for ``hold_steps``. The state it ends in starts the MPC episode; its steps are not part of
   the episode (the authors run it before the MPC and do not score it).
-- ``push``: from any state, the end effector moves toward the goal along the same line (its
-  target: the goal minus the object's depth, as far as ``speed * fraction * T * dt`` allows:
-  the authors' 0.1 m/s and 5/6) over the T steps of a horizon; the controls that track it are
-  the MPC's first plan. It can be called again from any later state to re-seed a plan.
+- ``push``: from any state, the end effector moves toward the goal along the same line over
+  the T steps of a horizon; the controls that track it are the MPC's first plan. Its end
+  point is the authors' (``EEWayPointsPush``): the pushed object's *centre* moved toward the
+  goal by as much as ``speed * fraction * T * dt`` allows (their 0.1 m/s and 5/6), never past
+  the goal. The plan keeps pushing at its end (``moving_tail``): it is the first T controls
+  of the tracker run along the same line for 2T steps at the same speed, so its last control
+  still drives the tip forward. The MPC pads every shifted plan with its last control; a
+  plan that ended in a hold (zero path velocity) would pad with a control that stops the
+  pusher, and once the pusher leaves the object the cost (Eq. 2, which reaches the controls
+  only through contact) gives iLQR nothing to improve: the optimisation stalls (measured in
+  docs/DESIGN-NOTES.md, "Why iLQR-SVR stalled"). The authors' P-only tracker lags its target,
+  so their last control is a standing forward push too. On the soft tasks the authors' code
+  of the paper's time starts from zero torques; on this arm (gravity compensated, a rod
+  pusher 3 cm behind the block) zero torques never reach the block, so every task starts
+  from this plan.
 
 The pushed object is ``TaskModel.pushed_object``: the goal cylinder in clutter, the soft block
 in soft and soft_rigid (it carries the cylinder in soft_rigid). Its centre and back face come
@@ -51,8 +62,13 @@ class WarmStartConfig:
     """gap: tool surface to the pushed object's back face at the set-up point (m).
     height: the tool tip's centre above the table (m; the tasks' start height).
     setup_steps, hold_steps: steps to reach the set-up point and to hold it.
-    speed, fraction: the push path's length over a horizon of T steps is at most
-    ``speed * fraction * T * dt`` (m/s; the authors' 0.1 and 5/6).
+    speed, fraction: the push moves the object's centre toward the goal by at most
+    ``speed * fraction * T * dt`` over a horizon of T steps (m/s; the authors' 0.1 and 5/6).
+    depth_from: ``centre``: that reach is measured from the pushed object's centre (the
+    authors'); ``tip``: from the end effector, stopping the tip at the object's back face
+    when it reaches the goal (a shorter push).
+    moving_tail: the plan is the first T controls of a 2T-step track of the same line (its
+    last control keeps pushing); False: the track ends at rest at the path's end (a hold).
     kp, kv, kr, kw, kq: tracking gains (N/m, N s/m, N m/rad, N m s/rad, N m s/rad)."""
 
     gap: float = 0.01
@@ -66,8 +82,12 @@ class WarmStartConfig:
     kr: float = 50.0
     kw: float = 5.0
     kq: float = 1.0
+    depth_from: str = "centre"
+    moving_tail: bool = True
 
     def __post_init__(self):
+        if self.depth_from not in ("centre", "tip"):
+            raise ValueError(f"depth_from must be 'centre' or 'tip', got {self.depth_from!r}")
         check_config(self, positive=("height", "speed", "fraction", "kp"),
                      minimum={"gap": 0.0, "setup_steps": 1, "hold_steps": 0, "kv": 0.0,
                               "kr": 0.0, "kw": 0.0, "kq": 0.0})
@@ -128,19 +148,38 @@ def setup(task: TaskModel, state: np.ndarray | None = None,
 def push(task: TaskModel, state: np.ndarray, horizon: int,
          config: WarmStartConfig = WarmStartConfig()) -> EEPlan:
     """The first plan of an episode from ``state``: ``horizon`` controls that move the end
-    effector toward the goal along the pushing line (see the module docstring)."""
+    effector toward the goal along the pushing line (see the module docstring). With
+    ``config.moving_tail`` the returned ``path``, ``states`` and ``ee`` are those of the
+    first ``horizon`` steps of the 2T-step track."""
     horizon = check_int(horizon, "horizon", minimum=1)
     state = _state(task, state)
+    end = push_end(task, state, horizon, config)
+    start = _ee(task, state)
+    if not config.moving_tail:
+        s = np.arange(1, horizon + 1) / horizon
+        return track(task, state, start + s[:, None] * (end - start), config)
+    s = np.arange(1, 2 * horizon + 1) / horizon              # the same speed, twice as long
+    full = track(task, state, start + s[:, None] * (end - start), config)
+    return EEPlan(full.controls[:horizon], full.states[:horizon + 1], full.path[:horizon],
+                  full.ee[:horizon + 1])
+
+
+def push_end(task: TaskModel, state: np.ndarray, horizon: int,
+             config: WarmStartConfig = WarmStartConfig()) -> np.ndarray:
+    """(3,) where ``push`` brings the end effector after ``horizon`` steps from ``state``
+    (``config.depth_from`` says what the reach is measured from)."""
     centre, along, back = push_line(task, state)
     start = _ee(task, state)
-    end_xy = np.asarray(task.goal_position[:2], dtype=float) - back * along
+    goal = np.asarray(task.goal_position[:2], dtype=float)
     reach = config.speed * config.fraction * horizon * task.model.opt.timestep
-    delta = end_xy - start[:2]
-    if np.linalg.norm(delta) > reach:
-        delta *= reach / np.linalg.norm(delta)
-    end = np.array([start[0] + delta[0], start[1] + delta[1], config.height])
-    s = np.arange(1, horizon + 1) / horizon
-    return track(task, state, start + s[:, None] * (end - start), config)
+    if config.depth_from == "centre":
+        end_xy = centre + min(reach, float(np.linalg.norm(goal - centre))) * along
+    else:
+        delta = goal - back * along - start[:2]
+        if np.linalg.norm(delta) > reach:
+            delta *= reach / np.linalg.norm(delta)
+        end_xy = start[:2] + delta
+    return np.array([end_xy[0], end_xy[1], config.height])
 
 
 def track(task: TaskModel, state: np.ndarray, path, config: WarmStartConfig = WarmStartConfig()

@@ -1,0 +1,218 @@
+"""One MPC episode of iLQR-SVR on a pushing task: the controller wiring (``build_controller``),
+``run_svr_mpc`` and its ``SVRMPCResult``; ``run_trial`` for ``dopt.sweep``.
+
+Shapes: T horizon, nu controls, ns state row, c = |C| active DoFs.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import asdict, dataclass, field
+
+import numpy as np
+
+from dopt.mpc import MPC, MPCConfig, Plan, mpc_cost
+from dopt.rollout import RolloutConfig, RolloutService
+from dopt.scene import Scene
+from dopt.tasks.push import warm_start
+from dopt.tasks.push.contact import robot_contact
+from dopt.tasks.push.costs import COST_PRESETS, PushWeights, goal_distance, push_cost
+from dopt.tasks.push.task_model import TaskModel
+from dopt.validation import check_int
+from planners.ilqr import ILQR, ILQRConfig
+from planners.svr import DofSelector, SelectionConfig, SVROptimiser
+from planners.svr_mpc.settings import CLOCK_MODEL_MS, SVRMPCSettings
+
+
+@dataclass(frozen=True)
+class SVRController:
+    """A task instance wired for MPC: its scene, cost, rollout service, the optimiser
+    (``planners.svr.SVROptimiser``: selector -> one iLQR iteration -> selector) and the goal
+    object's distance to the goal (state row (ns,) -> m)."""
+
+    task: TaskModel
+    scene: Scene
+    cost: object
+    service: RolloutService
+    optimiser: SVROptimiser
+    goal_distance: Callable[[np.ndarray], float]
+
+    @property
+    def selector(self) -> DofSelector:
+        return self.optimiser.selector
+
+    @property
+    def ilqr(self) -> ILQR:
+        return self.optimiser.ilqr
+
+
+def build_controller(task: TaskModel, selection: SelectionConfig, rng: np.random.Generator,
+                     threads: int = 0, ilqr: ILQRConfig = ILQRConfig(),
+                     weights: PushWeights = PushWeights()) -> SVRController:
+    """Wire ``task`` to its push cost (``weights``), a rollout service with ``threads``
+    threads, iLQR and a DoF selector drawing from ``rng``."""
+    scene = Scene(task.model)
+    cost = push_cost(task, scene, weights)
+    service = RolloutService(scene, RolloutConfig(threads=threads))
+    selector = DofSelector(scene.nv, task.robot_dofs, cost.costed_dofs, selection, rng)
+    return SVRController(task, scene, cost, service,
+                         SVROptimiser(ILQR(service, cost, ilqr), selector),
+                         goal_distance(task, scene))
+
+
+#: the goal distance is kept every this many executed steps (and at the last)
+GOAL_DISTANCE_STRIDE = 10
+
+
+@dataclass(frozen=True)
+class SVRMPCResult:
+    """One MPC episode: its MPC cost (Eq. 5), whether the goal object reached the goal, the
+    executed steps, the goal object's distance to the goal at start and end (m), per
+    optimisation its duration on the episode's clock (ms), its process CPU time (ms), |C|,
+    start step, lag (agent steps) and active set (a hex bit mask, bit j = DoF j:
+    ``active_dofs``), mean lag, steps that started late (real clock), and the slowdown,
+    timeout and clock it ran with; the goal object's distance to the goal every
+    ``goal_distance_stride`` executed steps and at the last (m, the start first), the final
+    state row (ns,) as a list, the line-search rollouts the stability verdict flagged, and
+    whether the executed episode broke a stability bound (the reason names the step and
+    bound). Lists are rounded (0.01 ms, 10 um, 1e-7) to keep trial files small."""
+
+    mpc_cost: float
+    success: bool
+    steps: int
+    goal_distance_start: float
+    goal_distance_end: float
+    opt_ms: list
+    n_dofs: list
+    opt_step: list
+    active_sets: list
+    lag_steps_mean: float
+    late_steps: int
+    slowdown: float
+    timeout: int
+    goal_distance: list = field(default_factory=list)
+    final_state: list = field(default_factory=list)
+    n_unstable_rollouts: int = 0
+    unstable: bool = False
+    unstable_reason: str = ""
+    clock: str = "real"
+    cpu_ms: list = field(default_factory=list)
+    lag_steps: list = field(default_factory=list)
+    goal_distance_stride: int = GOAL_DISTANCE_STRIDE
+
+    @property
+    def opt_ms_mean(self) -> float:
+        return float(np.mean(self.opt_ms))
+
+    @property
+    def dofs_mean(self) -> float:
+        return float(np.mean(self.n_dofs))
+
+    def active_dofs(self, i: int) -> np.ndarray:
+        """The active DoF set of optimisation ``i``: (c,) sorted indices."""
+        return dofs_of_mask(self.active_sets[i])
+
+    def to_dict(self) -> dict:
+        """JSON-able form, with the means and the optimisation count."""
+        return {**asdict(self), "opt_ms_mean": self.opt_ms_mean, "dofs_mean": self.dofs_mean,
+                "n_optimisations": len(self.opt_ms)}
+
+
+def dofs_mask(dofs) -> str:
+    """A DoF set as a hex bit mask (bit j set: DoF j in the set)."""
+    return hex(sum(1 << int(j) for j in np.unique(np.asarray(dofs, dtype=int))))
+
+
+def dofs_of_mask(mask: str) -> np.ndarray:
+    """The sorted DoF indices (c,) of a hex bit mask written by ``dofs_mask``."""
+    bits, out = int(mask, 16), []
+    while bits:
+        low = bits & -bits
+        out.append(low.bit_length() - 1)
+        bits ^= low
+    return np.array(out, dtype=int)
+
+
+def run_svr_mpc(settings: SVRMPCSettings = SVRMPCSettings(), seed: int = 0,
+                history: list | None = None) -> SVRMPCResult:
+    """One MPC episode of ``settings.method`` on the task instance of ``seed``.
+
+    The seed builds the task instance (the same for every method, so costs pair up against baseline:
+    problem ``ours`` draws its layout from ``default_rng(seed)``; the authors' clutter loads
+    their scene number ``seed``), the DoF selector's draws ([seed, 1]) and the control noise
+    ([seed, 2]). The episode starts at the task's initial state with zero controls, or
+    (``warm_start``) at the state the authors' set-up motion ends in with their push plan; it
+    runs on the settings' clock (real: real time times the slowdown) unless ``synchronous``.
+    ``history``: a list that receives ``SVROptimiser.history`` (each optimisation's set,
+    importances, line-search step, regularisation and costs), with "contact_steps": the states
+    of the new nominal in which the robot touches the pushed object
+    (``dopt.tasks.push.contact``), of "horizon" + 1.
+    """
+    import torch
+
+    if not isinstance(settings, SVRMPCSettings):
+        raise TypeError(f"settings must be SVRMPCSettings, got {type(settings).__name__}")
+    check_int(seed, "seed", minimum=0)
+
+    torch.set_num_threads(1)
+    seed = int(seed)
+    task = settings.build_task(seed)
+    ctl = build_controller(task, settings.selection, np.random.default_rng([seed, 1]),
+                           settings.threads, settings.ilqr,
+                           COST_PRESETS[settings.cost])
+    radius = PushWeights().success_radius
+    config = MPCConfig(timeout=int(settings.timeout or task.timeout),
+                       slowdown=float(settings.slowdown or task.slowdown),
+                       synchronous=settings.synchronous, feedback=settings.feedback,
+                       control_noise=float(settings.control_noise), clock=settings.clock,
+                       threads=float(settings.nominal_threads),
+                       model_ms=(CLOCK_MODEL_MS[settings.task] if settings.clock == "model"
+                                 else None))
+    ctl.optimiser.keep_history = history is not None
+    if history is not None:
+        touching = robot_contact(task)
+
+        def contact_in_horizon(states: np.ndarray) -> dict:
+            steps = touching(states)
+            return {"contact_steps": int(steps.sum()), "horizon": len(steps) - 1}
+
+        ctl.optimiser.probe = contact_in_horizon
+    mpc = MPC(ctl.scene, ctl.optimiser, config, np.random.default_rng([seed, 2]),
+              success=lambda x: ctl.goal_distance(x) < radius)
+    if settings.warm_start:
+        start = warm_start.setup(task).final_state
+        plan = Plan(warm_start.push(task, start, task.horizon).controls)
+    else:
+        start, plan = task.initial_state, Plan(np.zeros((task.horizon, ctl.scene.nu)))
+    try:
+        res = mpc.run(start, plan)
+    finally:
+        ctl.service.close()
+    if history is not None:
+        history.extend(ctl.optimiser.history)
+    S = len(res.controls)
+    kept = sorted(set(range(0, S + 1, GOAL_DISTANCE_STRIDE)) | {S})
+    return SVRMPCResult(
+        mpc_cost=mpc_cost(ctl.cost, res), success=bool(res.success), steps=S,
+        goal_distance_start=ctl.goal_distance(start),
+        goal_distance_end=ctl.goal_distance(res.states[-1]),
+        opt_ms=[round(1e3 * s, 2) for s in res.opt_seconds], n_dofs=list(res.n_dofs),
+        opt_step=list(res.opt_step), active_sets=[dofs_mask(d) for d in res.dofs],
+        lag_steps_mean=float(np.mean(res.lag_steps)), late_steps=int(res.late_steps),
+        slowdown=config.slowdown, timeout=config.timeout,
+        goal_distance=[round(ctl.goal_distance(res.states[t]), 5) for t in kept],
+        final_state=[float(v) for v in np.round(res.states[-1], 7)],
+        n_unstable_rollouts=ctl.optimiser.n_unstable_rollouts,
+        unstable=bool(res.stability.unstable[0]),
+        unstable_reason=(f"step {res.stability.step[0]}: {res.stability.reason[0]}"
+                         if res.stability.unstable[0] else ""),
+        clock=config.clock, cpu_ms=[round(1e3 * s, 2) for s in res.cpu_seconds],
+        lag_steps=[int(v) for v in res.lag_steps])
+
+
+def run_trial(params: dict) -> dict:
+    """``run_svr_mpc`` for ``dopt.sweep``: params holds the ``SVRMPCSettings`` fields and
+    "seed" -> ``SVRMPCResult.to_dict()``."""
+    p = dict(params)
+    seed = p.pop("seed")
+    return run_svr_mpc(SVRMPCSettings(**p), seed).to_dict()

@@ -1,0 +1,270 @@
+"""The settings of one iLQR-SVR MPC trial (``SVRMPCSettings``), the paper's Table 1 rows by
+name, derivative variants, and the key and row label a trial is stored and reported under."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import mujoco
+
+from dopt.mpc import CLOCKS
+from dopt.rollout import FDConfig
+from dopt.tasks import PUSH_PROBLEMS, build_push_task, get_task
+from dopt.tasks.push.costs import COST_PRESETS
+from dopt.tasks.push.task_model import TaskModel
+from dopt.validation import check_config
+from planners.ilqr import ILQRConfig
+from planners.keypoints import KeypointConfig
+from planners.svr import METHODS, SelectionConfig, paper_theta
+
+#: the nine rows of the paper's Table 1 by name: (method, theta, rho)
+TABLE1_ROWS = {
+    "baseline": ("baseline", 0, 1.0),
+    "rand-t5": ("rand", 5, 1.0),
+    "naive": ("naive", 0, 1.0),
+    "svd-t10-r1": ("svr-svd", 10, 1.0),
+    "svd-t10-r500": ("svr-svd", 10, 500.0),
+    "svd-t5-r1": ("svr-svd", 5, 1.0),
+    "sum-t10-r1": ("svr-sum", 10, 1.0),
+    "sum-t10-r500": ("svr-sum", 10, 500.0),
+    "sum-t5-r1": ("svr-sum", 5, 1.0),
+}
+
+#: the problems a trial can run on: ``ours`` (dopt's own scenes, ``dopt.tasks.PUSH_TASKS``) or
+#: ``authors`` (the authors' scenes, objects and contacts, ``dopt.tasks.push.authors``)
+PROBLEMS = PUSH_PROBLEMS
+
+#: the authors' cost per task where it is not Eq. 2 alone (``COST_PRESETS["paper"]``): their
+#: push_soft task file adds a terminal reach residual (``dopt.tasks.push.costs``)
+PAPER_COSTS = {"soft": "paper-reach"}
+
+#: the model clock per task, ms per optimisation = a + b |C| on the nominal 2 threads: fitted
+#: by ``python -m planners.bench clock`` (docs/results/clock-model.json)
+CLOCK_MODEL_MS = {"clutter": (38.9, 2.05), "soft": (146.7, 9.29), "soft_rigid": (289.6, 30.92)}
+
+
+def row_name(method: str, theta: int, rho: float) -> str:
+    """A trial's Table 1 row: ``baseline``, ``naive``, ``rand-t<theta>``,
+    ``sum-t<theta>-r<rho>`` or ``svd-t<theta>-r<rho>`` (``TABLE1_ROWS`` names nine)."""
+    if method in ("baseline", "naive"):
+        return method
+    if method == "rand":
+        return f"rand-t{theta}"
+    return f"{method[4:]}-t{theta}-r{rho:g}"
+
+
+def parse_row(spec: str) -> tuple[str, int, float, dict]:
+    """A row of ``TABLE1_ROWS`` by name, optionally with derivative variants
+    (``variant_settings``): ``sum-t10-r1+skip5``, ``sum-t10-r1+adaptive``,
+    ``sum-t10-r1+skip5+boxqp``, ``sum-t10-r1+central``. Returns (method, theta, rho, the
+    ``SVRMPCSettings`` fields the variants set)."""
+    name, *mods = spec.split("+")
+    if name not in TABLE1_ROWS:
+        raise ValueError(f"unknown Table 1 row {name!r}: choose from {', '.join(TABLE1_ROWS)}")
+    return (*TABLE1_ROWS[name], variant_settings(mods, f"row {spec!r}"))
+
+
+def variant_settings(mods, what: str = "variants") -> dict:
+    """The ``SVRMPCSettings`` fields of derivative variants: ``skip<K>`` or ``adaptive`` (key
+    timesteps, ``planners.keypoints``), ``boxqp`` (the box-QP backward pass), ``central`` (the
+    authors' central differences, eps 1e-6); ``what`` names them in errors."""
+    over: dict = {}
+    for mod in mods:
+        if mod == "boxqp" and "box_qp" not in over:
+            over["box_qp"] = True
+        elif mod == "central" and "fd_centered" not in over:
+            over.update(fd_centered=True, fd_eps=1e-6)
+        elif mod not in ("boxqp", "central") and "keypoints" not in over:
+            try:
+                kp = KeypointConfig.parse(mod)
+            except ValueError:
+                raise ValueError(f"{what}: a variant is skip<K>, adaptive, boxqp or central, "
+                                 f"got {mod!r}") from None
+            over.update(keypoints=kp.method, fd_skip=kp.skip)
+        else:
+            raise ValueError(f"{what}: {mod!r} repeats a variant")
+    return over
+
+
+def derivatives_tag(p: dict) -> str:
+    """The derivative variant of a trial's params as a row-label suffix: `` +central``
+    (central differences), `` +skip<K>`` or `` +adaptive`` (key timesteps), `` +boxqp``; ''
+    for forward differences (eps 1e-3) at every timestep and a plain backward pass."""
+    tag = ""
+    if p.get("fd_centered") or p.get("fd_eps", 1e-3) != 1e-3:
+        tag += " +central" if p.get("fd_centered") else f" +fd{p['fd_eps']:g}"
+    if p.get("keypoints", "every") == "adaptive":
+        tag += " +adaptive"
+    elif p.get("keypoints", "every") == "skip" and p.get("fd_skip", 1) > 1:
+        tag += f" +skip{p['fd_skip']}"
+    return tag + (" +boxqp" if p.get("box_qp") else "")
+
+
+@dataclass(frozen=True)
+class SVRMPCSettings:
+    """One MPC trial's settings (the seed comes separately).
+
+    Attributes:
+        task: a name of ``dopt.tasks.PUSH_TASKS`` (clutter, soft, soft_rigid).
+        method: a DoF-selection method (``planners.svr.METHODS``).
+        rho: SVR importance threshold.
+        theta: random DoFs per iteration; None: the paper's for the method (rand 5, svr 10).
+        slowdown: agent wall time per step over dt; None: the task's (the paper's).
+        timeout: Y, agent steps; None: the task's (the paper's).
+        feedback: execute u + K (x - x_nominal) (the authors did not).
+        control_noise: Gaussian noise on executed controls, fraction of each control's range.
+        synchronous: the agent waits for the optimiser (deterministic; tests, debugging).
+        threads: simulation threads (0: one per core).
+        cost: a name of ``dopt.tasks.push.costs.COST_PRESETS``: ``ee`` (with the end-effector
+            term, ours), ``paper`` (Eq. 2 alone) or ``paper-reach`` (Eq. 2 with the authors'
+            soft-task reach residual).
+        warm_start: start from the authors' set-up state and initial push plan
+            (``dopt.tasks.push.warm_start``) instead of the task's start and zero controls.
+        clock: ``real``, ``virtual`` or ``model`` (``dopt.mpc``); nominal_threads: the thread
+            count a virtual duration divides the CPU time by; the model clock's coefficients
+            are the task's ``CLOCK_MODEL_MS``.
+        fd_centered, fd_eps: the finite differences (default forward 1e-3; the authors:
+            centred 1e-6).
+        keypoints, fd_skip: the timesteps the finite differences cover (``every``, ``skip``
+            every fd_skip-th, ``adaptive``; ``planners.keypoints``), A and B linear between.
+        box_qp: control limits in the backward pass (``ILQRConfig.box_qp``).
+        problem: ``ours`` or ``authors`` (``PROBLEMS``): whose scenes the task builds.
+        layouts: the folder of the authors' clutter scenes (``push_mcl_layouts``, one CSV per
+            scene; seed i loads scene i); needed by problem ``authors`` on clutter only.
+        islands: MuJoCo's constraint islands (its default); False solves all constraints as
+            one system (``mjDSBL_ISLAND``), as the authors' MuJoCo did, so that untouched
+            objects' derivatives are tiny rather than exactly 0.
+    """
+
+    task: str = "clutter"
+    method: str = "svr-sum"
+    rho: float = 1.0
+    theta: int | None = None
+    slowdown: float | None = None
+    timeout: int | None = None
+    feedback: bool = False
+    control_noise: float = 0.0
+    synchronous: bool = False
+    threads: int = 0
+    cost: str = "ee"
+    warm_start: bool = False
+    clock: str = "real"
+    nominal_threads: float = 2.0
+    fd_centered: bool = False
+    fd_eps: float = 1e-3
+    keypoints: str = "every"
+    fd_skip: int = 1
+    box_qp: bool = False
+    problem: str = "ours"
+    layouts: str | None = None
+    islands: bool = True
+
+    def __post_init__(self):
+        get_task(self.task)                       # ValueError naming the known tasks
+        if self.method not in METHODS:
+            raise ValueError(f"unknown method {self.method!r}; choose from {METHODS}")
+        if self.cost not in COST_PRESETS:
+            raise ValueError(f"unknown cost {self.cost!r}; choose from {tuple(COST_PRESETS)}")
+        if self.clock not in CLOCKS:
+            raise ValueError(f"unknown clock {self.clock!r}; choose from {CLOCKS}")
+        if self.problem not in PROBLEMS:
+            raise ValueError(f"unknown problem {self.problem!r}; choose from {PROBLEMS}")
+        if self.problem == "authors" and self.task == "clutter" and not self.layouts:
+            raise ValueError("problem 'authors' on clutter needs layouts: the folder of the "
+                             "authors' scenes (push_mcl_layouts/{0..99}.csv)")
+        if self.layouts is not None and not Path(self.layouts).is_dir():
+            raise ValueError(f"layouts: no folder {self.layouts} (the authors' "
+                             f"push_mcl_layouts, one CSV per scene)")
+        # rho, control_noise finite >= 0; theta an int >= 0 or None; slowdown finite > 0 or
+        # None; timeout an int >= 1 or None; feedback, synchronous bools; threads an int >= 0
+        check_config(self, positive=("slowdown", "nominal_threads", "fd_eps"),
+                     minimum={"rho": 0.0, "theta": 0, "timeout": 1, "control_noise": 0.0,
+                              "threads": 0, "fd_skip": 1})
+        _ = self.ilqr                              # ValueError naming a bad keypoint method
+        if self.synchronous and self.clock != "real":
+            raise ValueError("synchronous runs have no clock: use clock='real' with it")
+
+    @classmethod
+    def paper(cls, task: str, row: str = "sum-t10-r1", **overrides) -> SVRMPCSettings:
+        """The paper's protocol for ``row`` (a name of ``TABLE1_ROWS``) on ``task``: the
+        authors' cost for the task (``PAPER_COSTS``: Eq. 2, on soft with their reach
+        residual), their initial plan, 5 % control noise, the virtual clock."""
+        if row not in TABLE1_ROWS:
+            raise ValueError(f"unknown Table 1 row {row!r}; choose from {tuple(TABLE1_ROWS)}")
+        method, theta, rho = TABLE1_ROWS[row]
+        return cls(**{"task": task, "method": method, "theta": theta, "rho": rho,
+                      "cost": PAPER_COSTS.get(task, "paper"), "warm_start": True,
+                      "control_noise": 0.05,
+                      "clock": "virtual", **overrides})
+
+    @classmethod
+    def authors(cls, task: str, row: str = "sum-t10-r1", layouts: str | None = None,
+                **overrides) -> SVRMPCSettings:
+        """The paper's protocol for ``row`` on the authors' own problem ``task``: their scenes
+        (clutter: scene ``seed`` of ``layouts``), objects and contacts, their cost weights
+        without a control cost (``dopt.tasks.push.costs.AUTHORS_COSTS``), their initial plan
+        and padding (``dopt.tasks.push.warm_start``, the plan keeps pushing at its end), no
+        control noise (every run of their paper data records ``controls_noise: 0``), the
+        virtual clock."""
+        return cls.paper(task, row, **{"problem": "authors", "layouts": layouts,
+                                       "cost": f"authors-{task}", "control_noise": 0.0,
+                                       **overrides})
+
+    def build_task(self, seed: int) -> TaskModel:
+        """The task instance of ``seed`` under these settings (``problem``, ``layouts``,
+        ``islands``): the same for every method, so costs pair up seed by seed."""
+        task = build_push_task(self.task, self.problem, int(seed),
+                               Path(self.layouts) if self.layouts else None)
+        if not self.islands:
+            task.model.opt.disableflags |= mujoco.mjtDisableBit.mjDSBL_ISLAND
+        return task
+
+    @property
+    def ilqr(self) -> ILQRConfig:
+        """iLQR's config: the finite differences, their key timesteps, the box QP."""
+        return ILQRConfig(fd=FDConfig(eps=float(self.fd_eps), centered=bool(self.fd_centered)),
+                          keypoints=KeypointConfig(self.keypoints, skip=int(self.fd_skip)),
+                          box_qp=bool(self.box_qp))
+
+    @property
+    def selection(self) -> SelectionConfig:
+        """The DoF selector's config (theta None -> the paper's for the method)."""
+        theta = paper_theta(self.method) if self.theta is None else self.theta
+        return SelectionConfig(self.method, rho=float(self.rho), theta=int(theta))
+
+
+def trial_key(p: dict) -> str:
+    """File-name key of a trial's params: everything that changes its outcome (timeout None,
+    the task's own, is Y0; settings at their defaults add nothing)."""
+    parts = [p["task"], p["method"], f"rho{p['rho']:g}", f"theta{p['theta']}",
+             f"slow{p['slowdown']:g}", f"Y{p['timeout'] or 0}", f"seed{p['seed']}"]
+    if p.get("feedback"):
+        parts.append("fb")
+    if p.get("control_noise"):
+        parts.append(f"noise{p['control_noise']:g}")
+    if p.get("cost", "ee") != "ee":
+        parts.append(f"cost{p['cost']}")
+    if p.get("warm_start"):
+        parts.append("ws")
+    if p.get("clock", "real") != "real":
+        parts.append(f"clock{p['clock']}{p.get('nominal_threads', 2.0):g}")
+    if p.get("fd_centered") or p.get("fd_eps", 1e-3) != 1e-3:
+        parts.append(f"fd{'c' if p.get('fd_centered') else 'f'}{p.get('fd_eps', 1e-3):g}")
+    if p.get("keypoints", "every") != "every":
+        parts.append("kpadaptive" if p["keypoints"] == "adaptive"
+                     else f"skip{p.get('fd_skip', 1)}")
+    if p.get("box_qp"):
+        parts.append("boxqp")
+    if p.get("problem", "ours") != "ours":
+        parts.append(p["problem"])
+    if not p.get("islands", True):
+        parts.append("noislands")
+    return "-".join(parts)
+
+
+def row_label(p: dict) -> str:
+    """Table row of a trial: ``row_name`` of its method, theta and rho, its
+    ``derivatives_tag`` and ' +fb' when it executed the K feedback term."""
+    return (row_name(p["method"], p["theta"], p["rho"]) + derivatives_tag(p)
+            + (" +fb" if p.get("feedback") else ""))

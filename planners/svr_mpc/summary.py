@@ -1,0 +1,160 @@
+"""Many finished iLQR-SVR MPC trials of one task -> the rows of Table 1 (``summarize``), paired
+comparisons with baseline (``paired``) and the effects of feedback and derivative variants.
+
+records: lists of {"params", "result"} as ``dopt.sweep`` stores them.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from dopt.stats import mean_ci
+from planners.svr_mpc.settings import row_label
+
+#: a goal object that ends farther than this from the goal (m) was knocked over and rolled away;
+#: the paper removes such outliers from its clutter means, and so do we (they are counted)
+OUTLIER_DISTANCE = 0.5
+
+
+def summarize(records: list[dict], baseline: str = "baseline", level: float = 0.90) -> dict:
+    """Per row (``row_label``), over the trials of one task:
+
+    - ``mpc_cost_normalised_mean``, ``_ci90``: MPC cost over the ``baseline`` row's on the
+      same task instance (seed), mean and Student-t half-width at ``level`` over the trials
+      that are neither outliers (goal object ending > ``OUTLIER_DISTANCE`` from the goal, as
+      the paper's clutter means leave out; counted in ``outliers``) nor unstable (the executed
+      episode broke a stability bound: its cost is not that of a physical push; counted in
+      ``n_unstable_trials``), on either side of the ratio;
+    - ``mpc_cost_normalised_median``: median of the same per-seed ratios over all trials;
+    - ``mpc_cost_median_ratio``: median cost of the row over median cost of baseline (all
+      trials, unpaired; the authors' own statistic is ``authors_data.authors_statistic``);
+    - ``opt_ms_mean`` (duration on the episode's clock), ``n_dofs_mean``, ``lag_steps_mean``,
+      ``success_rate``, ``goal_distance_end_median``, ``n_trials``, ``n_unstable_trials``,
+      ``n_unstable_rollouts``.
+
+    records: {"params", "result"} of finished trials of one task.
+    """
+    by: dict = {}
+    for r in records:
+        by.setdefault(row_label(r["params"]), {})[r["params"]["seed"]] = r["result"]
+
+    def outlier(v):
+        return v["goal_distance_end"] > OUTLIER_DISTANCE
+
+    def excluded(v):
+        return outlier(v) or bool(v.get("unstable", False))
+
+    base_all = {k: v["mpc_cost"] for k, v in by.get(baseline, {}).items()}
+    base = {k: c for k, c in base_all.items() if not excluded(by[baseline][k])}
+    out = {}
+    for row, trials in by.items():
+        res = list(trials.values())
+        norm_all = [v["mpc_cost"] / base_all[k] for k, v in trials.items() if k in base_all]
+        norm = [v["mpc_cost"] / base[k] for k, v in trials.items()
+                if k in base and not excluded(v)]
+        mean, ci = mean_ci(norm, level) if norm else (float("nan"), float("nan"))
+        costs = [v["mpc_cost"] for v in res]
+        out[row] = {
+            "mpc_cost_normalised_mean": mean,
+            "mpc_cost_normalised_ci90": ci,
+            "mpc_cost_normalised_median": float(np.median(norm_all)) if norm_all else None,
+            "mpc_cost_median_ratio": (float(np.median(costs) / np.median(list(base_all.values())))
+                                      if base_all else None),
+            "mpc_cost_median": float(np.median(costs)),
+            "opt_ms_mean": float(np.mean([v["opt_ms_mean"] for v in res])),
+            "n_dofs_mean": float(np.mean([v["dofs_mean"] for v in res])),
+            "success_rate": float(np.mean([v["success"] for v in res])),
+            "goal_distance_end_median": float(np.median([v["goal_distance_end"] for v in res])),
+            "goal_distance_end_mean": float(np.mean([v["goal_distance_end"] for v in res])),
+            "lag_steps_mean": float(np.mean([v["lag_steps_mean"] for v in res])),
+            "outliers": int(sum(outlier(v) for v in res)),
+            "n_trials": len(res),
+            "n_unstable_trials": int(sum(v.get("unstable", False) for v in res)),
+            "n_unstable_rollouts": int(sum(v.get("n_unstable_rollouts", 0) for v in res)),
+        }
+    return out
+
+
+def paired_ratio(numerator: dict, denominator: dict, level: float = 0.90) -> dict:
+    """Cost ratios on the same seeds: {seed: cost} x 2 -> {"ratio_geomean", "ratio_ci90":
+    [lo, hi], "better", "pairs"}: the geometric mean of the per-seed ratios with a t-interval
+    on their logs (cost ratios are skewed), and the pairs where the numerator cost less."""
+    seeds = sorted(set(numerator) & set(denominator))
+    logs = [np.log(numerator[k] / denominator[k]) for k in seeds]
+    if not logs:
+        return {"ratio_geomean": None, "ratio_ci90": None, "better": 0, "pairs": 0}
+    mean, ci = mean_ci(logs, level)
+    return {"ratio_geomean": float(np.exp(mean)),
+            "ratio_ci90": [float(np.exp(mean - ci)), float(np.exp(mean + ci))],
+            "better": int(sum(x < 0 for x in logs)), "pairs": len(logs)}
+
+
+def paired(records: list[dict], baseline: str = "baseline", level: float = 0.90) -> dict:
+    """Per row other than ``baseline``: ``paired_ratio`` of its MPC costs over baseline's on
+    the same seeds (all trials, outliers included)."""
+    by: dict = {}
+    for r in records:
+        by.setdefault(row_label(r["params"]), {})[r["params"]["seed"]] = r["result"]["mpc_cost"]
+    return {row: paired_ratio(costs, by.get(baseline, {}), level)
+            for row, costs in by.items() if row != baseline}
+
+
+def _variant_pairs(records: list[dict], plain) -> dict:
+    """{row label: (plain row label, {seed: result}, {seed: plain result})} for every row
+    (``row_label``) that differs from its ``plain(params)`` row, over the seeds both ran."""
+    by: dict = {}
+    plain_of: dict = {}
+    for r in records:
+        p = r["params"]
+        label, base = row_label(p), plain(p)
+        by.setdefault(label, {})[p["seed"]] = r["result"]
+        if base != label:
+            plain_of[label] = base
+    out = {}
+    for label, base in plain_of.items():
+        seeds = sorted(set(by[label]) & set(by.get(base, {})))
+        if seeds:
+            out[label] = (base, {k: by[label][k] for k in seeds}, {k: by[base][k] for k in seeds})
+    return out
+
+
+def _costs(results: dict) -> dict:
+    return {k: v["mpc_cost"] for k, v in results.items()}
+
+
+def feedback_effect(records: list[dict], level: float = 0.90) -> dict:
+    """Per row with both variants: MPC cost with feedback over open loop on the same seed.
+
+    Returns {row: {"ratio_geomean", "ratio_ci90": [lo, hi], "better", "pairs",
+    "success_open_loop", "success_feedback"}} (``paired_ratio``; "better": pairs where
+    feedback cost less).
+    """
+    pairs = _variant_pairs(records, lambda p: row_label({**p, "feedback": False}))
+    return {base: {**paired_ratio(_costs(fb), _costs(open_loop), level),
+                   "success_open_loop": int(sum(v["success"] for v in open_loop.values())),
+                   "success_feedback": int(sum(v["success"] for v in fb.values()))}
+            for base, fb, open_loop in pairs.values()}
+
+
+def derivatives_effect(records: list[dict], level: float = 0.90) -> dict:
+    """Per row run with a derivative variant (``derivatives_tag``: central differences, key
+    timesteps, box QP) and without it: the variant's MPC cost over the plain row's on the
+    same seeds.
+
+    Returns {row label: {"versus": the plain row's label, "ratio_geomean", "ratio_ci90",
+    "better", "pairs" (``paired_ratio``; "better": pairs where the variant cost less),
+    "lag_steps_mean", "versus_lag_steps_mean", "opt_ms_mean", "versus_opt_ms_mean" (means
+    over the paired trials)}}.
+    """
+    def plain(p):
+        return row_label({**p, "keypoints": "every", "fd_skip": 1, "box_qp": False,
+                          "fd_centered": False, "fd_eps": 1e-3})
+
+    def mean(results, field):
+        return float(np.mean([v[field] for v in results.values()]))
+
+    return {label: {"versus": base, **paired_ratio(_costs(var), _costs(ref), level),
+                    **{f"{who}{field}": mean(res, field)
+                       for field in ("lag_steps_mean", "opt_ms_mean")
+                       for who, res in (("", var), ("versus_", ref))}}
+            for label, (base, var, ref) in _variant_pairs(records, plain).items()}
