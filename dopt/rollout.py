@@ -22,7 +22,7 @@ from __future__ import annotations
 import os
 import threading
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import mujoco
 import numpy as np
@@ -32,8 +32,8 @@ from dopt.errors import UnstableRolloutError
 from dopt.rollout_batch import BatchRoute
 from dopt.rollout_c import CRoute
 from dopt.scene import Scene
-from dopt.stability import Stability
-from dopt.state import check_spec, check_states
+from dopt.stability import Monitor, Stability
+from dopt.state import MAXVAL, check_spec, check_states, fault
 from dopt.validation import check_config, float_array, is_int
 
 CTRL = int(mujoco.mjtState.mjSTATE_CTRL)
@@ -75,6 +75,34 @@ class FDConfig:
 
     def __post_init__(self):
         check_config(self, positive=("eps",))
+        if self.eps < MIN_FD_EPS:
+            raise ValueError(f"FDConfig.eps must be >= {MIN_FD_EPS:g}: a step of {self.eps:g} "
+                             f"cannot move a state entry of magnitude 1 in double precision "
+                             f"(derivatives would come out exactly 0)")
+
+
+#: the smallest finite-difference step: 1e4 units in the last place of a state entry of
+#: magnitude 1 (float64 resolves 2.2e-16 there), so that x + eps - x keeps 4 digits
+MIN_FD_EPS = 1e4 * float(np.finfo(float).eps)
+
+
+def check_fd_step(eps: float, states: np.ndarray, scene: Scene, dofs: np.ndarray) -> None:
+    """ValueError if ``eps`` cannot move the largest position or velocity entry of the
+    perturbed DoFs ``dofs`` in ``states`` (P, ns) by 1e4 units in its last place: their
+    finite differences would be rounding noise or exactly 0. Entries beyond MuJoCo's limit
+    (``dopt.state.MAXVAL``) are left to the stability verdict."""
+    m, layout = scene.model, scene.layout
+    joints = np.unique(m.dof_jntid[dofs])
+    width = {int(mujoco.mjtJoint.mjJNT_FREE): 7, int(mujoco.mjtJoint.mjJNT_BALL): 4}
+    qpos = np.concatenate([m.jnt_qposadr[j] + np.arange(width.get(int(m.jnt_type[j]), 1))
+                           for j in joints]) if len(joints) else np.zeros(0, int)
+    q = np.abs(np.concatenate([states[:, layout["qpos"].start + qpos],
+                               states[:, layout["qvel"].start + np.asarray(dofs)]], axis=1))
+    scale = max(float(q[q <= MAXVAL].max(initial=0.0)), 1.0)
+    if eps < MIN_FD_EPS * scale:
+        raise ValueError(f"fd.eps {eps:g} is too small for states of magnitude {scale:.3g}: "
+                         f"it must be >= {MIN_FD_EPS * scale:.3g} to move them in double "
+                         f"precision")
 
 
 @dataclass(frozen=True)
@@ -110,12 +138,15 @@ class Derivatives:
 
     F: (T, 2|C|, 2|C| + nu) = [A B], the one buffer A and B view (the backward pass reads F);
     A: (T, 2|C|, 2|C|), B: (T, 2|C|, nu); dofs: (|C|,) the DoF indices of C (into qvel).
-    With C = all DoFs (and na = 0) A and B equal ``mujoco.mjd_transitionFD``.
+    With C = all DoFs (and na = 0) A and B equal ``mujoco.mjd_transitionFD``. stability: the
+    verdict of the scene's bounds on the T nominal rows as one trajectory (``judge_states``):
+    derivatives around a state no rollout would accept are flagged, not silently used.
     """
 
     F: np.ndarray
     dofs: np.ndarray
     fd: FDConfig
+    stability: Stability | None = None
 
     @property
     def A(self) -> np.ndarray:
@@ -321,9 +352,43 @@ class RolloutService:
             raise TypeError(f"fd must be a dopt.FDConfig, got {type(fd).__name__}")
         x = check_states(m, states, batched=True, name="states")
         C = self.scene.dofs() if dofs is None else self.scene.as_dofs(dofs)
+        check_fd_step(fd.eps, x, self.scene, C)
         with self._lock:
             F = self._open_route().derivatives(x, C, fd.eps, fd.centered)
-        return Derivatives(F, C, fd)
+        return Derivatives(F, C, fd, judge_states(self.scene, x))
+
+
+def judge_states(scene: Scene, states: np.ndarray) -> Stability:
+    """The scene's stability verdict on state rows (T, ns) read as one trajectory (P = 1):
+    each row's velocities, flex vertex positions and edge lengths (from MuJoCo's position
+    stage) against the bounds, and MuJoCo's own limits (``dopt.state.fault``); ``step`` is the
+    first offending row. The energy bound, which needs a rollout's history, is not judged."""
+    m, mon = scene.model, scene.monitor
+    if mon.energy_judged:
+        mon = Monitor(m, replace(mon.bounds, max_energy_gain=None))
+    T = len(states)
+    fields = {"qvel": states[None, :, scene.layout["qvel"]],
+              "solver_niter": np.zeros((1, T), dtype=np.int32)}
+    if mon.has_flex:
+        d = mujoco.MjData(m)
+        xpos, length = np.empty((1, T, m.nflexvert, 3)), np.empty((1, T, m.nflexedge))
+        for t, row in enumerate(states):
+            mujoco.mj_setState(m, d, row, scene.layout.spec)
+            mujoco.mj_fwdPosition(m, d)
+            xpos[0, t], length[0, t] = d.flexvert_xpos, d.flexedge_length
+        fields.update(flexvert_xpos=xpos, flexedge_length=length)
+    if "eq_active" in mon.record:
+        fields["eq_active"] = (states[None, :, scene.layout["eq_active"]]
+                               if "eq_active" in scene.layout.slices
+                               else np.zeros((1, T, m.neq), dtype=np.uint8))
+    scan = mon.start(1)
+    scan.update(np.array([0]), 0, fields)
+    for t, row in enumerate(states):
+        why = fault(scene.layout, row)
+        if why is not None:
+            scan.flag(0, t, why)
+            break
+    return scan.result()
 
 
 def _check_record(record) -> tuple:

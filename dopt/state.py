@@ -136,7 +136,37 @@ def check_states(model: mujoco.MjModel, states, spec: int = INTEGRATION, *,
     if not np.all(np.isfinite(arr)):
         bad = np.argwhere(~np.isfinite(np.atleast_2d(arr)))[0]
         raise ValueError(f"{name} contains NaN/inf (first at row {bad[0]}, column {bad[1]})")
+    if spec & mujoco.mjtState.mjSTATE_QPOS:
+        _check_quaternions(model, np.atleast_2d(arr), StateLayout.of(model, spec), name)
     return arr
+
+
+#: how far a free or ball joint's quaternion in a given state may be from unit norm: MuJoCo
+#: normalises quaternions as it integrates, so rows it wrote are unit to rounding; a row far
+#: from it (say all zeros, which mj_normalizeQuat silently turns into the identity) is a
+#: caller's mistake
+QUAT_TOLERANCE = 1e-6
+
+
+def _check_quaternions(model: mujoco.MjModel, rows: np.ndarray, layout: StateLayout,
+                       name: str) -> None:
+    """ValueError naming the joint and row if a free or ball joint's quaternion in ``rows``
+    (P, ns) is not of unit norm within ``QUAT_TOLERANCE``."""
+    kinds = model.jnt_type
+    free = kinds == mujoco.mjtJoint.mjJNT_FREE
+    ball = kinds == mujoco.mjtJoint.mjJNT_BALL
+    if not (free.any() or ball.any()):
+        return
+    joints = np.flatnonzero(free | ball)
+    start = model.jnt_qposadr[joints] + np.where(free[joints], 3, 0) + layout["qpos"].start
+    quats = rows[:, start[:, None] + np.arange(4)]                     # (P, J, 4)
+    off = np.abs(np.linalg.norm(quats, axis=-1) - 1.0)
+    if (off > QUAT_TOLERANCE).any():
+        row, j = np.argwhere(off > QUAT_TOLERANCE)[0]
+        joint = model.joint(int(joints[j])).name or f"#{int(joints[j])}"
+        raise ValueError(f"{name}: the quaternion of joint {joint!r} in row {row} has norm "
+                         f"{np.linalg.norm(quats[row, j]):.6g}, not 1 (within "
+                         f"{QUAT_TOLERANCE:g})")
 
 
 def faulty_rows(layout: StateLayout, states: np.ndarray) -> np.ndarray:

@@ -421,6 +421,12 @@ def _check_costs(task, raw, population: int) -> torch.Tensor:
     if raw is None:
         raise TypeError(f"{_evaluate_name(task)} returned None; it must return "
                         f"({population},) float costs")
+    kind = (("c" if raw.is_complex() else "b" if raw.dtype == torch.bool else "f")
+            if torch.is_tensor(raw) else np.asarray(raw).dtype.kind)
+    if kind in "cbUS":
+        what = {"c": "complex", "b": "bool", "U": "str", "S": "bytes"}[kind]
+        raise TypeError(f"{_evaluate_name(task)} returned {what} costs; it must return "
+                        f"({population},) real float costs")
     try:
         costs = torch.as_tensor(raw.detach().cpu() if torch.is_tensor(raw)
                                 else np.asarray(raw, dtype=float), dtype=torch.float64)

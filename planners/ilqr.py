@@ -154,6 +154,9 @@ class ILQR:
         t0 = time.perf_counter()
         keys = key_steps(self.config.keypoints, scene, X, C)
         D = svc.derivatives(X[keys], C, self.config.fd)
+        if D.stability is not None and D.stability.n_unstable:
+            log.warning("iLQR: derivatives around an unstable nominal state (key step %d: %s)",
+                        keys[D.stability.step[0]], D.stability.reason[0])
         F = interpolate(torch.from_numpy(D.F), keys, len(U))     # part of the derivatives' time
         t1 = time.perf_counter()
         cd = self.cost.derivatives(X, U, C)

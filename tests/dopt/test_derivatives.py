@@ -158,3 +158,36 @@ def test_bad_inputs(scene, trajectory):
         FDConfig(eps=0.0)
     with pytest.raises(TypeError, match="integers"):
         svc.derivatives(states, [0.5, 1.0])
+
+
+def test_a_step_that_cannot_move_the_state_is_refused(scene, trajectory):
+    """eps 1e-20 would give B == 0 exactly (x + eps == x in double precision): FDConfig
+    refuses it; an eps that is fine near the origin is refused for states 1e8 away from it,
+    and accepted again once it can move them."""
+    with pytest.raises(ValueError, match="FDConfig.eps must be >="):
+        FDConfig(eps=1e-20)
+    states = trajectory.states[:-1].copy()
+    states[:, scene.layout["qpos"].start] = 1e8          # the slide joint 1e8 m out
+    svc = RolloutService(scene)
+    with pytest.raises(ValueError, match="too small for states of magnitude 1e"):
+        svc.derivatives(states, "robot", FDConfig(eps=1e-6))
+    d = svc.derivatives(states, "robot", FDConfig(eps=1e-3))
+    assert np.isfinite(d.F).all()
+
+
+def test_derivatives_judge_their_nominal_states(scene, trajectory):
+    """A nominal row with the box at 1e3 m/s (finite, no MuJoCo warning, so A and B
+    come out finite) is flagged by the same speed bound a rollout applies, at its row; the
+    unchanged trajectory is not flagged."""
+    svc = RolloutService(scene)
+    clean = svc.derivatives(trajectory.states[:-1], "robot")
+    assert clean.stability is not None and not clean.stability.unstable[0]
+    states = trajectory.states[:-1].copy()
+    box = scene.model.joint("box_free").dofadr[0]
+    states[12, scene.layout["qvel"].start + box] = 1e3
+    d = svc.derivatives(states, "robot")
+    assert np.isfinite(d.F).all()
+    assert d.stability.unstable[0] and d.stability.step[0] == 12
+    assert "speed" in d.stability.reason[0]
+    rollout = svc.rollout(states[12], np.zeros((1, scene.nu)))
+    assert rollout.stability.unstable[0]                 # the same state, the same verdict

@@ -86,3 +86,21 @@ def test_difference_on_a_dof_subset(scene):
     for dofs in ([0], [3], [2, 4, 9, 16], list(range(m.nv))):
         np.testing.assert_array_equal(tan.difference(q1, q2, 0.5, np.array(dofs)),
                                       full[:, dofs])
+
+
+@pytest.mark.parametrize("quat", [(0.0, 0.0, 0.0, 0.0), (2.0, 0.0, 0.0, 0.0),
+                                  (1.0, 1e-2, 0.0, 0.0)])
+def test_a_non_unit_quaternion_in_a_given_state_is_refused(scene, quat):
+    """MuJoCo would silently normalise these (an all-zero quaternion becomes the identity);
+    check_states names the joint instead. A unit quaternion off by rounding passes."""
+    d = mujoco.MjData(scene.model)
+    mujoco.mj_forward(scene.model, d)
+    row = scene.state_of(d)
+    adr = scene.layout["qpos"].start + scene.model.joint("box_free").qposadr[0] + 3
+    bad = row.copy()
+    bad[adr:adr + 4] = quat
+    with pytest.raises(ValueError, match="quaternion of joint 'box_free' in row 0"):
+        check_states(scene.model, bad)
+    near = row.copy()
+    near[adr:adr + 4] = np.array([1.0, 0.0, 0.0, 0.0]) * (1 + 1e-12)
+    check_states(scene.model, near)

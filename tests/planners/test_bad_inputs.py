@@ -158,7 +158,11 @@ def test_refit_uses_only_the_finite_elites():
     (lambda P: 0.0, ValueError, r"Returns.evaluate returned costs of shape \(\)"),
     (lambda P: np.zeros(P + 1), ValueError, r"shape \(9,\) for 8 samples"),
     (lambda P: None, TypeError, "Returns.evaluate returned None"),
-    (lambda P: ["cheap"] * P, TypeError, r"Returns.evaluate must return \(8,\) float costs"),
+    (lambda P: ["cheap"] * P, TypeError, r"Returns.evaluate returned str costs"),
+    (lambda P: np.ones(P) + 1j, TypeError, r"Returns.evaluate returned complex costs"),
+    (lambda P: torch.ones(P, dtype=torch.complex128), TypeError, "returned complex costs"),
+    (lambda P: np.ones(P, dtype=bool), TypeError, r"Returns.evaluate returned bool costs"),
+    (lambda P: torch.ones(P, dtype=torch.bool), TypeError, "returned bool costs"),
 ])
 def test_costs_of_the_wrong_shape_or_type(make, error, match):
     """3 zeros for 8 samples used to come back as a plan of cost 0.0."""
