@@ -3,6 +3,14 @@ errors of ``dopt.cli`` (re-exported here, so a script imports its CLI pieces fro
 plus what only experiments do: check --record (not the --out folder, and only from committed
 code), the sweeps' --reuse-any flag, and write OUT/summary.json with the run's provenance.
 
+Settings: every summary records the settings it ran with in full (``settings_dict``: every
+field of the resolved settings objects, not only a preset's name): Fig. 7 (pick_place_cli.py)
+its ``PickPlaceSettings`` and their resolved scene, picker and stability bounds ("physics");
+the Panda's execution the same per goal; key_particles.py its reduction configs and the
+scenes of its simulated goals; rho_sweep.py the protocol and each row's ``SVRMPCSettings``. The
+Table 1 experiments (mpc.py, svr_explain.py, clock_check.py) record the protocol's fields in
+the summary and every ``SVRMPCSettings`` field in each trial's params.
+
 Recording: ``--record PATH`` is refused, one line naming the changed files, when files that can
 change a result (dopt/, deformables/, planners/, experiments/, pyproject.toml, setup.py; the
 exact rule is ``dopt.provenance``'s) differ from HEAD, or outside a git checkout:
@@ -53,6 +61,23 @@ def record_problem(record: Path | None, out: Path, root: Path | None = None) -> 
 
     problem = code_state(root).record_problem()
     return None if problem is None else f"argument --record: {problem}"
+
+
+def settings_dict(settings) -> dict:
+    """Every field of a settings object as plain JSON values: a dataclass (nested ones as
+    dicts, ``dataclasses.asdict``), or a dict of them (per goal, per row), or a dict already.
+    What a summary records under "settings": the resolved fields, not only a preset's name,
+    so that the report can tell when the preset no longer gives them (experiments/
+    report_stale.py)."""
+    import dataclasses
+
+    def plain(x):
+        if dataclasses.is_dataclass(x) and not isinstance(x, type):
+            return dataclasses.asdict(x)
+        if isinstance(x, dict):
+            return {k: plain(v) for k, v in x.items()}
+        return x
+    return json.loads(json.dumps(plain(settings)))
 
 
 def add_reuse_argument(ap) -> None:

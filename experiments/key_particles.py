@@ -43,6 +43,7 @@ from cli_args import (
     output_file,
     positive_int,
     record_problem,
+    settings_dict,
     write_summary,
 )
 
@@ -316,6 +317,14 @@ def simulated_goals(resolutions: list[int], cloth_config: ClothConfig,
     return rows, failed
 
 
+def simulated_scenes(presets) -> dict:
+    """{preset: every field of the cloth scene its simulated goals are made on} (the
+    resolution's n aside): what each physics preset meant for this run."""
+    from dopt.tasks.pick.cloth_scene import ClothSceneConfig
+
+    return settings_dict({p: ClothSceneConfig.preset(p, selfcollide=True) for p in presets})
+
+
 def noise_table(rows: list[dict]) -> dict:
     """Goals whose key count equals the reference, per task kind, panel mode and sigma."""
     table: dict = {}
@@ -402,7 +411,13 @@ def main(argv=None) -> int:
     summary = {"experiment": "key_particles", "seed": args.seed, "quick": args.quick,
                "cloth_particles_per_side": cloth_n,
                "rope_config": vars(rope_config),
-               "cloth_config": vars(curve_config), "paper": PAPER, "tasks": {}, "failed": {}}
+               "cloth_config": vars(curve_config),
+               # every field of the configs the reductions ran (the noise and resolution
+               # sweeps: cloth_config; the Fig. 4 curves: with exact errors)
+               "settings": settings_dict({"rope_config": rope_config,
+                                          "cloth_config": cloth_config,
+                                          "curve_cloth_config": curve_config}),
+               "paper": PAPER, "tasks": {}, "failed": {}}
     failed = summary["failed"]
     commits = {code["commit"]: 0}
     for task in tasks:
@@ -455,6 +470,7 @@ def main(argv=None) -> int:
             failed["simulated"] = one_line(exc)
         summary["robustness"] = {"cloth_grid": grid, "noise": noise_table(noise),
                                  "simulated": simulated}
+        summary["settings"]["simulated_scenes"] = simulated_scenes(args.simulated_physics)
         logger.info("noise: %s", summary["robustness"]["noise"])
         commits[code["commit"]] += sum("error" not in g for g in grid + simulated)
         for row in noise:

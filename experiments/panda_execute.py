@@ -178,7 +178,11 @@ def main(argv=None) -> int:
     records = [r for k, r in res.records.items() if k in wanted]
     goals = summarize(records)
     write_summary({"experiment": "panda_execute", "task": "cloth", "goals": goals,
+                   "protocol": "ours",
+                   # every field, and what the presets resolve to (scene, picker, stability)
                    "settings": {g: settings_of(g, args).to_dict() for g in args.goals},
+                   "physics": {g: settings_of(g, args).resolved_physics()
+                               for g in args.goals},
                    "failed": res.failed, "trial_commits": res.commits},
                   args.out, args.record, "experiments/panda_execute.py", argv)
     for goal, e in goals.items():

@@ -65,6 +65,10 @@ def main(argv=None) -> int:
                                  **summarize(base + group, baseline=table1.baseline_label(args))[
                                      row_label(group[0]["params"])]))
     write_summary({"experiment": "fig4", "task": args.task, "method": args.method,
+                   **table1.protocol(args, trials[0].params),
+                   # every SVRMPCSettings field of each row (the trials' params less the seed)
+                   "settings": {row_label(t.params): {k: v for k, v in t.params.items()
+                                                      if k != "seed"} for t in trials},
                    "points": rows, "failed": failed, "trial_commits": res.commits},
                   args.out, args.record, "experiments/rho_sweep.py", argv)
     if rows:

@@ -12,6 +12,11 @@ def test_quick_run_writes_both_goals_and_resumes(tmp_path):
     assert panda_execute.main(["--quick", "--out", str(out)]) == 0
     s = json.loads((out / "summary.json").read_text())
     assert s["experiment"] == "panda_execute" and set(s["goals"]) == {"diagonal", "side"}
+    # the settings in full: every field, and what the presets resolved to (the stale check's)
+    for goal in ("diagonal", "side"):
+        assert s["settings"][goal]["physics"] == "default"
+        assert {"young", "timestep"} <= set(s["physics"][goal]["scene"])
+        assert "max_energy_gain" in s["physics"][goal]["stability"]
     for e in s["goals"].values():
         assert e["n"] == 1 and e["picker_final_cost_ci95"] is None     # one seed: no interval
         assert e["grasp_distance_max"] < 0.01                             # the grasp tolerance

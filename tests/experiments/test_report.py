@@ -103,9 +103,10 @@ def test_committed_results_md_and_readme_are_generated():
 
 
 def test_the_script_needs_only_the_standard_library():
-    """Besides the standard library it loads dopt.cli (the command-line types) and
-    planners.trial_progress (the reader of a trial's checkpoint), standard library themselves,
-    and nothing else of the project or of its dependencies."""
+    """Besides the standard library it loads dopt.cli (the command-line types),
+    dopt.multiple (Holm's correction) and planners.trial_progress (the reader of a trial's
+    checkpoint), standard library themselves, and nothing else of the project or of its
+    dependencies."""
     # as `python experiments/report.py`: the script's folder (its sibling cli_args) on the path
     code = ("import sys, runpy; sys.argv = ['report.py', '--help']\n"
             f"sys.path.insert(0, {str(SCRIPT.parent)!r})\n"
@@ -114,7 +115,7 @@ def test_the_script_needs_only_the_standard_library():
             "bad = sorted(m for m in sys.modules if m.split('.')[0] in\n"
             "             {'torch', 'numpy', 'mujoco', 'scipy', 'planners', 'deformables'}\n"
             "             and m not in ('planners', 'planners.trial_progress')\n"
-            "             or (m.startswith('dopt.') and m != 'dopt.cli'))\n"
+            "             or (m.startswith('dopt.') and m not in ('dopt.cli', 'dopt.multiple')))\n"
             "assert not bad, bad\n")
     subprocess.run([sys.executable, "-c", code], check=True, capture_output=True, timeout=60)
 
@@ -322,8 +323,12 @@ def test_orderings_name_reversed_pairs_and_those_with_separate_intervals():
     assert o["paper_order"] == ["a", "b", "c"] and o["our_order"] == ["b", "a", "c"]
     assert o["reversed"] == [("a", "b")]
     assert o["reversed_separate"] == [("a", "b")]          # 0.1 > 0.04 and 0.25 > 0.02
+    # Holm over each column's three pairs: a-b apart in both (z 5.8 on the paper's, 20 on ours)
+    assert o["reversed_holm"] == [("a", "b")]
+    assert o["holm"]["paper"]["a", "b"][2] and o["holm"]["ours"]["a", "b"][2]
     ours["b"] = (0.94, 0.01)                               # ours now within the intervals
     assert report.orderings(paper, ours)["reversed_separate"] == []
+    assert report.orderings(paper, ours)["reversed_holm"] == []
     assert report.orderings(paper, ours)["kendall_tau"] == pytest.approx(1 / 3)
 
 
@@ -763,7 +768,7 @@ def test_fig7_claims_give_the_welch_difference_and_which_gap_intervals_are_separ
                                   ("side", "underneath"), ("reflective", "underneath")]
     assert run(site) == 0
     text = block(site["readme"])
-    assert "Simple < Original yes (separate; difference 30.0 ± 4.0 mm)" in text
+    assert "Simple < Original yes (separate; difference 30.0 ± 4.0 mm, Holm p " in text
     assert ("diagonal 10.0 ± 4.0, side 20.0 ± 4.0, reflective 15.0 ± 4.0, underneath "
             "30.0 ± 4.0; it does not grow with difficulty; gap intervals separate only for "
             "diagonal vs side, diagonal vs underneath, side vs underneath and reflective vs "
@@ -776,3 +781,205 @@ def test_fig7_claims_give_the_welch_difference_and_which_gap_intervals_are_separ
     assert run(site) == 0
     assert ("it does not grow with difficulty; no two folds' gap intervals are separate, so "
             "these seeds cannot order the folds by their gap") in block(site["readme"])
+
+
+# ------------------------------------------------------ Holm's correction of the claims
+@pytest.mark.parametrize("seed", range(10))
+def test_welch_p_values_equal_scipys(seed):
+    """report_stats' pure-Python Welch test, from samples and from (mean, t half-width, n)
+    as a summary records them, is scipy's."""
+    from report_stats import t_ppf, welch_p, welch_p_from_intervals
+    from scipy import stats
+
+    rng = np.random.default_rng(seed)
+    na, nb = (int(n) for n in rng.integers(2, 25, 2))
+    a, b = rng.normal(0, rng.uniform(0.1, 2), na), rng.normal(rng.normal(), 1.0, nb)
+    want = stats.ttest_ind(b, a, equal_var=False).pvalue
+    assert welch_p(a.tolist(), b.tolist()) == pytest.approx(want, rel=1e-9)
+    half = [stats.t.ppf(0.975, len(x) - 1) * x.std(ddof=1) / np.sqrt(len(x)) for x in (a, b)]
+    got = welch_p_from_intervals((a.mean(), half[0], na), (b.mean(), half[1], nb), 0.95)
+    assert got == pytest.approx(want, rel=1e-9)
+    assert t_ppf(0.95, na - 1) == pytest.approx(stats.t.ppf(0.95, na - 1), rel=1e-9)
+
+
+def test_fig7_cloth_claims_are_judged_as_one_family_with_holm(site):
+    """The eight Simple-vs-Original/Random differences of a setup's four cloth folds are one
+    family: each line gives its Holm-adjusted p, and a line says how many exclude zero under
+    the correction, which do not, and the counts uncorrected and under Bonferroni."""
+    from scipy import stats
+
+    from dopt.multiple import holm
+
+    rng = np.random.default_rng(3)
+    simple = {g: rng.normal(0.02, 0.004, 10) for g in report.FIG7_PANELS if g[0] == "cloth"}
+    shift = {"original": {"diagonal": 0.015, "side": 0.02, "reflective": 0.005,
+                          "underneath": 0.01},
+             "random": {"diagonal": 0.03, "side": 0.002, "reflective": 0.012,
+                        "underneath": 0.006}}
+    pvalues, names = [], []
+    for (_, goal), s in simple.items():
+        methods = {"simple": s}
+        for m in ("original", "random"):
+            methods[m] = s + shift[m][goal] + rng.normal(0, 0.004, 10)
+            pvalues.append(stats.ttest_ind(methods[m], s, equal_var=False).pvalue)
+            names.append(f"{goal} vs {m.capitalize()}")
+        data = fig7(goal=goal, settings={**fig7()["settings"], "goal": goal, "n": 20},
+                    protocol="paper")
+        data["methods"] = {m: {"final_cost_mean": float(x.mean()),
+                               "final_cost_ci95": float(stats.t.ppf(0.975, 9) * x.std(ddof=1)
+                                                        / np.sqrt(10)),
+                               "final_costs": x.tolist(), "seeds": list(range(10)), "n": 10,
+                               "n_candidates": 4}
+                           for m, x in methods.items()}
+        for m in ("original", "random"):             # the Welch interval, as summarize's
+            ci = stats.ttest_ind(methods[m], s, equal_var=False).confidence_interval(0.95)
+            data["methods"][m]["final_cost_minus_simple_mean"] = float(methods[m].mean()
+                                                                       - s.mean())
+            data["methods"][m]["final_cost_minus_simple_ci95"] = float(ci.high - ci.low) / 2
+        write(site["results"], f"fig7-cloth-{goal}.json", data)
+    adjusted = holm(pvalues)
+    kept = [n for n, a in zip(names, adjusted, strict=True) if a > 0.05]
+    (family,) = report.fig7_claims(report.load_results(site["results"]))["families"]
+    assert family["m"] == 8 and len(family["kept"]) == len(kept) > 0
+    assert family["uncorrected"] == sum(p <= 0.05 for p in pvalues)
+    assert family["bonferroni"] == sum(8 * p <= 0.05 for p in pvalues)
+    assert run(site) == 0
+    text = block(site["readme"])
+    assert "Holm p: Welch's p-value of the difference adjusted by Holm's correction" in text
+    assert (f"- preset paper, cloth folds: with Holm's correction over the family's 8 "
+            f"Simple-vs-Original/Random differences (family-wise 5 %), {8 - len(kept)} of 8 "
+            "exclude zero; ") in text
+    for name, a in zip(names, adjusted, strict=True):
+        if a > 0.05:
+            assert f"{name} (adjusted p {a:.3f})" in text
+    for i, name in enumerate(names):            # each panel's line: its adjusted p
+        shown = "< 0.001" if adjusted[i] < 0.001 else f"{adjusted[i]:.3f}"
+        assert f"Holm p {shown})" in text, name
+
+
+# ------------------------------------------------------------- trials and stale presets
+def _trial(folder: Path, key: str, params: dict, commit: str) -> None:
+    folder.mkdir(parents=True, exist_ok=True)
+    (folder / f"{key}.json").write_text(json.dumps(
+        {"key": key, "params": params, "result": {"mpc_cost": 1.0},
+         "code": {"version": "0.2.0", "commit": commit}}))
+
+
+def test_trials_from_uncommitted_code_are_counted_next_to_the_result(site):
+    """A summary's committed trials (its command's --out under docs/results/runs/) are
+    counted by the commit each file records: RESULTS.md lists them, and the README says
+    "N of M trials from uncommitted code" beside the result."""
+    data = table1()
+    data["provenance"] = provenance("python experiments/mpc.py --task clutter --out "
+                                    "docs/results/runs/t1 --record docs/results/t1.json")
+    data["trial_commits"] = {"a" * 40 + "-dirty": 2, "b" * 40: 1}
+    write(site["results"], "table1-clutter.json", data)
+    trials = site["results"] / "runs" / "t1" / "trials"
+    params = {"task": "clutter", "method": "baseline", "rho": 1.0, "theta": 0}
+    for seed, commit in enumerate(["a" * 40 + "-dirty", "a" * 40 + "-dirty", "b" * 40]):
+        _trial(trials, f"clutter-baseline-seed{seed}", {**params, "seed": seed}, commit)
+    assert run(site) == 0
+    md = site["md"].read_text()
+    assert ("Trials: 3 committed under `runs/t1/`, written at `aaaaaaaa-dirty` (2), "
+            "`bbbbbbbb` (1); **2 of 3 trials from uncommitted code**.") in md
+    assert "; **2 of 3 trials from uncommitted code** |" in block(site["readme"])
+    # a summary whose trials are not committed shows its own trial_commits
+    data["provenance"] = provenance("python experiments/mpc.py --task clutter --out results/x")
+    write(site["results"], "table1-clutter.json", data)
+    assert run(site) == 0
+    assert ("Trial commits (the summary's \"trial_commits\"; its trials are not committed): "
+            "`aaaaaaaa-dirty` (2), `bbbbbbbb` (1).") in site["md"].read_text()
+    assert "uncommitted code" not in block(site["readme"])
+
+
+def snapshot(site, **extra) -> None:
+    """A presets snapshot: cloth preset default at 5e5 Pa, 5 ms; protocol ours of the
+    diagonal fold; the SVR paper protocol on clutter."""
+    scene = {"n": 16, "side": 0.3, "young": 5e5, "timestep": 0.005, "selfcollide": False}
+    settings = fig7()["settings"]
+    data = {"pick": {"physics": {"cloth": {"default": scene}},
+                     "protocols": {"ours": {"cloth/diagonal": {**settings,
+                                                               "physics": "default"}}},
+                     "resolved": {"ours": {"cloth/diagonal": {
+                         "scene": scene, "picker": {"speed": 0.5, "bound": [0.3] * 3},
+                         "stability": {"max_energy_gain": 0.5}}}}},
+            "svr_mpc": {"paper": {"clutter": {"cost": "paper", "clock": "virtual",
+                                              "control_noise": 0.05}}},
+            **extra}
+    write(site["results"] / "presets", "resolved.json", data)
+
+
+def test_a_result_whose_preset_was_redefined_is_shown_stale(site):
+    """The report compares each result's recorded fields with what its named presets resolve
+    to today (the snapshot presets_snapshot.py writes): a Fig. 7 file recorded on another
+    "default" is stale in the README and RESULTS.md; one on today's is not."""
+    snapshot(site)
+    physics = {"scene": {"n": 12, "side": 0.3, "young": 5e5, "timestep": 0.005,
+                         "selfcollide": False},
+               "picker": {"speed": 0.5, "bound": [0.3] * 3},
+               "stability": {"max_energy_gain": 0.5}}
+    current = fig7(physics=physics, settings={**fig7()["settings"], "physics": "default"})
+    write(site["results"], "fig7-cloth-diagonal.json", current)
+    assert run(site) == 0
+    assert "stale" not in block(site["readme"]).lower()
+    old = {**physics, "scene": {**physics["scene"], "young": 5e4, "timestep": 0.02}}
+    write(site["results"], "fig7-cloth-diagonal.json", {**current, "physics": old})
+    assert run(site) == 0
+    assert ("**stale**: cloth physics preset `default` now resolves to young 50000 → 500000, "
+            "timestep 0.02 → 0.005 |") in block(site["readme"])
+    assert "**Stale**: recorded on presets that today's code resolves otherwise" in \
+        site["md"].read_text()
+    # the protocol's budget redefined: its CEM iterations
+    redefined = json.loads((site["results"] / "presets" / "resolved.json").read_text())
+    redefined["pick"]["protocols"]["ours"]["cloth/diagonal"]["cem"]["iterations"] = 30
+    write(site["results"] / "presets", "resolved.json", redefined)
+    write(site["results"], "fig7-cloth-diagonal.json", current)
+    assert run(site) == 0
+    assert "**stale**: protocol `ours` now sets cem.iterations 15 → 30" in block(site["readme"])
+    assert run(site, "--check") == 0
+
+
+def test_a_result_recording_only_a_preset_name_is_checked_at_its_commit(site):
+    """The Panda's old file records only "physics": "default": the snapshot's "at_commit"
+    says what that meant at its commit; without that entry the result is "not checked"."""
+    goal = {"n": 3, "seeds": [0, 1, 2], "picker_final_cost_mean": 0.0148,
+            "picker_final_cost_ci95": 0.002, "panda_final_cost_mean": 0.0171,
+            "panda_final_cost_ci95": 0.003, "difference_mean": 0.0023,
+            "difference_ci95": 0.001, "picker_vs_panda_mean": 0.0052,
+            "picker_vs_panda_ci95": 0.001, "grasp_distance_max": 0.0004,
+            "carry_error_max": 0.031}
+    write(site["results"], "panda-execute.json",
+          {"experiment": "panda_execute", "goals": {"diagonal": goal},
+           "settings": {"diagonal": {**fig7()["settings"], "physics": "default"}},
+           "provenance": provenance("python experiments/panda_execute.py --seeds 3")})
+    snapshot(site)
+    assert run(site) == 0
+    assert "Not checked against today's presets: it records only their names" in \
+        site["md"].read_text()
+    commit = provenance("")["git_commit"]
+    snapshot(site, at_commit={commit: {"pick": {"physics": {"cloth": {"default": {
+        "n": 16, "young": 5e4, "timestep": 0.02}}}}}})
+    assert run(site) == 0
+    assert ("**stale**: diagonal: cloth physics preset `default` now resolves to young "
+            "50000 → 500000, timestep 0.02 → 0.005") in block(site["readme"])
+
+
+def test_a_table1_result_is_checked_on_its_trials_settings(site):
+    """Table 1's protocol is in every trial's params: a trial run on another cost than the
+    paper preset gives today is stale, unless the command set that cost itself."""
+    snapshot(site)
+    data = table1()
+    data["preset"] = "paper"
+    cmd = "python experiments/mpc.py --task clutter --preset paper --out docs/results/runs/t1"
+    data["provenance"] = provenance(cmd)
+    write(site["results"], "table1-clutter.json", data)
+    _trial(site["results"] / "runs" / "t1" / "trials", "clutter-baseline-seed0",
+           {"task": "clutter", "method": "baseline", "seed": 0, "cost": "paper-reach",
+            "clock": "virtual", "control_noise": 0.05}, "c" * 40)
+    assert run(site) == 0
+    assert ("**stale**: protocol `paper` on clutter now sets cost \"paper-reach\" → \"paper\"" in
+            block(site["readme"]))
+    data["provenance"] = provenance(cmd + " --cost paper-reach")
+    write(site["results"], "table1-clutter.json", data)
+    assert run(site) == 0
+    assert "stale" not in block(site["readme"])

@@ -27,4 +27,9 @@ def test_tiny_grid_writes_points_and_the_plot_with_the_authors_curves(tmp_path):
     for p in d["points"]:
         assert p["n_trials"] == 1 and p["n_dofs_mean"] > 0 and "mpc_cost_median_ratio" in p
     assert d["points"][0]["n_dofs_mean"] == 55.0          # rho 0 keeps every DoF
+    # the protocol and every SVRMPCSettings field of each row (the stale check's)
+    assert d["preset"] == "paper" and d["cost"] == "paper" and d["clock"] == "virtual"
+    assert set(d["settings"]) == {"baseline", "sum-t0-r0", "sum-t0-r1"}
+    assert d["settings"]["sum-t0-r1"]["control_noise"] == 0.05
+    assert "seed" not in d["settings"]["baseline"]
     assert (out / "rho_sweep.png").stat().st_size > 10_000

@@ -1,0 +1,282 @@
+"""The common part of experiments/report.py: the result files (``Result``, ``load_results``),
+the Markdown helpers every section uses, and the Fig. 7 labels and panels.
+
+Standard library only (report.py's rule: it runs without torch, numpy or MuJoCo).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import statistics
+from dataclasses import dataclass, field
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+BEGIN, END = "<!-- results:begin -->", "<!-- results:end -->"
+REGENERATE = "python experiments/report.py"
+
+#: method labels of the key-particle experiments (planners.pick_place.LABELS; copied here so
+#: that this script needs no torch), in the order of the paper's figures
+FIG7_LABELS = {"simple": "CEM(Simple)", "original": "CEM(Original)",
+               "random": "CEM(Random)", "scripted": "Scripted"}
+#: Fig. 7 panel of each (task, goal) of the key-particle paper
+FIG7_PANELS = {("rope", "straighten"): "(a) rope straightening",
+               ("rope", "fold"): "(b) rope folding",
+               ("cloth", "diagonal"): "(c) cloth diagonal fold",
+               ("cloth", "side"): "(d) cloth side fold",
+               ("cloth", "reflective"): "(e) cloth reflective fold",
+               ("cloth", "underneath"): "(f) cloth underneath fold"}
+#: what every result file's "provenance" holds (``dopt.provenance.provenance()``)
+PROVENANCE_FIELDS = ("command", "git_commit", "versions")
+PROVENANCE_VERSIONS = ("dopt", "mujoco", "torch")
+KP = "key particles"
+SVR = "state-vector reduction"
+
+
+#: result files of the benchmarks (field "bench") -> the section that renders them
+BENCH_KINDS = {"cloth": "physics", "rope": "physics",          # python -m planners.bench
+               "key-particles-compare": "kp_compare",          # python -m deformables.bench
+               "key-particles-paper-scale": "kp_paper_scale"}
+
+
+# ------------------------------------------------------------------------------ loading
+@dataclass(frozen=True)
+class Result:
+    """A result file: its path, its "experiment" kind and its contents; ``notes``: what
+    report.py's ``generate`` found about it besides (its committed trials, "trials"; whether
+    today's presets still give its settings, "stale")."""
+
+    path: Path
+    data: dict
+    notes: dict = field(default_factory=dict, compare=False, repr=False)
+
+    @property
+    def kind(self) -> str:
+        if "experiment" not in self.data and self.data.get("bench") in BENCH_KINDS:
+            return BENCH_KINDS[self.data["bench"]]
+        return str(self.data.get("experiment", "(none)"))
+
+    @property
+    def name(self) -> str:
+        return self.path.name
+
+    @property
+    def provenance(self) -> dict:
+        p = self.data.get("provenance")
+        return p if isinstance(p, dict) else {}
+
+    @property
+    def origin(self) -> dict:
+        """The provenance of the experiment whose trials this summary holds: for a summary
+        rebuilt from its trials by experiments/resummarize.py ("resummarized_from"), the
+        original run's; else its own."""
+        o = self.data.get("resummarized_from")
+        return o if isinstance(o, dict) else self.provenance
+
+    @property
+    def origin_command(self) -> str:
+        return str(self.origin.get("command") or "")
+
+    @property
+    def command(self) -> str:
+        """The experiment's command line (the one that reruns it, also for a re-summarised
+        file)."""
+        return str(self.origin.get("command") or "(no provenance: command unknown)")
+
+    @property
+    def commit(self) -> str:
+        """The short commit ("-dirty" kept: the run had uncommitted changes)."""
+        return short_commit(self.provenance.get("git_commit"))
+
+    @property
+    def date(self) -> str:
+        return str(self.provenance.get("date") or "unknown date")
+
+    @property
+    def quick(self) -> bool:
+        """A smoke-sized run (--quick): its numbers are not the paper's settings."""
+        return bool(self.data.get("quick")) or "--quick" in self.command.split()
+
+
+def provenance_gaps(r: Result) -> list[str]:
+    """What the result's provenance lacks of the command, the git commit and the versions of
+    dopt, mujoco and torch (empty when complete)."""
+    p = r.provenance
+    gaps = [k for k in PROVENANCE_FIELDS if not p.get(k)]
+    versions = p.get("versions") if isinstance(p.get("versions"), dict) else {}
+    gaps += [f"versions.{k}" for k in PROVENANCE_VERSIONS if not versions.get(k)]
+    return gaps
+
+
+class ReportError(Exception):
+    """A result file that cannot be read or rendered."""
+
+
+def load_results(results_dir: Path) -> list[Result]:
+    """Every ``*.json`` under ``results_dir`` (not recursive), sorted by name; a missing folder
+    is no results."""
+    out = []
+    for path in sorted(Path(results_dir).glob("*.json")):
+        try:
+            data = json.loads(path.read_text())
+        except (OSError, ValueError) as e:
+            raise ReportError(f"{path}: not a readable JSON file ({e})") from e
+        if not isinstance(data, dict):
+            raise ReportError(f"{path}: expected a JSON object, got {type(data).__name__}")
+        out.append(Result(path, data))
+    return out
+
+
+# ---------------------------------------------------------------------------- formatting
+def _finite(x) -> bool:
+    return isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x)
+
+
+def num(x, digits: int = 2, scale: float = 1.0) -> str:
+    """x * scale with ``digits`` decimals; "n/a" for None, NaN or a non-number."""
+    return f"{x * scale:.{digits}f}" if _finite(x) else "n/a"
+
+
+def sci(x) -> str:
+    """x in scientific notation with two significant digits; "-" for None."""
+    return "-" if x is None else (f"{x:.1e}" if _finite(x) else "n/a")
+
+
+def clip(text: str, n: int) -> str:
+    """``text`` cut to its first ``n`` characters, "..." marking a cut."""
+    return text[:n] + ("..." if len(text) > n else "")
+
+
+def mm(x, digits: int = 1) -> str:
+    """Metres as millimetres, one decimal."""
+    return num(x, digits, 1e3)
+
+
+def pm(mean: str, ci: str) -> str:
+    """"mean ± ci", or the mean alone when there is no interval."""
+    return mean if ci == "n/a" or mean == "n/a" else f"{mean} ± {ci}"
+
+
+def span(interval) -> str:
+    """An interval [lo, hi] as "lo-hi" (empty for none)."""
+    return "-".join(num(x) for x in interval or [])
+
+
+def cell(text) -> str:
+    """Text safe inside a Markdown table cell."""
+    return str(text).replace("|", "\\|").replace("\n", " ")
+
+
+def table(header: list[str], rows: list[list]) -> list[str]:
+    lines = ["| " + " | ".join(cell(h) for h in header) + " |", "|" + "---|" * len(header)]
+    return lines + ["| " + " | ".join(cell(c) for c in row) + " |" for row in rows]
+
+
+def link(r: Result, page: Path) -> str:
+    """A Markdown link to the result file, relative to the page that shows it."""
+    rel = Path(os.path.relpath(r.path, Path(page).parent)).as_posix()
+    return f"[{r.name}]({rel})"
+
+
+def source(r: Result, page: Path) -> str:
+    """'file (commit)' of a result, as the tables cite it."""
+    return f"{link(r, page)} ({r.commit})"
+
+
+def source_lines(results: list[Result], page: Path) -> list[str]:
+    """The source files of a table, each with its commit, date and command line, how it was
+    re-summarised (where it was), its committed trials and whether it is stale
+    (``Result.notes``)."""
+    lines = []
+    for r in results:
+        lines.append(f"Source: {link(r, page)}, commit `{r.commit}`, {r.date}"
+                     + (", **quick (smoke-sized) run**" if r.quick else "") + ":  ")
+        if "resummarized_from" in r.data:
+            o = r.origin
+            lines[-1] = (f"Source: {link(r, page)}, re-summarised from its committed trials at "
+                         f"commit `{r.commit}`, {r.date}, by `{r.provenance.get('command')}`; "
+                         f"the experiment ran at `{short_commit(o.get('git_commit'))}`, "
+                         f"{o.get('date') or 'unknown date'}:  ")
+        notes = [n for n in (r.notes.get("trials_line"), r.notes.get("stale_line")) if n]
+        lines.append(f"`{r.command}`" + ("  " if notes else ""))
+        lines += [n + ("  " if i < len(notes) - 1 else "") for i, n in enumerate(notes)]
+    return lines
+
+
+def short_commit(c) -> str:
+    """A recorded commit, short ("-dirty" kept)."""
+    if not c or not isinstance(c, str):
+        return "unknown commit"
+    head, dirty = (c[:-6], "-dirty") if c.endswith("-dirty") else (c, "")
+    return head[:8] + dirty
+
+
+def failed_lines(r: Result) -> list[str]:
+    failed = r.data.get("failed") or {}
+    if not failed:
+        return []
+    return ["", f"**{len(failed)} failed trial(s)** (not in the numbers above):", ""] + [
+        f"- `{k}`: {cell(v)}" for k, v in sorted(failed.items())]
+
+
+def section(title: str, intro: str | None, results: list[Result], page: Path, body,
+            key=lambda r: (str(r.data.get("task")), r.name)) -> list[str]:
+    """A page section: "## title", its intro, then per result file (in ``key`` order) the
+    lines ``body(r)`` gives (its heading, settings and tables), its source and failed trials."""
+    lines = [f"## {title}", ""] + ([intro, ""] if intro else [])
+    for r in sorted(results, key=key):
+        lines += [*body(r), "", *source_lines([r], page), *failed_lines(r), ""]
+    return lines[:-1]
+
+
+def _label(method: str) -> str:
+    return FIG7_LABELS.get(method, method)
+
+
+def _in_label_order(methods) -> list[str]:
+    """The distinct ``methods`` in the figures' order (``FIG7_LABELS``), unknown ones after,
+    sorted."""
+    seen = set(methods)
+    known = [m for m in FIG7_LABELS if m in seen]
+    return known + sorted(seen - set(known))
+
+
+def _methods_in_order(results: list[Result]) -> list[str]:
+    return _in_label_order(m for r in results for m in r.data["methods"])
+
+
+def _panel_of(task, goal) -> str:
+    return FIG7_PANELS.get((task, goal), f"{task} {goal}")
+
+
+def _panel_rank(task, goal) -> int:
+    """The place of (task, goal) in the paper's Fig. 7 (``FIG7_PANELS``); unknown ones last."""
+    order = list(FIG7_PANELS)
+    return order.index((task, goal)) if (task, goal) in order else len(order)
+
+
+def _panel(r: Result) -> str:
+    return _panel_of(r.data.get("task"), r.data.get("goal"))
+
+
+
+def _median(xs: list) -> float | None:
+    xs = [x for x in xs if _finite(x)]
+    return statistics.median(xs) if xs else None
+
+
+
+def _and(words: list[str]) -> str:
+    """"a", "a and b", "a, b and c"."""
+    return words[0] if len(words) == 1 else f"{', '.join(words[:-1])} and {words[-1]}"
+
+
+
+def _display(path: Path) -> str:
+    try:
+        return Path(path).resolve().relative_to(ROOT).as_posix()
+    except ValueError:
+        return Path(path).as_posix()
+

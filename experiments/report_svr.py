@@ -1,0 +1,459 @@
+"""The state-vector-reduction sections of experiments/report.py: Table 1 (and beside the
+paper's, its pairwise orderings judged with Holm's correction), Fig. 4, the SVR explanation, the
+iLQR bench, the authors' data and the clocks.
+
+Standard library only (and ``dopt.multiple``, pure Python).
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+from report_base import (
+    Result,
+    _finite,
+    num,
+    pm,
+    section,
+    source_lines,
+    span,
+    table,
+)
+from report_stats import (
+    CORRECTION,
+    FAMILY_ALPHA,
+    holm_family,
+    normal_p_from_intervals,
+    welch_p_from_intervals,
+)
+
+# ------------------------------------------------------------------------- table1 (SVR)
+MPC_HEADER = ["MPC cost / baseline (mean ± CI90)", "median (all)", "opt. time (ms)", "DoFs",
+              "lag (steps)", "success", "goal distance (m, median)", "outliers", "unstable",
+              "trials"]
+
+
+def mpc_cells(m: dict) -> list[str]:
+    return [pm(num(m.get("mpc_cost_normalised_mean")), num(m.get("mpc_cost_normalised_ci90"))),
+            num(m.get("mpc_cost_normalised_median")), num(m.get("opt_ms_mean"), 0),
+            num(m.get("n_dofs_mean", m.get("dofs_mean")), 1), num(m.get("lag_steps_mean"), 1),
+            num(m.get("success_rate")), num(m.get("goal_distance_end_median"), 3),
+            str(m.get("outliers", "?")), str(m.get("n_unstable_trials", "-")),
+            str(m.get("n_trials", m.get("trials", "?")))]
+
+
+def table1_section(results: list[Result], page: Path) -> list[str]:
+    def body(r: Result) -> list[str]:
+        d = r.data
+        lines = [f"### Table 1, {d.get('task')}: `{r.name}`" + (" (quick)" if r.quick else ""),
+                 "", protocol_line(d), ""]
+        if "row_settings" not in d:
+            theta = d.get("theta")
+            theta_text = (", ".join(f"{k} {v}" for k, v in theta.items())
+                          if isinstance(theta, dict) else str(theta))
+            lines[-2] += f" rho {d.get('rho')}; theta: {theta_text}; slowdown {d.get('slowdown')}."
+        lines += table(["method", *MPC_HEADER],
+                       [[name, *mpc_cells(m)] for name, m in d["methods"].items()])
+        pairs = [(m.get("lag_steps_mean"), m.get("mpc_cost_normalised_mean"))
+                 for m in d["methods"].values()]
+        if len(pairs) >= 5 and all(None not in p for p in pairs):
+            tau = kendall_tau_b([p[0] for p in pairs], [p[1] for p in pairs])
+            lines += ["", f"Kendall tau of the rows' mean lag and mean normalised cost: "
+                          f"{num(tau)} (1: the less a row lags, the less it costs)."]
+        fb = d.get("feedback_effect")
+        if fb:
+            lines += ["", "Feedback vs open loop, paired by seed (MPC cost ratio: geometric mean "
+                      "and 90 % CI; pairs where feedback cost less; successes open loop -> "
+                      "feedback):", ""]
+            lines += table(["method", "cost ratio", "CI90", "feedback better", "successes"],
+                           [[name, num(f.get("ratio_geomean")),
+                             span(f.get("ratio_ci90")),
+                             f"{f.get('better')}/{f.get('pairs')}",
+                             f"{f.get('success_open_loop')} -> {f.get('success_feedback')}"]
+                            for name, f in fb.items()])
+        variants = d.get("derivatives_effect")
+        if variants:
+            lines += ["", "Derivative variants against the same row with finite differences at "
+                      "every timestep, paired by seed (MPC cost ratio: geometric mean and 90 % "
+                      "CI; pairs where the variant cost less; agent steps per optimisation and "
+                      "optimisation time on the episode's clock, variant / plain):", ""]
+            lines += table(["row", "versus", "cost ratio", "CI90", "variant better",
+                            "lag (steps)", "opt. time (ms)"],
+                           [[name, f["versus"], num(f["ratio_geomean"]),
+                             span(f["ratio_ci90"]),
+                             f"{f['better']}/{f['pairs']}",
+                             f"{num(f['lag_steps_mean'], 1)} / "
+                             f"{num(f['versus_lag_steps_mean'], 1)}",
+                             f"{num(f['opt_ms_mean'], 0)} / {num(f['versus_opt_ms_mean'], 0)}"]
+                            for name, f in variants.items()])
+        return lines
+
+    return section("State-vector reduction, Table 1: iLQR-SVR in asynchronous MPC",
+                   "MPC cost normalised by the baseline's on the same task instance; mean and "
+                   "90 % CI over the trials that are neither outliers (goal object too far from "
+                   "the goal at the end) nor unstable (the executed episode broke a stability "
+                   "bound; counted in its own column), median over all.", results, page, body)
+
+
+def protocol_line(d: dict) -> str:
+    """How a Table 1 file's trials ran (files without a "preset" ran ours, the only one then)."""
+    if "preset" not in d:
+        return ("Protocol `ours`: cost with the end-effector term, zero initial plan, real "
+                "clock, no control noise.")
+    return (f"Protocol `{d['preset']}`: cost `{d.get('cost')}`"
+            + (", the authors' set-up motion and push plan" if d.get("warm_start")
+               else ", zero initial plan")
+            + f", {d.get('clock')} clock"
+            + (f" ({d.get('nominal_threads'):g} nominal threads)"
+               if d.get("clock") == "virtual" else "")
+            + f", control noise {d.get('control_noise')}, {d.get('fd')} differences, "
+              f"slowdown {d.get('slowdown')}.")
+
+
+def table1_headline(r: Result) -> str:
+    if r.data.get("derivatives_effect"):
+        return "; ".join(
+            f"{name} / {f['versus']}: MPC cost {num(f['ratio_geomean'])} "
+            f"({span(f['ratio_ci90'])}), lag {num(f['lag_steps_mean'], 1)} "
+            f"/ {num(f['versus_lag_steps_mean'], 1)} steps, opt. time "
+            f"{num(f['opt_ms_mean'], 0)} / {num(f['versus_opt_ms_mean'], 0)} ms "
+            f"({f['pairs']} seeds)" for name, f in r.data["derivatives_effect"].items())
+    parts = []
+    trials = 0
+    for name, m in r.data["methods"].items():
+        trials = max(trials, m.get("n_trials", m.get("trials")) or 0)
+        cost = pm(num(m.get("mpc_cost_normalised_mean")), num(m.get("mpc_cost_normalised_ci90")))
+        parts.append(f"{name} {cost} ({num(m.get('opt_ms_mean'), 0)} ms, "
+                     f"{num(m.get('n_dofs_mean', m.get('dofs_mean')), 1)} DoFs)")
+    cost_used = f", cost `{r.data['cost']}`" if r.data.get("cost") else ""
+    return (f"protocol `{r.data.get('preset', 'ours')}`{cost_used}; MPC cost / baseline "
+            f"(opt. time, DoFs): " + "; ".join(parts)
+            + f" ({trials} trial{'s' if trials != 1 else ''} each)")
+
+
+# ------------------------------------------------------------- table1 beside the paper
+def paper_table1(results: list[Result]) -> tuple[Result | None, dict]:
+    """The authors' reference file with the paper's published Table 1 (the newest), and that
+    table ({task: {row: {"mpc_cost", "mpc_cost_ci90", ...}}}); (None, {}) without one."""
+    refs = [r for r in results if r.kind == "paper_svr" and r.data.get("published")]
+    return (refs[-1], refs[-1].data["published"]) if refs else (None, {})
+
+
+def paper_preset_table1(results: list[Result], task: str) -> Result | None:
+    """The Table 1 file of ``task`` run under the authors' protocol (not quick), if any."""
+    chosen = [r for r in results if r.kind == "table1" and r.data.get("task") == task
+              and r.data.get("preset") == "paper" and not r.quick
+              and not r.data.get("derivatives_effect")]
+    return chosen[-1] if chosen else None
+
+
+def orderings(paper: dict, ours: dict) -> dict:
+    """How two Table 1 columns order the same rows by MPC cost. ``paper``: {row: (mean, CI90
+    half-width)}, a normal interval (the authors' statistic, 1.645 std / sqrt(n)); ``ours``:
+    {row: (mean, CI90 half-width[, trials])}, a Student-t interval over that many trials
+    (without the count: taken as normal). Rows without both means are left out. Returns
+    {"rows": the common rows, "paper_order", "our_order" (cheapest first), "kendall_tau",
+    "reversed": [(a, b)] pairs the paper puts a below b and we put b below a,
+    "reversed_separate": those of them whose intervals are separate in both columns,
+    "holm": {column: {(a, b): (p, Holm-adjusted p, ordered apart)}} over each column's
+    pairs (a z-test on the paper's column, Welch's on ours, from the means, intervals and
+    counts; one family per column, family-wise ``FAMILY_ALPHA``), "reversed_holm": the
+    reversed pairs ordered apart in both columns under it}."""
+    rows = [k for k in paper if k in ours and _finite(paper[k][0]) and _finite(ours[k][0])]
+    rev, sep = [], []
+    p_paper, p_ours = {}, {}
+    for i, a in enumerate(rows):
+        for b in rows[i + 1:]:
+            (pa, pca), (pb, pcb) = paper[a][:2], paper[b][:2]
+            (oa, oca), (ob, ocb) = ours[a][:2], ours[b][:2]
+            p_paper[a, b] = normal_p_from_intervals(paper[a], paper[b], 0.90)
+            p_ours[a, b] = _our_p(ours[a], ours[b])
+            if (pa - pb) * (oa - ob) < 0:
+                lo, hi = (a, b) if pa < pb else (b, a)
+                rev.append((lo, hi))
+                if (abs(pa - pb) > (pca or 0) + (pcb or 0)
+                        and abs(oa - ob) > (oca or 0) + (ocb or 0)):
+                    sep.append((lo, hi))
+    holm = {"paper": holm_family(p_paper), "ours": holm_family(p_ours)}
+
+    def apart(a, b) -> bool:
+        key = (a, b) if (a, b) in p_paper else (b, a)
+        return all(key in h and h[key][2] for h in holm.values())
+    tau = kendall_tau_b([paper[k][0] for k in rows], [ours[k][0] for k in rows])
+    return {"rows": rows, "paper_order": sorted(rows, key=lambda k: paper[k][0]),
+            "our_order": sorted(rows, key=lambda k: ours[k][0]), "kendall_tau": tau,
+            "reversed": rev, "reversed_separate": sep, "holm": holm,
+            "reversed_holm": [(a, b) for a, b in rev if apart(a, b)]}
+
+
+def _our_p(a: tuple, b: tuple) -> float | None:
+    """The p-value of our column's pair: Welch's from the t intervals and trial counts, a
+    z-test where a count is missing."""
+    if len(a) > 2 and len(b) > 2 and a[2] is not None and b[2] is not None:
+        return welch_p_from_intervals(a, b, 0.90)
+    return normal_p_from_intervals(a, b, 0.90)
+
+
+def kendall_tau_b(x: list[float], y: list[float]) -> float | None:
+    """Kendall's tau-b rank correlation of two equally long lists (ties in either count as
+    neither concordant nor discordant); None with fewer than two values or all tied."""
+    n = len(x)
+    c = d = tx = ty = 0
+    for i in range(n):
+        for j in range(i + 1, n):
+            sx, sy = (x[i] > x[j]) - (x[i] < x[j]), (y[i] > y[j]) - (y[i] < y[j])
+            if sx == 0 or sy == 0:
+                tx, ty = tx + (sx == 0), ty + (sy == 0)
+            elif sx == sy:
+                c += 1
+            else:
+                d += 1
+    pairs = n * (n - 1) // 2
+    denom = math.sqrt((pairs - tx) * (pairs - ty))
+    return (c - d) / denom if denom else None
+
+
+def _table1_columns(pub: dict, d: dict) -> tuple[dict, dict]:
+    """The paper's column {row: (mean, CI90)} and ours {row: (mean, CI90, trials the mean is
+    over: neither outliers nor unstable)}."""
+    paper = {row: (v["mpc_cost"], v.get("mpc_cost_ci90")) for row, v in pub.items()}
+    ours = {row: (m.get("mpc_cost_normalised_mean"), m.get("mpc_cost_normalised_ci90"),
+                  _kept_trials(m)) for row, m in d["methods"].items()}
+    return paper, ours
+
+
+def _kept_trials(m: dict) -> int | None:
+    """The trials a row's normalised mean is over: its trials less its outliers and unstable
+    ones (a seed its baseline lost is not known here: at most that many)."""
+    n = m.get("n_trials", m.get("trials"))
+    if not isinstance(n, int):
+        return None
+    return n - int(m.get("outliers") or 0) - int(m.get("n_unstable_trials") or 0)
+
+
+def ordering_sentence(o: dict) -> str:
+    """One line on how our rows order against the paper's."""
+    apart = "; ".join(f"{a} < {b}" for a, b in o["reversed_holm"]) or "none"
+    n_pairs = len(o["rows"]) * (len(o["rows"]) - 1) // 2
+    return (f"Kendall tau {num(o['kendall_tau'])} over {len(o['rows'])} rows; "
+            f"{len(o['reversed'])} of {n_pairs} pairs in the opposite order, "
+            f"{len(o['reversed_holm'])} of them ordered apart in both columns under "
+            f"{CORRECTION} over each column's {n_pairs} pairs (family-wise "
+            f"{FAMILY_ALPHA * 100:g} %; the paper's column by a z-test on its normal 90 % "
+            f"intervals, ours by Welch's test on our t intervals; paper's order: {apart})")
+
+
+def table1_vs_paper_section(results: list[Result], page: Path) -> list[str]:
+    """Each task's Table 1 under the authors' protocol beside the paper's printed Table 1 and
+    the authors' data, with the orderings compared (empty without both files)."""
+    ref, published = paper_table1(results)
+    ours = {t: paper_preset_table1(results, t) for t in published}
+    if ref is None or not any(ours.values()):
+        return []
+    lines = ["## State-vector reduction, Table 1 beside the paper", "",
+             "Per row: the paper's printed MPC cost (normalised by its baseline's; mean ± 90 % "
+             "CI, clutter without outliers), ours under `--preset paper` (mean ± 90 % CI of the "
+             "per-seed cost / baseline, outliers left out; the median of the per-seed ratios; "
+             "the geometric mean of the per-seed ratios with its 90 % CI), the authors' data's "
+             "median final cost over baseline's (absent for rand and naive), DoFs and "
+             "optimisation time. Paired ratios and medians are ours only: the paper prints "
+             "means.", ""]
+    for task, r in ours.items():
+        if r is None:
+            continue
+        d = r.data
+        pub, data_rows = published[task], ref.data["tasks"].get(task, {}).get("rows", {})
+        paired_ = d.get("paired") or {}
+        rows = []
+        for row, p in pub.items():
+            m = d["methods"].get(row, {})
+            pr = paired_.get(row) or {}
+            ci = pr.get("ratio_ci90") or []
+            rows.append([row, pm(num(p["mpc_cost"]), num(p.get("mpc_cost_ci90"), 3)),
+                         pm(num(m.get("mpc_cost_normalised_mean")),
+                            num(m.get("mpc_cost_normalised_ci90"))),
+                         num(m.get("mpc_cost_median_ratio")),
+                         num(pr.get("ratio_geomean")) + (f" [{num(ci[0])}, {num(ci[1])}]"
+                                                         if len(ci) == 2 else ""),
+                         num((data_rows.get(row) or {}).get("median_ratio")),
+                         f"{num(p.get('n_dofs'), 1)} / "
+                         f"{num(m.get('n_dofs_mean', m.get('dofs_mean')), 1)}",
+                         f"{num(p.get('opt_ms'), 0)} / {num(m.get('opt_ms_mean'), 0)}"])
+        o = orderings(*_table1_columns(pub, d))
+        lines += [f"### {task}: `{r.name}` beside the paper", "",
+                  *table(["row", "paper MPC cost", "ours mean", "ours median ratio",
+                          "ours paired geomean [CI90]", "authors' data median ratio",
+                          "DoFs paper / ours", "opt. ms paper / ours"], rows), "",
+                  f"Cheapest first, paper: {', '.join(o['paper_order'])}; ours: "
+                  f"{', '.join(o['our_order'])}.", "", ordering_sentence(o) + ".", "",
+                  *source_lines([r, ref], page), ""]
+    return lines[:-1]
+
+
+# --------------------------------------------------------------------------- fig4 (SVR)
+def fig4_section(results: list[Result], page: Path) -> list[str]:
+    def body(r: Result) -> list[str]:
+        d = r.data
+        points = sorted(d.get("points") or [], key=lambda p: (p.get("theta"), p.get("rho")))
+        lines = [f"### Fig. 4, {d.get('task')}, {d.get('method')}: `{r.name}`"
+                 + (" (quick)" if r.quick else ""), ""]
+        if not points:
+            return lines + ["No points (every trial failed?)."]
+        image = page.parent / "images" / f"fig4-{d.get('task')}.png"
+        if image.exists():     # the experiment's rho_sweep.png, copied beside the docs
+            lines += [f"![Fig. 4, {d.get('task')}: MPC cost / baseline and mean |C| against rho, "
+                      f"ours (solid, 90 % CI bands) and the authors' (dashed)]"
+                      f"(images/{image.name})", ""]
+        return lines + table(["rho", "theta", *MPC_HEADER],
+                             [[str(p.get("rho")), str(p.get("theta")), *mpc_cells(p)]
+                              for p in points])
+
+    return section("State-vector reduction, Fig. 4: importance threshold rho and random DoFs "
+                   "theta", None, results, page, body)
+
+
+def fig4_headline(r: Result) -> str:
+    points = [p for p in r.data.get("points") or []
+              if _finite(p.get("mpc_cost_normalised_mean"))]
+    if not points:
+        return f"{r.data.get('method')}: no finite point"
+    best = min(points, key=lambda p: p["mpc_cost_normalised_mean"])
+    trials = sum(p.get("n_trials") or 0 for p in r.data.get("points") or [])
+    cost = pm(num(best["mpc_cost_normalised_mean"]), num(best.get("mpc_cost_normalised_ci90")))
+    return (f"{r.data.get('method')}, {len(r.data.get('points'))} (rho, theta) points, "
+            f"{trials} trials; lowest MPC cost / baseline {cost} at rho {best.get('rho')}, "
+            f"theta {best.get('theta')} ({num(best.get('n_dofs_mean'), 1)} DoFs)")
+
+
+def svr_explain_section(results: list[Result], page: Path) -> list[str]:
+    def body(r: Result) -> list[str]:
+        d = r.data
+        rows = []
+        for name, row in d["rows"].items():
+            share = row.get("importance_share") or {}
+            n_dofs = [v for v in row["n_dofs"] if v is not None]
+            rows.append([name, str(row["n_trials"]), num(sum(n_dofs) / len(n_dofs) if n_dofs
+                                                         else None, 1),
+                         num(row["goal_share_mean"]), num(share.get("zero")),
+                         num(share.get("lt_1")), num(share.get("1_to_500")),
+                         num(share.get("ge_500")), str(row["importance"]["n"])])
+        return [f"### {d.get('task')}: `{r.name}`", "", protocol_line(d), "",
+                *table(["row", "trials", "mean size of C", "goal DoFs in C", "importance = 0",
+                        "< 1", "[1, 500)", ">= 500", "values"], rows)]
+
+    return section("State-vector reduction: which DoFs each method holds, and what rho cuts",
+                   "Per row: mean |C| and the share of the goal object's x, y DoFs in C per "
+                   "optimisation (over the episode, then over seeds); for SVR, the importances "
+                   "of the non-robot DoFs in C before the cut, pooled over optimisations and "
+                   "seeds.", results, page, body)
+
+
+def ilqr_bench_section(results: list[Result], page: Path) -> list[str]:
+    def body(r: Result) -> list[str]:
+        return [f"### {r.data.get('task')}: `{r.name}`", "",
+                *table(["method", "derivatives", "box QP", "ms / iteration", "vs every",
+                        "derivative share", "FD timesteps", "error (mean)", "error (median)",
+                        "DoFs"],
+                       [[row["method"], row["keypoints"], "yes" if row["box_qp"] else "no",
+                         num(row["ms_per_iteration"], 0), num(row.get("vs_every")),
+                         num(row["derivative_share"]),
+                         f"{num(row['fd_steps'], 1)} / {row['horizon']}",
+                         num(row["interp_error"], 4), num(row.get("interp_error_median"), 4),
+                         num(row["n_dofs"], 1)]
+                        for row in r.data["rows"]])]
+
+    return section("iLQR iteration: derivatives over time and the box-QP backward pass",
+                   "One iLQR(-SVR) iteration per method and derivative variant, same run: "
+                   "finite differences at every timestep, every K-th (skipK) or at adaptive key "
+                   "points, A and B linear between; `vs every`: time over the same method's at "
+                   "every timestep; error: relative Frobenius error of the interpolated [A B] "
+                   "against every-timestep differences on the last nominal, mean and median over t "
+                   "(they differ where a few timesteps in contact, whose A and B change from "
+                   "one step to the next, carry the whole error).",
+                   results, page, body)
+
+
+def paper_svr_section(results: list[Result], page: Path) -> list[str]:
+    def body(r: Result) -> list[str]:
+        lines: list[str] = []
+        for task, t in r.data["tasks"].items():
+            # plain iLQR runs record 0 DoFs in their data (not tracked): shown as "-"
+            rows = [[name, str(v["n_runs"]), num(v["median_ratio"]),
+                     num(v["final_dist_mean"], 3), num(v["avg_dofs"], 1) if v["avg_dofs"]
+                     else "-", num(v["opt_ms"], 0)] for name, v in t["rows"].items()]
+            rows += [["(unidentified iLQR run)", str(v["n_runs"]), num(v["median_ratio"]),
+                      num(v["final_dist_mean"], 3), "-", num(v["opt_ms"], 0)]
+                     for v in t.get("unidentified", [])]
+            lines += [f"### {task}", "",
+                      *table(["row", "runs", "median cost / baseline",
+                              "final goal distance (m)", "DoFs", "opt. time (ms)"], rows), ""]
+        return lines[:-1]
+
+    return section("The state-vector-reduction authors' own data",
+                   "Their run summaries (`experiments/paper_reference.py`): per Table 1 row the "
+                   "runs, the median final cost over the baseline's (their Table 1's statistic), "
+                   "mean final goal distance, mean DoFs and optimisation time. Rows their data "
+                   "does not name (rand, naive) are absent; a second plain iLQR run per task is "
+                   "not identified in it.", results, page, body)
+
+
+def clock_check_section(results: list[Result], page: Path) -> list[str]:
+    def body(r: Result) -> list[str]:
+        d = r.data
+        rows = []
+        for name, row in d["rows"].items():
+            real, virt = row.get("real", {}), row.get("virtual", {})
+            rows.append([name, str(real.get("n_trials")), num(real.get("lag_steps_mean"), 1),
+                         num(virt.get("lag_steps_mean"), 1), num(row.get("lag_ratio")),
+                         num(row.get("opt_ms_ratio")), num(row.get("real_speedup")),
+                         pm(num(real.get("mpc_cost_mean"), 0), num(real.get("mpc_cost_ci90"), 0)),
+                         pm(num(virt.get("mpc_cost_mean"), 0), num(virt.get("mpc_cost_ci90"), 0)),
+                         "yes" if row.get("lag_within_10_percent") else "no",
+                         "yes" if row.get("cost_intervals_overlap") else "no"])
+        seeds = d.get("seeds")
+        return [f"### {d.get('task')}: `{r.name}`", "", protocol_line(d)
+                + (f" Seeds {seeds[0]} to {seeds[-1]}." if seeds else ""), "",
+                *table(["row", "trials", "lag real", "lag virtual", "lag ratio",
+                        "opt. time ratio", "real speed-up", "cost real", "cost virtual",
+                        "lag within 10 %", "costs overlap"], rows)]
+
+    return section("The virtual clock against the real clock",
+                   "The same trials under both clocks: real (alone, in real time, on the "
+                   "machine's threads) and virtual (one thread, CPU time / nominal threads). "
+                   "Ratios are virtual / real; the lag should be within 10 % and the MPC cost "
+                   "intervals (90 %) should overlap. The real speed-up is one thread's CPU time "
+                   "(nominal threads x the virtual optimisation time) over the real one: the "
+                   "nominal thread count at which the two clocks agree.", results, page, body)
+
+
+def clock_check_headline(r: Result) -> str:
+    rows = r.data["rows"]
+    overlap = sum(bool(v.get("cost_intervals_overlap")) for v in rows.values())
+    nominal = r.data.get("nominal_threads")
+    seeds = r.data.get("seeds")
+    return (f"{r.data.get('task')}" + (f", {nominal:g} nominal threads" if nominal else "")
+            + ": lag virtual / real "
+            + ", ".join(f"{name} {num(v.get('lag_ratio'))}" for name, v in rows.items())
+            + f"; MPC cost intervals overlap on {overlap} of {len(rows)} rows "
+              f"({max((v.get('real') or {}).get('n_trials') or 0 for v in rows.values())} "
+              f"seeds each" + (f", {seeds[0]}-{seeds[-1]}" if seeds else "") + ")")
+
+
+def clock_model_section(results: list[Result], page: Path) -> list[str]:
+    def body(r: Result) -> list[str]:
+        d = r.data
+        return table(["task", "points (|C|: ms)", "a (ms)", "b (ms per DoF)", "R^2"],
+                     [[task, ", ".join(f"{row['n_dofs']}: {row['ms']:.0f}"
+                                       for row in d["rows"] if row["task"] == task),
+                       num(f["a_ms"], 1), num(f["b_ms"], 2), num(f["r2"], 3)]
+                      for task, f in d["fits"].items()])
+
+    return section("The model clock: CPU time of an MPC optimisation against |C|",
+                   "One optimisation of `rand` at theta random DoFs (|C| = 7 + theta) per point, "
+                   "the paper's protocol, one simulation thread; ms = CPU time / nominal "
+                   "threads. `planners.svr_mpc.CLOCK_MODEL_MS` holds the fits.",
+                   results, page, body)
+
+
+

@@ -1,0 +1,144 @@
+"""Fig. 7 sweeps in progress in experiments/report.py: committed trials that no recorded
+summary holds yet, seed by seed, and the checkpoints of trials stopped part-way.
+
+Standard library only (and ``planners.trial_progress``, standard library itself).
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+from report_base import (
+    ReportError,
+    Result,
+    _finite,
+    _in_label_order,
+    _label,
+    _median,
+    _panel_of,
+    _panel_rank,
+    mm,
+    num,
+    table,
+)
+
+from planners.trial_progress import iterations_done
+
+
+# ----------------------------------------------------------------- sweeps in progress
+def unrecorded_sweeps(results_dir: Path, results: list[Result]) -> dict[str, list[dict]]:
+    """{folder name: its trial records} of every ``runs/fig7-*`` folder under ``results_dir``
+    with committed trials (``trials/*.json``, as ``dopt.sweep`` writes them) that its recorded
+    summary ``<folder>.json`` among ``results`` (``load_results(results_dir)``) does not hold:
+    all of them while no summary is recorded, else those whose method and seed the summary
+    lacks (a sweep recorded for some methods or seeds, more committed since). Folders in name
+    order, records in file-name order; a folder whose trials the summary holds all of is left
+    out."""
+    recorded = {r.path.stem: r.data for r in results}
+    out = {}
+    for folder in sorted(Path(results_dir).glob("runs/fig7-*")):
+        files = sorted(folder.glob("trials/*.json"))
+        held = {m: set(row.get("seeds") or ())
+                for m, row in recorded.get(folder.name, {}).get("methods", {}).items()}
+        records = []
+        for path in files:
+            try:
+                data = json.loads(path.read_text())
+                # dopt.sweep.RECORD_FIELDS (copied: this script needs no dopt)
+                missing = [k for k in ("key", "params", "result") if k not in data]
+                if missing:
+                    raise KeyError(", ".join(missing))
+                params, result = data["params"], data["result"]
+                record = {"settings": params["settings"], "method": result["method"],
+                          "seed": result["seed"], "result": result}
+            except (OSError, ValueError, KeyError, TypeError) as e:
+                raise ReportError(f"{path}: not a trial record of a Fig. 7 sweep "
+                                  f"({type(e).__name__}: {e})") from e
+            if record["seed"] not in held.get(record["method"], ()):
+                records.append(record)
+        if records:
+            out[folder.name] = records
+    return out
+
+
+def checkpointed_trials(folder: Path) -> list[str]:
+    """"<method label> seed <s>: <n> CEM iterations done, <t> s" per checkpoint under
+    ``folder/trials/checkpoints/`` (``dopt.sweep.Checkpoint``: a trial stopped part-way that
+    a rerun resumes), in file-name order."""
+    out = []
+    for path in sorted(Path(folder).glob("trials/checkpoints/*.json")):
+        try:
+            progress = json.loads(path.read_text())["progress"]
+            trial, iterations = progress["trial"], iterations_done(progress)
+            out.append(f"{_label(trial['method'])} seed {trial['seed']}: {iterations} CEM "
+                       f"iterations done, {num(progress['wall_s'], 0)} s")
+        except (OSError, ValueError, KeyError, TypeError) as e:
+            raise ReportError(f"{path}: not a checkpoint of a Fig. 7 trial "
+                              f"({type(e).__name__}: {e})") from e
+    return out
+
+
+
+def sweeps_in_progress_section(results_dir: Path, results: list[Result]) -> list[str]:
+    """Per unrecorded Fig. 7 sweep (``unrecorded_sweeps``) and per settings key in it: each
+    method's committed seeds with their final costs, and the measured cost of a trial. No
+    means or claims: those wait for the recorded summary."""
+    sweeps = unrecorded_sweeps(results_dir, results)
+    if not sweeps:
+        return []
+    lines = ["## Fig. 7 sweeps in progress", "",
+             "Trials committed under `docs/results/runs/<sweep>/trials/` that the sweep's "
+             "summary (`docs/results/<sweep>.json`) does not hold yet (not recorded, or recorded "
+             "for other methods or seeds): each seed's final cost (mean particle distance, mm) "
+             "as its trial file holds it, and what a trial cost. Means, intervals and the "
+             "paper's claims wait for the recorded summary; the command in the results table "
+             "above (with these methods in `--methods` and enough `--seeds`) resumes the sweep "
+             "where it stopped."]
+    def panel_order(item) -> tuple:
+        s = item[1][0]["settings"]
+        return _panel_rank(s.get("task"), s.get("goal")), item[0]
+
+    for name, records in sorted(sweeps.items(), key=panel_order):
+        by_settings: dict[str, list[dict]] = {}
+        for rec in records:
+            by_settings.setdefault(json.dumps(rec["settings"], sort_keys=True), []).append(rec)
+        for group in by_settings.values():
+            s = group[0]["settings"]
+            cem = s.get("cem") or {}
+            size = (f"{s.get('n')} x {s.get('n')}" if s.get("task") == "cloth"
+                    else str(s.get("n")))
+            lines += ["", f"### `{name}`: Fig. 7 {_panel_of(s.get('task'), s.get('goal'))}", "",
+                      f"{size} particles, self-collision "
+                      f"{'on' if s.get('selfcollide') else 'off'}, physics {s.get('physics')}; "
+                      f"CEM population {cem.get('population')}, elites {cem.get('elites')}, "
+                      f"{cem.get('iterations')} iterations per stage, horizon "
+                      f"{cem.get('horizon')}.", ""]
+            rows = []
+            for m in _in_label_order(r["method"] for r in group):
+                runs = sorted((r for r in group if r["method"] == m), key=lambda r: r["seed"])
+                res = [r["result"] for r in runs]
+                flagged = [x.get("n_unstable_rollouts") for x in res]
+                rollouts = [x.get("n_rollouts") for x in res]
+                rows.append([_label(m), ", ".join(str(r["seed"]) for r in runs),
+                             ", ".join(mm(x.get("final_cost")) for x in res),
+                             num(_median([x.get("s_per_iteration") for x in res]), 1),
+                             num(_median([x.get("wall_s") for x in res]), 0),
+                             f"{sum(flagged)} / {sum(rollouts)}"
+                             if all(_finite(x) for x in flagged + rollouts) else "not judged",
+                             str(sum(bool(x.get("unstable")) for x in res))])
+            lines += table(["method", "seeds", "final cost per seed (mm)",
+                            "s / CEM iteration (median)", "s / trial (median)",
+                            "planning rollouts flagged", "executed plans unstable"], rows)
+            wall = sum(x for r in group if _finite(x := r["result"].get("wall_s")))
+            n = len(group)
+            lines += ["", f"{n} trial{'s' if n != 1 else ''}, {num(wall, 0)} s of trials "
+                          f"({num(wall / 3600, 1)} h of one core)."]
+        stopped = checkpointed_trials(Path(results_dir) / "runs" / name)
+        if stopped:
+            lines += ["", "Stopped part-way, their progress committed under "
+                          "`trials/checkpoints/` (a rerun resumes each where it stopped): "
+                      + "; ".join(stopped) + "."]
+    return lines
+
+

@@ -1,0 +1,177 @@
+"""The committed trials behind each summary: which files under ``<results dir>/runs/`` a
+summary holds, the commits they were written at, and how many came from uncommitted code.
+
+A summary's trials lie in the folder its command wrote them to (``--out
+docs/results/runs/<sweep>``, read from the command of the run whose trials it holds, also for a
+re-summarised file): ``trials/*.json`` there, and ``real/`` and ``virtual/`` below it for the
+clock check. Where several summaries share a folder, or a folder holds more than one summary
+used, only the summary's own are taken: a Fig. 7 summary's methods and seeds (the trial key is
+``<method>-seed<seed>-<settings hash>``), a clock check's seeds. Everything else in the folder
+is the summary's (the docs/results test checks the counts against "trial_commits").
+
+A trial's commit is read from its record's "code" (``dopt.sweep`` writes it last, so the tail
+of the file is enough; the whole file is parsed when it is not there). "-dirty", "unknown",
+"no git" or no commit at all: uncommitted code, which no one can check out to rerun.
+
+Standard library only (experiments/report.py's rule).
+"""
+
+from __future__ import annotations
+
+import json
+import re
+from collections import Counter
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from report_base import Result, short_commit
+
+#: a Fig. 7 trial's key (experiments/pick_place_cli.py's ``trial_key``)
+FIG7_KEY = re.compile(r"^(?P<method>[a-z]+)-seed(?P<seed>\d+)-[0-9a-f]{8}$")
+SEED = re.compile(r"-seed(?P<seed>\d+)(-|$)")
+CODE_TAIL = re.compile(r'"code":\s*(\{[^{}]*\})\s*\}\s*$')
+#: commits that name no code anyone can check out
+NO_COMMIT = ("unknown", "no git", "")
+
+
+@dataclass
+class TrialInfo:
+    """The committed trials of one summary.
+
+    Attributes:
+        folder: their sweep folder, relative to the results folder ("runs/<sweep>").
+        files: the trial files the summary holds.
+        commits: {commit: trials} over ``files``, as recorded.
+        recorded: the trials the summary's "trial_commits" counts (None: it has none).
+    """
+
+    folder: str
+    files: list = field(default_factory=list)
+    commits: Counter = field(default_factory=Counter)
+    recorded: int | None = None
+
+    @property
+    def n(self) -> int:
+        return len(self.files)
+
+    @property
+    def uncommitted(self) -> int:
+        return sum(n for c, n in self.commits.items() if uncommitted(c))
+
+
+def uncommitted(commit) -> bool:
+    """Whether a recorded commit names code no one can check out."""
+    return not isinstance(commit, str) or commit in NO_COMMIT or commit.endswith("-dirty")
+
+
+def out_folder(results_dir: Path, command: str) -> Path | None:
+    """The sweep folder a command's ``--out`` names under ``<results dir>/runs/``; None when
+    it wrote its trials elsewhere."""
+    m = re.search(r"--out[ =](\S+)", command or "")
+    if not m:
+        return None
+    parts = Path(m.group(1).strip("'\"")).parts
+    if "runs" not in parts or parts.index("runs") == 0 or parts[parts.index("runs") - 1] \
+            != "results":
+        return None
+    return Path(results_dir).joinpath(*parts[parts.index("runs"):])
+
+
+def _files(folder: Path, r: Result) -> list[Path]:
+    """The trial files of ``folder`` that summary ``r`` holds, sorted."""
+    d = r.data
+    if r.kind == "clock_check":
+        seeds = set(d.get("seeds") or ())
+        files = sorted(p for sub in ("real", "virtual")
+                       for p in (folder / sub / "trials").glob("*.json"))
+        return [p for p in files if (m := SEED.search(p.stem)) and int(m["seed"]) in seeds]
+    files = sorted(p for p in (folder / "trials").glob("*.json") if not p.name.startswith("."))
+    if r.kind == "fig7":
+        held = {m: set(e.get("seeds") or ()) for m, e in (d.get("methods") or {}).items()}
+        return [p for p in files if (m := FIG7_KEY.match(p.stem))
+                and int(m["seed"]) in held.get(m["method"], ())]
+    return files
+
+
+def trial_commit(path: Path) -> str:
+    """The commit a trial file records ("unknown" for none or an unreadable file)."""
+    try:
+        text = path.read_text()
+    except OSError:
+        return "unknown"
+    m = CODE_TAIL.search(text[-400:])
+    try:
+        code = json.loads(m.group(1)) if m else (json.loads(text) or {}).get("code")
+    except ValueError:
+        return "unknown"
+    commit = (code or {}).get("commit") if isinstance(code, dict) else None
+    return commit if isinstance(commit, str) and commit else "unknown"
+
+
+def _total(value) -> int:
+    """The trials a "trial_commits" counts ({commit: n}, nested by sweep)."""
+    if isinstance(value, dict):
+        return sum(_total(v) for v in value.values())
+    return value if isinstance(value, int) else 0
+
+
+def summary_trials(results_dir: Path, r: Result) -> TrialInfo | None:
+    """The committed trials of summary ``r`` (None when its command wrote them elsewhere or
+    its folder holds none)."""
+    folder = out_folder(results_dir, r.origin_command)
+    if folder is None or not folder.is_dir():
+        return None
+    files = _files(folder, r)
+    info = TrialInfo(folder.relative_to(results_dir).as_posix(), files,
+                     Counter(trial_commit(p) for p in files),
+                     _total(r.data["trial_commits"]) if "trial_commits" in r.data else None)
+    return info if files else None
+
+
+def first_params(info: TrialInfo | None) -> dict | None:
+    """The params of the summary's first baseline trial (else its first trial): every
+    setting the trial ran with."""
+    if info is None or not info.files:
+        return None
+    files = sorted(info.files, key=lambda p: ("-baseline-" not in p.stem, p.name))
+    try:
+        params = json.loads(files[0].read_text()).get("params")
+    except (OSError, ValueError, AttributeError):
+        return None
+    return params if isinstance(params, dict) else None
+
+
+def _commits_text(commits: dict) -> str:
+    return ", ".join(f"`{short_commit(c)}` ({n})" for c, n in commits.items())
+
+
+def trials_line(r: Result, info: TrialInfo | None) -> str:
+    """The line RESULTS.md gives under a summary's source: its committed trials, their
+    commits and those from uncommitted code; or, without committed trials, the summary's own
+    "trial_commits"; "" for a summary without either."""
+    recorded = r.data.get("trial_commits")
+    if info is None:
+        if not recorded:
+            return ""
+        parts = []
+        for k, v in recorded.items():
+            if isinstance(v, dict):                 # nested by sweep (the clock check's)
+                parts += [f"{k} `{short_commit(c)}` ({n})" for c, n in v.items()]
+            else:
+                parts.append(f"`{short_commit(k)}` ({v})")
+        return ("Trial commits (the summary's \"trial_commits\"; its trials are not "
+                f"committed): {', '.join(parts)}.")
+    line = (f"Trials: {info.n} committed under `{info.folder}/`, written at "
+            f"{_commits_text(dict(sorted(info.commits.items(), key=lambda kv: -kv[1])))}")
+    if info.recorded is not None and info.recorded != info.n:
+        line += f" (its \"trial_commits\" counts {info.recorded})"
+    if info.uncommitted:
+        line += f"; **{uncommitted_note(info)}**"
+    return line + "."
+
+
+def uncommitted_note(info: TrialInfo | None) -> str:
+    """"N of M trials from uncommitted code" ("" when none is)."""
+    if info is None or not info.uncommitted:
+        return ""
+    return f"{info.uncommitted} of {info.n} trials from uncommitted code"

@@ -1,0 +1,332 @@
+"""Rebuild every summary under docs/results that has committed trials, from those trials alone
+(no simulation), with the summarize functions the experiments use, and say where a committed
+summary does not match its trials.
+
+For each summary whose trials are committed under ``docs/results/runs/<sweep>/``
+(``report_trials``: the folder of its command's ``--out``, the summary's own trials in it),
+the fields an experiment computes from its trials (``TRIAL_FIELDS``) are computed again:
+
+    fig7           planners.pick_place.summarize (experiments/pick_place_cli.py), the trials'
+                   wall time
+    table1         planners.svr_mpc.summarize, paired, authors_statistic, feedback_effect,
+                   derivatives_effect (experiments/mpc.py)
+    fig4           planners.svr_mpc.summarize per (rho, theta) (experiments/rho_sweep.py)
+    clock_check    experiments/clock_check.py's compare
+    svr_explain    experiments/svr_explain.py's summarize_rows
+    panda_execute  experiments/panda_execute.py's summarize
+
+and "trial_commits" from the trial files. Every other field (the settings, the protocol, the
+departures, the resolved physics) is the committed summary's. The comparison covers every
+field of the committed summary among those: a number that differs beyond rounding (relative
+1e-9), a field the rebuild lacks (a summary of an older format), other values that differ.
+
+    python experiments/resummarize.py --out /tmp/resummarized     # rebuild, compare, write
+    python experiments/resummarize.py --check                     # exit 1 on a mismatch
+    python experiments/resummarize.py --in-place [--only A.json,B.json]
+
+``--in-place`` writes the rebuilt summary over the committed one, with this run's provenance
+(and the original run's under "resummarized_from"), only for a summary written from
+uncommitted code whose trials are all from committed code and whose numbers its trials give:
+that is what makes such a summary pass the docs/results test without rerunning anything. It
+is refused, like ``--record``, from a tree with uncommitted changes. Trial files are only read.
+"""
+
+from __future__ import annotations
+
+import argparse
+import copy
+import json
+import math
+import re
+import sys
+from collections import Counter
+from pathlib import Path
+from types import SimpleNamespace
+
+from cli_args import EPILOG, existing_dir, guarded, output_dir
+from report_base import ROOT, Result, load_results
+from report_trials import TrialInfo, summary_trials, uncommitted
+
+#: the fields each kind of summary computes from its trials
+TRIAL_FIELDS = {
+    "fig7": ("methods", "trials_wall_s", "trial_commits"),
+    "table1": ("methods", "paired", "authors_statistic", "feedback_effect",
+               "derivatives_effect", "row_settings", "trial_commits"),
+    "fig4": ("points", "trial_commits"),
+    "clock_check": ("rows", "trial_commits"),
+    "svr_explain": ("rows", "trial_commits"),
+    "panda_execute": ("goals", "trial_commits"),
+}
+REL_TOL, ABS_TOL = 1e-9, 1e-12
+
+
+def records_of(info: TrialInfo) -> list[dict]:
+    """The trial records ({"key", "params", "result", "code"}), in file-name order."""
+    return [json.loads(p.read_text()) for p in sorted(info.files, key=lambda p: p.name)]
+
+
+def commits_of(records: list[dict]) -> dict:
+    return dict(Counter(str((r.get("code") or {}).get("commit") or "unknown") for r in records))
+
+
+def _fig7(d: dict, records: list[dict], info: TrialInfo) -> dict:
+    from planners.pick_place import Problem, summarize
+
+    results = [r["result"] for r in records]
+    task, goal = d.get("task"), d.get("goal")
+    # the library's own metric names, without building the scene
+    names = Problem.metric_names.fget(SimpleNamespace(settings=SimpleNamespace(task=task,
+                                                                              goal=goal)))
+    methods = [m for m in d.get("methods") or {}]
+    return {"methods": summarize(results, methods, names),
+            "trials_wall_s": float(sum(r["wall_s"] for r in results)),
+            "trial_commits": commits_of(records)}
+
+
+def _baseline(records: list[dict]) -> str:
+    """The row every other is normalised by (experiments/mpc.py's ``baseline_label``): the
+    row of the baseline trials run without feedback."""
+    from planners.svr_mpc import row_label
+
+    base = [r for r in records if r["params"]["method"] == "baseline"]
+    plain = [r for r in base if not r["params"].get("feedback")] or base
+    return row_label(plain[0]["params"]) if plain else "baseline"
+
+
+def _table1(d: dict, records: list[dict], info: TrialInfo) -> dict:
+    from planners.svr_mpc import (
+        TABLE1_ROWS,
+        derivatives_effect,
+        feedback_effect,
+        paired,
+        row_label,
+        summarize,
+    )
+    from planners.svr_mpc.authors_data import authors_statistic
+
+    baseline = _baseline(records)
+    order = {name: i for i, name in enumerate(TABLE1_ROWS)}
+    rows = dict(sorted(summarize(records, baseline=baseline).items(),
+                       key=lambda kv: (order.get(kv[0].split()[0], 99), kv[0])))
+    out = {"row_settings": {row_label(r["params"]): {k: r["params"][k]
+                                                     for k in ("method", "theta", "rho")}
+                            for r in records},
+           "methods": rows, "paired": paired(records, baseline=baseline),
+           "authors_statistic": authors_statistic(records, baseline=baseline),
+           "trial_commits": commits_of(records)}
+    if len({bool(r["params"].get("feedback")) for r in records}) == 2:
+        out["feedback_effect"] = feedback_effect(records)
+    if variants := derivatives_effect(records):
+        out["derivatives_effect"] = variants
+    return out
+
+
+def _fig4(d: dict, records: list[dict], info: TrialInfo) -> dict:
+    from planners.svr_mpc import row_label, summarize
+
+    method = d.get("method")
+    base = [r for r in records if r["params"]["method"] == "baseline"]
+    baseline = _baseline(records)
+    points = []
+    grid = sorted({(r["params"]["theta"], r["params"]["rho"]) for r in records
+                   if r["params"]["method"] == method})
+    for theta, rho in grid:
+        group = [r for r in records if r["params"]["method"] == method
+                 and r["params"]["rho"] == rho and r["params"]["theta"] == theta]
+        points.append(dict(rho=rho, theta=theta, **summarize(base + group, baseline=baseline)[
+            row_label(group[0]["params"])]))
+    return {"points": points, "trial_commits": commits_of(records)}
+
+
+def _clock_check(d: dict, records: list[dict], info: TrialInfo) -> dict:
+    import clock_check
+
+    by: dict = {}
+    for path, r in zip(sorted(info.files, key=lambda p: p.name), records, strict=True):
+        by.setdefault(path.parent.parent.name, []).append(r)
+    nominal = next(r["params"]["nominal_threads"] for r in by.get("virtual", records))
+    return {"rows": clock_check.compare({c: by[c] for c in ("real", "virtual") if c in by},
+                                        nominal),
+            "trial_commits": {c: commits_of(rs) for c, rs in by.items()}}
+
+
+def _svr_explain(d: dict, records: list[dict], info: TrialInfo) -> dict:
+    import svr_explain
+
+    m = re.search(r"--bins[ =](\d+)", str((d.get("resummarized_from") or d.get("provenance")
+                                          or {}).get("command") or ""))
+    bins = int(m.group(1)) if m else svr_explain.parser().get_default("bins")
+    return {"rows": svr_explain.summarize_rows(records, bins),
+            "trial_commits": commits_of(records)}
+
+
+def _panda(d: dict, records: list[dict], info: TrialInfo) -> dict:
+    import panda_execute
+
+    return {"goals": panda_execute.summarize(records), "trial_commits": commits_of(records)}
+
+
+REBUILD = {"fig7": _fig7, "table1": _table1, "fig4": _fig4, "clock_check": _clock_check,
+           "svr_explain": _svr_explain, "panda_execute": _panda}
+
+
+def _number(x) -> bool:
+    return isinstance(x, (int, float)) and not isinstance(x, bool)
+
+
+def compare(committed, rebuilt, path: str = "") -> dict:
+    """Where ``committed`` (a committed summary's value) and ``rebuilt`` disagree: {"differs":
+    [paths], "missing": [paths the rebuild lacks], "new": [paths only the rebuild has]};
+    numbers equal to REL_TOL / ABS_TOL, None and NaN alike (no value); a list of Fig. 4
+    points matched by (rho, theta)."""
+    out: dict = {"differs": [], "missing": [], "new": []}
+
+    def walk(a, b, where):
+        if isinstance(a, dict) and isinstance(b, dict):
+            for k in a:
+                if k not in b:
+                    out["missing"].append(f"{where}.{k}".lstrip("."))
+                else:
+                    walk(a[k], b[k], f"{where}.{k}")
+            out["new"] += [f"{where}.{k}".lstrip(".") for k in b if k not in a]
+        elif isinstance(a, list) and isinstance(b, list):
+            if a and all(isinstance(x, dict) and {"rho", "theta"} <= set(x) for x in a + b):
+                a = sorted(a, key=lambda x: (x["theta"], x["rho"]))
+                b = sorted(b, key=lambda x: (x["theta"], x["rho"]))
+            if len(a) != len(b):
+                out["differs"].append(f"{where} (length {len(a)} vs {len(b)})".lstrip("."))
+                return
+            for i, (x, y) in enumerate(zip(a, b, strict=True)):
+                walk(x, y, f"{where}[{i}]")
+        elif _number(a) and _number(b):
+            if not (math.isnan(a) and math.isnan(b)) and not math.isclose(
+                    a, b, rel_tol=REL_TOL, abs_tol=ABS_TOL):
+                out["differs"].append(where.lstrip("."))
+        elif (a is None or (_number(a) and math.isnan(a))) and \
+                (b is None or (_number(b) and math.isnan(b))):
+            return
+        elif a != b:
+            out["differs"].append(where.lstrip("."))
+
+    walk(committed, rebuilt, path)
+    return out
+
+
+def rebuild(results_dir: Path, r: Result) -> dict | None:
+    """{"info", "fields": the rebuilt fields, "diff": ``compare`` over the committed
+    summary's trial fields, "error"} of a summary with committed trials (None without)."""
+    if r.kind not in REBUILD:
+        return None
+    info = summary_trials(results_dir, r)
+    if info is None:
+        return None
+    try:
+        fields = REBUILD[r.kind](r.data, records_of(info), info)
+    except Exception as e:  # named in the report, the others go on
+        return {"info": info, "fields": None, "diff": None,
+                "error": f"{type(e).__name__}: {' '.join(str(e).split())}"}
+    committed = {k: r.data[k] for k in TRIAL_FIELDS[r.kind] if k in r.data}
+    return {"info": info, "fields": fields, "diff": compare(committed, fields), "error": None}
+
+
+def matches(found: dict) -> bool:
+    return found["error"] is None and not found["diff"]["differs"] \
+        and not found["diff"]["missing"]
+
+
+def eligible(r: Result, found: dict) -> str | None:
+    """Why ``--in-place`` leaves a summary alone (None: it is re-summarised)."""
+    if not str(r.provenance.get("git_commit") or "").endswith("-dirty"):
+        return "its summary is from committed code already"
+    bad = sum(n for c, n in found["info"].commits.items() if uncommitted(c))
+    if bad:
+        return f"{bad} of {found['info'].n} trials from uncommitted code: rerun them"
+    if not matches(found):
+        return "its trials do not give its numbers"
+    return None
+
+
+def resummarized(r: Result, found: dict) -> dict:
+    """The rebuilt summary (without its provenance): the committed one with the trial fields
+    rebuilt and the original run's provenance under "resummarized_from"."""
+    out = copy.deepcopy(r.data)
+    out.update(found["fields"])
+    out["resummarized_from"] = r.origin
+    out.pop("provenance", None)
+    return out
+
+
+def describe(name: str, found: dict) -> str:
+    if found["error"]:
+        return f"{name}: cannot be rebuilt from its trials ({found['error']})"
+    d, n = found["diff"], found["info"].n
+    if matches(found):
+        return f"{name}: matches its {n} trials" + (
+            f" (the rebuild adds {', '.join(d['new'])})" if d["new"] else "")
+    parts = []
+    for what, paths in (("differs", d["differs"]), ("not in the rebuild", d["missing"])):
+        if paths:
+            parts.append(f"{what}: {', '.join(paths[:6])}"
+                         + (f" and {len(paths) - 6} more" if len(paths) > 6 else ""))
+    return f"{name}: DOES NOT MATCH its {n} trials; " + "; ".join(parts)
+
+
+def parser() -> argparse.ArgumentParser:
+    ap = argparse.ArgumentParser(prog="resummarize.py", description=__doc__, epilog=EPILOG,
+                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--results-dir", type=existing_dir, default=ROOT / "docs" / "results",
+                    help="folder of the result files (default docs/results)")
+    where = ap.add_mutually_exclusive_group()
+    where.add_argument("--out", type=output_dir, default=None,
+                       help="write every rebuilt summary to OUT/<name>.json")
+    where.add_argument("--in-place", action="store_true",
+                       help="write over the committed summaries that are from uncommitted code "
+                            "while their trials are not (refused from a dirty tree)")
+    ap.add_argument("--only", default=None, metavar="NAMES",
+                    help="comma-separated summary file names (default: all)")
+    ap.add_argument("--check", action="store_true",
+                    help="exit 1 when a committed summary does not match its trials")
+    return ap
+
+
+@guarded("resummarize.py")
+def main(argv=None) -> int:
+    from dopt.provenance import code_state, provenance
+
+    args = parser().parse_args(argv)
+    argv = sys.argv[1:] if argv is None else list(argv)
+    only = set(args.only.split(",")) if args.only else None
+    if args.in_place and (problem := code_state().record_problem()):
+        print(f"resummarize.py: error: --in-place: {problem}", file=sys.stderr)
+        return 1
+    mismatched, written = [], []
+    for r in load_results(args.results_dir):
+        if only is not None and r.name not in only:
+            continue
+        found = rebuild(args.results_dir, r)
+        if found is None:
+            continue
+        print(describe(r.name, found))
+        if not matches(found):
+            mismatched.append(r.name)
+        if found["fields"] is None:
+            continue
+        if args.in_place and (why := eligible(r, found)) is not None:
+            if only is not None:
+                print(f"  left alone: {why}")
+            continue
+        if args.out or args.in_place:
+            summary = resummarized(r, found)
+            summary["provenance"] = provenance(["experiments/resummarize.py", *argv])
+            target = r.path if args.in_place else Path(args.out) / r.name
+            target.parent.mkdir(parents=True, exist_ok=True)
+            target.write_text(json.dumps(summary, indent=2))
+            written.append(str(target))
+    print(f"{len(mismatched)} summaries do not match their trials"
+          + (f": {', '.join(mismatched)}" if mismatched else "")
+          + (f"; wrote {len(written)} file(s)" if written else ""))
+    return 1 if args.check and mismatched else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
