@@ -14,7 +14,7 @@ $(STAMP): pyproject.toml setup.py dopt/_rollout_kernels.c
 	test -x $(PY) || $(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install --quiet --upgrade pip
 	$(PY) -m pip install --quiet "$(TORCH)"
-	$(PY) -m pip install --quiet -e ".[plots,cluster,dev]"
+	$(PY) -m pip install --quiet -e ".[plots,cluster,dev,viz]"
 	touch $(STAMP)
 
 install: $(STAMP)

@@ -1,0 +1,263 @@
+"""Blow-up captures: the last states of an executed rollout that the stability verdict
+(``dopt.stability``) flagged, written so that ``dopt-view`` opens them at the failing step.
+
+A capture is one folder::
+
+    blowup.json   {"format": "dopt-blowup/1", "step", "first_row", "reason", "body",
+                   "body_id", "spec", "nstate", "rows", "label", "created", "version"}
+    states.npy    (R, ns) float64: rows first_row .. first_row + R - 1 of the rollout
+                  (row 0 its start, row t + 1 the state after step t); the last row is the
+                  state after the failing step ``step``
+    model.mjb     the model exactly as it ran (mj_saveModel: run-time changes included)
+    model.xml     MJCF of it, for reading (MjSpec.to_xml of the given spec, the given XML, or
+                  mj_saveLastXML where it matches), when one could be written
+
+``capture_blowup`` re-simulates an executed rollout's controls up to the failing step with
+``mj_step`` (bit-identical to both rollout routes) keeping a ring buffer of the last ``keep``
+states, and calls ``save_blowup``. The offending body is named by the verdict's reason
+(``speed ... (body NAME)``, ``(flex vertex i)``, ``(flex edge i)``), else it is the body whose
+DoFs move fastest (or first go non-finite) in the failing state.
+
+Shapes: R rows kept, ns state row, T control rows, nc control row size.
+"""
+
+from __future__ import annotations
+
+import collections
+import json
+import logging
+import re
+import time
+from pathlib import Path
+
+import mujoco
+import numpy as np
+
+from dopt.state import INTEGRATION, StateLayout, check_model, check_spec, check_states
+from dopt.validation import check_int, float_array
+
+log = logging.getLogger(__name__)
+
+FORMAT = "dopt-blowup/1"
+#: states a capture keeps by default (the ring buffer's length)
+KEEP = 100
+
+
+def save_blowup(out_dir, model: mujoco.MjModel, states: np.ndarray, step: int, reason: str,
+                *, first_row: int | None = None, spec: int = INTEGRATION,
+                xml: str | mujoco.MjSpec | None = None, label: str = "") -> Path:
+    """Write a capture (module docstring) into the folder ``out_dir`` (created; an existing
+    capture there is replaced) and return it.
+
+    Args:
+        model: the model the rollout ran on.
+        states: (R, ns) the last state rows of the rollout, the last one the state after the
+            failing step (non-finite values allowed: they are what blew up).
+        step: the failing step (the verdict's ``Stability.step``).
+        reason: the verdict's reason (names the bound and, where it can, the body).
+        first_row: the rollout row of ``states[0]``; default ``step + 2 - R`` (the last row
+            is the state after ``step``).
+        spec: the mjtState bits of the rows.
+        xml: the model's MJCF (a string or the MjSpec it was compiled from), for model.xml.
+        label: a name for the console and the viewer (e.g. "original seed 3 stage 1").
+
+    Raises:
+        TypeError / ValueError: rows that do not fit the model and spec, a negative step, a
+            first_row below 0, a reason that is not a string.
+    """
+    check_model(model)
+    spec = check_spec(spec)
+    step = check_int(step, "step", 0)
+    if not isinstance(reason, str) or not isinstance(label, str):
+        raise TypeError(f"reason and label must be strings, got {reason!r}, {label!r}")
+    rows = float_array(states, "states", finite=False, ndim=2)
+    ns = mujoco.mj_stateSize(model, spec)
+    if rows.shape[1] != ns or not len(rows):
+        raise ValueError(f"states must have shape (R, {ns}) with R >= 1, got {rows.shape}")
+    first = step + 2 - len(rows) if first_row is None else check_int(first_row, "first_row")
+    if first < 0:
+        raise ValueError(f"first_row {first} < 0: {len(rows)} rows cannot end after step "
+                         f"{step}")
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    mujoco.mj_saveModel(model, str(out / "model.mjb"), None)
+    wrote_xml = _write_xml(out / "model.xml", model, xml)
+    np.save(out / "states.npy", rows)
+    body = offending_body(model, rows[-1], reason, spec)
+    meta = {"format": FORMAT, "step": step, "first_row": first, "reason": reason,
+            "body": _body_name(model, body), "body_id": body, "spec": spec, "nstate": ns,
+            "rows": len(rows), "label": label, "xml": wrote_xml,
+            "created": time.strftime("%Y-%m-%dT%H:%M:%S"), "version": _version()}
+    (out / "blowup.json").write_text(json.dumps(meta, indent=1) + "\n")
+    log.warning("blow-up capture %s: step %d, %s (body %s)", out, step, reason, meta["body"])
+    return out
+
+
+def capture_blowup(out_dir, model: mujoco.MjModel, start_state: np.ndarray,
+                   controls: np.ndarray, step: int, reason: str, *, keep: int = KEEP,
+                   spec: int = INTEGRATION,
+                   control_spec: int = int(mujoco.mjtState.mjSTATE_CTRL),
+                   xml: str | mujoco.MjSpec | None = None, label: str = "") -> Path:
+    """Re-simulate an executed rollout from ``start_state`` (ns,) with its controls (T, nc)
+    (rows of ``control_spec``, set before each step) up to the failing ``step``, keep the last
+    ``keep`` state rows in a ring buffer and write them with ``save_blowup``.
+
+    A step in which MuJoCo raises ends the replay there (the rows so far are kept)."""
+    check_model(model)
+    spec, control_spec = check_spec(spec), check_spec(control_spec, "control_spec")
+    x0 = check_states(model, start_state, spec, batched=False, name="start_state")
+    U = float_array(controls, "controls", finite=False, ndim=2)
+    step, keep = check_int(step, "step", 0), check_int(keep, "keep", 1)
+    if step >= len(U):
+        raise ValueError(f"step {step} is beyond the {len(U)} control rows")
+    if U.shape[1] != mujoco.mj_stateSize(model, control_spec):
+        raise ValueError(f"controls must have shape (T, "
+                         f"{mujoco.mj_stateSize(model, control_spec)}), got {U.shape}")
+    data = mujoco.MjData(model)
+    mujoco.mj_setState(model, data, x0, spec)
+    ring = collections.deque([x0.copy()], maxlen=keep)
+    last = 0
+    for t in range(step + 1):
+        mujoco.mj_setState(model, data, U[t], control_spec)
+        try:
+            mujoco.mj_step(model, data)
+        except Exception as e:                       # MuJoCo gave up on this step
+            log.warning("blow-up replay: MuJoCo raised at step %d: %s", t, e)
+            break
+        row = np.empty(len(x0))
+        mujoco.mj_getState(model, data, row, spec)
+        ring.append(row)
+        last = t + 1
+    return save_blowup(out_dir, model, np.array(ring), max(last - 1, 0), reason,
+                       first_row=last + 1 - len(ring), spec=spec, xml=xml, label=label)
+
+
+def capture_dir(out, label: str) -> Path:
+    """A new capture folder ``OUT/blowups/<label>`` (``-2``, ``-3``, ... where it exists);
+    the label's characters outside [A-Za-z0-9._-] become '-'. Not created."""
+    base = Path(out) / "blowups"
+    name = re.sub(r"[^A-Za-z0-9._-]+", "-", str(label)).strip("-") or "blowup"
+    path, k = base / name, 1
+    while path.exists():
+        k += 1
+        path = base / f"{name}-{k}"
+    return path
+
+
+def offending_body(model: mujoco.MjModel, state: np.ndarray, reason: str = "",
+                   spec: int = INTEGRATION) -> int | None:
+    """The body a verdict's ``reason`` names (a body name, a flex vertex or edge), else the
+    body with the first non-finite, else the fastest, DoF in ``state`` (ns,); None when the
+    model has no DoF."""
+    named = _body_of_reason(model, reason)
+    if named is not None:
+        return named
+    layout = StateLayout.of(model, spec)
+    if model.nv == 0 or "qvel" not in layout.slices:
+        return None
+    qvel = np.asarray(state, dtype=float)[layout["qvel"]]
+    bad = np.flatnonzero(~np.isfinite(qvel))
+    dof = int(bad[0]) if len(bad) else int(np.argmax(np.abs(qvel)))
+    return int(model.dof_bodyid[dof])
+
+
+def _body_of_reason(model: mujoco.MjModel, reason: str) -> int | None:
+    m = re.search(r"\(body ([^)]+)\)", reason or "")
+    if m:
+        name = m.group(1).strip()
+        if name.isdigit() and int(name) < model.nbody:
+            return int(name)
+        b = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, name)
+        return int(b) if b >= 0 else None
+    m = re.search(r"\(flex (vertex|edge) (\d+)\)", reason or "")
+    if not m:
+        return None
+    i = int(m.group(2))
+    if m.group(1) == "vertex":
+        return int(model.flex_vertbodyid[i]) if i < model.nflexvert else None
+    if i >= model.nflexedge:
+        return None
+    f = int(np.searchsorted(model.flex_edgeadr, i, side="right") - 1)
+    v = int(model.flex_vertadr[f] + model.flex_edge[i, 0])
+    return int(model.flex_vertbodyid[v])
+
+
+def _body_name(model: mujoco.MjModel, body: int | None) -> str | None:
+    if body is None:
+        return None
+    return mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_BODY, body) or f"body {body}"
+
+
+def _write_xml(path: Path, model: mujoco.MjModel, xml) -> bool:
+    """model.xml from an MjSpec, an MJCF string, or mj_saveLastXML; False when none fits."""
+    try:
+        if isinstance(xml, mujoco.MjSpec):
+            path.write_text(xml.to_xml())
+        elif isinstance(xml, str):
+            path.write_text(xml)
+        elif xml is None:
+            mujoco.mj_saveLastXML(str(path), model)
+        else:
+            raise TypeError(f"xml must be an MJCF string or an MjSpec, got {type(xml).__name__}")
+    except (ValueError, RuntimeError, mujoco.FatalError) as e:
+        log.info("no model.xml for the capture (%s); model.mjb holds the model", e)
+        path.unlink(missing_ok=True)
+        return False
+    return True
+
+
+def _version() -> str:
+    from dopt import __version__
+    return __version__
+
+
+# ------------------------------------------------------------------------------ viewing
+def load_blowup(path, max_frames: int = 400):
+    """A capture folder as a ``dopt.view.episode.Episode`` opening at the state after the
+    failing step, the offending body marked.
+
+    Raises:
+        FileNotFoundError / ValueError: no capture there, or one of another format.
+    """
+    from dopt.view.episode import Episode, frame_rows
+
+    path = Path(path)
+    meta_file = path / "blowup.json"
+    if not meta_file.is_file():
+        raise FileNotFoundError(f"{path} holds no blowup.json")
+    meta = json.loads(meta_file.read_text())
+    if meta.get("format") != FORMAT:
+        raise ValueError(f"{meta_file}: format {meta.get('format')!r}, expected {FORMAT!r}")
+    model = mujoco.MjModel.from_binary_path(str(path / "model.mjb"))
+    rows = np.load(path / "states.npy")
+    first, step = int(meta["first_row"]), int(meta["step"])
+    failing = min(max(step + 1 - first, 0), len(rows) - 1)
+    keep = frame_rows(len(rows), max_frames, must=[failing])
+    layout = StateLayout.of(model, int(meta["spec"]))
+    times = (rows[keep, layout["time"]].ravel() if "time" in layout.slices
+             else (first + keep) * model.opt.timestep)
+    captions = [f"rollout row {first + r} (after step {first + r - 1})"
+                + ("  <- the verdict flagged this step" if r == failing else "")
+                for r in keep]
+    body = meta.get("body_id")
+    summary = (f"**Blow-up** {meta.get('label') or path.name}  \n"
+               f"step {step}: {meta['reason']}  \nbody: {meta.get('body')}  \n"
+               f"{len(rows)} states kept (rows {first}..{first + len(rows) - 1})")
+    return Episode(path.name, model, rows[keep], np.nan_to_num(times), captions, summary,
+                   spec=int(meta["spec"]), marked_body=None if body is None else int(body),
+                   start_frame=int(np.searchsorted(keep, failing)))
+
+
+class BlowupSource:
+    """The episode source of capture folders (``dopt.view.episode.sources``)."""
+
+    name = "blowup"
+
+    def claims(self, path: Path, record: dict | None) -> bool:
+        return record is None and Path(path).is_dir() and (Path(path) / "blowup.json").is_file()
+
+    def load(self, path: Path, max_frames: int = 400):
+        return load_blowup(path, max_frames)
+
+
+BLOWUP_SOURCE = BlowupSource()

@@ -1,0 +1,114 @@
+"""``dopt-view PATH`` (also ``python -m dopt.view PATH``): open trials, MPC episodes and
+blow-up captures in the browser, or write one frame as a PNG.
+
+    dopt-view docs/results/runs/fig7-cloth-diagonal          # serve; prints the URL
+    dopt-view OUT/trials/simple-seed0-ab12cd34.json --frame 40
+    dopt-view OUT/blowups/original-seed3 --png blowup.png    # a still, no server
+
+Serving needs the ``viz`` extra (viser); the still needs an offscreen OpenGL context
+(``MUJOCO_GL=egl``). Bad input is one line "dopt-view: error: ..." and exit status 1.
+"""
+
+from __future__ import annotations
+
+import argparse
+import logging
+import sys
+import time
+
+from dopt.cli import EPILOG, guarded, int_at_least, output_file, positive_int
+
+PROG = "dopt-view"
+
+
+def parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(
+        prog=PROG, epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter,
+        description="Replay pick-and-place trials, MPC episodes and blow-up captures in the "
+                    "browser (viser, on 127.0.0.1), or write one frame as a PNG.")
+    p.add_argument("path", help="a trial file, a result or trial folder, a blow-up capture "
+                                "or a folder of them")
+    p.add_argument("--trial", help="the episode to open first (its label: the trial file's "
+                                   "name without .json, or the capture's folder)")
+    p.add_argument("--frame", type=int, default=None,
+                   help="the frame to open at (0-based, as the slider counts; -1: the last); "
+                        "default: the episode's own (a blow-up's failing step, else 0)")
+    p.add_argument("--png", type=output_file, help="write the frame as a PNG and exit "
+                                                   "(MuJoCo's offscreen renderer)")
+    p.add_argument("--width", type=positive_int, default=800, help="PNG width (px)")
+    p.add_argument("--height", type=positive_int, default=600, help="PNG height (px)")
+    p.add_argument("--max-frames", type=int_at_least(2), default=300,
+                   help="frames kept per episode (evenly spaced; first and last kept)")
+    p.add_argument("--host", default="127.0.0.1", help="address to serve on")
+    p.add_argument("--port", type=positive_int, default=8080,
+                   help="port to serve on (the next free one when taken)")
+    p.add_argument("--list", action="store_true", help="list the episodes found and exit")
+    p.add_argument("-v", "--verbose", action="store_true", help="log what is loaded")
+    return p
+
+
+@guarded(PROG)
+def main(argv=None) -> int:
+    args = parser().parse_args(argv)
+    logging.basicConfig(level=logging.INFO if args.verbose else logging.WARNING,
+                        format="%(levelname)s %(name)s: %(message)s")
+    from dopt.view.episode import collect
+
+    entries = collect(args.path)
+    if args.trial is not None and args.trial not in entries:
+        raise ValueError(f"no episode {args.trial!r} under {args.path}; there are "
+                         f"{', '.join(list(entries)[:8])}{' ...' if len(entries) > 8 else ''}")
+    if args.list:
+        for label, (source, path) in entries.items():
+            print(f"{label}\t{source.name}\t{path}")
+        return 0
+    first = args.trial or next(iter(entries))
+    if args.png is not None:
+        return _still(entries, first, args)
+    return _serve(entries, first, args)
+
+
+def _frame(frame: int | None, n_frames: int, default: int) -> int:
+    if frame is None:
+        return default
+    k = frame + n_frames if frame < 0 else frame
+    if not 0 <= k < n_frames:
+        raise ValueError(f"--frame {frame} is outside the episode's {n_frames} frames "
+                         f"(0..{n_frames - 1}, or -1 for the last)")
+    return k
+
+
+def _still(entries: dict, first: str, args) -> int:
+    from dopt.view.still import write_png
+
+    source, path = entries[first]
+    ep = source.load(path, args.max_frames)
+    k = _frame(args.frame, ep.n_frames, ep.start_frame)
+    out = write_png(ep, k, args.png, args.width, args.height)
+    print(f"{PROG}: wrote {out} ({first}, frame {k} of {ep.n_frames})")
+    return 0
+
+
+def _serve(entries: dict, first: str, args) -> int:
+    try:
+        import viser  # noqa: F401
+    except ImportError:
+        raise RuntimeError("serving needs viser: pip install -e '.[viz]' (or write a still "
+                           "with --png)") from None
+    from dopt.view.player import Viewer
+
+    viewer = Viewer(entries, args.host, args.port, args.max_frames, first=first)
+    if args.frame is not None:
+        viewer.show(_frame(args.frame, viewer.episode.n_frames, 0))
+    print(f"{PROG}: {len(entries)} episode(s) from {args.path} at {viewer.url} "
+          f"(Ctrl-C stops)", flush=True)
+    try:
+        while True:
+            time.sleep(3600)
+    except KeyboardInterrupt:
+        viewer.close()
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

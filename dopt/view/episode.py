@@ -1,0 +1,283 @@
+"""What the viewer shows: an ``Episode`` (a model, its state frames and what is drawn over
+them), exact replay of recorded controls, and the sources that turn files into episodes.
+
+A *source* knows one kind of record: ``claims(path, record)`` says whether a file (its JSON
+``record``, or None for a folder) is one of its, ``load(path, max_frames)`` builds the
+``Episode``. dopt knows no planner: the pick-and-place and MPC trial sources live in
+``planners.view`` and are found through the ``dopt.view.sources`` entry points of the installed
+distribution (pyproject.toml); the blow-up capture source (``dopt.view.blowup``) is built in.
+
+Shapes: F frames, ns state row, M markers, V ghost vertices, nbody bodies.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import mujoco
+import numpy as np
+
+from dopt.state import INTEGRATION, check_model, check_spec, check_states
+from dopt.validation import check_int, float_array
+
+log = logging.getLogger(__name__)
+
+#: entry-point group of the episode sources of other packages
+ENTRY_POINTS = "dopt.view.sources"
+#: sub-folders of a trial folder that hold no finished trials (``dopt.sweep``)
+SKIPPED_FOLDERS = ("checkpoints", "corrupt", "outdated")
+
+
+@dataclass(frozen=True)
+class Curve:
+    """A time series beside the scene: x (n,) (seconds, or iterations when ``x_label`` says
+    so) and y (n,) in ``unit``."""
+
+    name: str
+    x: np.ndarray
+    y: np.ndarray
+    unit: str = ""
+    x_label: str = "time (s)"
+
+
+@dataclass(frozen=True)
+class Markers:
+    """Points drawn over the scene: positions (F, M, 3) per frame (NaN rows hidden), an RGB
+    colour (0-255) and a diameter (m)."""
+
+    name: str
+    positions: np.ndarray
+    colour: tuple[int, int, int]
+    size: float = 0.012
+
+
+@dataclass(frozen=True)
+class Ghost:
+    """The goal drawn as a translucent copy of the object: shapes (G, V, 3), which[f] the
+    shape of frame f (-1: none), and its triangles (E, 3) or segments (E, 2)."""
+
+    shapes: np.ndarray
+    which: np.ndarray
+    faces: np.ndarray
+    colour: tuple[int, int, int] = (40, 160, 230)
+    opacity: float = 0.35
+
+
+@dataclass(frozen=True)
+class Region:
+    """A translucent disc on the table: centre (3,) (m), radius (m), height (m)."""
+
+    centre: np.ndarray
+    radius: float
+    height: float = 0.002
+    colour: tuple[int, int, int] = (50, 220, 50)
+
+
+@dataclass(frozen=True)
+class Episode:
+    """One viewable run.
+
+    Attributes:
+        name: its label (a trial key, a capture's folder).
+        model: the compiled model the states belong to.
+        states: (F, ns) state rows of ``spec`` (frames in time order).
+        times: (F,) simulation time of each frame (s).
+        captions: F one-line texts (stage, action, optimisation at that frame).
+        summary: markdown shown beside the scene (metrics, the replay's check).
+        spec: mjtState bits of the rows (default ``mjSTATE_INTEGRATION``).
+        curves, markers, regions: drawn beside and over the scene.
+        ghost: the goal as a translucent object, or None.
+        shade: (F, nbody) in [0, 1] per body (NaN: its own colour): how much of each object
+            is in the optimiser's set at that frame (the SVR paper's Fig. 1).
+        marked_body: a body drawn in red (a blow-up's offender), or None.
+        start_frame: the frame shown first.
+        replay_error: max |replayed final state - recorded final state| (None: not replayed).
+        hidden_geoms: geom ids not drawn (e.g. a goal site's stand-in).
+    """
+
+    name: str
+    model: mujoco.MjModel
+    states: np.ndarray
+    times: np.ndarray
+    captions: Sequence[str]
+    summary: str = ""
+    spec: int = INTEGRATION
+    curves: Sequence[Curve] = ()
+    markers: Sequence[Markers] = ()
+    regions: Sequence[Region] = ()
+    ghost: Ghost | None = None
+    shade: np.ndarray | None = None
+    marked_body: int | None = None
+    start_frame: int = 0
+    replay_error: float | None = None
+    hidden_geoms: tuple[int, ...] = field(default_factory=tuple)
+
+    def __post_init__(self):
+        check_model(self.model)
+        check_spec(self.spec)
+        states = self._states()              # blow-up frames may be non-finite
+        F = len(states)
+        if F < 1:
+            raise ValueError(f"episode {self.name!r} has no frames")
+        if np.shape(self.times) != (F,) or len(self.captions) != F:
+            raise ValueError(f"episode {self.name!r}: times {np.shape(self.times)} and "
+                             f"{len(self.captions)} captions for {F} frames")
+        for m in self.markers:
+            if np.shape(m.positions)[:1] != (F,) or np.shape(m.positions)[2:] != (3,):
+                raise ValueError(f"markers {m.name!r} must have shape ({F}, M, 3), got "
+                                 f"{np.shape(m.positions)}")
+        if self.shade is not None and np.shape(self.shade) != (F, self.model.nbody):
+            raise ValueError(f"shade must have shape ({F}, {self.model.nbody}), got "
+                             f"{np.shape(self.shade)}")
+        if self.ghost is not None and np.shape(self.ghost.which) != (F,):
+            raise ValueError(f"ghost.which must have shape ({F},), got "
+                             f"{np.shape(self.ghost.which)}")
+        check_int(self.start_frame, "start_frame", 0)
+        if self.start_frame >= F:
+            raise ValueError(f"start_frame {self.start_frame} is beyond the {F} frames")
+
+    def _states(self) -> np.ndarray:
+        size = mujoco.mj_stateSize(self.model, self.spec)
+        states = np.asarray(self.states, dtype=float)
+        if states.ndim != 2 or states.shape[1] != size:
+            raise ValueError(f"states must have shape (F, {size}), got {states.shape}")
+        return states
+
+    @property
+    def n_frames(self) -> int:
+        return len(self.states)
+
+
+# ------------------------------------------------------------------------------ replay
+def replay_controls(model: mujoco.MjModel, start_state: np.ndarray, controls: np.ndarray,
+                    spec: int = INTEGRATION,
+                    control_spec: int = int(mujoco.mjtState.mjSTATE_CTRL)) -> np.ndarray:
+    """Re-simulate recorded controls from a recorded start with ``mj_step``, exactly as an MPC
+    agent or an executed rollout stepped them: (ns,), (T, nc) -> states (T + 1, ns) of
+    ``spec``, row t + 1 the state after step t. As in ``dopt.mpc.MPCResult`` and
+    ``RolloutService.trajectory``, row t holds the control executed at step t (row 0 is the
+    start with control row 0 set) and the last row the last control.
+
+    ``control_spec``: the mjtState bits one control row sets before each step (``mjSTATE_CTRL``:
+    nu values; the pick scenes' picker: ctrl | eq_active).
+
+    Raises:
+        TypeError / ValueError: a model that is not an MjModel, a start that is not a valid
+            state row of ``spec``, controls that are not finite (T, nc) rows.
+    """
+    check_model(model)
+    spec, control_spec = check_spec(spec), check_spec(control_spec, "control_spec")
+    x0 = check_states(model, start_state, spec, batched=False, name="start_state")
+    nc = mujoco.mj_stateSize(model, control_spec)
+    U = float_array(controls, "controls", ndim=2)
+    if U.shape[1] != nc:
+        raise ValueError(f"controls must have shape (T, {nc}) for control_spec "
+                         f"{control_spec}, got {U.shape}")
+    data = mujoco.MjData(model)
+    mujoco.mj_setState(model, data, x0, spec)
+    out = np.empty((len(U) + 1, len(x0)))
+    out[0] = x0
+    for t, row in enumerate(U):
+        mujoco.mj_setState(model, data, row, control_spec)
+        mujoco.mj_getState(model, data, out[t], spec)       # row t: the control it executes
+        mujoco.mj_step(model, data)
+        mujoco.mj_getState(model, data, out[t + 1], spec)
+    return out
+
+
+def drawable_state(states: np.ndarray, frame: int) -> np.ndarray:
+    """Row ``frame`` of states (F, ns), or the last finite row before it (a blow-up's last
+    rows can hold NaN, which cannot be drawn)."""
+    for f in range(frame, -1, -1):
+        if np.isfinite(states[f]).all():
+            return states[f]
+    return np.nan_to_num(states[frame])
+
+
+def frame_rows(n_rows: int, max_frames: int, must: Sequence[int] = ()) -> np.ndarray:
+    """At most about ``max_frames`` evenly spaced row indices of ``n_rows`` (the first and last
+    always, and every index in ``must``), sorted: (F,) int."""
+    n_rows, max_frames = check_int(n_rows, "n_rows", 1), check_int(max_frames, "max_frames", 2)
+    every = max(1, int(np.ceil((n_rows - 1) / (max_frames - 1))))
+    rows = set(range(0, n_rows, every)) | {n_rows - 1}
+    rows |= {int(r) for r in must if 0 <= int(r) < n_rows}
+    return np.array(sorted(rows), dtype=int)
+
+
+# ------------------------------------------------------------------------------ sources
+def read_record(path: Path) -> dict | None:
+    """The JSON object of a file, or None when it is not one (logged)."""
+    try:
+        record = json.loads(Path(path).read_text())
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as e:
+        log.info("%s: not a JSON record (%s)", path, e)
+        return None
+    return record if isinstance(record, dict) else None
+
+
+def sources() -> list:
+    """The episode sources: the built-in blow-up captures, then every ``dopt.view.sources``
+    entry point of the installed distributions (``planners.view``: pick and MPC trials)."""
+    from importlib.metadata import entry_points
+
+    from dopt.view.blowup import BLOWUP_SOURCE
+
+    found = [BLOWUP_SOURCE]
+    for ep in sorted(entry_points(group=ENTRY_POINTS), key=lambda e: e.name):
+        try:
+            found.append(ep.load())
+        except Exception as e:                 # a broken plug-in must not hide the others
+            log.warning("episode source %s (%s) failed to load: %s", ep.name, ep.value, e)
+    return found
+
+
+def candidates(path: Path) -> list[Path]:
+    """The files and folders under ``path`` a source may claim: ``path`` itself when it is a
+    file or a blow-up capture; for a folder its JSON files, those of its ``trials/`` (not
+    checkpoints, corrupt or outdated ones), its sub-folders and those of its ``blowups/``."""
+    path = Path(path)
+    if path.is_file() or (path / "blowup.json").is_file():
+        return [path]
+    found: list[Path] = []
+    for folder in (path, path / "trials", path / "blowups"):
+        if not folder.is_dir():
+            continue
+        for p in sorted(folder.iterdir()):
+            if p.name in SKIPPED_FOLDERS or p.name.startswith("."):
+                continue
+            if (p.is_file() and p.suffix == ".json") or (p / "blowup.json").is_file():
+                found.append(p)
+    return found
+
+
+def collect(path, source_list: Sequence | None = None) -> dict[str, tuple[object, Path]]:
+    """{label: (source, path)} of every episode under ``path`` (a trial file, a trial or result
+    folder, a blow-up capture or a folder of them), labels in file order.
+
+    Raises:
+        FileNotFoundError: ``path`` does not exist.
+        ValueError: nothing under it is an episode any source opens (the message names the
+            sources tried).
+    """
+    path = Path(path)
+    if not path.exists():
+        raise FileNotFoundError(f"{path} does not exist")
+    srcs = sources() if source_list is None else list(source_list)
+    out: dict[str, tuple[object, Path]] = {}
+    for p in candidates(path):
+        record = read_record(p) if p.is_file() else None
+        for src in srcs:
+            if src.claims(p, record):
+                label = p.stem if p.is_file() else p.name
+                out[label if label not in out else str(p)] = (src, p)
+                break
+    if not out:
+        names = ", ".join(getattr(s, "name", type(s).__name__) for s in srcs)
+        raise ValueError(f"{path}: no trial file, trial folder or blow-up capture found "
+                         f"(sources: {names}; the pick and MPC trial sources need the "
+                         f"package installed: pip install -e .)")
+    return out

@@ -1,0 +1,272 @@
+"""dopt.view (and its sources in planners.view): replays end where the trials say they ended,
+an MPC episode replays bit for bit from its start and controls, a forced blow-up is captured
+and opens at its failing step, the CLI's bad input is one line, the experiments' console
+scripts are the scripts themselves."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from dataclasses import asdict
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+os.environ.setdefault("MUJOCO_GL", "egl")
+
+ROOT = Path(__file__).resolve().parents[1]
+RUNS = ROOT / "docs" / "results" / "runs"
+BIN = Path(sys.executable).parent
+
+
+def committed_trial(run: str, pattern: str) -> Path:
+    found = sorted((RUNS / run / "trials").glob(pattern))
+    if not found:
+        pytest.skip(f"no committed trial {run}/trials/{pattern}")
+    return found[0]
+
+
+# ------------------------------------------------------------------------ MPC episode
+MPC_SETTINGS = {"task": "clutter", "method": "baseline", "timeout": 40, "synchronous": True}
+
+
+def write_mpc_trial(path: Path) -> dict:
+    """Run ``run_svr_mpc`` on MPC_SETTINGS (seed 0), keep what ``MPC.run`` returned, and write
+    a trial file as experiments/mpc.py does, with the proposed optional fields start_state and
+    controls. Returns {"path", "start", "states", "controls"}."""
+    import planners.svr_mpc.episode as episode
+    from planners.svr_mpc import SVRMPCSettings
+
+    seen = {}
+    run = episode.MPC.run
+
+    def keep(self, initial_state, plan):
+        res = run(self, initial_state, plan)
+        seen.update(start=np.array(initial_state), res=res)
+        return res
+
+    settings = SVRMPCSettings(**MPC_SETTINGS)
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(episode.MPC, "run", keep)
+        result = episode.run_svr_mpc(settings, seed=0).to_dict()
+    res = seen["res"]
+    result["start_state"] = [float(v) for v in seen["start"]]
+    result["controls"] = res.controls.tolist()
+    path.write_text(json.dumps({"key": "clutter-baseline-view-test",
+                                "params": {**asdict(settings), "seed": 0}, "result": result}))
+    return {"path": path, "start": seen["start"], "states": res.states,
+            "controls": res.controls}
+
+
+@pytest.fixture(scope="module")
+def mpc_trial(tmp_path_factory):
+    return write_mpc_trial(tmp_path_factory.mktemp("mpc") / "clutter-baseline-seed0.json")
+
+
+def test_mpc_episode_replays_bit_for_bit(mpc_trial):
+    from dopt.view.episode import replay_controls
+    from planners.svr_mpc import SVRMPCSettings
+    from planners.view import load_mpc
+
+    task = SVRMPCSettings(**MPC_SETTINGS).build_task(0)
+    model = task.model
+    states = replay_controls(model, mpc_trial["start"], mpc_trial["controls"])
+    assert states.shape == mpc_trial["states"].shape
+    assert np.max(np.abs(states - mpc_trial["states"])) <= 1e-9       # every row, not just the end
+    ep = load_mpc(mpc_trial["path"], max_frames=20)
+    assert np.max(np.abs(ep.states[-1] - mpc_trial["states"][-1])) <= 1e-9
+    assert ep.replay_error <= 1e-7                 # the trial's final_state is rounded to 1e-7
+    # baseline: every DoF in C, so every object fully shaded; the robot keeps its colour
+    robot = [model.body(name).id for name in task.robot_bodies]
+    objects = [model.body(name).id for name in (task.goal_object, *task.distractors)]
+    assert np.all(np.isnan(ep.shade[:, robot]))
+    assert np.all(ep.shade[1:, objects] == 1.0)          # frame 0: before the first optimisation
+    assert {c.name for c in ep.curves} == {"goal distance", "|C|"}
+
+
+def test_mpc_trial_without_controls_shows_start_and_end(mpc_trial, tmp_path):
+    from planners.view import load_mpc
+
+    record = json.loads(mpc_trial["path"].read_text())
+    del record["result"]["controls"], record["result"]["start_state"]
+    path = tmp_path / "old.json"
+    path.write_text(json.dumps(record))
+    ep = load_mpc(path)
+    assert ep.n_frames == 2 and ep.replay_error is None
+    assert "no controls recorded" in ep.summary
+
+
+# ------------------------------------------------------------------------ pick trials
+@pytest.mark.parametrize("run, pattern", [
+    ("fig7-ours-cloth-diagonal", "scripted-seed0-*.json"),
+    ("fig7-rope-fold", "original-seed0-*.json"),
+])
+def test_pick_trial_replays_to_its_recorded_final_state(run, pattern):
+    from planners.view import load_pick
+
+    path = committed_trial(run, pattern)
+    ep = load_pick(path, max_frames=40)
+    assert ep.replay_error <= 1e-9, f"{path.name}: the replay ends {ep.replay_error:.2e} away"
+    final = np.asarray(json.loads(path.read_text())["result"]["final_state"])
+    assert np.max(np.abs(ep.states[-1] - final)) <= 1e-9
+    assert ep.n_frames <= 41 and np.all(np.diff(ep.times) > 0)
+    names = [m.name for m in ep.markers]
+    assert names == ["key particles", "key particles on the goal", "picked particle",
+                     "place target"]
+    picked = ep.markers[2].positions
+    assert np.isfinite(picked).any(), "no frame shows the picked particle"
+    assert ep.ghost is not None
+    assert ep.ghost.shapes.shape[1:] == (int(ep.model.flex_vertnum[0]), 3)
+
+
+# ------------------------------------------------------------------------ blow-ups
+def violent_rope():
+    """A 12-particle rope whose picker moves 0.87 m in 2 steps: the stability verdict flags the
+    executed rollout (speed, the picked particle)."""
+    from dopt.rollout import RolloutConfig, RolloutService
+    from dopt.tasks.pick.picker import PickerConfig
+    from dopt.tasks.pick.rope_scene import RopeSceneConfig, make_rope
+    from dopt.tasks.pick.scene import PickPlaceTask
+
+    scene = make_rope(RopeSceneConfig.preset("fast", n=12),
+                      PickerConfig(bound=(0.5, 0.5, 0.5), speed=50.0))
+    service = RolloutService(scene.scene, RolloutConfig(threads=1))
+    task = PickPlaceTask(scene, scene.positions(scene.initial_state), rollout=service)
+    particles, displacements = np.array([[5]]), np.array([[[0.5, 0.5, 0.5]]])
+    return scene, service, task.execute(particles[0], displacements[0]), \
+        scene.picker.encode(particles, displacements)[0]
+
+
+def test_forced_blowup_is_captured_and_opens_at_the_failing_step(tmp_path):
+    from dopt.tasks.pick.picker import CONTROL_SPEC
+    from dopt.view.blowup import capture_blowup, capture_dir
+    from dopt.view.episode import collect
+
+    scene, service, done, U = violent_rope()
+    assert done.unstable and "body rope_5" in done.reason
+    out = capture_blowup(capture_dir(tmp_path, "rope seed 0"), scene.model, scene.initial_state,
+                         U, done.step, done.reason, control_spec=CONTROL_SPEC, xml=scene.xml,
+                         label="rope seed 0")
+    assert out == tmp_path / "blowups" / "rope-seed-0"
+    meta = json.loads((out / "blowup.json").read_text())
+    assert meta["step"] == done.step and meta["body"] == "rope_5" and meta["xml"]
+    # the viewer finds it from the run's folder and opens it at the state after the failing
+    # step, which is the executed rollout's state there
+    entries = collect(tmp_path)
+    assert list(entries) == ["rope-seed-0"]
+    source, path = entries["rope-seed-0"]
+    ep = source.load(path)
+    upto = service.rollout(scene.initial_state, U[None, :done.step + 1],
+                           control_spec=CONTROL_SPEC).final_states[0]
+    assert np.max(np.abs(ep.states[ep.start_frame] - upto)) <= 1e-9
+    assert ep.start_frame == ep.n_frames - 1
+    assert "flagged" in ep.captions[ep.start_frame]
+    assert ep.marked_body == scene.model.body("rope_5").id
+    service.close()
+
+
+def test_save_blowup_names_bad_input(tmp_path):
+    import mujoco
+
+    from dopt.view.blowup import save_blowup
+
+    model = mujoco.MjModel.from_xml_string("<mujoco><worldbody><body><freejoint/>"
+                                           "<geom size='.1'/></body></worldbody></mujoco>")
+    with pytest.raises(ValueError, match="states must have shape"):
+        save_blowup(tmp_path, model, np.zeros((3, 5)), 2, "x")
+    with pytest.raises(TypeError, match="reason"):
+        save_blowup(tmp_path, model, np.zeros((1, mujoco.mj_stateSize(
+            model, mujoco.mjtState.mjSTATE_INTEGRATION))), 0, None)
+    with pytest.raises(ValueError, match="first_row"):
+        save_blowup(tmp_path, model, np.zeros((5, mujoco.mj_stateSize(
+            model, mujoco.mjtState.mjSTATE_INTEGRATION))), 1, "x")
+
+
+def test_replay_controls_names_bad_input():
+    import mujoco
+
+    from dopt.view.episode import replay_controls
+
+    model = mujoco.MjModel.from_xml_string(
+        "<mujoco><worldbody><body><joint name='j' type='slide'/><geom size='.1'/></body>"
+        "</worldbody><actuator><motor joint='j'/></actuator></mujoco>")
+    x0 = np.zeros(mujoco.mj_stateSize(model, mujoco.mjtState.mjSTATE_INTEGRATION))
+    with pytest.raises(ValueError, match=r"controls must have shape \(T, 1\)"):
+        replay_controls(model, x0, np.zeros((4, 2)))
+    with pytest.raises(ValueError, match="start_state"):
+        replay_controls(model, x0[:-1], np.zeros((4, 1)))
+
+
+# ------------------------------------------------------------------------ command line
+def run_cli(*args, timeout: int = 300) -> subprocess.CompletedProcess:
+    env = {**os.environ, "MUJOCO_GL": os.environ.get("MUJOCO_GL", "egl")}
+    return subprocess.run([sys.executable, "-m", "dopt.view", *map(str, args)], cwd=ROOT,
+                          capture_output=True, text=True, timeout=timeout, env=env)
+
+
+def test_cli_bad_input_is_one_line_and_exit_1(tmp_path):
+    for args, words in [((tmp_path / "missing",), "does not exist"),
+                        ((tmp_path,), "no trial file, trial folder or blow-up capture"),
+                        ((tmp_path, "--frame", "x"), None)]:
+        r = run_cli(*args)
+        if words is None:                               # argparse: usage error, status 2
+            assert r.returncode == 2 and "--frame" in r.stderr
+            continue
+        assert r.returncode == 1, r.stderr
+        assert r.stderr.startswith("dopt-view: error:") and r.stderr.count("\n") == 1, r.stderr
+        assert words in r.stderr
+
+
+def test_cli_still_of_a_blowup_opens_at_the_failing_step(tmp_path):
+    from PIL import Image
+
+    from dopt.tasks.pick.picker import CONTROL_SPEC
+    from dopt.view.blowup import capture_blowup, capture_dir
+
+    scene, service, done, U = violent_rope()
+    service.close()
+    capture_blowup(capture_dir(tmp_path, "rope"), scene.model, scene.initial_state, U,
+                   done.step, done.reason, control_spec=CONTROL_SPEC)
+    r = run_cli(tmp_path, "--frame", "99", "--png", tmp_path / "x.png")
+    assert r.returncode == 1 and "outside the episode" in r.stderr
+    r = run_cli(tmp_path, "--png", tmp_path / "still.png", "--width", "320", "--height", "240")
+    if r.returncode and any(w in r.stderr for w in ("OpenGL", "EGL", "GLX", "gladLoadGL")):
+        pytest.skip(f"no offscreen OpenGL: {r.stderr.strip()}")
+    assert r.returncode == 0, r.stderr
+    assert f"frame {done.step + 1} of {done.step + 2}" in r.stdout       # the failing step
+    image = np.asarray(Image.open(tmp_path / "still.png").convert("RGB")).astype(int)
+    assert image.shape == (240, 320, 3)
+    ring = (image[..., 0] > 200) & (image[..., 1] < 40) & (image[..., 2] < 40)
+    assert ring.sum() > 20, "the offending body is not marked"
+
+
+def test_cli_lists_a_committed_result_folder():
+    committed_trial("fig7-ours-cloth-diagonal", "simple-seed0-*.json")
+    r = run_cli(RUNS / "fig7-ours-cloth-diagonal", "--list")
+    assert r.returncode == 0, r.stderr
+    lines = r.stdout.splitlines()
+    assert len(lines) >= 4 and all("\tpick\t" in line for line in lines)
+
+
+def test_entry_points_register_the_trial_sources():
+    from dopt.view.episode import sources
+
+    assert [s.name for s in sources()] == ["blowup", "mpc", "pick"]
+
+
+@pytest.mark.parametrize("name", ["dopt-fold", "dopt-report"])
+def test_console_scripts_are_the_experiment_scripts(name):
+    from dopt.scripts import SCRIPTS, experiments_dir
+
+    assert all((experiments_dir() / f).is_file() for f in SCRIPTS.values())
+    exe = BIN / name
+    if not exe.exists():
+        pytest.skip(f"{name} is not installed in {BIN} (pip install -e .)")
+    mine = subprocess.run([str(exe), "--help"], capture_output=True, text=True, timeout=120)
+    script = subprocess.run([sys.executable, str(ROOT / "experiments" / SCRIPTS[name]),
+                             "--help"], capture_output=True, text=True, timeout=120)
+    assert mine.returncode == script.returncode == 0, mine.stderr + script.stderr
+    assert mine.stdout == script.stdout
