@@ -146,6 +146,9 @@ def add_run_arguments(ap: argparse.ArgumentParser) -> None:
     ap.add_argument("--layouts", type=Path, default=None, metavar="DIR",
                     help="the authors' clutter scenes (a folder of {0..99}.csv, e.g. "
                          "../shared/external/ilqr_svr/push_mcl_layouts); seed i runs scene i")
+    ap.add_argument("--push-tail", default="on", choices=["on", "off"],
+                    help="the first push plan ends moving forward (default on); off: it ends "
+                         "braking at its end point (dopt.tasks.push.warm_start)")
     ap.add_argument("--islands", default="on", choices=["on", "off"],
                     help="MuJoCo's constraint islands (default on); off: one monolithic "
                          "constraint solve, as the authors' MuJoCo")
@@ -242,6 +245,8 @@ def settings_of(args, method: str, theta: int, rho: float, feedback: bool,
         preset = SVRMPCSettings()
     if args.islands == "off":
         preset = replace(preset, islands=False)
+    if args.push_tail == "off":
+        preset = replace(preset, push_tail=False)
     over = {"cost": args.cost, "control_noise": args.control_noise, "clock": args.clock}
     over = {k: v for k, v in over.items() if v is not None}
     if args.warm_start is not None:
@@ -307,7 +312,7 @@ def protocol(args, params: dict) -> dict:
             "keypoints": params["keypoints"], "fd_skip": params["fd_skip"],
             "box_qp": params["box_qp"], "slowdown": params["slowdown"],
             "problem": params["problem"], "layouts": params["layouts"],
-            "islands": params["islands"]}
+            "islands": params["islands"], "push_tail": params["push_tail"]}
 
 
 @functools.cache

@@ -181,7 +181,8 @@ def run_svr_mpc(settings: SVRMPCSettings = SVRMPCSettings(), seed: int = 0,
               success=lambda x: ctl.goal_distance(x) < radius)
     if settings.warm_start:
         start = warm_start.setup(task).final_state
-        plan = Plan(warm_start.push(task, start, task.horizon).controls)
+        push = warm_start.WarmStartConfig(moving_tail=settings.push_tail)
+        plan = Plan(warm_start.push(task, start, task.horizon, push).controls)
     else:
         start, plan = task.initial_state, Plan(np.zeros((task.horizon, ctl.scene.nu)))
     try:

@@ -135,6 +135,8 @@ class SVRMPCSettings:
         islands: MuJoCo's constraint islands (its default); False solves all constraints as
             one system (``mjDSBL_ISLAND``), as the authors' MuJoCo did, so that untouched
             objects' derivatives are tiny rather than exactly 0.
+        push_tail: the first push plan ends moving forward (``WarmStartConfig.moving_tail``);
+            False: it ends braking at its end point, and MPC's padding pulls the pusher back.
     """
 
     task: str = "clutter"
@@ -159,6 +161,7 @@ class SVRMPCSettings:
     problem: str = "ours"
     layouts: str | None = None
     islands: bool = True
+    push_tail: bool = True
 
     def __post_init__(self):
         get_task(self.task)                       # ValueError naming the known tasks
@@ -260,6 +263,8 @@ def trial_key(p: dict) -> str:
         parts.append(p["problem"])
     if not p.get("islands", True):
         parts.append("noislands")
+    if not p.get("push_tail", True):
+        parts.append("notail")
     return "-".join(parts)
 
 

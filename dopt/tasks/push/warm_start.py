@@ -15,30 +15,29 @@ controller here are ours.
   the T steps of a horizon; the controls that track it are the MPC's first plan. Its end
   point is the authors' (``EEWayPointsPush``): the pushed object's *centre* moved toward the
   goal by as much as ``speed * fraction * T * dt`` allows (their 0.1 m/s and 5/6), never past
-  the goal. The plan keeps pushing at its end (``moving_tail``): it is the first T controls
-  of the tracker run along the same line for 2T steps at the same speed, so its last control
-  still drives the tip forward. The MPC pads every shifted plan with its last control; a
-  plan that ended in a hold (zero path velocity) would pad with a control that stops the
-  pusher, and once the pusher leaves the object the cost (Eq. 2, which reaches the controls
-  only through contact) gives iLQR nothing to improve: the optimisation stalls (measured in
-  docs/DESIGN-NOTES.md, "Why iLQR-SVR stalled"). The authors' P-only tracker lags its target,
-  so their last control is a standing forward push too. On the soft tasks the authors' code
-  of the paper's time starts from zero torques; on this arm (gravity compensated, a rod
-  pusher 3 cm behind the block) zero torques never reach the block, so every task starts
-  from this plan.
+  the goal. With ``moving_tail`` (the default) the path goes on past that point at the
+  authors' push speed (``speed * fraction``) and the plan is the first T controls of its
+  track: the plan ends moving forward, not at rest. The MPC pads every shifted plan with its
+  last control; a plan that ends at rest pads with a control that stops the pusher, and once
+  the pusher leaves the object the cost (Eq. 2, which reaches the controls only through
+  contact) gives iLQR nothing to improve: the optimisation stalls (docs/DESIGN-NOTES.md, "Why
+  iLQR-SVR stalled", has the measurements, including the authors' own P-only tracker, which
+  on this arm moves the tip backwards). On the soft tasks the authors' code of the paper's
+  time starts from zero torques; on this arm (gravity compensated, a rod pusher behind the
+  block) zero torques never reach the block, so every task starts from this plan.
 
 The pushed object is ``TaskModel.pushed_object``: the goal cylinder in clutter, the soft block
 in soft and soft_rigid (it carries the cylinder in soft_rigid). Its centre and back face come
 from the state (a rigid body: its position and its geom's radius; a flex: its vertices and
 the flex radius), so any layout works.
 
-Tracking: tau = Jp^T (kp (p* - p) + kv (v* - v)) + Jr^T (kr (a x down) - kw w) + D qd* -
-kq (qd - qd*), with Jp, Jr the end-effector site's Jacobians, v* the path's velocity, qd* the
-joint velocities that realise it with the tool not turning (least squares), D the model's joint
+Tracking: tau = Jp^T (kp (p* - p) + kv (v* - v)) + Jr^T (kr (a x down) - kw w) + D qd* - kq (qd
+- qd*), with Jp, Jr the end-effector site's Jacobians, v* the path's velocity, qd* the joint
+velocities that realise it with the tool not turning (least squares), D the model's joint
 damping (heavy on the Panda: without D qd* the tip lags the path by centimetres), a the tool
-axis; clipped to the torque limits. The arm's
-gravity is compensated by the model (``gravcomp``), so, unlike the authors' controller, no
-gravity term is added. Shapes: S steps, nu controls, ns a state row.
+axis; clipped to the torque limits. The arm's gravity is compensated by the model
+(``gravcomp``), so, unlike the authors' controller, no gravity term is added.
+Shapes: S steps, nu controls, ns a state row.
 """
 
 from __future__ import annotations
@@ -67,8 +66,9 @@ class WarmStartConfig:
     depth_from: ``centre``: that reach is measured from the pushed object's centre (the
     authors'); ``tip``: from the end effector, stopping the tip at the object's back face
     when it reaches the goal (a shorter push).
-    moving_tail: the plan is the first T controls of a 2T-step track of the same line (its
-    last control keeps pushing); False: the track ends at rest at the path's end (a hold).
+    moving_tail: the plan is the first T controls of a track that goes on past the end
+    point at the authors' push speed (``speed * fraction``); False: the path ends there and
+    the plan ends at rest.
     kp, kv, kr, kw, kq: tracking gains (N/m, N s/m, N m/rad, N m s/rad, N m s/rad)."""
 
     gap: float = 0.01
@@ -155,19 +155,22 @@ def push(task: TaskModel, state: np.ndarray, horizon: int,
     state = _state(task, state)
     end = push_end(task, state, horizon, config)
     start = _ee(task, state)
+    s = np.arange(1, horizon + 1) / horizon
+    head = start + s[:, None] * (end - start)
     if not config.moving_tail:
-        s = np.arange(1, horizon + 1) / horizon
-        return track(task, state, start + s[:, None] * (end - start), config)
-    s = np.arange(1, 2 * horizon + 1) / horizon              # the same speed, twice as long
-    full = track(task, state, start + s[:, None] * (end - start), config)
+        return track(task, state, head, config)
+    direction = (end - start) / max(np.linalg.norm(end - start), 1e-12)
+    step = config.speed * config.fraction * task.model.opt.timestep
+    tail = end + np.arange(1, horizon + 1)[:, None] * step * direction
+    full = track(task, state, np.concatenate([head, tail]), config)
     return EEPlan(full.controls[:horizon], full.states[:horizon + 1], full.path[:horizon],
                   full.ee[:horizon + 1])
 
 
 def push_end(task: TaskModel, state: np.ndarray, horizon: int,
              config: WarmStartConfig = WarmStartConfig()) -> np.ndarray:
-    """(3,) where ``push`` brings the end effector after ``horizon`` steps from ``state``
-    (``config.depth_from`` says what the reach is measured from)."""
+    """(3,) where ``push`` sends the end effector over ``horizon`` steps from ``state`` (the
+    end of its path; ``config.depth_from`` says what the reach is measured from)."""
     centre, along, back = push_line(task, state)
     start = _ee(task, state)
     goal = np.asarray(task.goal_position[:2], dtype=float)
