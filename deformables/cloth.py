@@ -27,6 +27,11 @@ mesh, K key particles.
   particles: those of the model with the least error, ``reached_threshold=False`` and a logged
   warning (``ClothConfig.strict`` raises instead).
 
+Everything runs in the goal's own frame (:class:`deformables.frame.Frame`: centred, a
+power-of-two unit; plain metres for goals of 0.25-0.5 m): pymeshlab decimates in single
+precision, and the side fold 1e5 m above the origin got 13 keys and no model under the
+threshold. Keys, errors and threshold come back in metres.
+
 ``ClothConfig.paper()`` is the paper's own pipeline (one-sided error in metres, one decimation
 per size from the goal, no restarts, no panel projection, no re-triangulation) for comparison:
 ``python -m deformables.bench compare``.
@@ -46,6 +51,7 @@ from dopt.validation import check_config, check_real
 
 from .decimation import BACKENDS, EmptyDecimationError, decimate
 from .distance import SurfaceDistance, hausdorff, sample_surface
+from .frame import Frame, check_coordinates, check_range
 from .layers import estimate_layer_gap, stacking_axis
 from .mesh import canonical_triangulation, edges
 from .panels import project_on_panels
@@ -322,6 +328,79 @@ def sheet_sides(rest: np.ndarray, faces: np.ndarray) -> tuple[float, float]:
     return (total + difference) / 2, (total - difference) / 2
 
 
+def _cloth_frame(positions, faces, rest_positions):
+    """Check the goal, its faces and rest positions, then move them into the working frame
+    (:class:`deformables.frame.Frame`: the rest sheet's unit, each point set's own origin).
+
+    Returns:
+        ``(frame, goal, rest, faces, spacing)``: the goal's frame, the goal ``(N, 3)`` and the
+        rest positions ``(N, 3)`` (or None) in units of it, the checked faces ``(F, 3)``, and
+        the particle spacing (median edge length of the rest sheet, else of the goal) in units.
+    """
+    goal = check_positions(positions)
+    rest = None if rest_positions is None else check_positions(rest_positions, "rest_positions")
+    if rest is not None and rest.shape != goal.shape:
+        raise ValueError(f"rest_positions {rest.shape} and positions {goal.shape} differ in shape")
+    check_coordinates(goal)
+    if rest is not None:
+        check_coordinates(rest, "rest_positions")
+    frame = Frame.of(goal if rest is None else rest)
+    goal_frame = frame.moved(goal)
+    unit_goal = goal_frame.to_unit(goal)
+    unit_rest = None if rest is None else frame.to_unit(rest)
+    reference = unit_goal if rest is None else unit_rest
+    tri = check_faces(faces, len(goal), require_all=True)
+    warn_non_manifold(tri, len(goal))
+    pairs = edges(tri)
+    spacing = float(np.median(np.linalg.norm(reference[pairs[:, 0]] - reference[pairs[:, 1]],
+                                             axis=1)))
+    check_range(goal, spacing * frame.scale)
+    if rest is not None:
+        check_range(rest, spacing * frame.scale, "rest_positions")
+        check_rest_matches(unit_goal, unit_rest, tri)
+    check_areas(tri, reference)
+    return goal_frame, unit_goal, unit_rest, tri, spacing
+
+
+def _projected_goal_and_gap(goal: np.ndarray, rest: np.ndarray | None, tri: np.ndarray,
+                            spacing: float, metres: float,
+                            config: ClothConfig) -> tuple[np.ndarray, float]:
+    """The goal ``(N, 3)`` projected on its panels (``config.panels``, with rest positions
+    ``(N, 3)``) and its layer gap, both in the working frame's units (``metres`` per unit):
+    ``config.layer_gap``, else estimated from the goal (again after the projection), else
+    ``config.flat_gap_spacings`` spacings. ``tri`` ``(F, 3)``; ``spacing`` in units."""
+
+    def layer_gap(points: np.ndarray) -> float | None:
+        found = estimate_layer_gap(points, tri, spacing)          # on its own stacking axis
+        if not found.found:
+            return None
+        least = 0.1 * config.flat_gap_spacings * spacing
+        if found.gap < least:
+            logger.info("cloth: layer gap %.3g mm raised to %.3g mm (a tenth of the flat gap)",
+                        found.gap * metres * 1e3, least * metres * 1e3)
+        return max(found.gap, least)
+
+    gap = config.layer_gap / metres if config.layer_gap is not None else layer_gap(goal)
+    if rest is not None and config.panels != "off":
+        floor = config.panel_noise_floor / metres if config.panels == "auto" else None
+        fold = config.panels == "fold"
+        panel_gap = gap or config.flat_gap_spacings * spacing
+        fit = project_on_panels(goal, rest, tri, panel_gap, min_noise=floor,
+                                tolerance=np.inf if fold else None,
+                                merge_deg=config.fold_merge_deg if fold else None)
+        if fold and fit.n_panels > 1:      # the boundaries again, fitted on the panel model
+            fit = project_on_panels(fit.positions, rest, tri, panel_gap)
+        if fit.projected.any():
+            goal = fit.positions
+            if config.layer_gap is None:       # again, on the projected goal: free of noise
+                gap = layer_gap(goal) or gap
+    if gap is None:
+        gap = config.flat_gap_spacings * spacing
+        logger.info("cloth: no stacked layers; gap taken as %g spacings (%.4g mm)",
+                    config.flat_gap_spacings, gap * metres * 1e3)
+    return goal, gap
+
+
 def cloth_key_particles(positions, faces, threshold: float | None = None,
                         rest_positions=None, config: ClothConfig = ClothConfig()) -> KeyParticles:
     """Key particles of a cloth goal by mesh decimation (Alg. 1, cloth branch).
@@ -355,61 +434,24 @@ def cloth_key_particles(positions, faces, threshold: float | None = None,
         TypeError: non-numeric positions or faces, a config that is not a ClothConfig, a
             threshold that is not a number.
         ValueError: bad positions or faces (NaN/inf, fewer than 3 particles, zero extent,
-            indices out of range, particles in no face, zero-area faces), rest positions that
-            do not match the goal (edge lengths disagree far beyond what a fold does), no
-            rest positions under ``panels="fold"``, a non-positive threshold, or, with
+            outside the supported range of :mod:`deformables.frame`, indices out of range,
+            particles in no face, zero-area faces), rest positions that do not match the
+            goal (edge lengths disagree far beyond what a fold does), no rest positions under
+            ``panels="fold"``, a non-positive threshold, or, with
             ``config.strict``, a threshold that no model up to ``config.max_faces`` reaches.
     """
     start = time.perf_counter()
     if not isinstance(config, ClothConfig):
         raise TypeError(f"config must be a ClothConfig, got {type(config).__name__}")
-    goal = check_positions(positions)
-    rest = None if rest_positions is None else check_positions(rest_positions, "rest_positions")
-    if rest is not None and rest.shape != goal.shape:
-        raise ValueError(f"rest_positions {rest.shape} and positions {goal.shape} differ in shape")
-    reference = goal if rest is None else rest
-    tri = check_faces(faces, len(goal), require_all=True)
-    warn_non_manifold(tri, len(goal))
-    if rest is not None:
-        check_rest_matches(goal, rest, tri)
-    check_areas(tri, reference)
+    frame, goal, rest, tri, spacing = _cloth_frame(positions, faces, rest_positions)
+    metres = frame.scale                       # metres per unit of the frame the work runs in
     if threshold is not None:
         threshold = check_threshold(threshold)
     if rest is None and config.panels == "fold":
         raise ValueError("ClothConfig(panels='fold') needs rest_positions: the panels are "
                          "rigid maps of regions of the rest sheet")
-    pairs = edges(tri)
-    spacing = float(np.median(np.linalg.norm(reference[pairs[:, 0]] - reference[pairs[:, 1]],
-                                             axis=1)))
 
-    def layer_gap(points: np.ndarray) -> float | None:
-        found = estimate_layer_gap(points, tri, spacing)          # on its own stacking axis
-        if not found.found:
-            return None
-        least = 0.1 * config.flat_gap_spacings * spacing
-        if found.gap < least:
-            logger.info("cloth: layer gap %.3g mm raised to %.3g mm (a tenth of the flat gap)",
-                        found.gap * 1e3, least * 1e3)
-        return max(found.gap, least)
-
-    gap = config.layer_gap if config.layer_gap is not None else layer_gap(goal)
-    if rest is not None and config.panels != "off":
-        floor = config.panel_noise_floor if config.panels == "auto" else None
-        fold = config.panels == "fold"
-        panel_gap = gap or config.flat_gap_spacings * spacing
-        fit = project_on_panels(goal, rest, tri, panel_gap, min_noise=floor,
-                                tolerance=np.inf if fold else None,
-                                merge_deg=config.fold_merge_deg if fold else None)
-        if fold and fit.n_panels > 1:      # the boundaries again, fitted on the panel model
-            fit = project_on_panels(fit.positions, rest, tri, panel_gap)
-        if fit.projected.any():
-            goal = fit.positions
-            if config.layer_gap is None:       # again, on the projected goal: free of noise
-                gap = layer_gap(goal) or gap
-    if gap is None:
-        gap = config.flat_gap_spacings * spacing
-        logger.info("cloth: no stacked layers; gap taken as %g spacings (%.4g mm)",
-                    config.flat_gap_spacings, gap * 1e3)
+    goal, gap = _projected_goal_and_gap(goal, rest, tri, spacing, metres, config)
     if rest is not None and config.canonical_triangulation:
         tri = canonical_triangulation(goal, tri, rest)
     axis = stacking_axis(goal, tri)
@@ -418,7 +460,7 @@ def cloth_key_particles(positions, faces, threshold: float | None = None,
     extent = (float(np.ptp(goal @ np.linalg.svd(goal - goal.mean(axis=0))[2].T, axis=0).max())
               if rest is None else sheet_sides(rest, tri)[1])
     z_scale = min(config.z_scale, max(1.0, config.max_stretched_gap * extent / gap))
-    thr = threshold if threshold is not None else config.threshold_gaps * gap * z_scale
+    thr = threshold / metres if threshold is not None else config.threshold_gaps * gap * z_scale
     scaled = _stretch(goal, axis, z_scale)
     original = SurfaceDistance(scaled, tri)
     step = config.sample_spacings * spacing
@@ -454,20 +496,21 @@ def cloth_key_particles(positions, faces, threshold: float | None = None,
             return mesh.error
         return distance(mesh.vertices, mesh.faces, np.inf)
 
-    reduction = grow_until_below(simplify, lambda mesh: mesh.error, thr, config.max_faces,
-                                 strict=config.strict, exact_error=exact)
+    reduction = grow_until_below(simplify, lambda mesh: mesh.error * metres, thr * metres,
+                                 config.max_faces, strict=config.strict,
+                                 exact_error=lambda mesh: exact(mesh) * metres)
     mesh = reduction.model
     radius = max(config.geodesic_radius * extent,
                  min(config.geodesic_spacings * spacing, config.geodesic_cap * extent))
     keys = extract_keys(goal, tri, rest, scaled, mesh.vertices, radius)
     result = KeyParticles(
         indices=keys, n_elements=len(mesh.faces),
-        vertices=_stretch(mesh.vertices, axis, 1.0 / z_scale),
+        vertices=frame.to_metres(_stretch(mesh.vertices, axis, 1.0 / z_scale)),
         elements=mesh.faces, sizes=reduction.sizes, errors=reduction.errors,
-        error=reduction.error, threshold=thr, seconds=time.perf_counter() - start,
-        reached_threshold=reduction.reached, layer_gap=float(gap))
+        error=reduction.error, threshold=thr * metres, seconds=time.perf_counter() - start,
+        reached_threshold=reduction.reached, layer_gap=float(gap * metres))
     logger.info("cloth (%d particles, %d faces, layer gap %.4g mm): %d faces, error %.4g "
-                "(threshold %.4g%s), %d keys", len(goal), len(tri), gap * 1e3,
-                result.n_elements, result.error, thr,
+                "(threshold %.4g%s), %d keys", len(goal), len(tri), result.layer_gap * 1e3,
+                result.n_elements, result.error, result.threshold,
                 "" if reduction.reached else ", not reached", result.n_keys)
     return result

@@ -188,6 +188,6 @@ def estimate_layer_gap(positions, faces, spacing: float, axis: np.ndarray | None
                     "stacked layers", count, n)
         return LayerGap(float("nan"), axis, count)
     gap = float(np.median(gaps[stacked]))
-    logger.info("layer gap: %.4g mm (%.3g spacings) over %d of %d stacked particles",
-                gap * 1e3, gap / spacing, count, n)
+    logger.info("layer gap: %.3g spacings over %d of %d stacked particles", gap / spacing,
+                count, n)
     return LayerGap(gap, axis, count)

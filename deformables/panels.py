@@ -446,8 +446,8 @@ def project_on_panels(goal: np.ndarray, rest: np.ndarray, faces: np.ndarray, lay
     labels = miss.argmin(axis=0)
     noise = float(np.median(miss.min(axis=0)))
     if min_noise is not None and noise <= min_noise:
-        logger.info("panel projection: noise %.3g mm <= %.3g mm; goal left as measured",
-                    noise * 1e3, min_noise * 1e3)
+        logger.info("panel projection: noise %.3g <= %.3g spacings; goal left as measured",
+                    noise / spacing, min_noise / spacing)
         return PanelFit(goal, np.full(n, -1), rot, shift, noise, np.zeros(n, dtype=bool))
     if len(members) > 1:
         # a particle two panels explain about as well (the middle of a rounded crease) says
@@ -463,6 +463,6 @@ def project_on_panels(goal: np.ndarray, rest: np.ndarray, faces: np.ndarray, lay
     limit = layer_gap + 3.0 * np.sqrt(3.0) * noise if tolerance is None else tolerance
     moved = np.linalg.norm(own - goal, axis=1) <= limit
     positions = np.where(moved[:, None], own, goal)
-    logger.info("panel projection: %d panels, noise %.3g mm, %d/%d particles moved",
-                len(members), noise * 1e3, int(moved.sum()), n)
+    logger.info("panel projection: %d panels, noise %.3g spacings, %d/%d particles moved",
+                len(members), noise / spacing, int(moved.sum()), n)
     return PanelFit(positions, np.where(moved, labels, -1), rot, shift, noise, moved)

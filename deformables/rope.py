@@ -25,8 +25,22 @@ two end particles are always key particles.
   is the paper's linear parametrisation; it finds a corner only where the corner happens to sit
   at a multiple of ``1 / (M - 1)`` of the chain.
 * ``fit="breakpoints"`` (default): knots at particles, chosen by dynamic programming as the
-  optimal segmentation of the rope under the QP's objective with vertices on particles; the QP
-  then places the vertices. This finds corners at any position along the chain.
+  optimal segmentation of the rope under the QP's objective with vertices on particles
+  (:mod:`deformables.segmentation`, O(N) memory); the QP then places the vertices. This finds
+  corners at any position along the chain.
+
+The default threshold is half the fit's resolution: the coarser of the particle spacing and
+the samples' spacing. The fit sees the rope only at its NE samples, so detail between them is
+below what it can model; a threshold of half a particle spacing alone fell below the residual
+of real but tiny features once the particles were denser than the samples: the crossing of
+the library's fold lifts the rope by its diameter over 2 cm, a mean residual of 0.7-0.9 mm
+whatever the density, and at 300 / 500 / 1000 / 2000 particles the fold got 5 / 6 / 6 / 7
+keys instead of its 4 corners. With the samples' spacing as a floor the threshold is the same
+fraction of the rope's length at any density above NE particles.
+
+Everything runs in the goal's own frame (:class:`deformables.frame.Frame`): the closed-form
+segment costs cancel catastrophically on raw coordinates (the fold 1e6 m from the origin got
+12 keys), and squares of 1e200 m overflow.
 """
 from __future__ import annotations
 
@@ -41,7 +55,9 @@ import numpy as np
 
 from dopt.validation import check_config
 
+from .frame import Frame, check_coordinates, check_range
 from .reduction import KeyParticles, grow_until_below
+from .segmentation import Segmentation
 from .validation import check_positions, check_threshold
 
 logger = logging.getLogger(__name__)
@@ -49,6 +65,10 @@ logger = logging.getLogger(__name__)
 FITS = ("breakpoints", "fixed")
 #: longest an edge between neighbouring particles counts along the chain, in particle spacings
 EDGE_CAP = 2.0
+#: fewest samples NE: half the spacing of 8 samples (0.071 of the length) exceeds the error of
+#: a model that misses a corner of the library's folds (0.074 of the length for 3 vertices)
+#: and 2 samples fit any rope with one segment; 20 keeps a factor of two above that
+MIN_SAMPLES = 20
 
 
 @dataclass(frozen=True)
@@ -57,14 +77,20 @@ class RopeConfig:
 
     Attributes:
         fit: ``"breakpoints"`` (knots chosen among particles) or ``"fixed"`` (equal shares).
-        n_samples: NE, samples along the rope for the fit and the error.
-        threshold_spacings: the default threshold, as a multiple of the particle spacing (used
-            when no threshold in metres is given). The spacing is the median distance between
-            neighbouring particles, so that an outlier particle or a gap in the chain does not
-            inflate it. 0.5 spacing (6.4 mm for 40 particles on 0.5 m) sits between the error of
-            a resolved shape (below 1.5 mm on clean goals, about 1.6 sigma under Gaussian noise
-            of std sigma) and the error of a missing corner (above 20 mm for the folding goals).
-        max_vertices: cap on M; ``None`` means N.
+        n_samples: NE, samples along the rope for the fit and the error, at least
+            ``MIN_SAMPLES`` (20): a polyline of M vertices fits M samples exactly, and half
+            the spacing of fewer than 10 samples (the threshold's floor) exceeds the error of a
+            missing corner of the library's folds.
+        threshold_spacings: the default threshold (used when no threshold in metres is given),
+            as a multiple of the fit's resolution: the coarser of the particle spacing and the
+            spacing of the samples (chain length / (NE - 1)). The particle spacing is the median
+            distance between neighbouring particles, so that an outlier particle or a gap in
+            the chain does not inflate it. 0.5 (6.4 mm for 40 particles on 0.5 m, 2.5 mm for
+            any number above 100) sits between the error of a resolved shape (below 1.5 mm on
+            clean goals, 0.7-0.9 mm for the library's fold, whose crossing lifts the rope;
+            about 1.6 sigma under Gaussian noise of std sigma) and the error of a missing
+            corner (above 20 mm for the folding goals).
+        max_vertices: cap on M; ``None`` means N. M is also capped at NE - 1.
         strict: raise ``ValueError`` when no model up to the cap reaches the threshold (only
             possible with a threshold in metres or a cap below N). By default the model with
             the least error is returned with ``reached_threshold=False`` and a logged warning.
@@ -80,8 +106,10 @@ class RopeConfig:
         if self.fit not in FITS:
             raise ValueError(f"unknown rope fit {self.fit!r}; choose from {FITS}")
         check_config(self)
-        if self.n_samples < 2:
-            raise ValueError(f"RopeConfig.n_samples must be at least 2, got {self.n_samples}")
+        if self.n_samples < MIN_SAMPLES:
+            raise ValueError(f"RopeConfig.n_samples must be at least {MIN_SAMPLES}, got "
+                             f"{self.n_samples}: a polyline of M vertices fits M samples "
+                             f"exactly, and fewer samples lose the corners of a fold")
         check_threshold(self.threshold_spacings, "RopeConfig.threshold_spacings")
         if self.max_vertices is not None and self.max_vertices < 2:
             raise ValueError(f"RopeConfig.max_vertices must be at least 2, got "
@@ -137,51 +165,6 @@ def _polyline_qp(n_samples: int, n_vertices: int) -> _PolylineQP:
     return _PolylineQP(n_samples, n_vertices)
 
 
-class _Segmentation:
-    """Optimal segmentations of the rope with vertices on particles, by dynamic programming.
-
-    ``cost[i, j]`` is the summed squared distance of the samples in ``[s_i, s_j)`` to the chord
-    from particle i to particle j (at the same relative position), the QP's objective with the
-    vertices held on particles. It comes in closed form from prefix sums over the samples, for
-    all (i, j) at once. ``breakpoints(m)`` returns the ``(m,)`` particle indices of the best
-    polyline with m vertices, extending the table on demand."""
-
-    def __init__(self, positions: np.ndarray, chain: np.ndarray, t: np.ndarray, q: np.ndarray):
-        n = len(positions)
-
-        def prefix(values):
-            return np.concatenate([np.zeros((1,) + values.shape[1:]), np.cumsum(values, axis=0)])
-
-        sums = [prefix(v) for v in (np.ones_like(t), t, t * t, q, t[:, None] * q,
-                                     np.einsum("kd,kd->k", q, q))]
-        lo = np.searchsorted(t, chain, side="left")             # first sample of each particle
-        s0, s1, s2, sq, stq, sqq = (c[lo][None, :] - c[lo][:, None] for c in sums)  # (i, j)
-        start = chain[:, None]
-        length = np.maximum(chain[None, :] - start, 1e-15)
-        w1 = (s1 - start * s0) / length                                   # sum of w
-        w2 = (s2 - 2 * start * s1 + start ** 2 * s0) / length ** 2        # sum of w^2
-        wq = (stq - start[..., None] * sq) / length[..., None]            # sum of w q
-        a, b = positions[:, None, :], positions[None, :, :]
-        cost = ((s0 - 2 * w1 + w2) * np.einsum("ijd,ijd->ij", a, a)
-                + w2 * np.einsum("ijd,ijd->ij", b, b) + sqq
-                + 2 * (w1 - w2) * np.einsum("ijd,ijd->ij", a, b)
-                - 2 * np.einsum("ijd,ijd->ij", a, sq - wq) - 2 * np.einsum("ijd,ijd->ij", b, wq))
-        self.cost = np.where(np.triu(np.ones((n, n), dtype=bool), k=1), np.maximum(cost, 0.0),
-                             np.inf)
-        self.best = [None, self.cost[0].copy()]       # best[s][j]: s segments from 0 to j
-        self.parent = [None, np.zeros(n, dtype=np.int64)]
-
-    def breakpoints(self, m: int) -> np.ndarray:
-        while len(self.best) < m:
-            total = self.best[-1][:, None] + self.cost          # (i, j)
-            self.parent.append(np.argmin(total, axis=0))
-            self.best.append(total[self.parent[-1], np.arange(len(total))])
-        idx = [len(self.cost) - 1]
-        for s in range(m - 1, 0, -1):
-            idx.append(int(self.parent[s][idx[-1]]) if s > 1 else 0)
-        return np.array(idx[::-1], dtype=np.int64)
-
-
 def _key_particles(positions: np.ndarray, chain: np.ndarray, vertices: np.ndarray,
                    knots: np.ndarray) -> np.ndarray:
     """Key particles ``(K,)``: the two end particles for the end vertices (they correspond to
@@ -197,42 +180,63 @@ def _key_particles(positions: np.ndarray, chain: np.ndarray, vertices: np.ndarra
     return np.unique(np.array(keys, dtype=np.int64))
 
 
+def _fit_frame(positions) -> tuple[Frame, np.ndarray, float]:
+    """Check the goal, then its working frame, the positions in it ``(N, 3)`` and the particle
+    spacing (median edge length) in its units; ValueError outside the supported range."""
+    p = check_positions(positions)
+    check_coordinates(p)
+    frame = Frame.of(p)
+    unit = frame.to_unit(p)
+    edge = np.linalg.norm(np.diff(unit, axis=0), axis=1)
+    spacing = float(np.median(edge[edge > 0]))       # positive: the extent is not zero
+    check_range(p, spacing * frame.scale)
+    return frame, unit, spacing
+
+
 def rope_key_particles(positions, threshold: float | None = None,
                        config: RopeConfig = RopeConfig()) -> KeyParticles:
     """Key particles of a rope goal by piecewise-line fitting (Alg. 1, rope branch).
 
+    The fit runs in the goal's own frame (:class:`deformables.frame.Frame`: centred, unit the
+    extent), so the keys do not depend on where the goal lies, how it is turned or its size.
+
     Args:
         positions: ``(N, 3)`` goal positions of the particles, in order along the rope, metres.
         threshold: Alg. 1's error threshold in metres (mean distance, Eq. 3); ``None`` uses
-            ``config.threshold_spacings`` times the particle spacing, the median distance
-            between neighbouring particles (an outlier particle or a gap does not move it).
+            ``config.threshold_spacings`` times the fit's resolution: the coarser of the
+            particle spacing (the median distance between neighbouring particles: an outlier
+            particle or a gap does not move it) and the spacing of the samples (see
+            :class:`RopeConfig`).
         config: fit and threshold options.
 
     Returns:
         :class:`KeyParticles` with ``vertices`` ``(M, 3)``, ``elements`` ``(M - 1, 2)`` segments,
-        ``n_elements = M - 1`` and ``sizes`` counted in vertices (M). The indices always hold
-        both end particles, 0 and N - 1.
+        ``n_elements = M - 1`` and ``sizes`` counted in vertices (M, at most
+        ``config.n_samples - 1``: a polyline through every sample fits them exactly). The
+        indices always hold both end particles, 0 and N - 1.
 
     Raises:
         TypeError: non-numeric positions, a threshold that is not a number, a config that is
             not a RopeConfig.
-        ValueError: bad positions (NaN/inf, fewer than 3 particles, zero extent), a
-            non-positive threshold, or, with ``config.strict``, a threshold that no model up
-            to the cap reaches.
+        ValueError: bad positions (NaN/inf, fewer than 3 particles, zero extent, outside the
+            supported range of :mod:`deformables.frame`), a non-positive threshold, or, with
+            ``config.strict``, a threshold that no model up to the cap reaches.
     """
     start = time.perf_counter()
     if not isinstance(config, RopeConfig):
         raise TypeError(f"config must be a RopeConfig, got {type(config).__name__}")
-    p = check_positions(positions)
+    frame, p, spacing = _fit_frame(positions)
     edge = np.linalg.norm(np.diff(p, axis=0), axis=1)
-    spacing = float(np.median(edge[edge > 0]))       # positive: the extent is not zero
     # position of each particle along the chain: arc length, long edges capped
     chain = np.concatenate([[0.0], np.cumsum(np.minimum(edge, EDGE_CAP * spacing))])
+    resolution = max(spacing, chain[-1] / (config.n_samples - 1))
     thr = (check_threshold(threshold) if threshold is not None
-           else config.threshold_spacings * spacing)
+           else config.threshold_spacings * resolution * frame.scale)
     t = np.linspace(0.0, chain[-1], config.n_samples)
     q = np.stack([np.interp(t, chain, p[:, d]) for d in range(3)], axis=1)
-    segmentation = _Segmentation(p, chain, t, q) if config.fit == "breakpoints" else None
+    max_vertices = min(config.max_vertices or len(p), len(p), config.n_samples - 1)
+    segmentation = (Segmentation(p, chain, t, q, max_vertices - 1)
+                    if config.fit == "breakpoints" else None)
 
     def simplify(m: int) -> Polyline:
         if segmentation is not None:
@@ -244,14 +248,13 @@ def rope_key_particles(positions, threshold: float | None = None,
         error = float(np.mean(np.linalg.norm(a @ vertices - q, axis=1)))
         return Polyline(vertices, knots, error)
 
-    max_vertices = min(config.max_vertices or len(p), len(p))
-    reduction = grow_until_below(simplify, lambda model: model.error, thr, max_vertices,
-                                 strict=config.strict)
+    reduction = grow_until_below(simplify, lambda model: model.error * frame.scale, thr,
+                                 max_vertices, strict=config.strict)
     line = reduction.model
     keys = _key_particles(p, chain, line.vertices, line.knots)
     m = reduction.size
     result = KeyParticles(
-        indices=keys, n_elements=m - 1, vertices=line.vertices,
+        indices=keys, n_elements=m - 1, vertices=frame.to_metres(line.vertices),
         elements=np.stack([np.arange(m - 1), np.arange(1, m)], axis=1),
         sizes=reduction.sizes, errors=reduction.errors, error=reduction.error,
         threshold=thr, seconds=time.perf_counter() - start,
