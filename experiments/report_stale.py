@@ -36,6 +36,8 @@ from pathlib import Path
 
 from report_base import Result
 
+from dopt.dicts import flatten
+
 #: where the snapshot lies under the results folder
 SNAPSHOT = Path("presets") / "resolved.json"
 #: scene-config fields a pick-and-place trial's own settings set (not the physics preset's)
@@ -87,16 +89,6 @@ def needs_backfill(r: Result) -> bool:
     return False
 
 
-def _flatten(d: dict, prefix: str = "") -> dict:
-    out = {}
-    for k, v in d.items():
-        if isinstance(v, dict):
-            out.update(_flatten(v, f"{prefix}{k}."))
-        else:
-            out[f"{prefix}{k}"] = v
-    return out
-
-
 def _same(a, b) -> bool:
     """Equal as JSON values (tuples and lists alike; 1 and 1.0 alike)."""
     return json.loads(json.dumps(a)) == json.loads(json.dumps(b))
@@ -108,7 +100,7 @@ def _value(v) -> str:
 
 def _diff(recorded: dict, today: dict, skip=()) -> list[str]:
     """"field recorded -> today" of the fields both hold that differ (``skip`` left out)."""
-    rec, now = _flatten(recorded), _flatten(today)
+    rec, now = flatten(recorded), flatten(today)
     return [f"{k} {_value(rec[k])} -> {_value(now[k])}" for k in now
             if k in rec and k.split(".")[0] not in skip and k not in skip
             and not _same(rec[k], now[k])]
@@ -121,7 +113,7 @@ def _pick_findings(what: str, settings: dict, physics: dict | None, protocol: st
     out = []
     pick = snap.get("pick") or {}
     preset = ((pick.get("protocols") or {}).get(protocol) or {}).get(f"{task}/{goal}")
-    departing = set(_flatten(departures or {}))
+    departing = set(flatten(departures or {}))
     if preset is not None and not quick:
         diff = _diff({k: v for k, v in settings.items() if k != "threads"}, preset,
                      skip=("threads", *departing))

@@ -34,6 +34,7 @@ from typing import Protocol
 import numpy as np
 import torch
 
+from dopt.dicts import flatten
 from dopt.rollout import RolloutConfig, RolloutService
 from dopt.stats import difference_ci, mean_ci
 from dopt.tasks.pick.cloth_scene import PHYSICS_PRESETS, ClothSceneConfig, make_cloth
@@ -160,8 +161,8 @@ class PickPlaceSettings:
         """{field: value} of these settings that differ from ``preset(task, goal, quick,
         protocol)``, nested configs as dotted names ("cem.population"); the thread count is
         not a setting of the experiment and is left out. Empty: the protocol as it stands."""
-        base = _flatten(type(self).preset(self.task, self.goal, quick, protocol).to_dict())
-        mine = _flatten(self.to_dict())
+        base = flatten(type(self).preset(self.task, self.goal, quick, protocol).to_dict())
+        mine = flatten(self.to_dict())
         return {k: v for k, v in mine.items() if k != "threads" and base.get(k) != v}
 
     def constraint(self) -> ActionConstraint:
@@ -849,17 +850,6 @@ def _check_fields(cls, d: dict, name: str) -> None:
         raise ValueError(f"{name} does not match {cls.__name__}: "
                          + "; ".join(([f"missing {missing}"] if missing else [])
                                      + ([f"unknown {unknown}"] if unknown else [])))
-
-
-def _flatten(d: dict, prefix: str = "") -> dict:
-    """{"a.b": value} of a nested dict's leaves."""
-    out = {}
-    for k, v in d.items():
-        if isinstance(v, dict):
-            out.update(_flatten(v, f"{prefix}{k}."))
-        else:
-            out[f"{prefix}{k}"] = v
-    return out
 
 
 def _finite(x: float | None) -> float | None:

@@ -64,11 +64,9 @@ from dopt.tasks.push.clutter import (
     EE_HEIGHT,
     GOAL_CYLINDER,
     GOAL_RGBA,
-    HORIZON,
-    SLOWDOWN,
     STANDOFF,
-    TIMEOUT,
     add_goal_marker,
+    clutter_task,
 )
 from dopt.tasks.push.panda import (
     TABLE_NAME,
@@ -271,19 +269,7 @@ def build_clutter_authors(layout_path: str | Path) -> TaskModel:
     state = rest_state(model, ik_pointing_down(tip), CLUTTER_SETTLE_STEPS)
     log.debug("clutter (authors, %s): goal cylinder %s, goal %s", layout.path,
               layout.poses[0, :2], layout.goal)
-    return TaskModel(
-        name="clutter",
-        model=model,
-        initial_state=state,
-        goal_object=GOAL_CYLINDER,
-        goal_position=goal,
-        distractors=DISTRACTORS,
-        soft_body=None,
-        horizon=HORIZON,
-        dt=DT,
-        timeout=TIMEOUT,
-        slowdown=SLOWDOWN,
-    )
+    return clutter_task(model, state, goal)
 
 
 def build_soft_authors(rng: np.random.Generator) -> TaskModel:

@@ -149,6 +149,13 @@ def build_clutter(rng: np.random.Generator) -> TaskModel:
     model = spec.compile()
     state = rest_state(model, ik_pointing_down(layout.ee_start), SETTLE_STEPS)
     log.debug("clutter: goal cylinder %s, goal %s", layout.goal_cylinder, layout.goal)
+    return clutter_task(model, state, goal)
+
+
+def clutter_task(model: mujoco.MjModel, state: np.ndarray, goal: np.ndarray) -> TaskModel:
+    """The clutter task on a compiled scene whose goal cylinder is ``GOAL_CYLINDER`` and whose
+    distractors are ``DISTRACTORS``: the paper's T, dt, Y and slowdown. ``state``: (ns,) the
+    settled start; ``goal``: (3,) the goal region's centre on the table."""
     return TaskModel(
         name="clutter",
         model=model,
