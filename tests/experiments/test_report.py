@@ -104,9 +104,9 @@ def test_committed_results_md_and_readme_are_generated():
 
 def test_the_script_needs_only_the_standard_library():
     """Besides the standard library it loads dopt.cli (the command-line types),
-    dopt.multiple (Holm's correction), dopt.dicts (nested dicts) and planners.trial_progress (the reader of a trial's
-    checkpoint), standard library themselves, and nothing else of the project or of its
-    dependencies."""
+    dopt.multiple (Holm's correction), dopt.dicts (nested dicts) and planners.trial_progress
+    (the reader of a trial's checkpoint), standard library themselves, and nothing else of the
+    project or of its dependencies."""
     # as `python experiments/report.py`: the script's folder (its sibling cli_args) on the path
     code = ("import sys, runpy; sys.argv = ['report.py', '--help']\n"
             f"sys.path.insert(0, {str(SCRIPT.parent)!r})\n"
