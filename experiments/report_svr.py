@@ -15,6 +15,7 @@ from report_base import (
     _finite,
     num,
     pm,
+    sci,
     section,
     source_lines,
     span,
@@ -329,18 +330,36 @@ def fig4_headline(r: Result) -> str:
 def svr_explain_section(results: list[Result], page: Path) -> list[str]:
     def body(r: Result) -> list[str]:
         d = r.data
-        rows = []
+        rows, mech = [], []
+        fine = any("lt_0.1" in (row.get("importance_share") or {}) for row in d["rows"].values())
+        shares = ("zero", "lt_0.1", "0.1_to_1", "1_to_500", "ge_500") if fine else \
+            ("zero", "lt_1", "1_to_500", "ge_500")
         for name, row in d["rows"].items():
             share = row.get("importance_share") or {}
             n_dofs = [v for v in row["n_dofs"] if v is not None]
             rows.append([name, str(row["n_trials"]), num(sum(n_dofs) / len(n_dofs) if n_dofs
                                                          else None, 1),
-                         num(row["goal_share_mean"]), num(share.get("zero")),
-                         num(share.get("lt_1")), num(share.get("1_to_500")),
-                         num(share.get("ge_500")), str(row["importance"]["n"])])
-        return [f"### {d.get('task')}: `{r.name}`", "", protocol_line(d), "",
-                *table(["row", "trials", "mean size of C", "goal DoFs in C", "importance = 0",
-                        "< 1", "[1, 500)", ">= 500", "values"], rows)]
+                         num(row["goal_share_mean"]), *(num(share.get(k)) for k in shares),
+                         str(row["importance"]["n"])])
+            if m := row.get("mechanism"):
+                mech.append([name, sci(m.get("rel_improvement_median_away")),
+                             num(m.get("accepted_share")), num(m.get("contact_share")),
+                             sci(m.get("mu_median")), num(m.get("travel_median"), 3),
+                             num(m.get("goal_distance_end_median"), 3),
+                             f"{num(m.get('lag_steps_median'), 1)} / {m.get('horizon')}"])
+        labels = {"zero": "= 0", "lt_0.1": "(0, 0.1)", "0.1_to_1": "[0.1, 1)", "lt_1": "< 1",
+                  "1_to_500": "[1, 500)", "ge_500": ">= 500"}
+        out = [f"### {d.get('task')}: `{r.name}`", "", protocol_line(d), "",
+               *table(["row", "trials", "mean size of C", "goal DoFs in C",
+                       *(f"importance {labels[k]}" for k in shares), "values"], rows)]
+        if mech:
+            out += ["", "Whether the optimiser engages (dJ/J: the median relative improvement "
+                    "of an optimisation while the goal object is more than 5 cm from the goal; "
+                    "contact: the share of optimisations whose new nominal touches the pushed "
+                    "object; travel and end distance: medians over episodes, m):", "",
+                    *table(["row", "dJ/J", "accepted", "contact", "mu", "travel",
+                            "end distance", "lag / T"], mech)]
+        return out
 
     return section("State-vector reduction: which DoFs each method holds, and what rho cuts",
                    "Per row: mean |C| and the share of the goal object's x, y DoFs in C per "
