@@ -21,7 +21,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from dopt.validation import check_int, check_real
+from dopt.validation import check_int, check_memory, check_real
 
 logger = logging.getLogger(__name__)
 
@@ -39,6 +39,23 @@ CLOTH_REFERENCE_KEYS = {"cloth_diagonal": 4, "cloth_side": 6, "cloth_reflective"
                         "cloth_underneath": 10}
 
 TRIANGULATIONS = ("mujoco", "anti", "alternating", "random")
+#: bytes per particle that building a goal and reducing it to its key particles may take (its
+#: positions, faces and the reductions' per-particle arrays, generously): a goal's size is
+#: checked against this machine's memory before anything is allocated
+CLOTH_BYTES_PER_PARTICLE = 4096
+ROPE_BYTES_PER_PARTICLE = 1024
+
+
+def check_cloth_size(n, name: str = "n") -> int:
+    """``n`` particles per side as an int: >= 2, and its ``n * n`` particles within this
+    machine's memory (``CLOTH_BYTES_PER_PARTICLE`` each; ``dopt.validation.check_memory``).
+    The messages name ``name`` (a CLI passes its flag)."""
+    check_int(n, name)
+    if n < 2:
+        raise ValueError(f"a cloth grid needs at least 2 particles per side, got {name}={n}")
+    check_memory(float(n) * n * CLOTH_BYTES_PER_PARTICLE,
+                 f"{name}={n}: a cloth of {n} x {n} = {float(n) * n:.3g} particles")
+    return int(n)
 
 
 def _frozen(array: np.ndarray, dtype) -> np.ndarray:
@@ -102,6 +119,7 @@ def _check_rope_size(n: int, length: float) -> None:
     check_int(n, "n")
     if n < 3:
         raise ValueError(f"a rope needs at least 3 particles, got n={n}")
+    check_memory(float(n) * ROPE_BYTES_PER_PARTICLE, f"n={n}: a rope of {n} particles")
     if not isinstance(length, (int, float, np.integer, np.floating)) or isinstance(length, bool):
         raise TypeError(f"length must be a number of metres, got {length!r}")
     if not np.isfinite(length) or length <= 0:
@@ -220,9 +238,7 @@ def grid_faces(n: int, triangulation: str = "mujoco",
     """
     if not isinstance(triangulation, str) or triangulation not in TRIANGULATIONS:
         raise ValueError(f"unknown triangulation {triangulation!r}; choose from {TRIANGULATIONS}")
-    check_int(n, "n")
-    if n < 2:
-        raise ValueError(f"a cloth grid needs at least 2 particles per side, got n={n}")
+    check_cloth_size(n)
     ix, iy = np.meshgrid(np.arange(n - 1), np.arange(n - 1), indexing="ij")
     ix, iy = ix.ravel(), iy.ravel()
     v00, v10 = ix * n + iy, (ix + 1) * n + iy
@@ -245,9 +261,7 @@ def grid_faces(n: int, triangulation: str = "mujoco",
 
 def cloth_rest(n: int = CLOTH_PARTICLES_PER_SIDE, side: float = CLOTH_SIDE) -> np.ndarray:
     """Flat rest positions ``(n * n, 3)`` of the cloth grid, z = 0."""
-    check_int(n, "n")
-    if n < 2:
-        raise ValueError(f"a cloth grid needs at least 2 particles per side, got n={n}")
+    check_cloth_size(n)
     check_real(side, "side")
     if side <= 0:
         raise ValueError(f"cloth side must be a positive number of metres, got {side}")

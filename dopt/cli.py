@@ -24,7 +24,8 @@ TRACEBACK_ENV = "DOPT_TRACEBACK"
 #: the --help epilog of every script: exit codes and how to see a traceback
 EPILOG = (f"Exit status: 0 done; 1 a trial or the run failed (one line 'SCRIPT: error: ...' on "
           f"stderr;\n{TRACEBACK_ENV}=1 in the environment prints the full traceback); 2 bad "
-          "arguments.")
+          "arguments;\n130 or 143 interrupted by Ctrl-C or SIGTERM (what finished is kept: the "
+          "same command resumes).")
 
 
 def choices_list(text: str, choices: Sequence[str], what: str) -> list[str]:
@@ -190,19 +191,29 @@ def one_line(e: BaseException) -> str:
     return f"{type(e).__name__}: {' '.join(str(e).split())}"
 
 
+def resume_command() -> str:
+    """The command line of this process, as a shell would take it again."""
+    import shlex
+    return " ".join(shlex.quote(a) for a in ["python", *sys.argv])
+
+
 def guarded(script: str):
     """Decorator of a script's ``main(argv) -> int``: an exception becomes one line
     "SCRIPT: error: ErrorType: message" on stderr and exit status 1 (the traceback first when
-    the environment sets DOPT_TRACEBACK=1); Ctrl-C exits 130 with one line. Usage errors
-    (argparse's SystemExit 2) pass through."""
+    the environment sets DOPT_TRACEBACK=1); Ctrl-C exits 130 with one line, and an
+    interrupted sweep (``dopt.sweep.SweepInterrupted``) its ``exit_code`` (130, SIGTERM 143)
+    with its message and the command that resumes it. Usage errors (argparse's SystemExit 2)
+    pass through."""
     def wrap(main):
         @functools.wraps(main)
         def run(*args, **kwargs) -> int:
             try:
                 return main(*args, **kwargs)
-            except KeyboardInterrupt:
-                print(f"{script}: interrupted", file=sys.stderr)
-                return 130
+            except KeyboardInterrupt as e:
+                sweep = hasattr(e, "exit_code")
+                print(f"{script}: {e if sweep else 'interrupted'}"
+                      + (f"; to resume: {resume_command()}" if sweep else ""), file=sys.stderr)
+                return int(getattr(e, "exit_code", 130))
             except Exception as e:
                 if os.environ.get(TRACEBACK_ENV, "") not in ("", "0"):
                     traceback.print_exc()

@@ -189,10 +189,13 @@ class MPC:
         config: MPCConfig.
         rng: generator of the control noise.
         success: optional predicate on a state row that ends the task early.
+        on_step: optional, called with no argument after every agent step (a progress bar's
+            count; it must be quick: on the real clock it runs on the agent's schedule).
     """
 
     def __init__(self, scene: Scene, optimiser: Optimiser, config: MPCConfig,
-                 rng: np.random.Generator, success: Callable[[np.ndarray], bool] | None = None):
+                 rng: np.random.Generator, success: Callable[[np.ndarray], bool] | None = None,
+                 on_step: Callable[[], None] | None = None):
         if not isinstance(scene, Scene):
             raise TypeError(f"scene must be a dopt.Scene, got {type(scene).__name__}")
         if not callable(getattr(optimiser, "optimise", None)):
@@ -202,10 +205,11 @@ class MPC:
             raise TypeError(f"config must be a dopt.mpc.MPCConfig, got {type(config).__name__}")
         if not isinstance(rng, np.random.Generator):
             raise TypeError("rng must be a numpy.random.Generator")
-        if success is not None and not callable(success):
-            raise TypeError(f"success must be callable, got {type(success).__name__}")
+        for name, f in (("success", success), ("on_step", on_step)):
+            if f is not None and not callable(f):
+                raise TypeError(f"{name} must be callable, got {type(f).__name__}")
         self.scene, self.optimiser, self.config = scene, optimiser, config
-        self.rng, self.success = rng, success
+        self.rng, self.success, self.on_step = rng, success, on_step
         m = scene.model
         span = np.where(m.actuator_ctrllimited.astype(bool),
                         m.actuator_ctrlrange[:, 1] - m.actuator_ctrlrange[:, 0], 1.0)
@@ -335,6 +339,8 @@ class MPC:
             self._step += 1
             if self.success is not None and self.success(nxt):
                 self._succeeded = True
+        if self.on_step is not None:
+            self.on_step()
 
     def _deviation(self, plan: Plan) -> np.ndarray:
         """[q_C (-) q_nom_C ; v_C - v_nom_C] of the agent's state against plan row 0: (2c,)."""

@@ -9,9 +9,13 @@ else is passed to ``ray.init``), so a sweep of thousands of trials goes to many 
 code changes.
 
 Trial files are checked when read: a file that is not a trial record (truncated or invalid
-JSON, not an object, without "key", "params" or "result", or whose key is not its file name) is
-named in a logged warning and moved to ``OUT/trials/corrupt/`` (never deleted), and its trial is
-recomputed.
+JSON, not an object, without "key", "params", "result" or the "code" stamp, or whose key is
+not its file name) or whose result does not fit the experiment's ``Schema`` (the keys its
+summary reads: a result ``{}``, another experiment's, an older format) is named in a logged
+warning and moved to ``OUT/trials/corrupt/`` (never deleted), and its trial is recomputed. A
+trial function's own result that does not fit is a failure, never a record. Every file is
+strict JSON (``dopt.jsonio``: a NaN is written ``null`` with the reason beside it, and read
+back as NaN).
 
 **Which code a record stands for.** Each record stores ``CodeState.stamp()`` under "code"
 (dopt's version, the git commit, "-dirty" with a fingerprint for uncommitted code; see
@@ -20,9 +24,9 @@ key names its settings) and ``dopt.provenance.reuse_problem`` finds nothing that
 result between its commit and HEAD (``git diff X HEAD -- dopt deformables planners experiments
 pyproject.toml setup.py`` empty, X an ancestor of HEAD, the working tree clean there). Anything
 else is recomputed and its old file moved to ``OUT/trials/outdated/`` (never deleted): a record
-of an unknown commit, of no commit (records older than the "code" stamp, "no git"), of another
-branch, or marked "-dirty" (except in the very tree it was written from, so that a killed run
-resumes before its code is committed). The dopt version is recorded but decides nothing.
+of an unknown commit, of no commit ("no git"), of another branch, or marked "-dirty" (except
+in the very tree it was written from, so that a killed run resumes before its code is
+committed). The dopt version is recorded but decides nothing.
 ``reuse="any"`` reuses every valid record deliberately: ``SweepResult.reused_across`` (and
 ``take_deliberate_reuse()``, which the experiments' ``write_summary`` puts in the summary) list
 the trials reused across a code change and why they would have been recomputed. No field of a
@@ -40,56 +44,75 @@ the file, resumes the trial where it stopped instead of starting it again. The f
 deleted once the trial's record is written. A checkpoint follows the same rule as a trial, but
 always the strict one (a resumed trial's record names this commit, so resuming across a code
 change would hide it): one that cannot stand for this code is moved to
-``OUT/trials/checkpoints/outdated/`` and its trial starts afresh.
+``OUT/trials/checkpoints/outdated/`` and its trial starts afresh; one whose progress does not
+fit the ``Schema`` (another format) to ``OUT/trials/checkpoints/corrupt/``.
+
+**One run per folder.** ``run_sweep`` holds ``OUT/.lock`` (``OutLock``: pid, host, command)
+while it runs; a second process on the same OUT refuses (``SweepLockedError``, one line naming
+the first) unless that process is dead (a stale lock is taken over).
+
+**Interrupts.** SIGINT (Ctrl-C) or SIGTERM cancels the queued trials, stops the running ones
+(each keeps the checkpoint of its last completed step, if it saved one), writes those that
+finished and raises ``SweepInterrupted`` (a KeyboardInterrupt) within a few seconds, inline,
+on the pool and on Ray alike (``dopt.sweep_exec``); its ``exit_code`` is 130 or 143 and its
+message says how to resume. The rerun gives exactly the result of an uninterrupted sweep.
+
+**Progress.** ``on_start`` is given the ``SweepPlan`` (trials reused, resumed from a checkpoint,
+run from the start); ``progress`` is called as each trial ends; a trial function with a
+``report`` parameter reports its steps (``Report``), which reach ``tick(key, n)`` from the pool's
+and Ray's workers as well.
 """
 
 from __future__ import annotations
 
 import inspect
-import json
 import logging
-import os
-import sys
-import tempfile
+import signal
 from collections import Counter
 from collections.abc import Callable, Sequence
-from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass, field
-from multiprocessing import get_context
 from pathlib import Path
 
-from dopt.provenance import COMMIT_ENV, CodeState, code_state, repo_root, reuse_problem
+from dopt import jsonio
+from dopt.provenance import CodeState, repo_root, reuse_problem
+from dopt.sweep_exec import (
+    Stopper,
+    TrialInterrupted,
+    _Progress,
+    progress_reports,
+    run_inline,
+    run_pool,
+    run_ray,
+)
+from dopt.sweep_store import (  # noqa: F401  (the public names of dopt.sweep)
+    ANY,
+    CHECKPOINT_DIR,
+    CORRUPT_DIR,
+    LOCK_NAME,
+    OUTDATED_DIR,
+    RECORD_FIELDS,
+    Checkpoint,
+    OutLock,
+    Report,
+    Schema,
+    SweepLockedError,
+    Trial,
+    check_record,
+    check_trial_files,
+    current_code,
+    move_aside,
+    trial_path,
+)
 
 log = logging.getLogger(__name__)
 
-#: folders under OUT/trials where unusable trial files are moved (never deleted)
-CORRUPT_DIR, OUTDATED_DIR = "corrupt", "outdated"
-#: folder under OUT/trials of the unfinished trials' saved progress
-CHECKPOINT_DIR = "checkpoints"
-#: the fields every trial record has
-RECORD_FIELDS = ("key", "params", "result")
 #: run_sweep's reuse modes: git's rule, or every valid record (deliberately, listed)
 REUSE_MODES = ("same-code", "any")
 #: the folder, under a checkout's root, of the committed results
 RESULTS_DIR = Path("docs") / "results"
 
-#: {root: CodeState} this process last saw (run_sweep refreshes it; is_finished and
-#: Checkpoint read it, so that asking about many trials asks git once)
-_STATES: dict[str, CodeState] = {}
 #: {trial key: why it would have been recomputed} of the trials reused with reuse="any"
 _DELIBERATE: dict[str, str] = {}
-
-
-@dataclass(frozen=True)
-class Trial:
-    """key: unique file-name stem; params: the JSON-able arguments of the trial function."""
-
-    key: str
-    params: dict
-
-    def __post_init__(self):
-        if not self.key or any(ch in self.key for ch in "/\\\0") or self.key.startswith("."):
-            raise ValueError(f"trial key {self.key!r} is not a valid file name")
 
 
 @dataclass(frozen=True)
@@ -99,7 +122,7 @@ class SweepResult:
     Attributes:
         records: {key: {"key", "params", "result", "code"}} of every finished trial (old and
             new).
-        ran: keys run in this call; skipped: keys found finished and reused.
+        ran: keys run to the end in this call; skipped: keys found finished and reused.
         failed: {key: "ErrorType: message"} of the trials that raised.
         commits: {commit: number of records} over ``records`` (their "code" "commit";
             "unknown" for records without one): more than one key means the results were
@@ -110,6 +133,9 @@ class SweepResult:
         corrupt: {file name: reason} of the files moved to OUT/trials/corrupt in this call.
         reused_across: {key: why it would have been recomputed} of the trials that
             ``reuse="any"`` reused across a code change.
+        resumed: keys that started from a checkpoint.
+        interrupted: {key: what happened} of the trials an interrupt stopped ("stopped ...")
+            or kept from starting ("not started").
     """
 
     records: dict
@@ -120,19 +146,69 @@ class SweepResult:
     recomputed: dict = field(default_factory=dict)
     corrupt: dict = field(default_factory=dict)
     reused_across: dict = field(default_factory=dict)
+    resumed: list = field(default_factory=list)
+    interrupted: dict = field(default_factory=dict)
+
+    def line(self) -> str:
+        """One line: trials reused, resumed, run, failed (and interrupted)."""
+        stopped = [k for k, v in self.interrupted.items() if not v.startswith("not started")]
+        return (f"{len(self.skipped) + len(self.ran) + len(self.failed) + len(self.interrupted)}"
+                f" trials: {len(self.skipped)} reused, {len(self.ran)} run to the end ("
+                f"{len([k for k in self.resumed if k in self.ran])} of them resumed from a "
+                f"checkpoint), {len(self.failed)} failed"
+                + (f", {len(stopped)} stopped part-way, "
+                   f"{len(self.interrupted) - len(stopped)} not started"
+                   if self.interrupted else ""))
 
 
-def trial_path(out_dir: Path | str, key: str) -> Path:
-    return Path(out_dir) / "trials" / f"{key}.json"
+@dataclass(frozen=True)
+class SweepPlan:
+    """What a ``run_sweep`` call is about to do (``on_start`` gets it; it is logged).
+
+    Attributes:
+        reused: keys whose records stand (not run).
+        resumed: keys to run from their checkpoints.
+        fresh: keys to run from the start.
+        recomputed: {key: why} of those to run although they had a file.
+    """
+
+    reused: list
+    resumed: list
+    fresh: list
+    recomputed: dict
+
+    def line(self) -> str:
+        """"N trials: R reused, C resumed from a checkpoint, F run from the start"."""
+        n = len(self.reused) + len(self.resumed) + len(self.fresh)
+        return (f"{n} trials: {len(self.reused)} reused, {len(self.resumed)} resumed from a "
+                f"checkpoint, {len(self.fresh)} run from the start"
+                + (f" ({len(self.recomputed)} recomputed: their files were outdated or bad)"
+                   if self.recomputed else ""))
 
 
-def current_code(root: Path | str | None = None, refresh: bool = False) -> CodeState:
-    """The ``CodeState`` of ``root`` (default: this checkout) this process last saw; asked of
-    git again when ``refresh`` (``run_sweep`` does, once per call) or never asked before."""
-    where = str(repo_root(root))
-    if refresh or where not in _STATES or os.environ.get(COMMIT_ENV):
-        _STATES[where] = code_state(where)
-    return _STATES[where]
+class SweepInterrupted(KeyboardInterrupt):
+    """``run_sweep`` was stopped by SIGINT or SIGTERM. ``signum``; ``exit_code`` (128 +
+    signum: 130, 143); ``result``: the ``SweepResult`` so far (what finished is written); the
+    message says what happened and that a rerun resumes."""
+
+    def __init__(self, signum: int, result: SweepResult, out_dir: Path | str):
+        self.signum, self.result, self.out_dir = signum, result, Path(out_dir)
+        self.exit_code = 128 + int(signum)
+        super().__init__(self._message())
+
+    def _message(self) -> str:
+        r = self.result
+        stopped = [k for k, v in r.interrupted.items() if not v.startswith("not started")]
+        saved = sum((self.out_dir / "trials" / CHECKPOINT_DIR / f"{k}.json").is_file()
+                    for k in stopped)
+        return (f"interrupted by {signal.Signals(self.signum).name}: {len(r.ran)} trials "
+                f"finished in this run (written under {self.out_dir / 'trials'}), "
+                f"{len(stopped)} stopped part-way ({saved} with a checkpoint of their last "
+                f"completed step), {len(r.interrupted) - len(stopped)} not started; a rerun of "
+                f"the same command reuses the finished trials and resumes the rest")
+
+    def __str__(self) -> str:
+        return self._message()
 
 
 def take_deliberate_reuse() -> dict:
@@ -159,148 +235,39 @@ def record_refusal(out_dir: Path | str, state: CodeState, record: bool,
     return f"cannot write trial files ({where}): {problem}"
 
 
-class Checkpoint:
-    """The saved progress of one unfinished trial, ``OUT/trials/checkpoints/<key>.json``.
-
-    ``save(progress)`` writes the JSON-able dict atomically with the trial's key and the code
-    stamp (``CodeState.stamp``); ``load()`` returns the dict last saved, or None when there is
-    none or it cannot be resumed (unreadable, another key, code that may give another result:
-    ``dopt.provenance.reuse_problem``; logged and moved aside, never deleted). ``root`` is the
-    repository asked (default: this checkout). Picklable: a process pool's workers get it with
-    their trial (and the code state its sweep saw).
-    """
-
-    def __init__(self, out_dir: Path | str, key: str, root: Path | str | None = None,
-                 state: CodeState | None = None):
-        Trial(key, {})                                   # the key's checks
-        self.key = key
-        self.path = Path(out_dir) / "trials" / CHECKPOINT_DIR / f"{key}.json"
-        self.root = None if root is None else str(root)
-        self._state = state
-
-    def __repr__(self) -> str:
-        return f"Checkpoint({str(self.path)!r})"
-
-    @property
-    def state(self) -> CodeState:
-        if self._state is None:
-            self._state = current_code(self.root)
-        return self._state
-
-    def save(self, progress: dict) -> None:
-        _write_json_atomic(self.path, {"key": self.key, "code": self.state.stamp(),
-                                       "progress": progress})
-
-    def load(self) -> dict | None:
-        progress, problem, folder = self._read()
-        if problem is None:
-            return progress
-        where = _move_aside(self.path, folder)
-        log.warning("checkpoint %s is not resumed (%s): %s", self.path, problem,
-                    f"moved to {where}" if where else "it could not be moved aside")
-        return None
-
-    def peek(self) -> dict | None:
-        """The progress ``load`` would resume, or None; reads only (moves and logs nothing)."""
-        return self._read()[0]
-
-    def _read(self) -> tuple[dict | None, str | None, str | None]:
-        """(progress, None, None) of a resumable file, else (None, what is wrong, the folder
-        it belongs in); (None, None, None) when there is none."""
-        if not self.path.is_file():
-            return None, None, None
-        try:
-            rec = json.loads(self.path.read_text())
-            key, code, progress = rec["key"], rec["code"], rec["progress"]
-        except (OSError, ValueError, TypeError, KeyError) as e:
-            return None, f"not a checkpoint ({type(e).__name__}: {e})", CORRUPT_DIR
-        if key != self.key:
-            return None, f"the checkpoint of {key!r}", CORRUPT_DIR
-        if not isinstance(progress, dict):
-            return None, "its progress is not an object", CORRUPT_DIR
-        problem = reuse_problem(code, self.state, self.root)
-        if problem is not None:
-            return None, problem, OUTDATED_DIR
-        return progress, None, None
-
-    def clear(self) -> None:
-        """Delete the file (the trial's record is written)."""
-        try:
-            self.path.unlink()
-        except FileNotFoundError:
-            pass
-
-
 def takes_checkpoint(fn: Callable) -> bool:
     """Whether the trial function ``fn`` has a ``checkpoint`` parameter."""
+    return _takes(fn, "checkpoint")
+
+
+def takes_report(fn: Callable) -> bool:
+    """Whether the trial function ``fn`` has a ``report`` parameter."""
+    return _takes(fn, "report")
+
+
+def _takes(fn: Callable, name: str) -> bool:
     try:
-        return "checkpoint" in inspect.signature(fn).parameters
+        return name in inspect.signature(fn).parameters
     except (TypeError, ValueError):             # no signature (a builtin): it has none
         return False
 
 
-def check_record(path: Path | str) -> tuple[dict | None, str | None]:
-    """(record, None) if the file at ``path`` is a trial record, else (None, what is wrong)."""
-    path = Path(path)
-    try:
-        rec = json.loads(path.read_text())
-    except (OSError, UnicodeDecodeError) as e:
-        return None, f"unreadable ({type(e).__name__}: {e})"
-    except ValueError as e:
-        return None, f"not valid JSON, truncated? ({e})"
-    if not isinstance(rec, dict):
-        return None, f"not a trial record (a JSON {type(rec).__name__}, not an object)"
-    missing = [k for k in RECORD_FIELDS if k not in rec]
-    if missing:
-        return None, f"not a trial record (no {', '.join(repr(k) for k in missing)})"
-    if rec["key"] != path.stem:
-        return None, f"its key {rec['key']!r} is not its file name"
-    if not isinstance(rec["params"], dict):
-        return None, "its params are not an object"
-    code = rec.get("code")
-    if code is not None and not (isinstance(code, dict) and "version" in code):
-        return None, f"its code version {code!r} is not {{\"version\", \"commit\"}}"
-    return rec, None
-
-
-def check_trial_files(out_dir: Path | str) -> tuple[dict, dict]:
-    """({key: record} of the valid trial files under OUT/trials, {file name: reason} of the
-    others, each moved to OUT/trials/corrupt/ with a logged warning). Hidden files (the
-    temporary files of writes that were killed) are left alone."""
-    folder = Path(out_dir) / "trials"
-    if not folder.is_dir():
-        return {}, {}
-    records, corrupt = {}, {}
-    for path in sorted(folder.glob("*.json")):
-        if path.name.startswith(".") or not path.is_file():
-            continue
-        rec, problem = check_record(path)
-        if rec is not None:
-            records[rec["key"]] = rec
-            continue
-        corrupt[path.name] = problem
-        where = _move_aside(path, CORRUPT_DIR)
-        log.warning("trial file %s is not used (%s): %s", path, problem,
-                    f"moved to {where}" if where else "it could not be moved aside")
-    return records, corrupt
-
-
 def is_finished(out_dir: Path | str, key: str, *, root: Path | str | None = None,
-                reuse: str = "same-code") -> bool:
-    """Whether ``run_sweep`` (not fresh, same ``reuse`` and ``root``) would skip trial
-    ``key``: its file under OUT/trials is a valid record that may stand for this code (the
-    code state this process last saw, ``current_code``). Reads only."""
+                reuse: str = "same-code", schema: Schema = ANY) -> bool:
+    """Whether ``run_sweep`` (not fresh, same ``reuse``, ``root`` and ``schema``) would skip
+    trial ``key``: its file under OUT/trials is a valid record that may stand for this code
+    (the code state this process last saw, ``current_code``). Reads only."""
     _check_reuse(reuse)
-    rec, _ = check_record(trial_path(out_dir, key))
+    rec, _ = check_record(trial_path(out_dir, key), schema)
     if rec is None:
         return False
     return reuse == "any" or reuse_problem(rec.get("code"), current_code(root), root) is None
 
 
-def load_finished(out_dir: Path | str) -> dict:
+def load_finished(out_dir: Path | str, schema: Schema = ANY) -> dict:
     """{key: record} of every valid trial file under OUT/trials (others are moved aside:
     ``check_trial_files``)."""
-    return check_trial_files(out_dir)[0]
+    return check_trial_files(out_dir, schema)[0]
 
 
 def _check_reuse(reuse) -> None:
@@ -308,11 +275,12 @@ def _check_reuse(reuse) -> None:
         raise ValueError(f"reuse must be one of {', '.join(REUSE_MODES)}, got {reuse!r}")
 
 
-def _sort_stored(trials, out_dir, state, *, fresh, reuse, root) -> tuple[dict, dict, dict, dict]:
+def _sort_stored(trials, out_dir, state, *, fresh, reuse, root, schema
+                 ) -> tuple[dict, dict, dict, dict]:
     """({key: reused record}, {key: why recomputed}, {file name: why corrupt}, {key: why it
     was reused across a code change}) of the stored trial files; the files of the trials to
     recompute are moved to OUT/trials/outdated/."""
-    done, corrupt = check_trial_files(out_dir)
+    done, corrupt = check_trial_files(out_dir, schema)
     recomputed, across = {}, {}
     for t in trials:
         if f"{t.key}.json" in corrupt:
@@ -329,27 +297,48 @@ def _sort_stored(trials, out_dir, state, *, fresh, reuse, root) -> tuple[dict, d
             continue
         recomputed[t.key] = reason
         del done[t.key]
-        where = _move_aside(trial_path(out_dir, t.key), OUTDATED_DIR)
+        where = move_aside(trial_path(out_dir, t.key), OUTDATED_DIR)
         log.log(logging.INFO if fresh else logging.WARNING, "trial %s is recomputed: %s (old "
                 "file moved to %s)", t.key, reason, where)
     return done, recomputed, corrupt, across
 
 
+def _check_args(fn, trials, workers, reuse, schema, callbacks: dict) -> None:
+    keys = [t.key for t in trials]
+    if len(set(keys)) != len(keys):
+        raise ValueError("trial keys must be unique")
+    if workers < 1:
+        raise ValueError(f"workers must be >= 1, got {workers}")
+    _check_reuse(reuse)
+    if not isinstance(schema, Schema):
+        raise TypeError(f"schema must be a dopt.sweep.Schema, got {type(schema).__name__}")
+    for name, f in {"fn": fn, **callbacks}.items():
+        if f is not None and not callable(f):
+            raise TypeError(f"{name} must be callable or None, got {f!r}")
+
+
 def run_sweep(fn: Callable[[dict], dict], trials: Sequence[Trial], out_dir: Path | str, *,
               workers: int = 1, ray_address: str | None = None,
               progress: Callable[[str, dict | None], None] | None = None,
+              tick: Callable[[str, int], None] | None = None,
+              on_start: Callable[[SweepPlan], None] | None = None, schema: Schema = ANY,
               fresh: bool = False, reuse: str = "same-code", record: bool = False,
               root: Path | str | None = None) -> SweepResult:
     """Run the trials not yet finished under ``out_dir``.
 
     Args:
         fn: module-level function params -> JSON-able dict (picklable by reference); with a
-            ``checkpoint`` parameter it is called as ``fn(params, checkpoint=Checkpoint)``.
+            ``checkpoint`` parameter it is called with ``checkpoint=Checkpoint``, with a
+            ``report`` parameter with ``report=Report``.
         trials: the sweep; keys must be unique.
         out_dir: results folder; OUT/trials/<key>.json per finished trial.
         workers: processes of the local pool (1: run inline in this process).
         ray_address: run on Ray instead ("local" for a local instance).
-        progress: called with (key, record or None on failure) as each trial ends.
+        progress: called with (key, record or None on failure) as each trial ends (not for
+            the trials an interrupt stopped).
+        tick: called with (key, n) as a running trial reports n more steps.
+        on_start: called with the ``SweepPlan`` before the first trial starts.
+        schema: what the experiment's results and checkpoints hold (``Schema``).
         fresh: recompute every trial (the old files are moved to OUT/trials/outdated/, the
             checkpoints of unfinished trials to OUT/trials/checkpoints/outdated/).
         reuse: "same-code" (git's rule, the module's docstring) or "any" (every valid record,
@@ -360,59 +349,89 @@ def run_sweep(fn: Callable[[dict], dict], trials: Sequence[Trial], out_dir: Path
     Raises:
         RuntimeError: a recording (``record``, or ``out_dir`` inside docs/results/) from a
             dirty tree or outside git; nothing is run or moved.
+        SweepLockedError: another live process runs a sweep on ``out_dir``.
+        SweepInterrupted: SIGINT or SIGTERM (what finished is written).
 
     A trial whose file is corrupt, or cannot stand for this code, is recomputed
     (``SweepResult.recomputed``); a trial that raises, or returns something that is not
-    JSON-able, is a failure (``SweepResult.failed``), never a result.
+    JSON-able or does not fit ``schema``, is a failure (``SweepResult.failed``), never a
+    result.
     """
-    keys = [t.key for t in trials]
-    if len(set(keys)) != len(keys):
-        raise ValueError("trial keys must be unique")
-    if workers < 1:
-        raise ValueError(f"workers must be >= 1, got {workers}")
-    _check_reuse(reuse)
+    _check_args(fn, trials, workers, reuse, schema,
+                {"progress": progress, "tick": tick, "on_start": on_start})
     state = current_code(root, refresh=True)
     refusal = record_refusal(out_dir, state, record, root)
     if refusal is not None:
         raise RuntimeError(refusal)
+    with OutLock(out_dir):
+        return _run_locked(fn, trials, out_dir, state, workers=workers,
+                           ray_address=ray_address, progress=progress, tick=tick,
+                           on_start=on_start, schema=schema, fresh=fresh, reuse=reuse,
+                           root=root)
+
+
+def _run_locked(fn, trials, out_dir, state, *, workers, ray_address, progress, tick, on_start,
+                schema, fresh, reuse, root) -> SweepResult:
+    """``run_sweep`` once its checks passed and it holds the folder's lock."""
     (Path(out_dir) / "trials").mkdir(parents=True, exist_ok=True)
     done, recomputed, corrupt, across = _sort_stored(trials, out_dir, state, fresh=fresh,
-                                                     reuse=reuse, root=root)
+                                                     reuse=reuse, root=root, schema=schema)
     _DELIBERATE.update(across)
     todo = [t for t in trials if t.key not in done]
     skipped = [t.key for t in trials if t.key in done]
-    checkpoints = {t.key: Checkpoint(out_dir, t.key, root, state) for t in todo}
+    checkpoints = {t.key: Checkpoint(out_dir, t.key, root, state, schema) for t in todo}
     if fresh:
         for c in checkpoints.values():
             if c.path.exists():
                 log.info("trial %s starts afresh (its checkpoint moved to %s)", c.key,
-                         _move_aside(c.path, OUTDATED_DIR))
-    log.info("sweep: %d trials, %d already finished, %d to run (%d recomputed, %d reused "
-             "across a code change)", len(trials), len(skipped), len(todo), len(recomputed),
+                         move_aside(c.path, OUTDATED_DIR))
+    uses_checkpoint = takes_checkpoint(fn)
+    resumed = [k for k, c in checkpoints.items() if uses_checkpoint and c.peek() is not None]
+    plan = SweepPlan(skipped, resumed, [t.key for t in todo if t.key not in resumed],
+                     recomputed)
+    log.info("sweep %s: %s (%d reused across a code change)", out_dir, plan.line(),
              len(across))
+    if on_start is not None:
+        on_start(plan)
     records = {k: done[k] for k in skipped}
-    failed = _execute(fn, todo, out_dir, state.stamp(), checkpoints, records, progress,
-                      workers=workers, ray_address=ray_address)
+    failed, interrupted, stop = _execute(fn, todo, out_dir, state.stamp(), checkpoints,
+                                         records, progress, tick, schema, workers=workers,
+                                         ray_address=ray_address)
     commits = Counter(str((r.get("code") or {}).get("commit") or "unknown")
                       for r in records.values())
-    return SweepResult(records, [t.key for t in todo if t.key not in failed], skipped, failed,
-                       dict(commits), recomputed, corrupt, across)
+    result = SweepResult(records, [t.key for t in todo if t.key in records], skipped, failed,
+                         dict(commits), recomputed, corrupt, across, resumed, interrupted)
+    if stop.signum is not None:
+        raise SweepInterrupted(stop.signum, result, out_dir)
+    return result
 
 
-def _execute(fn, todo, out_dir, code, checkpoints, records, progress, *, workers,
-             ray_address) -> dict:
+def _execute(fn, todo, out_dir, code, checkpoints, records, progress, tick, schema, *,
+             workers, ray_address) -> tuple[dict, dict, Stopper]:
     """Run ``todo`` (inline, on a pool or on Ray), write each record stamped ``code`` into
-    ``records`` and its file; returns {key: error} of the failures."""
+    ``records`` and its file; returns ({key: error} of the failures, {key: what happened} of
+    the trials an interrupt stopped, the ``Stopper`` that watched for it)."""
     failed: dict = {}
-    kwargs = ((lambda t: {"checkpoint": checkpoints[t.key]}) if takes_checkpoint(fn)
-              else (lambda t: {}))
+    interrupted: dict = {}
+    reports = (progress_reports(out_dir, [t.key for t in todo], tick) if takes_report(fn)
+               else {})
+
+    def kwargs_of(t: Trial) -> dict:
+        out = {"checkpoint": checkpoints[t.key]} if takes_checkpoint(fn) else {}
+        return {**out, "report": reports[t.key]} if reports else out
 
     def finish(trial: Trial, result=None, error: BaseException | None = None):
+        if isinstance(error, TrialInterrupted):
+            interrupted[trial.key] = str(error)
+            log.info("trial %s: %s", trial.key, error)
+            return
         rec = None
+        if error is None and (problem := schema.result_problem(result)) is not None:
+            error = ValueError(f"its result does not fit the experiment's schema: {problem}")
         if error is None:
             rec = {"key": trial.key, "params": trial.params, "result": result, "code": code}
             try:
-                _write_json_atomic(trial_path(out_dir, trial.key), rec)
+                jsonio.write_atomic(trial_path(out_dir, trial.key), rec)
             except (TypeError, ValueError) as e:        # not JSON-able: a failure, not a result
                 error, rec = TypeError(f"its result is not JSON-able ({e})"), None
             else:
@@ -425,72 +444,14 @@ def _execute(fn, todo, out_dir, code, checkpoints, records, progress, *, workers
         if progress is not None:
             progress(trial.key, rec)
 
+    stop = Stopper()
+    watch = _Progress(reports, tick)
     if ray_address is not None:
-        _run_ray(fn, todo, ray_address, finish, kwargs)
+        run_ray(fn, todo, ray_address, kwargs_of, finish, stop, watch)
     elif workers == 1:
-        for t in todo:
-            try:
-                result = fn(t.params, **kwargs(t))
-            except Exception as e:  # recorded, the sweep goes on
-                finish(t, error=e)
-            else:
-                finish(t, result)
+        run_inline(fn, todo, kwargs_of, finish, stop)
     else:
-        with ProcessPoolExecutor(workers, mp_context=get_context("spawn")) as pool:
-            futures = {pool.submit(fn, t.params, **kwargs(t)): t for t in todo}
-            for fut in as_completed(futures):
-                err = fut.exception()
-                finish(futures[fut], None if err else fut.result(), err)
-    return failed
-
-
-def _move_aside(path: Path, folder: str) -> Path | None:
-    """Move ``path`` into ``folder`` next to it (a free name: <stem>.1.json, ...); None if it
-    cannot be moved (it is then left where it is)."""
-    dest_dir = path.parent / folder
-    try:
-        dest_dir.mkdir(exist_ok=True)
-        dest = dest_dir / path.name
-        n = 0
-        while dest.exists():
-            n += 1
-            dest = dest_dir / f"{path.stem}.{n}{path.suffix}"
-        os.replace(path, dest)
-    except OSError as e:
-        log.warning("could not move %s to %s/: %s", path, dest_dir, e)
-        return None
-    return dest
-
-
-def _run_ray(fn, todo, address, finish, kwargs) -> None:
-    import ray
-    if not ray.is_initialized():
-        if address == "local":
-            ray.init(include_dashboard=False, log_to_driver=False)
-        else:
-            ray.init(address=address, log_to_driver=False)
-    module = sys.modules[fn.__module__]
-    if getattr(module, "__file__", None) and "site-packages" not in module.__file__:
-        # the trial module lives in a script folder, not an installed package: ship it by value
-        ray.cloudpickle.register_pickle_by_value(module)
-    remote = ray.remote(fn)
-    pending = {remote.remote(t.params, **kwargs(t)): t for t in todo}
-    while pending:
-        ready, _ = ray.wait(list(pending), num_returns=1)
-        trial = pending.pop(ready[0])
-        try:
-            finish(trial, ray.get(ready[0]))
-        except Exception as e:
-            finish(trial, error=e)
-
-
-def _write_json_atomic(path: Path, obj) -> None:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=".tmp-", suffix=".json")
-    try:
-        with os.fdopen(fd, "w") as f:
-            json.dump(obj, f)
-        os.replace(tmp, path)
-    except BaseException:
-        os.unlink(tmp)
-        raise
+        run_pool(fn, todo, kwargs_of, finish, stop, workers, watch)
+    for r in reports.values():
+        r.clear()
+    return failed, interrupted, stop

@@ -11,6 +11,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import numbers
+import os
 from collections.abc import Iterable, Mapping
 
 import numpy as np
@@ -119,6 +120,43 @@ def check_real(value, name: str, *, positive: bool = False, minimum: float | Non
     if maximum is not None and value > maximum:
         raise ValueError(f"{name} must be <= {maximum}, got {value!r}")
     return float(value)
+
+
+# ----------------------------------------------------------------------------- memory
+#: set to a number of bytes to plan sizes for less (or more) than this machine's memory
+MEMORY_ENV = "DOPT_MEMORY_BYTES"
+
+
+def memory_bytes() -> int:
+    """The bytes a size check plans for: this machine's physical memory (``MEMORY_ENV``
+    overrides it; 1 TiB where the system does not say)."""
+    env = os.environ.get(MEMORY_ENV, "").strip()
+    if env:
+        return int(float(env))
+    try:
+        return int(os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES"))
+    except (ValueError, OSError, AttributeError):
+        return 2 ** 40
+
+
+def size_text(nbytes: float) -> str:
+    """Bytes as text in binary units: "2.52 TiB"."""
+    value = float(nbytes)
+    for unit in ("B", "KiB", "MiB", "GiB", "TiB", "PiB"):
+        if abs(value) < 1024 or unit == "PiB":
+            return f"{value:.3g} {unit}"
+        value /= 1024
+    return f"{value:.3g} EiB"
+
+
+def check_memory(nbytes: float, what: str) -> None:
+    """ValueError "``what`` needs about X, more than this machine's memory (Y)" when
+    ``nbytes`` exceed ``memory_bytes()``: the check a size that a setting implies gets before
+    anything of that size is allocated (``what`` names the setting and the size)."""
+    limit = memory_bytes()
+    if not nbytes <= limit:
+        raise ValueError(f"{what} needs about {size_text(nbytes)}, more than this machine's "
+                         f"memory ({size_text(limit)}; {MEMORY_ENV} sets another bound)")
 
 
 # ----------------------------------------------------------------------------- arrays

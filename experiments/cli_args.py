@@ -16,7 +16,12 @@ change a result (dopt/, deformables/, planners/, experiments/, pyproject.toml, s
 exact rule is ``dopt.provenance``'s) differ from HEAD, or outside a git checkout:
 ``record_problem`` says so before anything runs, and ``write_summary`` checks again before it
 writes the copy (OUT/summary.json is written either way, marked "-dirty" in its provenance).
-A run with --out only is never refused.
+A run with --out only is never refused. ``record_problem`` also tries the places a run writes
+(the --record file and the --out folder: a file created and removed, nothing overwritten), so
+that a path the user cannot write fails before the first trial, not after the run.
+
+Strict JSON: ``write_summary`` writes with ``dopt.jsonio`` (a value that is not a finite number
+is ``null`` with its reason beside it under "<field>_undefined"; no bare NaN).
 
 Standard library and ``dopt.cli`` / ``dopt.provenance`` / ``dopt.sweep`` only (all pure Python),
 so the MuJoCo-free key-particle experiment can use them without importing torch or MuJoCo.
@@ -49,14 +54,55 @@ from dopt.cli import (  # noqa: F401  (re-exported for the scripts)
 )
 
 
+def write_problem(path: Path, folder: bool = False) -> str | None:
+    """Why nothing can be written at ``path`` (a folder when ``folder``), found by trying: a
+    temporary file is created and removed in the folder (or the nearest one that exists, for
+    a path not created yet), and an existing file is opened for appending (nothing written).
+    None when it can; creates nothing that stays."""
+    import os
+    import tempfile
+
+    path = Path(path).absolute()
+    if not folder and path.exists() and not path.is_file():
+        return f"cannot write {path}: not a regular file"
+    try:
+        if not folder and path.is_file():
+            with open(path, "a"):
+                pass
+            return None
+        where = next(p for p in (path if folder else path.parent, *path.parents) if p.exists())
+        fd, tmp = tempfile.mkstemp(dir=where, prefix=".write-test-")
+        os.close(fd)
+        os.unlink(tmp)
+    except OSError as e:
+        return f"cannot write {path}: {e.strerror or e}"
+    return None
+
+
+#: the packages every experiment needs after its trials (the plots extra: bars, plots, GIFs)
+RUN_PACKAGES = ("tqdm", "matplotlib", "imageio")
+
+
 def record_problem(record: Path | None, out: Path, root: Path | None = None) -> str | None:
-    """Why --record PATH cannot be written (one line, argparse's "argument --record: ..."):
-    it is the --out folder, or this code (``root``: default this checkout) is not committed
-    (``dopt.provenance.CodeState.record_problem``). None without --record."""
+    """Why the run cannot write what it will (one line, argparse's "argument --out: ..." or
+    "argument --record: ..."): a package of ``RUN_PACKAGES`` missing, a place that fails
+    ``write_problem``, --record the --out folder, or this code (``root``: default this
+    checkout) not committed (``dopt.provenance.CodeState.record_problem``). None when the
+    run can write both. Every experiment asks it before its first trial."""
+    import importlib.util
+
+    missing = [m for m in RUN_PACKAGES if importlib.util.find_spec(m) is None]
+    if missing:
+        return (f"the run needs {', '.join(missing)} (the plots extra: pip install "
+                f"'dopt[plots]')")
+    if (problem := write_problem(out, folder=True)) is not None:
+        return f"argument --out: {problem}"
     if record is None:
         return None
     if Path(record).absolute() == Path(out).absolute():
         return f"argument --record: {record} is the --out folder"
+    if (problem := write_problem(record)) is not None:
+        return f"argument --record: {problem}"
     from dopt.provenance import code_state  # pure Python: no MuJoCo, no torch
 
     problem = code_state(root).record_problem()
@@ -110,6 +156,7 @@ def write_summary(summary: dict, out: Path, record: Path | None, script: str, ar
             sweep of this process ran at); the --record file is then not written
             (OUT/summary.json is).
     """
+    from dopt import jsonio
     from dopt.provenance import code_state, provenance  # pure Python: no MuJoCo, no torch
     from dopt.sweep import current_code, take_deliberate_reuse
 
@@ -118,7 +165,7 @@ def write_summary(summary: dict, out: Path, record: Path | None, script: str, ar
         summary["reused_across_code"] = reused
     summary["provenance"] = provenance([script, *(sys.argv[1:] if argv is None else argv)],
                                        root)
-    text = json.dumps(summary, indent=indent)
+    text = jsonio.dumps(summary, indent=indent)
     (Path(out) / "summary.json").write_text(text)
     if record:
         state = code_state(root)

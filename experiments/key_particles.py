@@ -21,7 +21,6 @@ from __future__ import annotations
 import argparse
 import csv
 import itertools
-import json
 import logging
 import sys
 import time
@@ -56,7 +55,8 @@ from deformables import (
     rope_key_particles,
 )
 from deformables.cloth import PANEL_MODES
-from deformables.goals import CLOTH_REFERENCE_KEYS, TRIANGULATIONS
+from deformables.goals import CLOTH_REFERENCE_KEYS, TRIANGULATIONS, check_cloth_size
+from dopt import jsonio
 from dopt.provenance import code_version
 from dopt.tasks.pick.cloth_scene import PHYSICS_PRESETS
 
@@ -176,7 +176,7 @@ def load_journal(journal: Path) -> dict:
         if not line.strip():
             continue
         try:
-            row = json.loads(line)
+            row = jsonio.loads(line, strict_numbers=False)
             rows[_noise_key(row)] = row
         except (ValueError, TypeError, KeyError) as exc:
             logger.warning("%s line %d is not a noise row (%s): its goal is recomputed",
@@ -239,7 +239,7 @@ def noise_sweep(journal: Path, rope_config: RopeConfig, cloth_config: ClothConfi
                 logger.error("%s failed: %s", _noise_name(row), row["error"])
             row.update(n_keys=keys, reached_threshold=reached, held=keys == reference[task],
                        code=code)
-            handle.write(json.dumps(row) + "\n")
+            handle.write(jsonio.dumps(row) + "\n")      # strict: no bare NaN
             handle.flush()
             rows.append(row)
     return rows, failed
@@ -364,8 +364,7 @@ def parser() -> argparse.ArgumentParser:
     ap.add_argument("--noise-n", type=number_list(int, MIN_CLOTH_N, "particles per side"),
                     default=[16, 25, 40],
                     help="cloth particles per side of the goal-noise sweep (comma-separated, "
-                         f"each >= {MIN_CLOTH_N}; default 16,25,40; docs/DESIGN-NOTES.md uses "
-                         "12,16,21,25,28,32,40)")
+                         f"each >= {MIN_CLOTH_N}; default 16,25,40)")
     ap.add_argument("--noise-seeds", type=positive_int, default=3,
                     help="goal seeds per noise level (triangulation draw and noise; default "
                          "%(default)s)")
@@ -391,12 +390,25 @@ def parser() -> argparse.ArgumentParser:
     return ap
 
 
+def check_sizes(ap: argparse.ArgumentParser, args) -> None:
+    """A usage error naming the flag when a cloth size of the flags needs more memory than
+    this machine has (``deformables.goals.check_cloth_size``), before any goal is built."""
+    for flag, sizes in (("--cloth-n", [args.cloth_n or 2]), ("--noise-n", args.noise_n),
+                        ("--simulated-n", args.simulated_n)):
+        for n in sizes:
+            try:
+                check_cloth_size(n, f"argument {flag}")
+            except ValueError as e:
+                ap.error(str(e))
+
+
 @guarded("key_particles.py")
 def main(argv=None) -> int:
     ap = parser()
     args = ap.parse_args(argv)
     if record_problem(args.record, args.out):
         ap.error(record_problem(args.record, args.out))
+    check_sizes(ap, args)
     logging.basicConfig(level=logging.INFO, format="%(levelname)s %(name)s: %(message)s")
 
     rng = np.random.default_rng(args.seed)

@@ -60,9 +60,10 @@ from cli_args import (
     reuse_mode,
     write_summary,
 )
+from sweep_console import out_lock, run_with_console
 
 from dopt.mpc import CLOCKS
-from dopt.sweep import SweepResult, Trial, run_sweep
+from dopt.sweep import Schema, SweepResult, Trial, is_finished
 from dopt.tasks import PUSH_TASKS
 from dopt.tasks.push.costs import COST_PRESETS
 from planners.svr import METHODS, paper_theta
@@ -84,6 +85,10 @@ from planners.svr_mpc.authors_data import authors_statistic
 
 log = logging.getLogger(__name__)
 FEEDBACK = {"off": (False,), "on": (True,), "both": (False, True)}
+#: what a stored MPC trial must hold to be reused: the fields the summary and plots read
+SCHEMA = Schema(result=("mpc_cost", "success", "steps", "goal_distance_start",
+                        "goal_distance_end", "opt_ms_mean", "dofs_mean", "n_dofs", "opt_step",
+                        "lag_steps_mean", "unstable"))
 
 
 def parser() -> argparse.ArgumentParser:
@@ -320,21 +325,29 @@ def _task_slowdown(task: str) -> float:
     return float(PUSH_TASKS[task](np.random.default_rng(0)).slowdown)
 
 
-def run(args, trials, fn=None, out: Path | None = None,
-        workers: int | None = None) -> tuple[list, SweepResult]:
+@functools.cache
+def _task_timeout(task: str) -> int:
+    return int(PUSH_TASKS[task](np.random.default_rng(0)).timeout)
+
+
+def run(args, trials, fn=None, out: Path | None = None, workers: int | None = None,
+        schema: Schema = SCHEMA) -> tuple[list, SweepResult]:
     """Run (or resume; ``args.fresh``: recompute) the trials with ``fn`` (default one MPC
     episode) under ``out`` (default --out), on ``workers`` processes (default --workers, or
-    Ray with --ray); returns their records and the sweep's result (``failed``: {key: error},
+    Ray with --ray), with the sweep's console (``sweep_console``: a bar of the agent steps of
+    every trial, a trial's budget its timeout); a stored trial is reused only when it fits
+    ``schema``. Returns their records and the sweep's result (``failed``: {key: error},
     ``commits``: code commits of the records)."""
-    from tqdm import tqdm
-
-    bar = tqdm(total=len(trials), desc=f"{args.task} trials", unit="trial")
-    res = run_sweep(fn or run_trial, trials, out or args.out, workers=workers or args.workers,
-                    ray_address=None if workers else args.ray,
-                    progress=lambda key, rec: bar.update(1), fresh=args.fresh,
-                    reuse=reuse_mode(args))
-    bar.update(len(res.skipped))
-    bar.close()
+    out = out or args.out
+    steps = {t.key: int(t.params.get("timeout") or _task_timeout(t.params["task"]))
+             for t in trials}
+    res = run_with_console(
+        fn or run_trial, trials, out, unit="step", desc=f"{args.task} MPC steps",
+        steps=lambda t: steps[t.key],
+        held=lambda t: steps[t.key] if is_finished(out, t.key, reuse=reuse_mode(args),
+                                                   schema=schema) else 0,
+        workers=workers or args.workers, ray_address=None if workers else args.ray,
+        fresh=args.fresh, reuse=reuse_mode(args), schema=schema)
     for key, err in res.failed.items():
         print(f"FAILED {key}: {err}", file=sys.stderr)
     wanted = {t.key for t in trials}
@@ -531,6 +544,12 @@ def write_final(path: Path, task: str, row: str, r: dict) -> None:
 def main(argv=None) -> int:
     logging.basicConfig(level=logging.WARNING)
     args = parse_args(argv)
+    with out_lock(args.out):              # a second run on this --out refuses at once
+        return _main(args, argv)
+
+
+def _main(args, argv) -> int:
+    """The run of ``main`` once its flags are checked and it holds its folder."""
     trials = make_trials(args)
     records, res = run(args, trials)
     failed = res.failed

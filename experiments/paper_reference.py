@@ -33,13 +33,13 @@ from __future__ import annotations
 import argparse
 import csv
 import hashlib
-import json
 import re
 import sys
 from pathlib import Path
 
 from cli_args import EPILOG, existing_dir, guarded, output_file
 
+from dopt import jsonio
 from planners.svr_mpc import TABLE1_ROWS, row_name
 from planners.svr_mpc.authors_data import RAND_MIN_RHO, RAND_THETA, TASK_DIRS, authors_table1
 
@@ -219,7 +219,7 @@ def main(argv=None) -> int:
     summary["provenance"] = provenance(["experiments/paper_reference.py",
                                         *(sys.argv[1:] if argv is None else argv)])
     args.record.parent.mkdir(parents=True, exist_ok=True)
-    args.record.write_text(json.dumps(summary, indent=2))
+    args.record.write_text(jsonio.dumps(summary, indent=2))
     return 0
 
 

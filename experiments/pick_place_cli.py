@@ -20,7 +20,6 @@ import logging
 import sys
 import time
 from dataclasses import replace
-from functools import partial
 from pathlib import Path
 
 import numpy as np
@@ -37,10 +36,15 @@ from cli_args import (
     record_problem,
     write_summary,
 )
+from pick_sweep import BUDGET_FLAGS, SCHEMA
+from pick_sweep import iterations_held as _iterations_held
+from pick_sweep import run_trials as _run
+from sweep_console import out_lock
 
 from dopt.stats import mean_ci
-from dopt.sweep import Checkpoint, SweepResult, Trial, is_finished, run_sweep
+from dopt.sweep import Trial, is_finished
 from dopt.tasks.pick.cloth_scene import PHYSICS_PRESETS
+from planners.pick_budget import budget_problem
 from planners.pick_place import (
     GOALS,
     LABELS,
@@ -49,14 +53,21 @@ from planners.pick_place import (
     PROTOCOLS,
     PickPlaceSettings,
     make_problem,
-    run_trial,
     summarize,
 )
-from planners.trial_progress import iterations_done
 
 log = logging.getLogger(__name__)
 COLOURS = {"simple": "tab:blue", "original": "tab:red", "random": "tab:green",
            "scripted": "tab:gray"}
+#: seeds per method of a command that names neither --seeds nor --preset: a first answer in
+#: minutes (the protocols' seeds, ``PROTOCOL_SEEDS``, are a flag away)
+FIRST_SEEDS = 1
+#: the calibration step times a batched rollout of this share of a CEM population (at least
+#: ``CALIBRATION_MIN_PLANS`` random plans of the settings' horizon)
+CALIBRATION_SHARE = 0.25
+CALIBRATION_MIN_PLANS = 4
+#: times the calibration rollout runs (the fastest counts)
+CALIBRATION_REPEATS = 2
 
 
 def parser(task: str, doc: str, help_: dict) -> argparse.ArgumentParser:
@@ -72,12 +83,16 @@ def parser(task: str, doc: str, help_: dict) -> argparse.ArgumentParser:
     ap.add_argument("--methods", type=choices_type(METHODS, "methods"),
                     default=",".join(METHODS),
                     help="comma-separated subset of " + ", ".join(METHODS) + " (default: all)")
-    ap.add_argument("--preset", choices=tuple(PROTOCOLS), default="ours",
-                    help="the protocol: ours (the experiments' defaults, minutes on 2 cores) or "
+    ap.add_argument("--preset", choices=tuple(PROTOCOLS), default=None,
+                    help="the protocol: ours (the experiments' settings, "
+                         f"{PROTOCOL_SEEDS['ours']} seeds per method, minutes on 2 cores) or "
                          "paper (the paper's 30 CEM iterations per stage and ten runs per "
-                         "method; a 20 x 20 cloth) (default %(default)s)")
+                         "method; a 20 x 20 cloth). Without it: ours's settings with "
+                         f"{FIRST_SEEDS} seed per method, a first answer")
     ap.add_argument("--seeds", type=positive_int, default=None,
-                    help="seeds per method (default 3; --preset paper 10)")
+                    help=f"seeds per method (default {FIRST_SEEDS}; with --preset its "
+                         "protocol's: " + ", ".join(f"{k} {v}" for k, v in PROTOCOL_SEEDS.items())
+                         + ")")
     ap.add_argument("--seed", type=nonneg_int, default=0, help=help_["seed"])
     ap.add_argument("--out", type=output_dir, default=None,
                     help=f"output folder (default results/{task}_<goal>); finished trials "
@@ -125,6 +140,8 @@ def parse(ap: argparse.ArgumentParser, task: str, argv) -> tuple[argparse.Namesp
     """Parse the flags and build the typed settings (argparse usage error, exit 2, on any
     bad value: the settings' own checks are reported as usage errors too)."""
     args = ap.parse_args(argv)
+    named = args.preset is not None               # a protocol asked for: its seeds too
+    args.preset = args.preset or "ours"
     try:
         s = PickPlaceSettings.preset(task, args.goal, quick=args.quick,
                                      protocol=args.preset)
@@ -138,9 +155,11 @@ def parse(ap: argparse.ArgumentParser, task: str, argv) -> tuple[argparse.Namesp
                     max_stretch=args.max_stretch,
                     picker_speed=args.picker_speed or s.picker_speed)
         if args.seeds is None:
-            args.seeds = PROTOCOL_SEEDS[args.preset]
+            args.seeds = PROTOCOL_SEEDS[args.preset] if named else FIRST_SEEDS
     except (ValueError, TypeError) as e:
         ap.error(str(e))
+    if (too_big := budget_problem(s)) is not None:   # what the sizes need, before any is made
+        ap.error(f"argument {BUDGET_FLAGS[too_big.field]}: {too_big}")
     if args.out is None:
         args.out = Path("results") / f"{task}_{args.goal}"
         problem = folder_problem(args.out)
@@ -170,6 +189,12 @@ def main(task: str, script: str, doc: str, help_: dict, argv=None) -> int:
 def _main(task: str, script: str, doc: str, help_: dict, argv=None) -> int:
     ap = parser(task, doc, help_)
     args, settings = parse(ap, task, argv)
+    with out_lock(args.out):                  # a second run on this --out refuses at once
+        return _experiment(task, script, args, settings, argv)
+
+
+def _experiment(task: str, script: str, args, settings: PickPlaceSettings, argv) -> int:
+    """The run of ``_main`` once its flags are checked and it holds its folder."""
     logging.basicConfig(level=logging.INFO if args.verbose else logging.WARNING,
                         format="%(levelname)s %(name)s: %(message)s")
     out = args.out
@@ -183,8 +208,9 @@ def _main(task: str, script: str, doc: str, help_: dict, argv=None) -> int:
     trials = [Trial(trial_key(m, seed, settings),
                     {"settings": settings.to_dict(), "method": m, "seed": int(seed)})
               for seed in seeds for m in args.methods]
-    results, res = _run(trials, settings.cem.iterations * len(problem.stages), out, args.fresh,
-                        args.workers)
+    iterations = settings.cem.iterations * len(problem.stages)
+    print(estimate_line(problem, settings, trials, iterations, out, args))
+    results, res = _run(trials, iterations, out, args.fresh, args.workers)
     failed = res.failed
     summary = {"experiment": "fig7", "task": task, "goal": args.goal, "protocol": args.preset,
                "settings": settings.to_dict(),
@@ -221,54 +247,67 @@ def _main(task: str, script: str, doc: str, help_: dict, argv=None) -> int:
     return 1 if failed else 0
 
 
-def _run(trials: list[Trial], iterations_per_trial: int, out: Path,
-         fresh: bool = False, workers: int = 1) -> tuple[list, SweepResult]:
-    """Every trial not finished yet under ``out`` (all of them when ``fresh``), with a progress
-    bar of CEM iterations (``workers`` 1) or of trials (a pool of ``workers`` processes).
-    Returns the results of the given trials and the sweep's result (``failed``: {key: error},
-    ``commits``: the code versions of the results)."""
-    from tqdm import tqdm
+def seconds_per_action(problem, settings: PickPlaceSettings) -> tuple[float, int]:
+    """The calibration step: wall seconds per simulated pick-and-place action on this machine
+    now, timed on a batched rollout of random plans (``CALIBRATION_SHARE`` of the population,
+    at least ``CALIBRATION_MIN_PLANS``; the settings' horizon, threads and planning physics)
+    from the problem's start, the fastest of ``CALIBRATION_REPEATS``; and the plans timed."""
+    from dopt.rollout import RolloutConfig, RolloutService
+    from dopt.tasks.pick.scene import PickPlaceTask
 
-    pool = workers > 1
+    scene = problem.planning_scene or problem.scene
+    P, H = settings.cem.population, settings.cem.horizon
+    plans = max(CALIBRATION_MIN_PLANS, int(P * CALIBRATION_SHARE))
+    rng = np.random.default_rng(0)
+    keys = problem.stages[0].keys
+    particles = keys[rng.integers(0, len(keys), (plans, H))]
+    displacements = rng.uniform(-0.5, 0.5, (plans, H, 3)) * scene.picker.bound
+    service = RolloutService(scene.scene, RolloutConfig(threads=settings.threads))
+    try:
+        task = PickPlaceTask(scene, problem.final_goal, problem.start_state, service)
+        seconds = []
+        for _ in range(CALIBRATION_REPEATS):          # the fastest: a first call's set-up out
+            t0 = time.perf_counter()
+            task.rollout(particles, displacements)
+            seconds.append(time.perf_counter() - t0)
+        return min(seconds) / (plans * H), plans
+    finally:
+        service.close()
+
+
+def estimate_line(problem, settings: PickPlaceSettings, trials: list[Trial], iterations: int,
+                  out: Path, args) -> str:
+    """What the run will take, said before it starts: the CEM iterations left (a rerun's
+    finished trials and checkpoints counted out), each ``population x horizon`` actions at
+    the seconds per action of the calibration step (``seconds_per_action``), over the
+    workers; the executed plans and the scripted policy at one action each. Renders are not
+    counted. The seeds it runs, and how to run a protocol's."""
     cem = [t for t in trials if t.params["method"] != "scripted"]
-    total, unit = (len(trials), "trial") if pool else (len(cem) * iterations_per_trial, "it")
-    # the bar starts at what the sweep will not run again (a pool's: whole trials)
-    if fresh:
-        initial = 0
-    elif pool:
-        initial = sum(is_finished(out, t.key) for t in trials)
-    else:
-        initial = _iterations_held(cem, iterations_per_trial, out)
-    with tqdm(total=total, initial=initial, unit=unit,
-              desc="trials" if pool else "CEM iterations") as bar:
-        def tick(i, best):
-            bar.update(1)
-            bar.set_postfix(best_mm=f"{best * 1e3:.1f}")
-
-        def done(key, rec):
-            bar.update(int(pool))
-            bar.write(f"finished {key}" if rec else f"FAILED {key}")
-
-        # a pool's trials cannot call back into this process's bar: it counts whole trials
-        fn = run_trial if pool else partial(run_trial, on_iteration=tick)
-        res = run_sweep(fn, trials, out, workers=workers, progress=done, fresh=fresh)
-    keys = {t.key for t in trials}
-    return [r["result"] for k, r in res.records.items() if k in keys], res
+    held = 0 if args.fresh else _iterations_held(cem, iterations, out)
+    left = len(cem) * iterations - held
+    open_trials = sum(args.fresh or not is_finished(out, t.key, schema=SCHEMA)
+                      for t in trials)
+    n = len({t.params["seed"] for t in trials})
+    m = len(args.methods)
+    seeds = f"{n} seed{'s' if n > 1 else ''} x {m} method{'s' if m > 1 else ''}"
+    if n == FIRST_SEEDS and not args.quick:
+        seeds += (f" (a first answer: --preset ours for its {PROTOCOL_SEEDS['ours']} seeds, "
+                  f"--preset paper for the paper's protocol)")
+    if not open_trials:
+        return f"{seeds}: every trial is finished under {out}; nothing to simulate"
+    per_action, plans = seconds_per_action(problem, settings)
+    H = settings.cem.horizon
+    actions = left * settings.cem.population * H + open_trials * len(problem.stages) * H
+    seconds = actions * per_action / min(args.workers, open_trials)
+    return (f"{seeds}: about {_duration(seconds)} for {left} CEM iterations of "
+            f"{settings.cem.population} plans x {H} actions in {open_trials} trials, at "
+            f"{per_action:.2f} s per action timed here now (a calibration rollout of {plans} "
+            f"random plans; renders not counted)")
 
 
-def _iterations_held(trials: list[Trial], iterations_per_trial: int, out: Path) -> int:
-    """The CEM iterations of ``trials`` that a (not fresh) sweep under ``out`` holds already:
-    all of a finished trial's, those of a checkpoint it resumes."""
-    held = 0
-    for t in trials:
-        if is_finished(out, t.key):
-            held += iterations_per_trial
-        elif (progress := Checkpoint(out, t.key).peek()) is not None:
-            try:
-                held += iterations_done(progress)
-            except (KeyError, TypeError):       # the run refuses it and says why
-                pass
-    return held
+def _duration(seconds: float) -> str:
+    return f"{seconds:.0f} s" if seconds < 90 else (
+        f"{seconds / 60:.0f} min" if seconds < 5400 else f"{seconds / 3600:.1f} h")
 
 
 # --------------------------------------------------------------------------------- report
@@ -468,17 +507,18 @@ def write_comparison(path: Path, problem, r: dict) -> None:
 
 
 def plan_frames(problem, r: dict, size=GIF_SIZE, max_frames: int = GIF_FRAMES) -> tuple:
-    """The executed plan of one trial replayed (``dopt.render.replay``) and rendered
+    """The executed plan of one trial replayed (``dopt.tasks.pick.replay``) and rendered
     obliquely: (F, H, W, 3) frames with the goal's outline (magenta), the goal positions of
     the last stage's key particles (black x) and the key particles (gold), the replay, and the
     cost (m) of each frame."""
     from dopt import render
+    from dopt.tasks.pick.replay import replay
     from dopt.tasks.pick.scene import mean_distance
 
     scene = problem.scene
     m, spec = scene.model, scene.scene.layout.spec
     fovy, (w, h) = m.vis.global_.fovy, size
-    rep = render.replay(scene, problem.start_state, r["actions"], max_frames)
+    rep = replay(scene, problem.start_state, r["actions"], max_frames)
     pos = scene.positions(rep.states)                                       # (F, N, 3)
     goal, keys = problem.final_goal, problem.stages[-1].keys
     # frame the start, the goal and whatever of the motion stays near them: an object flung

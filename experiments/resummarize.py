@@ -35,7 +35,6 @@ from __future__ import annotations
 
 import argparse
 import copy
-import json
 import math
 import re
 import sys
@@ -46,6 +45,8 @@ from types import SimpleNamespace
 from cli_args import EPILOG, existing_dir, guarded, output_dir
 from report_base import ROOT, Result, load_results
 from report_trials import TrialInfo, summary_trials, uncommitted
+
+from dopt import jsonio
 
 #: the fields each kind of summary computes from its trials
 TRIAL_FIELDS = {
@@ -61,8 +62,10 @@ REL_TOL, ABS_TOL = 1e-9, 1e-12
 
 
 def records_of(info: TrialInfo) -> list[dict]:
-    """The trial records ({"key", "params", "result", "code"}), in file-name order."""
-    return [json.loads(p.read_text()) for p in sorted(info.files, key=lambda p: p.name)]
+    """The trial records ({"key", "params", "result", "code"}), in file-name order (a NaN
+    written null with its note read back as NaN: ``dopt.jsonio``)."""
+    return [jsonio.loads(p.read_text(), strict_numbers=False)
+            for p in sorted(info.files, key=lambda p: p.name)]
 
 
 def commits_of(records: list[dict]) -> dict:
@@ -320,7 +323,7 @@ def main(argv=None) -> int:
             summary["provenance"] = provenance(["experiments/resummarize.py", *argv])
             target = r.path if args.in_place else Path(args.out) / r.name
             target.parent.mkdir(parents=True, exist_ok=True)
-            target.write_text(json.dumps(summary, indent=2))
+            target.write_text(jsonio.dumps(summary, indent=2))
             written.append(str(target))
     print(f"{len(mismatched)} summaries do not match their trials"
           + (f": {', '.join(mismatched)}" if mismatched else "")

@@ -25,6 +25,7 @@ from pathlib import Path
 import mpc as table1
 import numpy as np
 from cli_args import EPILOG, guarded, number_list, write_summary
+from sweep_console import out_lock
 
 from planners.svr_mpc import row_label, summarize
 
@@ -45,10 +46,41 @@ def parser() -> argparse.ArgumentParser:
     return ap
 
 
+def paper_reference(path: Path | None, task: str) -> dict | None:
+    """The "tasks" of the authors' data file at ``path`` (None: none given), read and checked
+    before any trial runs: ValueError, naming the file and what is wrong, for a file that
+    cannot be read, is not JSON or has no Fig. 4 points that ``plot`` can draw for ``task``."""
+    if path is None:
+        return None
+    try:
+        tasks = json.loads(Path(path).read_text())["tasks"]
+        points = tasks.get(task, {}).get("fig4", [])
+        bad = [p for p in points if not all(
+            isinstance(p.get(k), (int, float)) and not isinstance(p.get(k), bool)
+            for k in ("theta", "rho", "median_ratio", "avg_dofs"))]
+    except (OSError, UnicodeDecodeError, ValueError, KeyError, TypeError, AttributeError) as e:
+        raise ValueError(f"{path} is not experiments/paper_reference.py's file "
+                         f"({type(e).__name__}: {e})") from None
+    if bad:
+        raise ValueError(f"{path}: {len(bad)} of the {task} Fig. 4 points lack a number for "
+                         f"theta, rho, median_ratio or avg_dofs (e.g. {bad[0]})")
+    return tasks
+
+
 @guarded("rho_sweep.py")
 def main(argv=None) -> int:
     ap = parser()
     args = table1.parse_args(argv, ap, one_feedback=True)
+    try:                  # the authors' curves are drawn after the sweep: read them first
+        paper = paper_reference(args.paper_reference, args.task)
+    except ValueError as e:
+        ap.error(f"argument --paper-reference: {e}")
+    with out_lock(args.out):              # a second run on this --out refuses at once
+        return _main(args, paper, argv)
+
+
+def _main(args, paper: dict | None, argv) -> int:
+    """The run of ``main`` once its flags (and the authors' data) are checked."""
     args.rho, args.theta = 1.0, None          # make_trials' defaults; the grid overrides them
     trials = table1.make_trials(args, methods=["baseline"]) + table1.make_trials(
         args, methods=[args.method], rhos=args.rhos, thetas=args.thetas)
@@ -76,8 +108,6 @@ def main(argv=None) -> int:
             w = csv.DictWriter(f, fieldnames=list(rows[0]))
             w.writeheader()
             w.writerows(rows)
-        paper = (json.loads(args.paper_reference.read_text())["tasks"]
-                 if args.paper_reference else None)
         plot(rows, args.thetas, args.out / "rho_sweep.png", args.task, args.method, paper)
     return 1 if failed else 0
 

@@ -34,13 +34,20 @@ import sys
 import mpc as table1
 import numpy as np
 from cli_args import EPILOG, guarded, positive_int, write_summary
+from sweep_console import out_lock
 
+from dopt.sweep import Schema
 from planners.svr_mpc import SVRMPCSettings, row_label, run_svr_mpc
 
 DEFAULT_ROWS = ("rand-t5", "sum-t10-r1", "sum-t10-r500", "svd-t10-r1")
 #: importance decades counted: 10^k <= v < 10^(k+1) for k in DECADES (and the ends beyond)
 DECADES = tuple(range(-6, 7))
 RHO_CUTS = (1.0, 500.0)
+#: what a stored trial must hold to be reused: the fields ``summarize_rows`` and
+#: ``mechanism`` read (a record of an older explain_trial lacks some: it is recomputed)
+SCHEMA = Schema(result=("steps", "opt_step", "n_dofs", "goal_share", "importance",
+                        "rel_improvement", "goal_distance_at_opt", "alpha", "contact_steps",
+                        "mu", "travel", "goal_distance_end", "lag_steps_mean", "horizon"))
 
 
 def parser() -> argparse.ArgumentParser:
@@ -54,19 +61,20 @@ def parser() -> argparse.ArgumentParser:
     return ap
 
 
-def explain_trial(params: dict) -> dict:
+def explain_trial(params: dict, report=None) -> dict:
     """One episode with its optimisations' sets and importances, reduced to per-optimisation
     records (start step, |C|, share of the goal object's planar DoFs in C, the line-search
     step alpha, the relative improvement dJ/J, the regularisation mu, the nominal's states in
     contact with the pushed object, the goal object's distance to the goal when it started),
-    the goal object's travel and the importance counts."""
+    the goal object's travel and the importance counts. ``report`` (the sweep's) is called
+    after every agent step."""
     from dopt.tasks.push.task_model import planar_dofs
 
     p = dict(params)
     seed = p.pop("seed")
     settings = SVRMPCSettings(**p)
     history: list = []
-    result = run_svr_mpc(settings, seed, history=history)
+    result = run_svr_mpc(settings, seed, history=history, on_step=report)
     task = settings.build_task(seed)
     goal = planar_dofs(task.model, task.goal_bodies)
     robot = set(task.robot_dofs.tolist())
@@ -88,6 +96,8 @@ def explain_trial(params: dict) -> dict:
             "mu": [h["mu"] for h in history],
             "contact_steps": [h["contact_steps"] for h in history],
             "goal_distance_at_opt": at_start,
+            "n_unstable_rollouts": result.n_unstable_rollouts, "unstable": result.unstable,
+            "unstable_reason": result.unstable_reason,
             "importance": importance_counts(values)}
 
 
@@ -142,7 +152,8 @@ def mechanism(results: list[dict]) -> dict:
     is more than ``AWAY`` from the goal, the share of optimisations accepted (alpha > 0), whose
     nominal touches the pushed object, the median mu; per episode: the median travel of the
     goal object and the median lag (agent steps) against the horizon T; the mean over episodes
-    of each episode's mean |C|."""
+    of each episode's mean |C|; the line-search rollouts the stability verdict flagged and the
+    executed episodes it flagged."""
     away = [r for res in results for r, d in zip(res["rel_improvement"],
                                                  res["goal_distance_at_opt"], strict=True)
             if d > AWAY]
@@ -162,6 +173,8 @@ def mechanism(results: list[dict]) -> dict:
             "lag_steps_median": median([res["lag_steps_mean"] for res in results]),
             "n_dofs_mean": float(np.mean([np.mean(res["n_dofs"]) for res in results
                                           if len(res["n_dofs"])])),
+            "n_unstable_rollouts": int(sum(res.get("n_unstable_rollouts", 0) for res in results)),
+            "n_unstable_episodes": int(sum(bool(res.get("unstable")) for res in results)),
             "horizon": results[0]["horizon"]}
 
 
@@ -245,8 +258,14 @@ def plot(rows: dict, path, task: str) -> None:
 def main(argv=None) -> int:
     ap = parser()
     args = table1.parse_args(argv, ap, one_feedback=True)
+    with out_lock(args.out):              # a second run on this --out refuses at once
+        return _main(args, argv)
+
+
+def _main(args, argv) -> int:
+    """The run of ``main`` once its flags are checked and it holds its folder."""
     trials = table1.make_trials(args)
-    records, res = table1.run(args, trials, fn=explain_trial, workers=1)
+    records, res = table1.run(args, trials, fn=explain_trial, workers=1, schema=SCHEMA)
     rows = summarize_rows(records, args.bins)
     write_summary({"experiment": "svr_explain", "task": args.task,
                    **table1.protocol(args, trials[0].params), "rows": rows,

@@ -197,25 +197,81 @@ class CEMProgress:
 
     @classmethod
     def from_dict(cls, d: dict) -> CEMProgress:
-        """Inverse of ``to_dict``.
+        """Inverse of ``to_dict``, checked (a checkpoint file may hold anything): shapes that
+        fit one another, probabilities that are finite, >= 0 and sum to 1 per action, finite
+        means, finite stds >= 0, finite costs and histories as long as the iteration count,
+        and a generator state of a torch CPU generator's exact size in bytes.
 
         Raises:
-            ValueError: a dict that is not a ``to_dict`` form (a key missing, a bad value).
+            ValueError: a dict that is not a ``to_dict`` form (a key missing, a bad value);
+                the message says what is wrong.
         """
         try:
+            gen = d["generator_state"]
+            if not isinstance(gen, list) or not all(
+                    isinstance(b, int) and not isinstance(b, bool) and 0 <= b <= 255
+                    for b in gen):
+                raise ValueError("its generator state is not a list of bytes (ints 0..255)")
             dist = Distribution(*(torch.tensor(d["dist"][k], dtype=torch.float64)
                                   for k in ("probs", "mean", "std")))
             choice, particles, disp = d["best"]
             best = (torch.tensor(choice, dtype=torch.int64),
                     torch.tensor(particles, dtype=torch.int64),
                     torch.tensor(disp, dtype=torch.float64))
-            return cls(int(d["iteration"]), dist, best, float(d["best_cost"]),
-                       [float(c) for c in d["cost_history"]],
-                       [float(c) for c in d["elite_history"]],
-                       [float(c) for c in d["seconds"]], int(d["n_nonfinite"]),
-                       torch.tensor(d["generator_state"], dtype=torch.uint8))
+            counts = {k: d[k] for k in ("iteration", "n_nonfinite")}
+            if not all(isinstance(v, int) and not isinstance(v, bool) for v in counts.values()):
+                raise ValueError(f"its counts {counts} are not integers")
+            out = cls(d["iteration"], dist, best, float(d["best_cost"]),
+                      [float(c) for c in d["cost_history"]],
+                      [float(c) for c in d["elite_history"]],
+                      [float(c) for c in d["seconds"]], d["n_nonfinite"],
+                      torch.tensor(gen, dtype=torch.uint8))
         except (KeyError, TypeError, ValueError, RuntimeError) as e:
             raise ValueError(f"not a CEM progress record ({type(e).__name__}: {e})") from e
+        problem = _progress_problem(out)
+        if problem is not None:
+            raise ValueError(f"not a CEM progress record: {problem}")
+        return out
+
+
+#: bytes of a torch CPU generator's state (what ``torch.Generator.set_state`` takes)
+GENERATOR_STATE_BYTES = torch.Generator().get_state().numel()
+
+
+def _progress_problem(p: CEMProgress) -> str | None:
+    """What makes a ``CEMProgress`` read from a file unusable, or None (``from_dict``)."""
+    probs, mean, std = p.dist.probs, p.dist.mean, p.dist.std
+    if probs.ndim != 2 or probs.shape[1] < 2:
+        return f"its probabilities have shape {tuple(probs.shape)}, not (H, C + 1), C >= 1"
+    H, C1 = probs.shape
+    for name, t in (("means", mean), ("stds", std)):
+        if tuple(t.shape) != (H, C1, 3):
+            return f"its {name} have shape {tuple(t.shape)}, not {(H, C1, 3)}"
+    if not (torch.isfinite(probs).all() and (probs >= 0).all()):
+        return "its probabilities are not all finite and >= 0 (NaN or negative)"
+    if not torch.allclose(probs.sum(-1), torch.ones(H, dtype=torch.float64), atol=1e-6):
+        return f"its probabilities do not sum to 1 per action (sums {probs.sum(-1).tolist()})"
+    if not (torch.isfinite(mean).all() and torch.isfinite(std).all() and (std >= 0).all()):
+        return "its means or stds are not finite, or a std is negative"
+    choice, particles, disp = p.best
+    if tuple(choice.shape) != (H,) or tuple(particles.shape) != (H,) or \
+            tuple(disp.shape) != (H, 3):
+        return f"its best sample does not have the shapes ({H},), ({H},), ({H}, 3)"
+    if not (((choice >= 0) & (choice < C1)).all() and (particles >= NONE).all()
+            and torch.isfinite(disp).all()):
+        return "its best sample has choices outside 0..C, particles below -1 or a NaN/inf move"
+    if p.iteration < 1 or p.n_nonfinite < 0:
+        return f"its iteration {p.iteration} (>= 1) or non-finite count {p.n_nonfinite} (>= 0)"
+    histories = (p.cost_history, p.elite_history, p.seconds)
+    if any(len(h) != p.iteration for h in histories):
+        return f"its histories are not {p.iteration} long (one entry per iteration)"
+    if not all(np.isfinite(v) for h in ([p.best_cost], *histories) for v in h) or \
+            any(v < 0 for v in p.seconds):
+        return "its best cost or histories hold NaN/inf (or a negative time)"
+    if p.generator_state.numel() != GENERATOR_STATE_BYTES:
+        return (f"its generator state has {p.generator_state.numel()} bytes, a torch CPU "
+                f"generator's has {GENERATOR_STATE_BYTES}")
+    return None
 
 
 class CEM:

@@ -364,8 +364,13 @@ def make_problem(settings: PickPlaceSettings, seed: int = 0,
                  scene_overrides: dict | None = None) -> Problem:
     """The scene, start and stages of a task (the seed picks the crumpled start of rope
     straightening; every other start is deterministic). ``scene_overrides``: scene-config
-    fields set on top of the physics preset (what ``python -m planners.bench cloth`` sweeps)."""
+    fields set on top of the physics preset (what ``python -m planners.bench cloth`` sweeps).
+    The sizes the settings imply are checked first (``planners.pick_budget``: a
+    ``BudgetError``, a ValueError, naming the setting)."""
+    from planners.pick_budget import check_budget
+
     _check_settings(settings)
+    check_budget(settings)
     _check_seed(seed)
     if scene_overrides is not None and not isinstance(scene_overrides, dict):
         raise TypeError(f"scene_overrides must be a dict of scene-config fields, got "

@@ -9,6 +9,33 @@ CEM's under "cem", or None), "planner" (the generators' state), "segments" and "
 
 from __future__ import annotations
 
+#: keys every pick-and-place trial result holds (``PickPlaceResult.to_dict``): what the
+#: summary, the curves, the renders and the report read; a stored result without one of them
+#: is not reused (``dopt.sweep.Schema``)
+RESULT_FIELDS = ("method", "seed", "final_cost", "cost_history", "stage_of_iteration",
+                 "stage_costs", "n_candidates", "s_per_iteration", "actions", "final_state",
+                 "wall_s", "unstable", "unstable_reason", "n_rollouts",
+                 "n_unstable_rollouts")
+#: keys every saved progress holds (the module docstring); a checkpoint without one of them
+#: is not resumed
+PROGRESS_FIELDS = ("trial", "stages", "stage", "planner")
+
+
+def progress_problem(progress: dict) -> str | None:
+    """Why ``progress`` (holding ``PROGRESS_FIELDS``) is not a trial's saved progress, or
+    None: its stages must be a list of objects with a ``cost_history`` list, its unfinished
+    stage None or an object whose CEM iteration is an int >= 0 (``iterations_done`` reads
+    them)."""
+    stages, stage = progress["stages"], progress["stage"]
+    if not isinstance(stages, list) or not all(
+            isinstance(p, dict) and isinstance(p.get("cost_history"), list) for p in stages):
+        return "its finished stages are not a list of stage plans"
+    if stage is not None:
+        it = (stage.get("cem") or {}).get("iteration") if isinstance(stage, dict) else None
+        if not isinstance(it, int) or isinstance(it, bool) or it < 0:
+            return "its unfinished stage has no CEM iteration count"
+    return None
+
 
 def iterations_done(progress: dict) -> int:
     """The CEM iterations a saved progress holds: those of its finished stages (one per entry

@@ -12,7 +12,6 @@ Shapes: F frames, ns state row, M markers, V ghost vertices, nbody bodies.
 
 from __future__ import annotations
 
-import json
 import logging
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -21,6 +20,7 @@ from pathlib import Path
 import mujoco
 import numpy as np
 
+from dopt import jsonio
 from dopt.state import INTEGRATION, check_model, check_spec, check_states
 from dopt.validation import check_int, float_array
 
@@ -212,8 +212,8 @@ def frame_rows(n_rows: int, max_frames: int, must: Sequence[int] = ()) -> np.nda
 def read_record(path: Path) -> dict | None:
     """The JSON object of a file, or None when it is not one (logged)."""
     try:
-        record = json.loads(Path(path).read_text())
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as e:
+        record = jsonio.loads(Path(path).read_text(), strict_numbers=False)
+    except (OSError, UnicodeDecodeError, ValueError) as e:
         log.info("%s: not a JSON record (%s)", path, e)
         return None
     return record if isinstance(record, dict) else None

@@ -51,7 +51,7 @@ def build_controller(task: TaskModel, selection: SelectionConfig, rng: np.random
                      weights: PushWeights = PushWeights()) -> SVRController:
     """Wire ``task`` to its push cost (``weights``), a rollout service with ``threads``
     threads, iLQR and a DoF selector drawing from ``rng``."""
-    scene = Scene(task.model)
+    scene = Scene(task.model, stability=task.stability)
     cost = push_cost(task, scene, weights)
     service = RolloutService(scene, RolloutConfig(threads=threads))
     selector = DofSelector(scene.nv, task.robot_dofs, cost.costed_dofs, selection, rng)
@@ -134,7 +134,8 @@ def dofs_of_mask(mask: str) -> np.ndarray:
 
 
 def run_svr_mpc(settings: SVRMPCSettings = SVRMPCSettings(), seed: int = 0,
-                history: list | None = None) -> SVRMPCResult:
+                history: list | None = None,
+                on_step: Callable[[], None] | None = None) -> SVRMPCResult:
     """One MPC episode of ``settings.method`` on the task instance of ``seed``.
 
     The seed builds the task instance (the same for every method, so costs pair up against baseline:
@@ -146,7 +147,8 @@ def run_svr_mpc(settings: SVRMPCSettings = SVRMPCSettings(), seed: int = 0,
     ``history``: a list that receives ``SVROptimiser.history`` (each optimisation's set,
     importances, line-search step, regularisation and costs), with "contact_steps": the states
     of the new nominal in which the robot touches the pushed object
-    (``dopt.tasks.push.contact``), of "horizon" + 1.
+    (``dopt.tasks.push.contact``), of "horizon" + 1. ``on_step``: called after every executed
+    agent step (``dopt.mpc.MPC``'s; a progress bar's count).
     """
     import torch
 
@@ -178,7 +180,7 @@ def run_svr_mpc(settings: SVRMPCSettings = SVRMPCSettings(), seed: int = 0,
 
         ctl.optimiser.probe = contact_in_horizon
     mpc = MPC(ctl.scene, ctl.optimiser, config, np.random.default_rng([seed, 2]),
-              success=lambda x: ctl.goal_distance(x) < radius)
+              success=lambda x: ctl.goal_distance(x) < radius, on_step=on_step)
     if settings.warm_start:
         start = warm_start.setup(task).final_state
         push = warm_start.WarmStartConfig(moving_tail=settings.push_tail)
@@ -211,9 +213,10 @@ def run_svr_mpc(settings: SVRMPCSettings = SVRMPCSettings(), seed: int = 0,
         lag_steps=[int(v) for v in res.lag_steps])
 
 
-def run_trial(params: dict) -> dict:
+def run_trial(params: dict, report: Callable[[], None] | None = None) -> dict:
     """``run_svr_mpc`` for ``dopt.sweep``: params holds the ``SVRMPCSettings`` fields and
-    "seed" -> ``SVRMPCResult.to_dict()``."""
+    "seed" -> ``SVRMPCResult.to_dict()``; ``report`` (the sweep's) is called after every
+    agent step."""
     p = dict(params)
     seed = p.pop("seed")
-    return run_svr_mpc(SVRMPCSettings(**p), seed).to_dict()
+    return run_svr_mpc(SVRMPCSettings(**p), seed, on_step=report).to_dict()

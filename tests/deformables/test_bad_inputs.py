@@ -532,3 +532,31 @@ def test_panel_weights(kwargs, error, match):
     args.update(kwargs)
     with pytest.raises(error, match=match):
         panel_weights(**args)
+
+
+# ------------------------------------------------------------- sizes against the memory
+@pytest.mark.parametrize("make, match", [
+    (lambda: make_goal("cloth_diagonal", n=10**5),
+     r"n=100000: a cloth of 100000 x 100000 = 1e\+10 particles needs about 37.3 TiB, more "
+     r"than this machine's memory"),
+    (lambda: goals.grid_faces(10**5), "n=100000: a cloth of"),
+    (lambda: goals.cloth_rest(10**5), "n=100000: a cloth of"),
+    (lambda: make_goal("rope_fold", n=10**9), "n=1000000000: a rope of 1000000000 particles"),
+    (lambda: goals.check_cloth_size(40, "argument --x"), None),
+])
+def test_a_goal_larger_than_the_memory_is_refused_before_anything_is_allocated(make, match):
+    """make_goal(..., n=10**5) once ended in "MemoryError: Unable to allocate 74.5 GiB"."""
+    if match is None:
+        assert make() == 40
+        return
+    with pytest.raises(ValueError, match=match):
+        make()
+
+
+def test_the_memory_bound_can_be_set(monkeypatch):
+    from dopt.validation import MEMORY_ENV
+    monkeypatch.setenv(MEMORY_ENV, str(1e6))
+    with pytest.raises(ValueError, match=r"n=40: a cloth of 40 x 40 = 1.6e\+03 particles needs "
+                                         r"about 6.25 MiB, more than this machine's memory "
+                                         r"\(977 KiB; DOPT_MEMORY_BYTES"):
+        make_goal("cloth_side", n=40)

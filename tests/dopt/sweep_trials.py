@@ -30,3 +30,30 @@ def count(params, checkpoint=None):
         if i == params.get("stop_at"):
             raise RuntimeError(f"killed at {i}")
     return {"i": i, "runs": runs, "pid": os.getpid()}
+
+
+def walk(params, checkpoint=None, report=None):
+    """A chaotic walk, x <- 3.99 x (1 - x) from params['x0'], of params['n'] steps of
+    params['sleep'] seconds each, saving {"i", "x"} to its checkpoint and reporting each step.
+    Its result depends on every bit of every step: a resumed run that lost or rounded anything
+    ends elsewhere."""
+    progress = checkpoint.load() if checkpoint is not None else None
+    i, x = (progress["i"], progress["x"]) if progress else (0, float(params["x0"]))
+    while i < params["n"]:
+        time.sleep(params.get("sleep", 0.0))
+        x = 3.99 * x * (1.0 - x)
+        i += 1
+        if checkpoint is not None:
+            checkpoint.save({"i": i, "x": x})
+        if report is not None:
+            report()
+    return {"x": x, "i": i, "nan": float("nan"), "inf": [1.0, float("inf")]}
+
+
+def warn(params):
+    """Logs a warning and issues a Python warning, then returns {"ok": True}."""
+    import logging
+    import warnings
+    logging.getLogger("tests.sweep_trials").warning("warned by trial %s", params["x"])
+    warnings.warn(f"python warning of trial {params['x']}", UserWarning, stacklevel=1)
+    return {"ok": True}

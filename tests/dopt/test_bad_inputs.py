@@ -29,6 +29,7 @@ from dopt.scene import Scene  # noqa: E402
 from dopt.state import StateLayout, check_states, get_state, set_state  # noqa: E402
 from dopt.tasks.pick.cloth_scene import ClothSceneConfig, make_cloth  # noqa: E402
 from dopt.tasks.pick.picker import PickerConfig  # noqa: E402
+from dopt.tasks.pick.replay import replay  # noqa: E402
 from dopt.tasks.pick.rope_scene import RopeSceneConfig, make_rope  # noqa: E402
 from dopt.tasks.pick.scene import PickPlaceTask  # noqa: E402
 from dopt.tasks.push.costs import PushWeights  # noqa: E402
@@ -576,11 +577,11 @@ CASES = [
                                                      end=np.zeros((3, 2)))), V, "end"),
     ("draw_segments (M, 3)", lambda c: _seg(c, dict(start=np.zeros((2, 3)),
                                                     end=np.zeros((2, 3)))), V, "start"),
-    ("replay action keys", lambda c: render.replay(c.rope, c.rope.initial_state,
+    ("replay action keys", lambda c: replay(c.rope, c.rope.initial_state,
                                                    [{"particles": [0]}]), V, "actions"),
-    ("replay max_frames", lambda c: render.replay(c.rope, c.rope.initial_state, [],
+    ("replay max_frames", lambda c: replay(c.rope, c.rope.initial_state, [],
                                                   max_frames=1.5), T_, "max_frames"),
-    ("replay start_state", lambda c: render.replay(c.rope, c.rope.initial_state[:-1], []), V,
+    ("replay start_state", lambda c: replay(c.rope, c.rope.initial_state[:-1], []), V,
      "start_state"),
 ]
 
@@ -617,3 +618,26 @@ def test_scene_dof_indices_accept_numpy_ints_and_names(c):
     assert c.sc.linear_qpos_indices(np.array([1, 0], np.int32)).tolist() == [1, 0]
     assert c.sc.linear_qpos_indices("joint:slide").tolist() == [0]
     assert c.sc.as_dofs(np.array([3, 0], dtype=object)).tolist() == [0, 3]
+
+
+# ------------------------------------------------- sizes a setting implies, before allocating
+def test_picker_sizes_are_checked_against_the_workspace_and_the_steps_of_an_action():
+    """--bound 1e9 and --picker-speed 1e-9 once ended in "MemoryError: Unable to allocate
+    2.52 TiB" (one action's steps); a rope of more particles than its length holds in a
+    MuJoCo XML error."""
+    from dopt.tasks.pick.constraints import ActionConstraint
+    from dopt.tasks.pick.picker import MAX_STEPS_PER_ACTION
+
+    with pytest.raises(ValueError, match=r"PickerConfig.bound 1e\+09 m is beyond the "
+                                         r"workspace: the picker cannot move farther than "
+                                         r"0.6 m along x"):
+        PickerConfig(bound=(1e9,) * 3, workspace=ActionConstraint.table(0.3))
+    with pytest.raises(ValueError, match=rf"1.73e\+10 steps of 0.01 s .* more than "
+                                         rf"{MAX_STEPS_PER_ACTION}; raise the speed"):
+        PickerConfig(speed=1e-9).steps(0.01)
+    assert PickerConfig().steps(0.01) == (6, 1, 35, 25)           # the picker's own count
+    with pytest.raises(ValueError, match="RopeSceneConfig.n 52 puts the particles 0.0098 m "
+                                         "apart, closer than their diameter 0.01 m: a 0.5 m "
+                                         "rope holds at most 51"):
+        RopeSceneConfig(n=52)
+    RopeSceneConfig(n=51)

@@ -196,8 +196,9 @@ def _record(tmp_path, key, x, code=None):
 
 
 def test_resume_reuses_only_what_git_says_is_the_same_code(tmp_path, code, caplog):
-    """The dopt version decides nothing; a commit git does not know, a "-dirty" record and a
-    record of no commit are recomputed (moved aside unchanged), this commit's reused."""
+    """The dopt version decides nothing; a commit git does not know and a "-dirty" record are
+    recomputed (moved aside unchanged), this commit's reused; a record without the code stamp
+    (an older format) is not a record: moved to corrupt/ and recomputed."""
     _record(tmp_path, "x1", 1, {"version": "0.9.0", "commit": COMMIT})      # another version
     _record(tmp_path, "x2", 2, {"version": "1.0.0", "commit": UNKNOWN})    # unknown commit
     _record(tmp_path, "x3", 3)                                               # before "code"
@@ -208,8 +209,10 @@ def test_resume_reuses_only_what_git_says_is_the_same_code(tmp_path, code, caplo
     assert sorted(res.ran) == ["x2", "x3", "x4", "x5"] and res.skipped == ["x1"]
     assert res.recomputed == {
         "x2": "its commit feedfacefeed is unknown to git here",
-        "x3": "written by code of no known commit (none recorded)",
+        "x3": "corrupt trial file: not a trial record of this format (no 'code' stamp: "
+              "written before records named the code that wrote them)",
         "x4": "written from uncommitted code (c0ffee-dirty)"}
+    assert list(res.corrupt) == ["x3.json"]
     assert "x2" in caplog.text and "unknown to git" in caplog.text
     assert res.records["x1"]["result"]["y"] == -1 and res.records["x2"]["result"]["y"] == 4
     assert res.commits == {COMMIT: 5} and res.reused_across == {}

@@ -22,6 +22,7 @@ import key_particles
 import mpc
 import numpy as np
 import pick_place_cli
+import pick_sweep
 import pytest
 import report
 import rho_sweep
@@ -125,6 +126,22 @@ BAD = [
     ("svr_explain", ["--feedback", "both"], "--feedback both is for experiments/mpc.py"),
     ("clock_check", ["--real-threads", "0"], "argument --real-threads: must be >= 1, got 0"),
     ("clock_check", ["--clock", "wall"], "argument --clock: invalid choice: 'wall'"),
+    # sizes a setting implies, against the workspace, the picker's steps and the memory
+    ("rope", ["--bound", "1e9"], "argument --bound: PickerConfig.bound 1e+09 m is beyond the "
+                                 "workspace: the picker cannot move farther than 1 m along x"),
+    ("rope", ["--picker-speed", "1e-9"], "argument --picker-speed: PickerConfig: one action "
+                                         "would take 1.73e+10 steps of 0.01 s"),
+    ("rope", ["--n", "100000"], "argument --n: RopeSceneConfig.n 100000 puts the particles "
+                                "5e-06 m apart, closer than their diameter"),
+    ("cloth_fold", ["--n", "100000"], "argument --n: one CEM population's rollout (32 plans x "
+                                      "2 actions x 271 steps per action on 10000000000 "
+                                      "particles) needs about"),
+    ("cloth_fold", ["--horizon", "1000000"], "argument --horizon: one CEM population's"),
+    ("key_particles", ["--cloth-n", "100000"], "argument --cloth-n=100000: a cloth of 100000 x "
+                                               "100000 = 1e+10 particles needs about 37.3 TiB,"
+                                               " more than this machine's memory"),
+    ("key_particles", ["--noise-n", "16,100000"], "argument --noise-n=100000: a cloth of"),
+    ("key_particles", ["--simulated-n", "100000"], "argument --simulated-n=100000: a cloth"),
 ]
 
 
@@ -152,6 +169,21 @@ def test_out_and_record_must_be_writable_places(tmp_path, capsys, no_run, script
     assert f"argument --record: {tmp_path} is a folder" in err
     err = usage_error(capsys, script, ["--out", out, "--record", out])
     assert "argument --record: " in err and "is the --out folder" in err
+    assert not out.exists()
+
+
+@pytest.mark.parametrize("script", ["cloth_fold", "rope", "mpc", "rho_sweep", "key_particles"])
+def test_places_that_fail_only_when_written_fail_before_the_run(tmp_path, capsys, no_run,
+                                                                script):
+    """/sys and /proc pass every permission check (root may write anything), yet a file cannot
+    be created there: the scripts try, before the first trial, and say so."""
+    if not Path("/sys").is_dir():
+        pytest.skip("no /sys here")
+    out = tmp_path / "out"
+    err = usage_error(capsys, script, ["--out", out, "--record", "/sys/rec.json"])
+    assert "argument --record: cannot write /sys/rec.json: " in err
+    err = usage_error(capsys, script, ["--out", "/sys/out"])
+    assert "argument --out: cannot write /sys/out: " in err
     assert not out.exists()
 
 
@@ -284,7 +316,7 @@ def test_rho_sweep_with_a_failing_trial_exits_1(tmp_path, monkeypatch):
 
 
 def test_pick_place_with_failing_trials_exits_1(tmp_path, monkeypatch):
-    monkeypatch.setattr(pick_place_cli, "run_trial", _impossible)
+    monkeypatch.setattr(pick_sweep, "run_trial", _impossible)
     out = tmp_path / "rope"
     assert rope.main(["--quick", "--methods", "scripted,random", "--out", str(out),
                       "--no-render"]) == 1

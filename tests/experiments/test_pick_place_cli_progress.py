@@ -1,26 +1,33 @@
-"""The CEM-iteration bar of a sweep run in one process starts at what the sweep holds already:
-every iteration of a finished trial, those of a checkpoint it resumes, none of a checkpoint it
-cannot resume."""
+"""The CEM-iteration bar of a sweep starts at what the sweep holds already: every iteration of
+a finished trial, those of a checkpoint it resumes, none of a checkpoint it cannot resume (not
+a trial's progress: the pick-and-place schema refuses it)."""
 
-from pick_place_cli import _iterations_held
+from pick_sweep import SCHEMA
+from pick_sweep import iterations_held as _iterations_held
 
 from dopt.sweep import Checkpoint, Trial, run_sweep
+from planners.trial_progress import RESULT_FIELDS
 
 
 def _finish(params):
-    return {"done": True}
+    return dict.fromkeys(RESULT_FIELDS, 0)
+
+
+def _progress(stages, stage):
+    return {"trial": {}, "planner": {}, "stages": stages, "stage": stage}
 
 
 def test_the_bar_starts_at_the_iterations_the_sweep_holds(tmp_path):
     trials = [Trial(k, {"method": "simple", "seed": i})
-              for i, k in enumerate(["done", "half", "none", "bad"])]
-    run_sweep(_finish, trials[:1], tmp_path)                        # a finished trial
+              for i, k in enumerate(["done", "half", "none", "bad", "other"])]
+    run_sweep(_finish, trials[:1], tmp_path, schema=SCHEMA)        # a finished trial
     # stopped in its second stage: 4 iterations of the first, 3 of the second
-    Checkpoint(tmp_path, "half").save({"stages": [{"cost_history": [0.3, 0.2, 0.2, 0.1]}],
-                                       "stage": {"cem": {"iteration": 3}}})
+    Checkpoint(tmp_path, "half").save(_progress([{"cost_history": [0.3, 0.2, 0.2, 0.1]}],
+                                                {"cem": {"iteration": 3}}))
     Checkpoint(tmp_path, "bad").save({"no": "progress"})           # refused by the run
+    Checkpoint(tmp_path, "other").save(_progress([], {"cem": {}}))  # no iteration count
     assert _iterations_held(trials, 12, tmp_path) == 12 + 4 + 3
     # between stages (no stage part-way), and a fresh folder
-    Checkpoint(tmp_path, "half").save({"stages": [{"cost_history": [0.3] * 6}], "stage": None})
+    Checkpoint(tmp_path, "half").save(_progress([{"cost_history": [0.3] * 6}], None))
     assert _iterations_held(trials, 12, tmp_path) == 12 + 6
     assert _iterations_held(trials, 12, tmp_path / "empty") == 0

@@ -656,3 +656,23 @@ def test_svr_mpc_settings_fields(kwargs, error, match):
 def test_run_svr_mpc_arguments(settings, seed, error, match):
     with pytest.raises(error, match=match):
         run_svr_mpc(settings, seed)
+
+
+def test_make_problem_checks_the_sizes_its_settings_imply_before_building_anything():
+    """A cloth of 100000 x 100000 particles once ended in a MemoryError of numpy; the
+    settings' sizes are checked first, naming the setting (``planners.pick_budget``)."""
+    from dataclasses import replace
+
+    from planners.pick_budget import BudgetError, budget_problem
+
+    cloth = PickPlaceSettings.preset("cloth", "diagonal")
+    with pytest.raises(BudgetError, match=r"on 10000000000 particles\) needs about .* more "
+                                          r"than this machine's memory") as exc:
+        make_problem(replace(cloth, n=100_000))
+    assert exc.value.field == "n"
+    rope = PickPlaceSettings.preset("rope", "fold")
+    assert budget_problem(rope) is None
+    assert budget_problem(replace(rope, bound=1e9)).field == "bound"
+    assert budget_problem(replace(rope, picker_speed=1e-9)).field == "picker_speed"
+    assert budget_problem(replace(rope, cem=replace(rope.cem, population=10**9))).field == \
+        "cem.population"

@@ -191,3 +191,44 @@ def test_a_resume_of_another_plan_is_refused():
                       resume=saved[0].to_dict())
     with pytest.raises(ValueError, match="not a CEM progress record"):
         CEMProgress.from_dict({"iteration": 1})
+
+
+def _saved_progress() -> dict:
+    """The JSON form of a real plan's progress after its second iteration."""
+    cfg = CEMConfig(population=6, elites=2, iterations=3, horizon=2)
+    saved = []
+    CEM(cfg).plan(PointsTask(), list(range(10)), torch.Generator().manual_seed(0),
+                  on_progress=lambda p: saved.append(json.loads(json.dumps(p.to_dict()))))
+    return saved[1]
+
+
+def _probs(d, f):
+    d["dist"]["probs"][0] = f(d["dist"]["probs"][0])
+
+
+@pytest.mark.parametrize("spoil, match", [
+    (lambda d: _probs(d, lambda p: [float("nan")] + p[1:]), "not all finite and >= 0"),
+    (lambda d: _probs(d, lambda p: [-p[0]] + p[1:-1] + [p[-1] + 2 * p[0]]),
+     "not all finite and >= 0"),
+    (lambda d: _probs(d, lambda p: [2 * v for v in p]), "do not sum to 1"),
+    (lambda d: d["dist"]["std"][0][0].__setitem__(0, -0.1), "a std is negative"),
+    (lambda d: d["dist"]["mean"].pop(), "its means have shape"),
+    (lambda d: d.__setitem__("generator_state", d["generator_state"][:100]),
+     "generator state has 100 bytes"),
+    (lambda d: d["generator_state"].__setitem__(0, 300), "not a list of bytes"),
+    (lambda d: d.__setitem__("iteration", 2.5), "are not integers"),
+    (lambda d: d.__setitem__("iteration", 3), "histories are not 3 long"),
+    (lambda d: d.__setitem__("best_cost", float("nan")), "hold NaN/inf"),
+    (lambda d: d["best"][2].__setitem__(0, [float("inf"), 0.0, 0.0]), "a NaN/inf move"),
+    (lambda d: d["best"][0].__setitem__(0, 99), "choices outside 0..C"),
+])
+def test_a_bad_progress_record_is_a_value_error_before_torch_sees_it(spoil, match):
+    """NaN or negative probabilities once reached torch.multinomial ("invalid multinomial
+    distribution") and a short generator state Generator.set_state ("Expected a
+    CPUGeneratorImplState of size 5056"); from_dict now refuses them and says why."""
+    good = _saved_progress()
+    CEMProgress.from_dict(good)                                    # the real one is fine
+    spoil(good)
+    with pytest.raises(ValueError, match="not a CEM progress record") as exc:
+        CEMProgress.from_dict(good)
+    assert match in str(exc.value)

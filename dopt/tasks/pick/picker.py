@@ -35,6 +35,9 @@ NONE = -1
 #: what the picker's control rows set before every step: ctrl, then eq_active
 CONTROL_SPEC = int(mujoco.mjtState.mjSTATE_CTRL) | int(mujoco.mjtState.mjSTATE_EQ_ACTIVE)
 _AXES = "xyz"
+#: most simulation steps one action may take (``PickerConfig.steps``): 500 s at dt 5 ms; a
+#: slower picker or a longer bound is refused before any array of them is allocated
+MAX_STEPS_PER_ACTION = 100_000
 
 
 @dataclass(frozen=True)
@@ -81,6 +84,33 @@ class PickerConfig:
             if not self.workspace.contains(self.start):
                 raise ValueError(f"PickerConfig.start {tuple(self.start)} lies outside the "
                                  f"workspace box {self.workspace.low} .. {self.workspace.high}")
+            extent = np.subtract(self.workspace.high, self.workspace.low)
+            over = np.flatnonzero(np.asarray(self.bound) > extent)
+            if len(over):
+                a = int(over[0])
+                raise ValueError(f"PickerConfig.bound {self.bound[a]:g} m is beyond the "
+                                 f"workspace: the picker cannot move farther than "
+                                 f"{extent[a]:g} m along {_AXES[a]} (the box "
+                                 f"{self.workspace.low} .. {self.workspace.high})")
+
+    def steps(self, dt: float) -> tuple[int, int, int, int]:
+        """(snap, hold, move, settle) steps of one action at the timestep ``dt`` (s): the
+        move covers the bound box's diagonal at ``speed``.
+
+        Raises:
+            ValueError: more than ``MAX_STEPS_PER_ACTION`` steps in all (a bound too long or a
+                speed too slow for ``dt``), before anything is allocated.
+        """
+        move_s = float(np.linalg.norm(self.bound)) / self.speed
+        total = (move_s + self.snap + self.settle) / dt + self.hold_steps
+        if not total <= MAX_STEPS_PER_ACTION:
+            raise ValueError(f"PickerConfig: one action would take {total:.3g} steps of "
+                             f"{dt:g} s ({move_s:.3g} s to move the bound box's diagonal, "
+                             f"{float(np.linalg.norm(self.bound)):.3g} m, at speed "
+                             f"{self.speed:g} m/s), more than {MAX_STEPS_PER_ACTION}; raise "
+                             f"the speed or lower the bound")
+        return (max(1, int(round(self.snap / dt))), self.hold_steps,
+                max(2, int(np.ceil(move_s / dt))), int(np.ceil(self.settle / dt)))
 
 
 def picker_mjcf(flex_name: str, particles: Iterable[int],
@@ -204,12 +234,8 @@ class Picker:
         self._base[self._damp] = 1.0                                     # servo on
         others = np.setdiff1d(np.arange(model.neq), list(grasp.values()))
         self._base[eq.start + others] = model.eq_active0[others]         # e.g. rope edges
-        cfg = config
-        self.snap_steps = max(1, int(round(cfg.snap / self.dt)))
-        self.hold_steps = cfg.hold_steps
-        longest = float(np.linalg.norm(self.bound))
-        self.move_steps = max(2, int(np.ceil(longest / cfg.speed / self.dt)))
-        self.settle_steps = int(np.ceil(cfg.settle / self.dt))
+        self.snap_steps, self.hold_steps, self.move_steps, self.settle_steps = \
+            config.steps(self.dt)
         self.steps_per_action = (self.snap_steps + self.hold_steps + self.move_steps
                                  + self.settle_steps)
         s = smooth_profile(self.move_steps)

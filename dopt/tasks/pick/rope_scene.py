@@ -84,6 +84,12 @@ class RopeSceneConfig:
                               "tolerance": 0, "settle": 0},
                      choices={"solver": SOLVERS})
         selfcollide_mode(self.selfcollide, "RopeSceneConfig.selfcollide")
+        spacing = self.length / (self.n - 1)
+        if spacing < 2 * self.radius * (1 - 1e-9):      # MuJoCo's flexcomp refuses it
+            most = int(self.length / (2 * self.radius) * (1 + 1e-9)) + 1
+            raise ValueError(f"RopeSceneConfig.n {self.n} puts the particles {spacing:.3g} m "
+                             f"apart, closer than their diameter {2 * self.radius:g} m: a "
+                             f"{self.length:g} m rope holds at most {most}")
 
     @classmethod
     def preset(cls, name: str = "default", **fields) -> RopeSceneConfig:

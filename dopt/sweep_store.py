@@ -1,0 +1,461 @@
+"""The files of a sweep (``dopt.sweep``) under its folder OUT, and their checks when read.
+
+- ``OUT/trials/<key>.json``: a finished trial's record {"key", "params", "result", "code"}
+  (``check_record``: a file that is not one, or whose result does not fit the sweep's
+  ``Schema``, is named in a logged warning, moved to ``OUT/trials/corrupt/`` and recomputed);
+- ``OUT/trials/checkpoints/<key>.json``: an unfinished trial's saved progress
+  (``Checkpoint``; its progress is checked against the ``Schema`` too);
+- ``OUT/trials/.progress/<key>.json``: how far a running trial has got (``Report``: what a
+  progress bar of a process pool or of Ray shows between whole trials), deleted when it ends;
+- ``OUT/.lock``: the process that runs a sweep on OUT (``OutLock``): a second one refuses.
+
+Every file is written atomically and as strict JSON (``dopt.jsonio``: no bare NaN).
+Standard library only (with ``dopt.provenance`` and ``dopt.jsonio``).
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+import socket
+import sys
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+from dopt import jsonio
+from dopt.provenance import COMMIT_ENV, CodeState, code_state, repo_root, reuse_problem
+
+log = logging.getLogger("dopt.sweep")
+
+#: folders under OUT/trials where unusable trial files are moved (never deleted)
+CORRUPT_DIR, OUTDATED_DIR = "corrupt", "outdated"
+#: folder under OUT/trials of the unfinished trials' saved progress
+CHECKPOINT_DIR = "checkpoints"
+#: folder under OUT/trials of the running trials' step counts (``Report``)
+PROGRESS_DIR = ".progress"
+#: the fields every trial record has
+RECORD_FIELDS = ("key", "params", "result", "code")
+#: the lock file of a sweep's folder, and how long (s) an unreadable one counts as being
+#: written (older: garbage, taken over)
+LOCK_NAME = ".lock"
+FRESH_LOCK_S = 5.0
+
+#: {root: CodeState} this process last saw (run_sweep refreshes it; is_finished and
+#: Checkpoint read it, so that asking about many trials asks git once)
+_STATES: dict[str, CodeState] = {}
+
+
+def current_code(root: Path | str | None = None, refresh: bool = False) -> CodeState:
+    """The ``CodeState`` of ``root`` (default: this checkout) this process last saw; asked of
+    git again when ``refresh`` (``run_sweep`` does, once per call) or never asked before."""
+    where = str(repo_root(root))
+    if refresh or where not in _STATES or os.environ.get(COMMIT_ENV):
+        _STATES[where] = code_state(where)
+    return _STATES[where]
+
+
+@dataclass(frozen=True)
+class Trial:
+    """key: unique file-name stem; params: the JSON-able arguments of the trial function."""
+
+    key: str
+    params: dict
+
+    def __post_init__(self):
+        if not self.key or any(ch in self.key for ch in "/\\\0") or self.key.startswith("."):
+            raise ValueError(f"trial key {self.key!r} is not a valid file name")
+
+
+@dataclass(frozen=True)
+class Schema:
+    """What an experiment's stored files must hold, beyond the fields of every record: a
+    record or checkpoint that does not is named, moved aside and recomputed (never reused,
+    never passed to the summary or to the trial). Each experiment script passes its own.
+
+    Attributes:
+        result: keys every trial result holds.
+        progress: keys every checkpoint's progress holds.
+        check_result, check_progress: further checks (picklable functions: a checkpoint
+            travels to the pool's workers with its schema): the problem in a few words, or
+            None.
+    """
+
+    result: tuple[str, ...] = ()
+    progress: tuple[str, ...] = ()
+    check_result: Callable[[dict], str | None] | None = None
+    check_progress: Callable[[dict], str | None] | None = None
+
+    def __post_init__(self):
+        for name in ("result", "progress"):
+            keys = getattr(self, name)
+            if isinstance(keys, str) or not all(isinstance(k, str) for k in keys):
+                raise TypeError(f"Schema.{name} must be a tuple of key names, got {keys!r}")
+            object.__setattr__(self, name, tuple(keys))
+        for name in ("check_result", "check_progress"):
+            if getattr(self, name) is not None and not callable(getattr(self, name)):
+                raise TypeError(f"Schema.{name} must be callable or None")
+
+    def result_problem(self, result) -> str | None:
+        """Why ``result`` is not a trial result of this experiment, or None."""
+        return _fields_problem(result, self.result, self.check_result, "result")
+
+    def progress_problem(self, progress) -> str | None:
+        """Why ``progress`` is not a checkpoint of this experiment, or None."""
+        return _fields_problem(progress, self.progress, self.check_progress, "progress")
+
+
+#: the schema of a sweep that names none: any object
+ANY = Schema()
+
+
+def _fields_problem(value, keys, check, what: str) -> str | None:
+    if not isinstance(value, dict):
+        return f"its {what} is not an object (a JSON {type(value).__name__})"
+    missing = [k for k in keys if k not in value]
+    if missing:
+        return (f"its {what} lacks {', '.join(repr(k) for k in missing)} (another "
+                f"experiment's or an older format)")
+    return None if check is None else check(value)
+
+
+def trial_path(out_dir: Path | str, key: str) -> Path:
+    """OUT/trials/<key>.json."""
+    return Path(out_dir) / "trials" / f"{key}.json"
+
+
+def read_json(path: Path) -> tuple[object, str | None]:
+    """(the JSON of the file at ``path``, None) or (None, what is wrong). Files are written
+    strict (``dopt.jsonio``); one with a bare NaN, written before, is read as it was meant."""
+    try:
+        return jsonio.loads(Path(path).read_text(), strict_numbers=False), None
+    except (OSError, UnicodeDecodeError) as e:
+        return None, f"unreadable ({type(e).__name__}: {e})"
+    except ValueError as e:
+        return None, f"not valid JSON, truncated? ({e})"
+
+
+def check_record(path: Path | str, schema: Schema = ANY) -> tuple[dict | None, str | None]:
+    """(record, None) if the file at ``path`` is a trial record of ``schema``'s experiment,
+    else (None, what is wrong)."""
+    path = Path(path)
+    rec, problem = read_json(path)
+    if problem is not None:
+        return None, problem
+    if not isinstance(rec, dict):
+        return None, f"not a trial record (a JSON {type(rec).__name__}, not an object)"
+    missing = [k for k in RECORD_FIELDS if k not in rec]
+    if set(missing) - {"code"}:
+        return None, f"not a trial record (no {', '.join(repr(k) for k in missing)})"
+    if rec["key"] != path.stem:
+        return None, f"its key {rec['key']!r} is not its file name"
+    if not isinstance(rec["params"], dict):
+        return None, "its params are not an object"
+    if missing:
+        return None, ("not a trial record of this format (no 'code' stamp: written before "
+                      "records named the code that wrote them)")
+    code = rec["code"]
+    if not (isinstance(code, dict) and "version" in code):
+        return None, f"its code version {code!r} is not {{\"version\", \"commit\"}}"
+    return (None, problem) if (problem := schema.result_problem(rec["result"])) else (rec, None)
+
+
+def move_aside(path: Path, folder: str) -> Path | None:
+    """Move ``path`` into ``folder`` next to it (a free name: <stem>.1.json, ...); None if it
+    cannot be moved (it is then left where it is)."""
+    dest_dir = path.parent / folder
+    try:
+        dest_dir.mkdir(exist_ok=True)
+        dest = dest_dir / path.name
+        n = 0
+        while dest.exists():
+            n += 1
+            dest = dest_dir / f"{path.stem}.{n}{path.suffix}"
+        os.replace(path, dest)
+    except OSError as e:
+        log.warning("could not move %s to %s/: %s", path, dest_dir, e)
+        return None
+    return dest
+
+
+def check_trial_files(out_dir: Path | str, schema: Schema = ANY) -> tuple[dict, dict]:
+    """({key: record} of the valid trial files under OUT/trials, {file name: reason} of the
+    others, each moved to OUT/trials/corrupt/ with a logged warning). Hidden files (the
+    temporary files of writes that were killed) are left alone."""
+    folder = Path(out_dir) / "trials"
+    if not folder.is_dir():
+        return {}, {}
+    records, corrupt = {}, {}
+    for path in sorted(folder.glob("*.json")):
+        if path.name.startswith(".") or not path.is_file():
+            continue
+        rec, problem = check_record(path, schema)
+        if rec is not None:
+            records[rec["key"]] = rec
+            continue
+        corrupt[path.name] = problem
+        where = move_aside(path, CORRUPT_DIR)
+        log.warning("trial file %s is not used (%s): %s", path, problem,
+                    f"moved to {where}" if where else "it could not be moved aside")
+    return records, corrupt
+
+
+class Checkpoint:
+    """The saved progress of one unfinished trial, ``OUT/trials/checkpoints/<key>.json``.
+
+    ``save(progress)`` writes the JSON-able dict atomically with the trial's key and the code
+    stamp (``CodeState.stamp``); ``load()`` returns the dict last saved, or None when there is
+    none or it cannot be resumed (unreadable, another key, progress that does not fit the
+    sweep's ``schema``: moved to checkpoints/corrupt/; code that may give another result,
+    ``dopt.provenance.reuse_problem``: to checkpoints/outdated/; logged, never deleted).
+    ``root`` is the repository asked (default: this checkout). Picklable: a process pool's
+    workers get it with their trial (and the code state its sweep saw).
+    """
+
+    def __init__(self, out_dir: Path | str, key: str, root: Path | str | None = None,
+                 state: CodeState | None = None, schema: Schema = ANY):
+        Trial(key, {})                                   # the key's checks
+        if not isinstance(schema, Schema):
+            raise TypeError(f"schema must be a dopt.sweep.Schema, got {type(schema).__name__}")
+        self.key, self.schema = key, schema
+        self.path = Path(out_dir) / "trials" / CHECKPOINT_DIR / f"{key}.json"
+        self.root = None if root is None else str(root)
+        self._state = state
+
+    def __repr__(self) -> str:
+        return f"Checkpoint({str(self.path)!r})"
+
+    @property
+    def state(self) -> CodeState:
+        if self._state is None:
+            self._state = current_code(self.root)
+        return self._state
+
+    def save(self, progress: dict) -> None:
+        """Write ``progress`` (a JSON-able dict) for a rerun to resume."""
+        jsonio.write_atomic(self.path, {"key": self.key, "code": self.state.stamp(),
+                                        "progress": progress})
+
+    def load(self) -> dict | None:
+        """The progress to resume, or None (a bad file is logged and moved aside)."""
+        progress, problem, folder = self._read()
+        if problem is None:
+            return progress
+        where = move_aside(self.path, folder)
+        log.warning("checkpoint %s is not resumed (%s): %s", self.path, problem,
+                    f"moved to {where}" if where else "it could not be moved aside")
+        return None
+
+    def peek(self) -> dict | None:
+        """The progress ``load`` would resume, or None; reads only (moves and logs nothing)."""
+        return self._read()[0]
+
+    def _read(self) -> tuple[dict | None, str | None, str | None]:
+        """(progress, None, None) of a resumable file, else (None, what is wrong, the folder
+        it belongs in); (None, None, None) when there is none."""
+        if not self.path.is_file():
+            return None, None, None
+        rec, problem = read_json(self.path)
+        if problem is None and not (isinstance(rec, dict) and {"key", "code", "progress"} <=
+                                    rec.keys()):
+            problem = "not a checkpoint (not an object with 'key', 'code' and 'progress')"
+        if problem is not None:
+            return None, (problem if problem.startswith("not a checkpoint")
+                          else f"not a checkpoint: {problem}"), CORRUPT_DIR
+        if rec["key"] != self.key:
+            return None, f"the checkpoint of {rec['key']!r}", CORRUPT_DIR
+        if (problem := self.schema.progress_problem(rec["progress"])) is not None:
+            return None, problem, CORRUPT_DIR
+        problem = reuse_problem(rec["code"], self.state, self.root)
+        if problem is not None:
+            return None, problem, OUTDATED_DIR
+        return rec["progress"], None, None
+
+    def clear(self) -> None:
+        """Delete the file (the trial's record is written)."""
+        try:
+            self.path.unlink()
+        except FileNotFoundError:
+            pass
+
+
+class Report:
+    """What a trial function with a ``report`` parameter is given: ``report(n=1)`` says it
+    has done ``n`` more steps (CEM iterations, MPC steps: whatever its caller's bar counts).
+
+    In the sweep's own process the count goes straight to the sweep's ``tick`` callback; in
+    a pool's or Ray's worker (the object is pickled there) it is written, at most every
+    ``interval`` seconds and once more when the trial returns, to
+    ``OUT/trials/.progress/<key>.json``, which the sweep reads while it waits.
+    """
+
+    def __init__(self, out_dir: Path | str, key: str,
+                 callback: Callable[[int], None] | None = None, interval: float = 0.5):
+        self.key = key
+        self.path = Path(out_dir) / "trials" / PROGRESS_DIR / f"{key}.json"
+        self.callback, self.interval = callback, float(interval)
+        self.done, self._written, self._last = 0, 0, 0.0
+
+    def __getstate__(self) -> dict:
+        return {**self.__dict__, "callback": None}      # a worker writes the file instead
+
+    def __call__(self, n: int = 1) -> None:
+        n = int(n)
+        if n < 0:
+            raise ValueError(f"report(n): n must be >= 0, got {n}")
+        self.done += n
+        if self.callback is not None:
+            self.callback(n)
+        elif time.monotonic() - self._last >= self.interval:
+            self.flush()
+
+    def flush(self) -> None:
+        """Write the count now (a worker's last word before its trial returns)."""
+        if self.callback is not None or self.done == self._written:
+            return
+        try:
+            jsonio.write_atomic(self.path, {"key": self.key, "done": self.done})
+        except OSError as e:                 # a bar is not worth a trial
+            log.debug("progress of %s not written: %s", self.key, e)
+        self._written, self._last = self.done, time.monotonic()
+
+    def read(self) -> int:
+        """The count a worker last wrote (0 if none)."""
+        rec, problem = read_json(self.path)
+        ok = problem is None and isinstance(rec, dict) and isinstance(rec.get("done"), int)
+        return rec["done"] if ok else 0
+
+    def clear(self) -> None:
+        try:
+            self.path.unlink()
+        except FileNotFoundError:
+            pass
+
+
+class SweepLockedError(RuntimeError):
+    """Another live process runs a sweep on the same folder."""
+
+
+#: {lock file: how many times this process holds it}
+_HELD: dict[str, int] = {}
+
+
+class OutLock:
+    """``OUT/.lock``: one process at a time runs sweeps on OUT. Holds {"pid", "host",
+    "started", "command"}; a lock of a dead process on this host is stale and taken over
+    (logged). Reentrant within a process (an experiment holds it, and so does each of its
+    sweeps). Use as a context manager.
+
+    Raises (on enter):
+        SweepLockedError: a live process (or one on another host, which cannot be asked)
+            holds it; the one-line message names it.
+    """
+
+    def __init__(self, out_dir: Path | str):
+        self.path = Path(out_dir).absolute() / LOCK_NAME
+
+    def __enter__(self) -> OutLock:
+        self.acquire()
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.release()
+
+    def acquire(self) -> None:
+        where = str(self.path)
+        if _HELD.get(where):
+            _HELD[where] += 1
+            return
+        self.path.parent.mkdir(parents=True, exist_ok=True)
+        me = {"pid": os.getpid(), "host": socket.gethostname(),
+              "started": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
+              "command": " ".join(sys.argv)}
+        for _ in range(3):
+            try:
+                fd = os.open(self.path, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o644)
+            except FileExistsError:
+                holder = self._holder()
+                if holder is None and _age(self.path) < FRESH_LOCK_S:
+                    raise SweepLockedError(f"{self.path.parent} is being locked by another "
+                                           f"process right now ({self.path})") from None
+                if holder is not None and not _stale(holder):
+                    raise SweepLockedError(_locked_message(self.path.parent, holder)) \
+                        from None
+                log.warning("%s: taking over the stale lock of %s", self.path.parent,
+                            _describe(holder) if holder else "an unreadable lock file")
+                try:
+                    self.path.unlink()
+                except FileNotFoundError:
+                    pass
+                continue
+            with os.fdopen(fd, "w") as f:
+                f.write(jsonio.dumps(me))
+            _HELD[where] = 1
+            return
+        raise SweepLockedError(f"{self.path.parent}: could not take its lock {self.path}")
+
+    def release(self) -> None:
+        where = str(self.path)
+        if not _HELD.get(where):
+            return
+        _HELD[where] -= 1
+        if _HELD[where]:
+            return
+        del _HELD[where]
+        holder = self._holder()
+        if holder is not None and holder.get("pid") == os.getpid():
+            try:
+                self.path.unlink()
+            except FileNotFoundError:
+                pass
+
+    def _holder(self) -> dict | None:
+        rec, problem = read_json(self.path)
+        return rec if problem is None and isinstance(rec, dict) else None
+
+
+def _stale(holder: dict) -> bool:
+    """Whether the lock ``holder`` wrote is of a dead process (or of this one) on this host;
+    a process on another host cannot be asked, so its lock is never stale here."""
+    if holder.get("host") != socket.gethostname():
+        return False
+    pid = holder.get("pid")
+    if not isinstance(pid, int) or pid <= 0 or pid == os.getpid():
+        return True
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return True
+    except PermissionError:                  # alive, another user's
+        return False
+    try:                                     # alive: the same program, or a reused pid?
+        running = Path(f"/proc/{pid}/cmdline").read_bytes().replace(b"\0", b" ").decode()
+    except (OSError, UnicodeDecodeError):    # no /proc here: trust the pid
+        return False
+    return str(holder.get("command", "")) not in running
+
+
+def _age(path: Path) -> float:
+    try:
+        return time.time() - path.stat().st_mtime
+    except OSError:
+        return float("inf")
+
+
+def _describe(holder: dict) -> str:
+    return (f"process {holder.get('pid')} on {holder.get('host')} since "
+            f"{holder.get('started')} ({holder.get('command')})")
+
+
+def _locked_message(out: Path, holder: dict) -> str:
+    other = holder.get("host") != socket.gethostname()
+    return (f"{out} is in use by {_describe(holder)}; wait for it to finish or use another "
+            f"--out" + (f" (if it is no longer running on {holder.get('host')}, delete "
+                        f"{out / LOCK_NAME})" if other else ""))
+
+
+__all__ = ["ANY", "CHECKPOINT_DIR", "CORRUPT_DIR", "LOCK_NAME", "OUTDATED_DIR", "PROGRESS_DIR",
+           "RECORD_FIELDS", "Checkpoint", "OutLock", "Report", "Schema", "SweepLockedError",
+           "Trial", "check_record", "check_trial_files", "current_code", "move_aside",
+           "read_json", "trial_path"]

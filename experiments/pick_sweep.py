@@ -1,0 +1,62 @@
+"""The sweep of the key-particle experiments (cloth_fold.py, rope.py): their trials run through
+``dopt.sweep`` with the sweep's console (``sweep_console``), their schema (what a stored
+result and checkpoint must hold to be reused or resumed), the CEM iterations a folder already
+holds, and the flags ``planners.pick_budget`` may name. ``pick_place_cli`` is the command line
+around it."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from sweep_console import run_with_console
+
+from dopt.sweep import Checkpoint, Schema, SweepResult, Trial, is_finished
+from planners.pick_place import run_trial
+from planners.trial_progress import (
+    PROGRESS_FIELDS,
+    RESULT_FIELDS,
+    iterations_done,
+    progress_problem,
+)
+
+#: the flag of each setting ``planners.pick_budget`` may name
+BUDGET_FLAGS = {"n": "--n", "bound": "--bound", "picker_speed": "--picker-speed",
+                "cem.population": "--population", "cem.horizon": "--horizon"}
+#: what a stored trial and its checkpoint must hold to be reused or resumed (``dopt.sweep``)
+SCHEMA = Schema(result=RESULT_FIELDS, progress=PROGRESS_FIELDS, check_progress=progress_problem)
+
+
+def run_trials(trials: list[Trial], iterations_per_trial: int, out: Path,
+               fresh: bool = False, workers: int = 1) -> tuple[list, SweepResult]:
+    """Every trial not finished yet under ``out`` (all of them when ``fresh``), inline or on a
+    pool of ``workers`` processes, with the sweep's console (a bar of the CEM iterations of
+    every trial, the running ones of the pool included). Returns the results of the given
+    trials and the sweep's result (``failed``: {key: error}, ``commits``: the code versions of
+    the results)."""
+    cem = {t.key for t in trials if t.params["method"] != "scripted"}
+    res = run_with_console(
+        cem_trial, trials, out, unit="it", desc="CEM iterations", workers=workers,
+        fresh=fresh, schema=SCHEMA,
+        steps=lambda t: iterations_per_trial if t.key in cem else 0,
+        held=lambda t: iterations_held([t], iterations_per_trial, out) if t.key in cem else 0)
+    keys = {t.key for t in trials}
+    return [r["result"] for k, r in res.records.items() if k in keys], res
+
+
+def cem_trial(params: dict, checkpoint: Checkpoint | None = None, report=None) -> dict:
+    """``run_trial`` for the sweep (inline or in a pool's worker): each CEM iteration is
+    given to ``report`` (the sweep's bar counts them), progress saved to ``checkpoint``."""
+    tick = None if report is None else (lambda i, best: report())
+    return run_trial(params, on_iteration=tick, checkpoint=checkpoint)
+
+
+def iterations_held(trials: list[Trial], iterations_per_trial: int, out: Path) -> int:
+    """The CEM iterations of ``trials`` that a (not fresh) sweep under ``out`` holds already:
+    all of a finished trial's, those of a checkpoint it resumes."""
+    held = 0
+    for t in trials:
+        if is_finished(out, t.key, schema=SCHEMA):
+            held += iterations_per_trial
+        elif (progress := Checkpoint(out, t.key, schema=SCHEMA).peek()) is not None:
+            held += iterations_done(progress)
+    return held

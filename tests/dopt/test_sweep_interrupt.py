@@ -1,0 +1,230 @@
+"""Stopping a sweep: SIGINT or SIGTERM on a sweep of a process pool (and of Ray) cancels the
+queued trials, stops the running ones with their checkpoints, writes what finished, says how
+to resume and exits 130 / 143 within 5 s; the rerun equals the uninterrupted sweep bit for bit.
+Also the per-step progress of a pool's running trials and their log records reaching this
+process, and the lock of a sweep's folder."""
+
+import json
+import logging
+import os
+import signal
+import subprocess
+import sys
+import textwrap
+import time
+from pathlib import Path
+
+import pytest
+
+from dopt.provenance import COMMIT_ENV
+from dopt.sweep import (
+    LOCK_NAME,
+    OutLock,
+    SweepLockedError,
+    SweepPlan,
+    Trial,
+    run_sweep,
+)
+from tests.dopt.sweep_trials import walk, warn
+
+HERE = Path(__file__).parent
+#: the most seconds from the signal to the sweep's exit
+STOP_S = 5.0
+
+
+def walks(n_trials=8, n=40, sleep=0.05):
+    return [Trial(f"w{i}", {"n": n, "x0": 0.1 + i / 97, "sleep": sleep})
+            for i in range(n_trials)]
+
+
+def child(out: Path, workers: int, ray: bool):
+    """A CLI-like process that runs the walks on ``workers`` (or Ray) under dopt.cli.guarded."""
+    script = textwrap.dedent(f"""
+        import sys
+        from dopt.cli import guarded
+        from dopt.sweep import Trial, run_sweep
+        from sweep_trials import walk
+
+        @guarded("sweep")
+        def main():
+            trials = [Trial(f"w{{i}}", {{"n": 40, "x0": 0.1 + i / 97, "sleep": 0.05}})
+                      for i in range(8)]
+            run_sweep(walk, trials, {str(out)!r}, workers={workers},
+                      ray_address={"'local'" if ray else None})
+            return 0
+        sys.exit(main())
+    """)
+    env = {**os.environ,
+           "PYTHONPATH": os.pathsep.join(filter(None, [str(HERE), os.environ.get("PYTHONPATH")]))}
+    # a session of its own, as a terminal's job: Ctrl-C reaches every process of its group
+    return subprocess.Popen([sys.executable, "-c", script], env=env, stderr=subprocess.PIPE,
+                            text=True, start_new_session=True)
+
+
+def wait_for(condition, seconds: float) -> None:
+    deadline = time.time() + seconds
+    while not condition():
+        assert time.time() < deadline, "the sweep did not get there in time"
+        time.sleep(0.05)
+
+
+def results(out: Path) -> dict:
+    """{key: the result's JSON text} of every trial file under OUT."""
+    return {p.stem: json.dumps(json.loads(p.read_text())["result"], sort_keys=True)
+            for p in (out / "trials").glob("*.json")}
+
+
+@pytest.fixture(autouse=True)
+def fixed_code(monkeypatch):
+    """The code of this process and of its children, fixed (a clean commit named by
+    DOPT_GIT_COMMIT): others may commit or edit the checkout while a test runs."""
+    monkeypatch.setenv(COMMIT_ENV, "c0ffee")
+
+
+@pytest.fixture(scope="module")
+def uninterrupted(tmp_path_factory):
+    out = tmp_path_factory.mktemp("uninterrupted")
+    res = run_sweep(walk, walks(sleep=0.0), out)
+    assert sorted(res.ran) == [f"w{i}" for i in range(8)]
+    return results(out)
+
+
+def interrupt_and_resume(tmp_path, uninterrupted, sig, workers=2, ray=False, group=False):
+    """Interrupt a child's sweep with ``sig`` (``group``: sent to its whole process group,
+    as a terminal's Ctrl-C is), check how it stopped, rerun it here and compare."""
+    out = tmp_path / "out"
+    proc = child(out, workers, ray)
+    try:
+        # a trial finished and others part-way: their checkpoints hold a few steps
+        wait_for(lambda: len(list((out / "trials").glob("w*.json"))) >= 1
+                 and any((out / "trials" / "checkpoints").glob("w*.json")), 240)
+        time.sleep(0.3)
+        sent = time.monotonic()
+        if group:
+            os.killpg(proc.pid, sig)
+        else:
+            proc.send_signal(sig)
+        _, err = proc.communicate(timeout=30)
+        took = time.monotonic() - sent
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
+    assert proc.returncode == 128 + sig, err
+    assert took < STOP_S, f"the sweep took {took:.1f} s to stop"
+    line = err.strip().splitlines()[-1]
+    assert line.startswith(f"sweep: interrupted by {signal.Signals(sig).name}: ")
+    assert "to resume: python" in line and "resumes the rest" in line
+    finished = set(results(out))
+    stopped = {p.stem for p in (out / "trials" / "checkpoints").glob("w*.json")}
+    assert finished and stopped and len(finished) < 8 and not finished & stopped
+    assert not (out / LOCK_NAME).exists()                 # released on the way out
+    res = run_sweep(walk, walks(sleep=0.0), out, workers=workers)
+    assert set(res.skipped) == finished and set(res.resumed) == stopped, res.recomputed
+    assert results(out) == uninterrupted                  # the same bits as never stopped
+    print(f"stopped in {took:.2f} s")
+    return took
+
+
+@pytest.mark.parametrize("sig, group", [(signal.SIGINT, True), (signal.SIGINT, False),
+                                        (signal.SIGTERM, False)])
+def test_a_pool_sweep_stops_within_seconds_and_resumes_exactly(tmp_path, uninterrupted, sig,
+                                                               group):
+    interrupt_and_resume(tmp_path, uninterrupted, sig, group=group)
+
+
+def test_an_inline_sweep_stops_and_resumes_exactly(tmp_path, uninterrupted):
+    interrupt_and_resume(tmp_path, uninterrupted, signal.SIGINT, workers=1)
+
+
+def test_a_ray_sweep_stops_within_seconds_and_resumes_exactly(tmp_path, uninterrupted):
+    pytest.importorskip("ray")
+    interrupt_and_resume(tmp_path, uninterrupted, signal.SIGINT, ray=True, group=True)
+
+
+# --------------------------------------------------------------- progress and logs of workers
+def test_a_pool_reports_the_steps_of_its_running_trials(tmp_path):
+    ticks, ends, plans = [], [], []
+    res = run_sweep(walk, walks(n_trials=2, n=12, sleep=0.1), tmp_path, workers=2,
+                    tick=lambda key, n: ticks.append((key, n, len(ends))),
+                    progress=lambda key, rec: ends.append(key), on_start=plans.append)
+    assert sorted(res.ran) == ["w0", "w1"] and not res.failed
+    steps = {k: sum(n for key, n, _ in ticks if key == k) for k in ("w0", "w1")}
+    assert steps == {"w0": 12, "w1": 12}               # every step, once
+    assert any(before == 0 for _, _, before in ticks)   # while the trials still ran
+    assert plans == [SweepPlan([], [], ["w0", "w1"], {})]
+    assert plans[0].line() == "2 trials: 0 reused, 0 resumed from a checkpoint, 2 run from " \
+                              "the start"
+    assert not list((tmp_path / "trials" / ".progress").glob("*.json"))
+
+
+def test_inline_steps_reach_tick_at_once(tmp_path):
+    ticks = []
+    run_sweep(walk, walks(n_trials=1, n=5), tmp_path, tick=lambda k, n: ticks.append(n))
+    assert ticks == [1] * 5
+
+
+def test_the_warnings_of_pool_workers_reach_this_process_loggers(tmp_path, caplog):
+    with caplog.at_level(logging.WARNING):
+        run_sweep(warn, [Trial("a", {"x": 1}), Trial("b", {"x": 2})], tmp_path, workers=2)
+    text = caplog.text
+    assert "warned by trial 1" in text and "warned by trial 2" in text
+    assert "python warning of trial 1" in text                # warnings.warn, via logging
+
+
+# ------------------------------------------------------------------------------ the lock
+def holder(out: Path):
+    """A process that holds OUT's lock until killed."""
+    code = (f"from dopt.sweep import OutLock; import time\n"
+            f"with OutLock({str(out)!r}):\n    print('held', flush=True); time.sleep(60)")
+    proc = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE, text=True)
+    assert proc.stdout.readline().strip() == "held"
+    return proc
+
+
+def test_a_second_run_on_the_same_out_refuses_naming_the_first(tmp_path):
+    proc = holder(tmp_path)
+    try:
+        with pytest.raises(SweepLockedError) as exc:
+            run_sweep(walk, walks(n_trials=1, n=1), tmp_path)
+        message = str(exc.value)
+        assert f"is in use by process {proc.pid} on " in message and "\n" not in message
+        assert "wait for it to finish or use another --out" in message
+        assert not (tmp_path / "trials").exists()              # nothing ran, nothing moved
+    finally:
+        proc.kill()
+        proc.wait()
+    # its process is dead: the lock is stale and taken over
+    res = run_sweep(walk, walks(n_trials=1, n=1), tmp_path)
+    assert res.ran == ["w0"] and not (tmp_path / LOCK_NAME).exists()
+
+
+def test_the_lock_is_reentrant_within_a_process_and_names_its_holder(tmp_path):
+    with OutLock(tmp_path):
+        held = json.loads((tmp_path / LOCK_NAME).read_text())
+        assert held["pid"] == os.getpid() and held["host"] and held["command"]
+        run_sweep(walk, walks(n_trials=1, n=1), tmp_path)       # the experiment's own sweep
+        assert (tmp_path / LOCK_NAME).exists()
+    assert not (tmp_path / LOCK_NAME).exists()
+
+
+def test_a_lock_of_another_host_is_never_taken_over(tmp_path):
+    (tmp_path / LOCK_NAME).write_text(json.dumps({"pid": 1, "host": "elsewhere",
+                                                  "started": "x", "command": "y"}))
+    with pytest.raises(SweepLockedError, match="if it is no longer running on elsewhere, "
+                                               "delete"):
+        OutLock(tmp_path).acquire()
+
+
+def test_a_lock_whose_pid_now_runs_another_program_is_stale(tmp_path):
+    """A dead sweep's pid taken by an unrelated process (pid reuse) does not hold the folder."""
+    other = subprocess.Popen(["sleep", "30"])
+    try:
+        (tmp_path / LOCK_NAME).write_text(json.dumps(
+            {"pid": other.pid, "host": os.uname().nodename, "started": "x",
+             "command": "experiments/rope.py --out somewhere"}))
+        with OutLock(tmp_path):
+            assert json.loads((tmp_path / LOCK_NAME).read_text())["pid"] == os.getpid()
+    finally:
+        other.kill()
+        other.wait()

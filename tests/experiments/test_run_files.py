@@ -1,0 +1,222 @@
+"""What the experiment scripts read and write under --out: trial records and checkpoints of
+another format are named, moved aside and recomputed (each experiment's schema); a second run
+on the same --out refuses, naming the first; every JSON file a --quick run writes parses with
+a strict parser (no bare NaN: null with its reason); what a run needs is checked before its
+first trial; the console says what the sweep reuses, resumes and runs, and prints warnings
+above its bar, not on it."""
+
+import json
+import logging
+import os
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
+
+import mpc
+import pytest
+import rho_sweep
+import rope
+
+from dopt.provenance import COMMIT_ENV
+from dopt.sweep import Checkpoint
+
+ROOT = Path(__file__).resolve().parents[2]
+QUICK_ROPE = ["--quick", "--no-render"]
+
+
+@pytest.fixture(autouse=True)
+def fixed_code(monkeypatch):
+    """The code of this process (and its children) fixed: others may commit or edit the
+    checkout while a test runs, and a resumed trial must see the code that wrote it."""
+    monkeypatch.setenv(COMMIT_ENV, "c0ffee")
+
+
+def strict(text: str):
+    """json.loads that rejects NaN, Infinity and -Infinity (as JSON itself does)."""
+    def refuse(name):
+        raise ValueError(f"bare {name}")
+    return json.loads(text, parse_constant=refuse)
+
+
+# ---------------------------------------------------------------- records of another format
+@pytest.mark.parametrize("spoil, reason", [
+    (lambda rec: rec.pop("code"), "no 'code' stamp"),
+    (lambda rec: rec.__setitem__("result", {}), "its result lacks 'method', 'seed'"),
+    (lambda rec: rec["result"].pop("unstable"), "its result lacks 'unstable'"),
+])
+def test_a_pick_record_of_another_format_is_named_moved_aside_and_recomputed(
+        tmp_path, caplog, spoil, reason):
+    """Such a record once reached the summary: KeyError 'unstable' (or 'method'), exit 1 on
+    every rerun, naming no file."""
+    out = tmp_path / "rope"
+    argv = [*QUICK_ROPE, "--methods", "scripted", "--out", str(out)]
+    assert rope.main(argv) == 0
+    (path,) = (out / "trials").glob("*.json")
+    rec = json.loads(path.read_text())
+    spoil(rec)
+    path.write_text(json.dumps(rec))
+    with caplog.at_level(logging.WARNING, logger="dopt.sweep"):
+        assert rope.main(argv) == 0
+    assert f"trial file {path} is not used (" in caplog.text and reason in caplog.text
+    assert json.loads((out / "trials" / "corrupt" / path.name).read_text()) == rec
+    assert json.loads(path.read_text())["result"]["method"] == "scripted"     # recomputed
+
+
+def test_a_checkpoint_of_another_format_is_moved_aside_and_its_trial_starts_afresh(
+        tmp_path, caplog):
+    """A checkpoint that is valid JSON without "trial" once failed its trial on every rerun."""
+    out = tmp_path / "rope"
+    argv = [*QUICK_ROPE, "--methods", "random", "--out", str(out)]
+    assert rope.main(argv) == 0
+    (path,) = (out / "trials").glob("*.json")
+    first = json.loads(path.read_text())["result"]
+    path.unlink()
+    Checkpoint(out, path.stem).save({"stages": [], "stage": None})        # no "trial"
+    with caplog.at_level(logging.WARNING, logger="dopt.sweep"):
+        assert rope.main(argv) == 0
+    assert "is not resumed (its progress lacks 'trial', 'planner'" in caplog.text
+    assert (out / "trials" / "checkpoints" / "corrupt" / path.name).exists()
+    again = json.loads(path.read_text())["result"]
+    assert again["cost_history"] == first["cost_history"] and again["segments"] == 1
+
+
+def test_the_mpc_experiment_passes_its_schema(tmp_path, capsys):
+    """A stored MPC trial without a field the summary reads is recomputed, not summarised."""
+    args = mpc.parse_args(["--quick", "--methods", "baseline", "--out", str(tmp_path)])
+    (trial,) = mpc.make_trials(args)
+    full = dict.fromkeys(mpc.SCHEMA.result, 0)
+    (tmp_path / "trials").mkdir()
+    (tmp_path / "trials" / f"{trial.key}.json").write_text(json.dumps(
+        {"key": trial.key, "params": trial.params, "code": {"version": "0", "commit": "c0ffee"},
+         "result": {k: v for k, v in full.items() if k != "unstable"}}))
+    records, res = mpc.run(args, [trial], fn=_fake_episode)
+    assert res.ran == [trial.key] and records[0]["result"]["unstable"] is False
+    assert "its result lacks 'unstable'" in res.recomputed[trial.key]
+    assert "sweep: 1 trials: 0 reused, 0 resumed from a checkpoint, 1 run from the start (1 " \
+           "recomputed" in capsys.readouterr().err
+
+
+def _fake_episode(params, report=None):
+    for _ in range(3):
+        report()
+    return {**dict.fromkeys(mpc.SCHEMA.result, 0), "unstable": False}
+
+
+# ---------------------------------------------------------------------------------- lock
+def test_a_second_run_on_the_same_out_refuses_naming_the_first(tmp_path, capsys):
+    out = tmp_path / "rope"
+    code = (f"from dopt.sweep import OutLock; import time\n"
+            f"with OutLock({str(out)!r}):\n    print('held', flush=True); time.sleep(60)")
+    proc = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE, text=True)
+    try:
+        assert proc.stdout.readline().strip() == "held"
+        assert rope.main([*QUICK_ROPE, "--methods", "scripted", "--out", str(out)]) == 1
+        err = capsys.readouterr().err.strip().splitlines()
+        assert err[-1].startswith(f"rope.py: error: SweepLockedError: {out.absolute()} is in "
+                                  f"use by process {proc.pid} on ")
+        assert not (out / "trials").exists()
+    finally:
+        proc.kill()
+        proc.wait()
+
+
+# ---------------------------------------------------------- what a run needs, checked first
+@pytest.mark.parametrize("text, message", [
+    ("{not json", "is not experiments/paper_reference.py's file (JSONDecodeError"),
+    ('{"rows": []}', "is not experiments/paper_reference.py's file (KeyError"),
+    ('{"tasks": {"clutter": {"fig4": [{"theta": 0, "rho": 1}]}}}',
+     "1 of the clutter Fig. 4 points lack a number"),
+])
+def test_a_bad_paper_reference_is_refused_before_the_sweep(tmp_path, capsys, text, message):
+    """rho_sweep read --paper-reference only after the whole sweep."""
+    ref, out = tmp_path / "ref.json", tmp_path / "out"
+    ref.write_text(text)
+    with pytest.raises(SystemExit) as exc:
+        rho_sweep.main(["--quick", "--rhos", "1", "--thetas", "0", "--paper-reference",
+                        str(ref), "--out", str(out)])
+    err = capsys.readouterr().err
+    assert exc.value.code == 2 and f"argument --paper-reference: {ref}" in err
+    assert message in err and not out.exists()
+
+
+def test_a_missing_plots_package_is_refused_before_the_first_trial(tmp_path, capsys,
+                                                                   monkeypatch):
+    """The plots and bars come after the trials: without matplotlib a run failed at its end."""
+    import importlib.util
+    real = importlib.util.find_spec
+    monkeypatch.setattr(importlib.util, "find_spec",
+                        lambda name, *a: None if name == "matplotlib" else real(name, *a))
+    out = tmp_path / "out"
+    with pytest.raises(SystemExit) as exc:
+        rope.main([*QUICK_ROPE, "--methods", "scripted", "--out", str(out)])
+    assert exc.value.code == 2 and not out.exists()
+    assert "the run needs matplotlib (the plots extra: pip install 'dopt[plots]')" in \
+        capsys.readouterr().err
+
+
+# ------------------------------------------------------------------------ strict JSON files
+def run_script(name: str, *args) -> None:
+    proc = subprocess.run([sys.executable, str(ROOT / "experiments" / name), *map(str, args)],
+                          capture_output=True, text=True, timeout=900,
+                          env={**os.environ, "MUJOCO_GL": "egl"})
+    assert proc.returncode == 0, proc.stderr[-3000:]
+
+
+@pytest.mark.slow
+def test_every_file_of_a_quick_run_parses_strictly(tmp_path):
+    """mpc.py and rho_sweep.py wrote bare NaN (13 in a --quick run); every JSON file of the
+    four scripts' --quick runs parses strictly, and an undefined value is null with its
+    reason under "<field>_undefined"."""
+    runs = {"mpc": ("mpc.py", "--quick", "--methods", "baseline,svr-sum", "--no-render"),
+            "rho": ("rho_sweep.py", "--quick", "--rhos", "1", "--thetas", "0"),
+            "explain": ("svr_explain.py", "--quick", "--rows", "sum-t10-r1", "--bins", "2"),
+            "cloth": ("cloth_fold.py", "--quick", "--methods", "simple,scripted",
+                      "--no-render")}
+    for name, (script, *flags) in runs.items():
+        run_script(script, *flags, "--out", tmp_path / name)
+    files = [p for p in tmp_path.rglob("*.json*") if p.is_file()]
+    assert len(files) >= 11                      # 4 summaries, 7 trial records
+    for path in files:
+        lines = path.read_text().splitlines() if path.suffix == ".jsonl" else [path.read_text()]
+        for line in filter(None, lines):
+            strict(line)                                    # raises on a bare NaN
+    methods = strict((tmp_path / "mpc" / "summary.json").read_text())["methods"]
+    row = methods["svr-sum-t10-r1"] if "svr-sum-t10-r1" in methods else next(iter(methods.values()))
+    assert row["mpc_cost_normalised_ci90"] is None                      # one trial: no CI
+    assert row["mpc_cost_normalised_ci90_undefined"] == \
+        "NaN: a confidence interval needs two or more values"
+
+
+# ------------------------------------------------------------------------------ console
+def test_the_console_counts_and_keeps_warnings_off_the_bar(tmp_path):
+    """With --workers N the bar counts the running trials' steps and a worker's warning
+    prints on a line of its own above the bar."""
+    script = textwrap.dedent(f"""
+        import logging, sys
+        sys.path[:0] = [{str(ROOT / "experiments")!r}, {str(ROOT)!r}]
+        from sweep_console import run_with_console
+        from dopt.sweep import Trial
+        from tests.dopt.sweep_trials import walk, warn
+        logging.basicConfig(format="%(levelname)s %(name)s: %(message)s")
+        trials = [Trial(f"w{{i}}", {{"n": 8, "x0": 0.2 + i / 10, "sleep": 0.05}})
+                  for i in range(2)]
+        run_with_console(walk, trials, {str(tmp_path)!r}, steps=lambda t: 8,
+                         held=lambda t: 0, unit="step", desc="walk", workers=2)
+        run_with_console(warn, [Trial("a", {{"x": 1}})], {str(tmp_path / "w")!r},
+                         steps=lambda t: 1, held=lambda t: 0, unit="t", desc="warn",
+                         workers=2)
+    """)
+    proc = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
+                          timeout=300)
+    assert proc.returncode == 0, proc.stderr
+    err = proc.stderr
+    assert "sweep: 2 trials: 0 reused, 0 resumed from a checkpoint, 2 run from the start" in err
+    assert "sweep: 2 trials: 0 reused, 2 run to the end (0 of them resumed from a checkpoint)," \
+           " 0 failed" in err
+    assert "16/16" in err                                  # every step of both trials
+    # each warning is a line of its own (after the bar's carriage returns, nothing before it)
+    shown = [line.split("\r")[-1] for line in err.splitlines()]
+    assert "WARNING tests.sweep_trials: warned by trial 1" in shown
+    assert any(line.startswith("WARNING py.warnings:") and "python warning of trial 1" in line
+               for line in shown)
