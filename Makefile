@@ -14,6 +14,10 @@ $(STAMP): pyproject.toml setup.py dopt/_rollout_kernels.c
 	test -x $(PY) || $(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install --quiet --upgrade pip
 	$(PY) -m pip install --quiet "$(TORCH)"
+	# a .venv from before mujoco-core: the mujoco metapackage pins mujoco-core 4.0.0 and owns the
+	# same mujoco/__init__.py, so it goes, with the core, which the next line installs afresh
+	if $(PY) -m pip show --quiet mujoco >/dev/null 2>&1; then \
+		$(PY) -m pip uninstall --quiet --yes mujoco mujoco-studio mujoco-core; fi
 	$(PY) -m pip install --quiet -e ".[plots,cluster,dev,viz]"
 	touch $(STAMP)
 

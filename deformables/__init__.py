@@ -1,4 +1,21 @@
-"""Goal shapes of ropes and cloth and their simplification to key particles (no MuJoCo)."""
+"""Goal shapes of ropes and cloth and their simplification to key particles (no MuJoCo).
+
+Imports neither MuJoCo nor torch, and of dopt only its pure-Python dopt.validation,
+dopt.provenance and dopt.cli. Modules:
+
+    goals.py         rope and cloth goal shapes registered by name (GOALS, GOAL_SEQUENCES),
+                     flexcomp-compatible numbering and triangulations
+    reduction.py     Alg. 1: grow the model until its error is under the threshold -> KeyParticles
+    rope.py          the rope's polyline (dynamic-programme breakpoints + a cvxpy QP);
+                     segmentation.py its optimal segmentation in blocks
+    cloth.py         the cloth's pipeline (ClothConfig; ClothConfig.paper(): the paper's), over
+                     decimation.py (pymeshlab QECD with restarts), distance.py (exact symmetric
+                     Hausdorff), mesh.py (canonical triangulation, geodesic dedupe),
+                     layers.py (stacking axis and layer gap), panels.py (rigid panels of noisy
+                     folds), frame.py (the goal's own frame)
+    validation.py    goal checks and repairs
+    bench.py         python -m deformables.bench: timings, the paper's scale, paper vs default
+"""
 from .cloth import ClothConfig, cloth_key_particles
 from .goals import (
     GOAL_SEQUENCES,

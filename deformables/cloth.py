@@ -174,7 +174,7 @@ class ClothConfig:
         fold_merge_deg: under ``panels="fold"``, neighbouring panels whose rigid fits turn
             by less than this (degrees) are one panel: a fold turns one panel against the next
             by 90-180 degrees, a wrinkle by tens. Measured on the simulated goals of
-            ``experiments/key_particles.py`` (docs/DESIGN-NOTES.md, "Goals from the
+            ``experiments/key_particles.py`` (docs/DESIGN-NOTES.md, "Goals made by the
             simulator").
         strict: raise ``ValueError`` when no model up to ``max_faces`` reaches the threshold.
             By default the model with the least error is returned with

@@ -1,5 +1,27 @@
 """dopt: the runtime both planners stand on (scenes, state, batched rollouts, FD derivatives).
 
+It knows MuJoCo and no planner (docs/ARCHITECTURE.md has the map and the rule). Modules:
+
+    state.py, scene.py      mjSTATE_INTEGRATION rows (StateLayout, Tangent); Scene: a compiled
+                            model with named DoF groups and its stability bounds
+    rollout.py              RolloutService: batched rollouts, feedback rollouts, reduced FD
+                            derivatives; its routes rollout_batch.py (mujoco.batch) and
+                            rollout_c.py over kernels.py (the C loops of _rollout_kernels.c)
+    stability.py, errors.py the verdict every rollout gets; RolloutError, UnstableRolloutError
+    costs.py, mpc.py        QuadraticCost + residual terms (Eq. 2-3); asynchronous MPC (Alg. 1)
+                            with its real, virtual and model clocks, mpc_cost (Eq. 5)
+    sweep.py                resumable trial sweeps (inline, process pool, Ray), checkpoints,
+                            schemas, the folder's lock, interrupts; its files sweep_store.py,
+                            its runners sweep_exec.py; jsonio.py: strict JSON (no bare NaN)
+    provenance.py           command, commit, versions of a result; the recording and reuse rules
+    stats.py, multiple.py   means and intervals; Holm's correction
+    validation.py, cli.py   argument checks; the command lines' shared types and guarded()
+    render.py               offscreen images of states (numpy arrays; no task knowledge)
+    scripts.py              the console scripts of the experiment scripts
+    tasks/                  the two papers' tasks: registries in tasks/__init__.py, the wings
+                            tasks/pick and tasks/push, the shared arm tasks/panda.py
+    view/, bench/           dopt-view (the browser viewer); python -m dopt.bench
+
 Glossary of shape letters used in every docstring:
     P   population / number of rollouts in a batch
     T   horizon (number of control steps)

@@ -1,4 +1,12 @@
-"""Exceptions raised by the rollout service."""
+"""Exceptions raised by the rollout service.
+
+``RolloutError``: MuJoCo raised an error inside a batched call. ``UnstableRolloutError(rollout,
+step, reason)``: a simulation went unstable (a MuJoCo warning, a state MuJoCo would reject or a
+non-finite one), raised where a caller asked for it (``RolloutConfig(on_unstable="raise")``,
+derivatives); the verdicts of the scene's own bounds are ``dopt.stability``'s. Bad arguments
+raise ``ValueError`` / ``TypeError`` naming them (``dopt.validation``), and a closed service
+``RuntimeError``.
+"""
 
 from __future__ import annotations
 

@@ -28,7 +28,10 @@ from dopt.state import StateLayout
 
 log = logging.getLogger(__name__)
 
-MUJOCO_VERSION = 4000000          # the prototypes in _rollout_kernels.c are MuJoCo 4.0's
+#: the MuJoCo release series whose prototypes _rollout_kernels.c declares: 4.0.x (mj_version()
+#: // 1000; a patch release keeps the public API: 4.0.1's mujoco.h differs from 4.0.0's only in
+#: mjVERSION_HEADER and one added function)
+MUJOCO_MINOR = 4000
 ABI_VERSION = 5                   # dopt_abi_version() of the C file this front matches
 _HERE = os.path.dirname(os.path.abspath(__file__))
 _lib = None
@@ -151,9 +154,9 @@ def load():
     global _lib, _load_error
     if _lib is not None or _load_error is not None:
         return _lib
-    if mujoco.mj_version() != MUJOCO_VERSION:
-        _load_error = (f"MuJoCo {mujoco.mj_version()} is not the {MUJOCO_VERSION} the kernel "
-                       f"prototypes were written for")
+    if mujoco.mj_version() // 1000 != MUJOCO_MINOR:
+        _load_error = (f"MuJoCo {mujoco.mj_version()} is not of the {MUJOCO_MINOR}xxx series "
+                       f"the kernel prototypes were written for")
     elif (path := _library_path()) is None:
         _load_error = "dopt/_rollout_kernels was not built (no C compiler at install?)"
     else:

@@ -52,6 +52,9 @@ from dopt import __version__
 
 #: the packages whose versions a result records
 PACKAGES = ("dopt", "mujoco", "torch", "numpy", "scipy", "cvxpy", "pymeshlab", "trimesh")
+#: the distributions a package's version is read from, first found first: MuJoCo's bindings
+#: ship as mujoco-core (the dependency; the mujoco metapackage pins an older core)
+DISTRIBUTIONS = {"mujoco": ("mujoco-core", "mujoco")}
 #: the paths whose files can change a result (relative to the repository's root)
 RESULT_PATHS = ("dopt", "deformables", "planners", "experiments", "pyproject.toml", "setup.py")
 #: the package folders in which an untracked source file counts as a change
@@ -277,10 +280,13 @@ def versions() -> dict:
         if name == "dopt":                  # the source's, which no stale install metadata hides
             out[name] = __version__
             continue
-        try:
-            out[name] = importlib.metadata.version(name)
-        except importlib.metadata.PackageNotFoundError:
-            out[name] = None
+        out[name] = None
+        for dist in DISTRIBUTIONS.get(name, (name,)):
+            try:
+                out[name] = importlib.metadata.version(dist)
+                break
+            except importlib.metadata.PackageNotFoundError:
+                continue
     return out
 
 

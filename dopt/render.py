@@ -1,6 +1,6 @@
 """Offscreen pictures of MuJoCo states as numpy arrays: a camera fitted to a set of points,
-projection of 3D points to pixels, markers drawn on the image, and the frames of a replayed
-pick-and-place plan.
+projection of 3D points to pixels and markers drawn on the image. The frames of a replayed
+pick-and-place plan are the pick wing's (``dopt.tasks.pick.replay``): this module knows no task.
 
 Everything here returns arrays (``(H, W, 3) uint8`` images); composing figures, titles and
 writing files is the caller's business. Rendering needs an offscreen OpenGL context: set
@@ -18,7 +18,6 @@ cloth stays visible. Shapes: N points, F frames, ns state row.
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
 
 import mujoco
 import numpy as np
@@ -344,77 +343,3 @@ def draw_segments(image: np.ndarray, start: np.ndarray, end: np.ndarray,
         dist = np.linalg.norm(q - (a + t[..., None] * d), axis=-1)
         img[r0:r1, c0:c1][dist <= width / 2 + 0.5] = colour
     return img
-
-
-# ------------------------------------------------------------------------------- replay
-@dataclass(frozen=True)
-class Replay:
-    """Recorded frames of an executed plan: states (F, ns) every ``every`` simulation steps
-    (the start and the end included), and per frame its simulation step, stage and action
-    (indices into the plan; the start frame is stage 0, action 0)."""
-
-    states: np.ndarray
-    step: np.ndarray
-    stage: np.ndarray
-    action: np.ndarray
-    every: int
-
-
-def replay(scene, start_state: np.ndarray, actions: Sequence[dict],
-           max_frames: int = 120) -> Replay:
-    """Re-execute a pick-and-place plan with plain ``mj_step`` and keep at most
-    ``max_frames`` evenly spaced states.
-
-    Args:
-        scene: a ``dopt.tasks.pick.scene.DeformableScene`` (``model``, ``scene.layout.spec``,
-            ``picker``).
-        start_state: (ns,) where the plan starts.
-        actions: per stage {"particles": (H,), "displacements": (H, 3)} (a trial's recorded
-            ``actions``), executed in order without resetting between stages.
-        max_frames: most frames kept (>= 2).
-    """
-    from dopt.tasks.pick.picker import CONTROL_SPEC
-    from dopt.tasks.pick.scene import DeformableScene
-
-    if not isinstance(scene, DeformableScene):
-        raise TypeError(f"scene must be a DeformableScene, got {type(scene).__name__}")
-    max_frames = check_int(max_frames, "max_frames", 2)
-    m, spec = scene.model, scene.scene.layout.spec
-    start_state = check_states(m, start_state, spec, batched=False, name="start_state")
-    if isinstance(actions, (str, Mapping)) or not isinstance(actions, Sequence):
-        raise TypeError(f"actions must be a sequence of per-stage dicts, got {actions!r}")
-    rows = []
-    for k, a in enumerate(actions):
-        if not isinstance(a, Mapping) or not {"particles", "displacements"} <= set(a):
-            raise ValueError(f"actions[{k}] must be a dict with 'particles' (H,) and "
-                             f"'displacements' (H, 3), got {a!r}")
-        if not np.size(a["particles"]):                  # a stage that took no action
-            rows.append(np.empty((0, scene.picker.ncontrol)))
-            continue
-        rows.append(scene.picker.encode(np.asarray(a["particles"])[None],
-                                        np.asarray(a["displacements"])[None])[0])  # (H*K, nc)
-    total = sum(len(r) for r in rows)
-    every = max(1, int(np.ceil(total / (max_frames - 1))))
-    K = scene.picker.steps_per_action
-    data = mujoco.MjData(m)
-    mujoco.mj_setState(m, data, start_state, spec)
-    size = mujoco.mj_stateSize(m, spec)
-    states, info = [], []
-
-    def keep(step, stage, action):
-        x = np.empty(size)
-        mujoco.mj_getState(m, data, x, spec)
-        states.append(x)
-        info.append((step, stage, action))
-
-    keep(0, 0, 0)
-    step = 0
-    for k, U in enumerate(rows):
-        for t, row in enumerate(U):
-            mujoco.mj_setState(m, data, row, CONTROL_SPEC)
-            mujoco.mj_step(m, data)
-            step += 1
-            if step % every == 0 or step == total:
-                keep(step, k, t // K)
-    info = np.array(info, dtype=int).reshape(-1, 3)
-    return Replay(np.array(states), info[:, 0], info[:, 1], info[:, 2], every)

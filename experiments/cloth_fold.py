@@ -1,8 +1,11 @@
 """Fig. 7 (c-f) of the key-particle paper: cloth folds planned by CEM over key particles.
 
-Four methods (default all) on one fold goal, over several seeds: CEM(Simple) over the key
-particles of the goal, CEM(Original) over all particles, CEM(Random) over a random subset as
-large as the key set, and the scripted policy (each key particle above its goal, release).
+Four methods (default all) on one fold goal: CEM(Simple) over the key particles of the goal,
+CEM(Original) over all particles, CEM(Random) over a random subset as large as the key set, and
+the scripted policy (each key particle above its goal, release). The bare command runs one seed
+per method, a first answer in minutes, and says before it starts how long it will take (timed
+by a short calibration rollout); ``--preset ours`` runs the experiments' three seeds,
+``--preset paper`` the paper's protocol (ten seeds on a 20 x 20 cloth), ``--seeds N`` any.
 Multi-step folds (reflective: side -> reflective; underneath: side -> reflective ->
 underneath) plan to each intermediate goal in turn with that goal's key particles (Sec. III-D).
 The pipeline is ``planners.pick_place``; the defaults are its ``PRESETS`` (12 x 12 cloth,
@@ -19,7 +22,8 @@ replayed) (renders; MUJOCO_GL=egl, skipped with --no-render), OUT/trials/*.json 
 finished trial; a rerun resumes, --fresh recomputes). Exits 1 if a trial failed
 (summary.json lists it under "failed") or the run failed (one line on stderr).
 
-    python experiments/cloth_fold.py --goal diagonal --out results/cloth_diagonal
+    python experiments/cloth_fold.py --goal diagonal                  # one seed: a first answer
+    python experiments/cloth_fold.py --goal diagonal --preset ours    # the experiments' 3 seeds
 """
 
 from __future__ import annotations

@@ -1,16 +1,19 @@
-"""Generate docs/RESULTS.md and README.md's headline table from the result files.
+"""Generate docs/RESULTS.md and README.md's map of the papers' figures from the result files.
 
 Every number in the docs comes from a result file ``docs/results/*.json`` that an experiment
 wrote itself (``--record PATH``; each file holds a "provenance": command, git commit, package
 versions, date, machine). This script reads them all and writes
 
-- ``docs/RESULTS.md``: every table behind the papers' figures, each naming its source file,
-  the file's commit and the command that produced it (generated: never edit it by hand),
-  and, for each Fig. 7 sweep whose trials are committed under ``docs/results/runs/`` but whose
-  summary is not recorded yet, its seeds so far and what a trial cost;
+- ``docs/RESULTS.md``: the headline of every result file (``headlines_section``: its command
+  and numbers, Fig. 7's claims, Table 1 against the paper's), then every table behind the
+  papers' figures, each naming its source file, the file's commit and the command that
+  produced it (generated: never edit it by hand), and, for each Fig. 7 sweep whose trials are
+  committed under ``docs/results/runs/`` but whose summary is not recorded yet, its seeds so
+  far and what a trial cost;
 - the block between ``<!-- results:begin -->`` and ``<!-- results:end -->`` in README.md:
-  the headline table, paper figure / table -> script -> headline numbers (README.md is left
-  alone, with a note, when it has no such markers).
+  the compact map (``report_map``): one row per paper figure or table, its command, one
+  headline sentence and a link to its RESULTS.md section (README.md is left alone, with a
+  note, when it has no such markers).
 
 Beside each summary, RESULTS.md gives its committed trials (``docs/results/runs/<sweep>/``)
 and the commits they were written at, and the README says "N of M trials from uncommitted code"
@@ -34,13 +37,13 @@ the git commit or the versions of dopt, mujoco and torch is named in a note on s
 Standard library only (with dopt.cli, the command-line types, dopt.multiple, Holm's
 correction, and planners.trial_progress, the reader of a trial's checkpoint, all standard
 library themselves), so it runs without torch, numpy or MuJoCo. Its sections live in
-report_base.py, report_fig7.py, report_kp.py, report_svr.py and report_sweeps.py.
+report_base.py, report_fig7.py, report_kp.py, report_svr.py and report_sweeps.py, the README's
+map in report_map.py.
 """
 
 from __future__ import annotations
 
 import argparse
-import os
 import sys
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -86,6 +89,7 @@ from report_kp import (
     panda_section,
     physics_section,
 )
+from report_map import HEADLINES_TITLE, map_block
 from report_stale import (
     SNAPSHOT,
     SVR_KINDS,
@@ -245,7 +249,8 @@ def results_md(results: list[Result], results_dir: Path, page: Path) -> str:
         return "\n".join(lines + [f"No results yet: `{where}/` holds no result file. Run an "
                                   "experiment with `--record "
                                   f"{where}/<name>.json`, then `{REGENERATE}`.", ""])
-    lines += ["## Result files", ""]
+    lines += headlines_section(results, page)
+    lines += ["", "## Result files", ""]
     lines += table(["file", "experiment", "paper figure / table", "commit", "date"],
                    [[link(r, page), r.kind, _items(r), r.commit, r.date] for r in results])
     for kind, section in SECTIONS.items():
@@ -274,51 +279,58 @@ def _items(r: Result) -> str:
     return "; ".join(names) or "-"
 
 
-def readme_block(results: list[Result], readme: Path, results_md_path: Path) -> str:
-    """The README's headline table (between the markers, markers excluded)."""
+def headlines_section(results: list[Result], page: Path) -> list[str]:
+    """RESULTS.md's headline of every result file: per catalogue entry (``CATALOGUE``) its
+    command and headline numbers, Fig. 7's claims on the recorded files and Table 1 under the
+    authors' protocol against the paper's printed one. (README.md's block is the compact map
+    of ``report_map``, one row per figure or table, that links here.)"""
     rows = []
     for e in CATALOGUE:
-        # a Fig. 7 run that departs from its protocol is in RESULTS.md, beside the protocol's
+        # a Fig. 7 run that departs from its protocol is in its section, beside the protocol's
         matched = [r for r in results if e.match(r) and not _departs(r)]
         if not matched:
             rows.append([e.paper, e.item, f"`{e.command}`", "not recorded yet"])
         for r in matched:
             headline = _rendered(r, HEADLINES[r.kind], r)
             rows.append([e.paper, e.item + (" (quick run)" if r.quick else ""),
-                         f"`{r.command}`", f"{headline}; {source(r, readme)}{readme_notes(r)}"])
+                         f"`{r.command}`", f"{headline}; {source(r, page)}{readme_notes(r)}"])
     for r in results:                  # a known kind the catalogue has no row for
         if r.kind in HEADLINES and not _departs(r) and not any(e.match(r) for e in CATALOGUE):
             rows.append(["-", f"{r.kind}: {r.data.get('task', '')} {r.data.get('goal', '')}"
                          .strip(), f"`{r.command}`",
-                         f"{_rendered(r, HEADLINES[r.kind], r)}; {source(r, readme)}"
+                         f"{_rendered(r, HEADLINES[r.kind], r)}; {source(r, page)}"
                          f"{readme_notes(r)}"])
     departing = "; ".join(sorted({fig7_departures(r) for r in results if _departs(r)}))
-    claims = fig7_claims_lines(results, readme)
+    claims = fig7_claims_lines(results, page)
     ref, published = paper_table1(results)
     beside = [(t, r) for t in published if (r := paper_preset_table1(results, t))]
-    rel = Path(os.path.relpath(results_md_path, Path(readme).parent)).as_posix()
-    lines = [f"<!-- generated by experiments/report.py from the result files; edit those, "
-             f"then run `{REGENERATE}` -->",
+    lines = [f"## {HEADLINES_TITLE}", "",
+             "What each paper figure or table came to, one line per result file, with the "
+             "command that recorded it; the sections below hold each file's tables."
+             + (f" Fig. 7 runs that change a protocol's settings ({departing}) are in the "
+                f"Fig. 7 section, each beside its protocol's file." if departing else ""), "",
              *table(["paper", "figure / table", "command", "headline numbers (source file, "
-                     "commit)"], rows), "",
-             f"Every table, per-seed number and setting: [{rel}]({rel}), generated like this "
-             f"table from the result files by `{REGENERATE}`."
-             + (f" Fig. 7 runs that change a protocol's settings ({departing}) are there, "
-                f"each beside its protocol's file." if departing else "")]
+                     "commit)"], rows)]
     if claims:
         lines += ["", "Fig. 7's claims on the recorded files (each panel on the paper's metric, "
                       "named; 95 % intervals separate or overlapping; difference: the other "
                       f"method's mean minus Simple's ± its Welch 95 % interval; {HOLM_NOTE}):",
                   "", *claims]
     if beside:
-        lines += ["", f"Table 1 under `--preset paper` against the paper's printed Table 1 "
-                      f"(MPC cost / baseline, means; [{rel}]({rel}) has the rows side by side):",
-                  ""]
+        lines += ["", "Table 1 under `--preset paper` against the paper's printed Table 1 "
+                      "(MPC cost / baseline, means; the rows side by side are in \"State-vector "
+                      "reduction, Table 1 beside the paper\" below):", ""]
         lines += [f"- {task}: paper cheapest first {', '.join(o['paper_order'][:3])}; ours "
-                  f"{', '.join(o['our_order'][:3])}. {ordering_sentence(o)}; {source(r, readme)}."
+                  f"{', '.join(o['our_order'][:3])}. {ordering_sentence(o)}; {source(r, page)}."
                   for task, r in beside
                   for o in [orderings(*_table1_columns(published[task], r.data))]]
-    return "\n".join(lines)
+    return lines
+
+
+def readme_block(results: list[Result], readme: Path, results_md_path: Path) -> str:
+    """The README's block between the markers (markers excluded): the map of the papers'
+    figures and tables (``report_map``)."""
+    return map_block(results, readme, results_md_path)
 
 
 def replace_block(text: str, block: str) -> str | None:

@@ -110,3 +110,17 @@ def test_python_blocks_run(doc: Path, tmp_path):
     trace = run.stderr[marker.end():].strip()
     pytest.fail(f"{name}: python block {b['index'] + 1} (fenced at line {b['line']}: "
                 f"`{first.strip()}`) failed:\n{trace[-4000:]}", pytrace=False)
+
+
+def test_the_docs_stay_short():
+    """README.md is read in minutes (at most 150 lines and 1,500 words), docs/ARCHITECTURE.md
+    is a map (at most 150 lines), docs/DESIGN-NOTES.md keeps reasons, not measurements (at
+    most 4,000 words)."""
+    def size(path: Path) -> tuple[int, int]:
+        text = path.read_text()
+        return len(text.splitlines()), len(text.split())
+
+    lines, words = size(ROOT / "README.md")
+    assert lines <= 150 and words <= 1500, (lines, words)
+    assert size(ROOT / "docs" / "ARCHITECTURE.md")[0] <= 150
+    assert size(ROOT / "docs" / "DESIGN-NOTES.md")[1] <= 4000

@@ -29,8 +29,10 @@ into Eq. 2 costs with one batched rollout.
     rope        make_rope(RopeSceneConfig, PickerConfig): a 1D flexcomp rod (40 particles)
 
 Both wings build scenes only: costs, planners and rollouts are built elsewhere from their
-fields; this package knows no planner. Shape letters (see ``dopt``): ns the size of one
-``mjSTATE_INTEGRATION`` state, nv the number of DoFs (``model.nv``).
+fields; this package knows no planner. The wings never import each other nor this front; the
+Franka Panda both use (the push tasks' arm, the pick wing's executor) is the neutral
+``dopt.tasks.panda`` (tests/test_layers.py checks the rooms). Shape letters (see ``dopt``): ns
+the size of one ``mjSTATE_INTEGRATION`` state, nv the number of DoFs (``model.nv``).
 """
 
 from __future__ import annotations

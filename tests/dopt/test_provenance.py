@@ -74,3 +74,23 @@ def test_name_files_names_a_dozen_and_counts_the_rest():
     assert provenance.name_files(["a", "b"]) == "a, b"
     many = [f"f{i}" for i in range(15)]
     assert provenance.name_files(many) == ", ".join(many[:12]) + " and 3 more"
+
+
+def test_mujoco_version_is_read_from_mujoco_core_first(monkeypatch):
+    """MuJoCo's bindings ship as mujoco-core (the dependency); an old environment has only the
+    mujoco metapackage, which is read when there is no core."""
+    import importlib.metadata as md
+
+    installed = {"mujoco-core": "4.0.1", "mujoco": "4.0.0"}
+
+    def version(dist):
+        if dist in installed:
+            return installed[dist]
+        raise md.PackageNotFoundError(dist)
+
+    monkeypatch.setattr(md, "version", version)
+    assert provenance.versions()["mujoco"] == "4.0.1"
+    del installed["mujoco-core"]
+    assert provenance.versions()["mujoco"] == "4.0.0"
+    installed.clear()
+    assert provenance.versions()["mujoco"] is None

@@ -1,6 +1,7 @@
 """dopt.render: the fitted camera frames every point, projection agrees with what OpenGL draws,
-markers land where the points project, segmentation masks, and a replayed plan ends where the
-rollout service's does. The rendering tests skip where no offscreen OpenGL is available."""
+markers land where the points project, and segmentation masks. The rendering tests skip where no
+offscreen OpenGL is available. (The replay of a plan is the pick wing's:
+tests/dopt/tasks/pick/test_replay.py.)"""
 
 import os
 
@@ -12,7 +13,6 @@ import pytest  # noqa: E402
 
 from dopt import render  # noqa: E402
 from dopt.tasks.pick.cloth_scene import ClothSceneConfig, make_cloth  # noqa: E402
-from dopt.tasks.pick.scene import PickPlaceTask  # noqa: E402
 
 W, H = 320, 240
 
@@ -140,22 +140,3 @@ def test_render_options_leave_the_model_alone(cloth, gl):
     with pytest.raises(ValueError, match="offscreen buffer"):
         render.render(m, cloth.initial_state, cloth.scene.layout.spec, cam,
                       m.vis.global_.offwidth + 1, 10)
-
-
-def test_replay_ends_where_the_rollout_does(cloth):
-    particles = np.array([0, -1, 35])
-    displacements = np.array([[0.05, 0.02, 0.04], [0.0, 0.0, 0.0], [-0.03, 0.0, 0.02]])
-    task = PickPlaceTask(cloth, cloth.positions(cloth.initial_state))
-    final = task.execute(particles, displacements).state
-    actions = [{"particles": particles[:2].tolist(), "displacements": displacements[:2].tolist()},
-               {"particles": particles[2:].tolist(), "displacements": displacements[2:].tolist()}]
-    rep = render.replay(cloth, cloth.initial_state, actions, max_frames=40)
-    assert 2 < len(rep.states) <= 40 and len(rep.step) == len(rep.states)
-    np.testing.assert_array_equal(rep.states[0], cloth.initial_state)
-    np.testing.assert_allclose(cloth.positions(rep.states[-1]), cloth.positions(final),
-                               atol=1e-9)
-    K = cloth.picker.steps_per_action
-    assert rep.step[-1] == 3 * K and np.all(np.diff(rep.step) > 0)
-    assert rep.stage[-1] == 1 and rep.action[-1] == 0 and rep.stage.min() == 0
-    with pytest.raises(ValueError):
-        render.replay(cloth, cloth.initial_state, actions, max_frames=1)

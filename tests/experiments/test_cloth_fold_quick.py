@@ -52,10 +52,13 @@ def _check_summary(out: Path, goal: str, extra=()):
     return summary
 
 
-def test_cloth_fold_quick_writes_everything_and_resumes(tmp_path):
+def test_cloth_fold_quick_writes_everything_and_resumes(tmp_path, capsys):
     out = tmp_path / "diag"
     assert cloth_fold.main(["--quick", "--goal", "diagonal", "--out", str(out)]) == 0
     first = _check_summary(out, "diagonal")
+    # said before the run: how long, from a calibration rollout
+    printed = capsys.readouterr().out
+    assert "1 seed x 4 methods: about " in printed and "calibration rollout" in printed
     for m in ("simple", "original", "random", "scripted"):
         # goal | result, from above and obliquely, 640 x 480 per view
         figure = iio.imread(out / f"goal_vs_{m}.png")
@@ -72,6 +75,7 @@ def test_cloth_fold_quick_writes_everything_and_resumes(tmp_path):
     assert cloth_fold.main(["--quick", "--goal", "diagonal", "--out", str(out),
                             "--no-render"]) == 0
     assert {p.name: p.stat().st_mtime_ns for p in (out / "trials").glob("*.json")} == stamps
+    assert "every trial is finished" in capsys.readouterr().out
     again = json.loads((out / "summary.json").read_text())
     assert again["methods"] == first["methods"]
 
@@ -125,8 +129,11 @@ def test_paper_protocol_runs_the_papers_budget():
     args, s = pick_place_cli.parse(ap, "cloth", ["--preset", "paper", "--seeds", "2",
                                                  "--n", "16", "--out", "results/x"])
     assert (args.seeds, s.n) == (2, 16)
+    # the bare command: ours's settings, one seed (a first answer); --preset ours: its three
     args, s = pick_place_cli.parse(ap, "cloth", ["--out", "results/x"])
-    assert (args.seeds, s.cem.iterations, s.n) == (3, 15, 12)
+    assert (args.preset, args.seeds, s.cem.iterations, s.n) == ("ours", 1, 15, 12)
+    args, s2 = pick_place_cli.parse(ap, "cloth", ["--preset", "ours", "--out", "results/x"])
+    assert (args.seeds, s2) == (3, s)
     rope_ap = pick_place_cli.parser("rope", "", rope.HELP)
     _, s = pick_place_cli.parse(rope_ap, "rope", ["--preset", "paper", "--goal", "fold",
                                                   "--out", "results/x"])

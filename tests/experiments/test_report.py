@@ -82,6 +82,13 @@ def run(site, *extra) -> int:
                         "--readme", str(site["readme"]), *extra])
 
 
+def headlines(site) -> str:
+    """RESULTS.md's headline of every result file (what README's block held before its map)."""
+    text = site["md"].read_text()
+    start = text.index(f"## {report.HEADLINES_TITLE}")
+    return text[start:text.index("\n## ", start + 1)]
+
+
 def block(readme: Path) -> str:
     text = readme.read_text()
     return text[text.index(report.BEGIN):text.index(report.END)]
@@ -141,10 +148,10 @@ def test_fig7_renders_mm_with_one_decimal(site):
     assert "commit `01234567`" in md
     assert "`python experiments/cloth_fold.py --goal diagonal --record " in md
     assert "[fig7_cloth_diagonal.json](results/fig7_cloth_diagonal.json)" in md
-    headline = block(site["readme"])
+    headline = headlines(site)
     assert "Fig. 7 (c) cloth diagonal fold" in headline
     assert "CEM(Simple) 13.6 ± 0.5 mm, Original 40.2, Scripted 15.8 (3 seeds)" in headline
-    assert "[fig7_cloth_diagonal.json](docs/results/fig7_cloth_diagonal.json) (01234567)" \
+    assert "[fig7_cloth_diagonal.json](results/fig7_cloth_diagonal.json) (01234567)" \
         in headline
     assert "not recorded yet" in headline                     # the other figures
     text = site["readme"].read_text()
@@ -160,7 +167,7 @@ def test_rope_straightening_shows_the_end_to_end_ratio(site):
     assert run(site) == 0
     assert "| (a) rope straightening (preset ours) |" in site["md"].read_text()
     assert "0.95 ± 0.01" in site["md"].read_text()
-    assert "end-to-end 0.95 L" in block(site["readme"])
+    assert "end-to-end 0.95 L" in headlines(site)
 
 
 def test_table1_renders_its_rows(site):
@@ -170,7 +177,7 @@ def test_table1_renders_its_rows(site):
     assert "| baseline | 1.00 ± 0.00 | 1.00 | 189 | 55.0 | 3.0 | 0.85 | 0.012 | 1 | - | 20 |" in md
     assert "| svr-sum | 0.86 ± 0.10 | 0.86 | 93 | 21.0 | 3.0 | 0.85 | 0.012 | 1 | - | 20 |" in md
     assert "1 failed trial(s)" in md and "svr-sum-seed7" in md
-    assert "svr-sum 0.86 ± 0.10 (93 ms, 21.0 DoFs)" in block(site["readme"])
+    assert "svr-sum 0.86 ± 0.10 (93 ms, 21.0 DoFs)" in headlines(site)
 
 
 def test_fig4_and_key_particles(site):
@@ -192,7 +199,7 @@ def test_fig4_and_key_particles(site):
     md = site["md"].read_text()
     assert "| 10.0 | 0 | 0.90 ± 0.05 | 0.90 | 80 | 15.0 |" in md
     assert "| cloth diagonal | 144 | 4 | 4 | 4 | 4 | 0.0 / 17.5 | 0.28 | 0 11 132 143 | - |" in md
-    headline = block(site["readme"])
+    headline = headlines(site)
     assert "lowest MPC cost / baseline 0.90 ± 0.05 at rho 10.0, theta 0" in headline
     assert "cloth diagonal 4 keys / 4 triangles (paper 4 triangles)" in headline
 
@@ -210,20 +217,27 @@ def test_unknown_kind_is_listed_not_an_error(site):
 
 
 def test_check_fails_after_a_number_changes(site, capsys):
-    path = write(site["results"], "fig7_cloth_diagonal.json", fig7())
+    path = write(site["results"], "fig7_cloth_diagonal.json", fig7(protocol="paper"))
     assert run(site) == 0
     assert run(site, "--check") == 0
     md, readme = site["md"].read_text(), site["readme"].read_text()
+    assert "CEM(Simple) closest on 1 of 1 folds" in block(site["readme"])
     data = json.loads(path.read_text())
     data["methods"]["simple"]["final_cost_mean"] = 0.01375        # 13.6 -> 13.8 mm
     path.write_text(json.dumps(data))
     capsys.readouterr()
     assert run(site, "--check") == 1
     err = capsys.readouterr().err
+    assert "RESULTS.md differs" in err and "README.md" not in err   # the map keeps its sentence
+    data["methods"]["simple"]["final_cost_mean"] = 0.05           # now farther than Scripted
+    path.write_text(json.dumps(data))
+    assert run(site, "--check") == 1
+    err = capsys.readouterr().err
     assert "RESULTS.md differs" in err and "README.md differs" in err
     assert site["md"].read_text() == md and site["readme"].read_text() == readme  # untouched
     assert run(site) == 0 and run(site, "--check") == 0
-    assert "13.8 ± 0.5" in site["md"].read_text()
+    assert "50.0 ± 0.5" in site["md"].read_text()
+    assert "CEM(Simple) closest on 0 of 1 folds" in block(site["readme"])
 
 
 def test_check_fails_on_a_hand_edit_and_the_cli_exit_code(site):
@@ -359,8 +373,7 @@ def test_table1_of_the_paper_protocol_is_shown_beside_the_published_table(site):
             "29.8 / 17.0 | 287 / 50 |") in md
     assert "Cheapest first, paper: sum-t10-r1, rand-t5, baseline; ours: sum-t10-r1, rand-t5, " \
            "baseline." in md
-    assert "Kendall tau 1.00 over 3 rows; 0 of 3 pairs in the opposite order" in block(
-        site["readme"])
+    assert "Kendall tau 1.00 over 3 rows; 0 of 3 pairs in the opposite order" in headlines(site)
 
 
 def test_panda_execution_renders_its_goals(site):
@@ -378,7 +391,7 @@ def test_panda_execution_renders_its_goals(site):
             "1 / 7 | not judged |"
             in site["md"].read_text())
     assert "diagonal: picker 14.8 mm, Panda 17.1 mm, final cloths 5.2 mm apart (3 seeds)" in \
-        block(site["readme"])
+        headlines(site)
 
 
 @pytest.mark.parametrize("a, b, want", [
@@ -404,7 +417,7 @@ def test_fig7_claims_check_whether_the_gap_grows_with_difficulty(site):
     assert [g for _, g in claims["gaps"]] == pytest.approx(list(gaps.values()))
     assert claims["grows"] is False                      # side 20 > reflective 15
     assert run(site) == 0
-    assert "it does not grow with difficulty" in block(site["readme"])
+    assert "it does not grow with difficulty" in headlines(site)
     write(site["results"], "fig7-cloth-reflective.json", fig7(goal="reflective", methods={
         **fig7()["methods"], "original": {**fig7()["methods"]["original"],
                                           "final_cost_mean": 0.013649 + 0.025}}))
@@ -416,7 +429,7 @@ def test_fig7_claims_check_whether_the_gap_grows_with_difficulty(site):
     assert claims["grows"] is None
     assert run(site) == 0
     assert "; whether it grows cannot be judged until underneath is run (the paper" in \
-        block(site["readme"])
+        headlines(site)
 
 
 def test_fig7_gap_is_not_judged_across_cloth_sizes(site):
@@ -435,7 +448,7 @@ def test_fig7_gap_is_not_judged_across_cloth_sizes(site):
     assert run(site) == 0
     assert ("diagonal 10.0 at 20 x 20, side 20.0 at 12 x 12, reflective 30.0 at 12 x 12, "
             "underneath 40.0 at 12 x 12; whether it grows cannot be judged until all folds are "
-            "run at one size") in block(site["readme"])
+            "run at one size") in headlines(site)
 
 
 def test_a_run_that_departs_from_its_protocol_is_judged_apart_and_seed_by_seed(site):
@@ -473,11 +486,11 @@ def test_a_run_that_departs_from_its_protocol_is_judged_apart_and_seed_by_seed(s
     # Simple alone claims nothing against Original or Random
     assert "population 200, elites 20 (12 x 12 particles" not in text
     # the README's table holds the protocols' runs; the departing one is named and in RESULTS
-    rows = [line for line in block(site["readme"]).splitlines()
+    rows = [line for line in headlines(site).splitlines()
             if "Fig. 7 (c) cloth diagonal fold" in line]
     assert len(rows) == 2 and not any("pop200" in line for line in rows)
-    assert ("Fig. 7 runs that change a protocol's settings (population 200, elites 20) are "
-            "there") in block(site["readme"])
+    assert ("Fig. 7 runs that change a protocol's settings (population 200, elites 20) are in "
+            "the Fig. 7 section") in headlines(site)
     assert "preset ours: the gap Original - Simple (mm) over the cloth folds" in text
     assert "it grows with difficulty" in text
     assert ("preset paper: the gap Original - Simple (mm) over the cloth folds in the paper's "
@@ -537,7 +550,7 @@ def test_rope_panels_are_judged_on_the_papers_metric(site):
                                                               "no (separate)")
     assert run(site) == 0
     assert "(40 particles, 3 seeds, matching distance): Simple < Original no (separate)" in \
-        block(site["readme"])
+        headlines(site)
 
 
 def test_cloth_step_bench_renders_the_ratio_to_the_smallest_size(site):
@@ -575,7 +588,7 @@ def test_clock_check_headline_gives_the_lag_ratios(site):
            "failed": {}, "provenance": provenance("python experiments/clock_check.py")})
     assert run(site) == 0
     assert ("clutter: lag virtual / real rand-t5 0.64, baseline 0.64; MPC cost intervals "
-            "overlap on 1 of 2 rows (10 seeds each)") in block(site["readme"])
+            "overlap on 1 of 2 rows (10 seeds each)") in headlines(site)
 
 
 def test_a_derivative_variant_run_has_its_own_row_not_table1s(site):
@@ -592,7 +605,7 @@ def test_a_derivative_variant_run_has_its_own_row_not_table1s(site):
                     "versus_opt_ms_mean": 53.9}})
     write(site["results"], "keypoints-clutter.json", data)
     assert run(site) == 0
-    readme = block(site["readme"])
+    readme = headlines(site)
     assert ("sum-t10-r1 +skip5 / sum-t10-r1: MPC cost 0.97 (0.94-1.01), lag 7.5 / 13.4 steps, "
             "opt. time 30 / 54 ms (100 seeds)") in readme
     row = next(line for line in readme.splitlines() if "keypoints-clutter.json" in line)
@@ -675,7 +688,7 @@ def test_a_sweep_without_its_summary_is_shown_seed_by_seed_until_recorded(site):
     assert "| CEM(Simple) | 0, 3 | 6.9, 4.9 | 68.3 | 2050 | 1 / 1922 | 0 |" in part
     assert "| CEM(Random) | 1 | 30.4 |" in part
     assert "3 trials, 5600 s of trials (1.6 h of one core)." in part
-    assert "fig7-cloth-side" not in block(site["readme"])   # partial: never a headline
+    assert "fig7-cloth-side" not in headlines(site)   # partial: never a headline
     # a summary recorded for some of them leaves the others listed
     partial = fig7(goal="side")
     partial["methods"]["simple"]["seeds"] = [0, 1, 2]
@@ -768,7 +781,7 @@ def test_fig7_claims_give_the_welch_difference_and_which_gap_intervals_are_separ
     assert claims["separate"] == [("diagonal", "side"), ("diagonal", "underneath"),
                                   ("side", "underneath"), ("reflective", "underneath")]
     assert run(site) == 0
-    text = block(site["readme"])
+    text = headlines(site)
     assert "Simple < Original yes (separate; difference 30.0 ± 4.0 mm, Holm p " in text
     assert ("diagonal 10.0 ± 4.0, side 20.0 ± 4.0, reflective 15.0 ± 4.0, underneath "
             "30.0 ± 4.0; it does not grow with difficulty; gap intervals separate only for "
@@ -781,7 +794,7 @@ def test_fig7_claims_give_the_welch_difference_and_which_gap_intervals_are_separ
         write(site["results"], f"fig7-cloth-{goal}.json", data)
     assert run(site) == 0
     assert ("it does not grow with difficulty; no two folds' gap intervals are separate, so "
-            "these seeds cannot order the folds by their gap") in block(site["readme"])
+            "these seeds cannot order the folds by their gap") in headlines(site)
 
 
 # ------------------------------------------------------ Holm's correction of the claims
@@ -845,7 +858,7 @@ def test_fig7_cloth_claims_are_judged_as_one_family_with_holm(site):
     assert family["uncorrected"] == sum(p <= 0.05 for p in pvalues)
     assert family["bonferroni"] == sum(8 * p <= 0.05 for p in pvalues)
     assert run(site) == 0
-    text = block(site["readme"])
+    text = headlines(site)
     assert "Holm p: Welch's p-value of the difference adjusted by Holm's correction" in text
     assert (f"- preset paper, cloth folds: with Holm's correction over the family's 8 "
             f"Simple-vs-Original/Random differences (family-wise 5 %), {8 - len(kept)} of 8 "
@@ -883,14 +896,14 @@ def test_trials_from_uncommitted_code_are_counted_next_to_the_result(site):
     md = site["md"].read_text()
     assert ("Trials: 3 committed under `runs/t1/`, written at `aaaaaaaa-dirty` (2), "
             "`bbbbbbbb` (1); **2 of 3 trials from uncommitted code**.") in md
-    assert "; **2 of 3 trials from uncommitted code** |" in block(site["readme"])
+    assert "; **2 of 3 trials from uncommitted code** |" in headlines(site)
     # a summary whose trials are not committed shows its own trial_commits
     data["provenance"] = provenance("python experiments/mpc.py --task clutter --out results/x")
     write(site["results"], "table1-clutter.json", data)
     assert run(site) == 0
     assert ("Trial commits (the summary's \"trial_commits\"; its trials are not committed): "
             "`aaaaaaaa-dirty` (2), `bbbbbbbb` (1).") in site["md"].read_text()
-    assert "uncommitted code" not in block(site["readme"])
+    assert "uncommitted code" not in headlines(site)
 
 
 def snapshot(site, **extra) -> None:
@@ -922,12 +935,12 @@ def test_a_result_whose_preset_was_redefined_is_shown_stale(site):
     current = fig7(physics=physics, settings={**fig7()["settings"], "physics": "default"})
     write(site["results"], "fig7-cloth-diagonal.json", current)
     assert run(site) == 0
-    assert "stale" not in block(site["readme"]).lower()
+    assert "stale" not in headlines(site).lower()
     old = {**physics, "scene": {**physics["scene"], "young": 5e4, "timestep": 0.02}}
     write(site["results"], "fig7-cloth-diagonal.json", {**current, "physics": old})
     assert run(site) == 0
     assert ("**stale**: cloth physics preset `default` now resolves to young 50000 → 500000, "
-            "timestep 0.02 → 0.005 |") in block(site["readme"])
+            "timestep 0.02 → 0.005 |") in headlines(site)
     assert "**Stale**: recorded on presets that today's code resolves otherwise" in \
         site["md"].read_text()
     # the protocol's budget redefined: its CEM iterations
@@ -936,7 +949,7 @@ def test_a_result_whose_preset_was_redefined_is_shown_stale(site):
     write(site["results"] / "presets", "resolved.json", redefined)
     write(site["results"], "fig7-cloth-diagonal.json", current)
     assert run(site) == 0
-    assert "**stale**: protocol `ours` now sets cem.iterations 15 → 30" in block(site["readme"])
+    assert "**stale**: protocol `ours` now sets cem.iterations 15 → 30" in headlines(site)
     assert run(site, "--check") == 0
 
 
@@ -962,7 +975,7 @@ def test_a_result_recording_only_a_preset_name_is_checked_at_its_commit(site):
         "n": 16, "young": 5e4, "timestep": 0.02}}}}}})
     assert run(site) == 0
     assert ("**stale**: diagonal: cloth physics preset `default` now resolves to young "
-            "50000 → 500000, timestep 0.02 → 0.005") in block(site["readme"])
+            "50000 → 500000, timestep 0.02 → 0.005") in headlines(site)
 
 
 def test_a_table1_result_is_checked_on_its_trials_settings(site):
@@ -979,8 +992,46 @@ def test_a_table1_result_is_checked_on_its_trials_settings(site):
             "clock": "virtual", "control_noise": 0.05}, "c" * 40)
     assert run(site) == 0
     assert ("**stale**: protocol `paper` on clutter now sets cost \"paper-reach\" → \"paper\"" in
-            block(site["readme"]))
+            headlines(site))
     data["provenance"] = provenance(cmd + " --cost paper-reach")
     write(site["results"], "table1-clutter.json", data)
     assert run(site) == 0
-    assert "stale" not in block(site["readme"])
+    assert "stale" not in headlines(site)
+
+
+# ------------------------------------------------------------------------- README's map
+def test_the_committed_readme_map_is_compact_and_links_to_results_md():
+    """README's block is the map: one row per paper figure or table (``report_map.ROWS``), no
+    cell over ``MAX_CELL`` characters, each row's link an anchor of a RESULTS.md heading."""
+    import report_map
+
+    readme, md = (ROOT / "README.md"), (ROOT / "docs" / "RESULTS.md")
+    rows = [line for line in block(readme).splitlines() if line.startswith("| ")][1:]
+    assert len(rows) == len(report_map.ROWS)
+    for row in rows:
+        cells = [c.strip() for c in row.strip("|").split(" | ")]
+        assert max(map(len, cells)) <= report_map.MAX_CELL, row
+    anchors = {report_map.anchor(line.lstrip("#")) for line in md.read_text().splitlines()
+               if line.startswith("## ")}
+    for row in report_map.ROWS:
+        assert report_map.anchor(row.section) in anchors, row.section
+    assert report_map.anchor(report_map.HEADLINES_TITLE) in anchors
+
+
+def test_map_rows_read_the_protocols_files(site):
+    """The cloth row reads the paper protocol's files (which method ends closest); a file of
+    our preset is in RESULTS.md only."""
+    import report_map
+
+    write(site["results"], "fig7_ours.json", fig7())
+    assert run(site) == 0
+    assert "| Fig. 7 (c-f): cloth diagonal, side, reflective, underneath folds |" in \
+        block(site["readme"])
+    assert "CEM(Simple) closest" not in block(site["readme"])       # ours: not the protocol
+    write(site["results"], "fig7_paper.json", fig7(protocol="paper"))
+    assert run(site) == 0
+    line = report_map.cloth_line(report.load_results(site["results"]))
+    # one difference (to Original) is no family to correct: no Holm count
+    assert line == "CEM(Simple) closest on 1 of 1 folds (12 x 12, 3 seeds)"
+    assert report_map.anchor("Key particles, Fig. 7: final cost of pick-and-place") == \
+        "key-particles-fig-7-final-cost-of-pick-and-place"

@@ -6,6 +6,10 @@
                     mean_distance, end_to_end, matching_distance (the paper's metrics)
     cloth_scene.py  ClothSceneConfig, make_cloth; rope_scene.py: RopeSceneConfig, make_rope
     fold_goals.py   cloth goals folded on the MuJoCo sheet by a line grasp (fold_goal, folds)
+    replay.py       a recorded plan re-executed with mj_step, its frames kept (replay, Replay)
+    panda_gripper.py  a Panda with a two-finger hand executes picker plans (the arm is
+                    the neutral dopt.tasks.panda, shared with the push wing)
+    constraints.py  the action constraint C(a_t): the picker's workspace box
 
 The scene builders are registered by name in ``dopt.tasks.PICK_SCENES``.
 """

@@ -2,7 +2,7 @@
 rope open-loop through inverse kinematics, as the key-particle paper's Sec. IV-D did on
 hardware; the floating picker is what the plans were made with.
 
-The arm is ``dopt.tasks.push.panda``'s (7 torque-driven joints, gravity compensated, joint
+The arm is ``dopt.tasks.panda``'s (7 torque-driven joints, gravity compensated, joint
 damping 100 / 10 N m s/rad) with the pusher replaced by a hand: two fingers on slide joints
 (position actuators, 0-4 cm each) and the site ``PINCH`` between the fingertips, 0.1034 m from
 the flange (Franka's hand). It stands on the floor at ``base``, facing +x, beside the object.
@@ -34,15 +34,15 @@ import numpy as np
 
 from dopt.scene import Scene
 from dopt.stability import Monitor, Stability
-from dopt.tasks.pick.picker import fix_grasp_anchors, grasp_equalities, smooth_profile
-from dopt.tasks.pick.scene import DeformableScene
-from dopt.tasks.push.panda import (
+from dopt.tasks.panda import (
     JOINT_NAMES,
     Q_LOWER,
     Q_UPPER,
     TAU_MAX,
     panda_spec,
 )
+from dopt.tasks.pick.picker import fix_grasp_anchors, grasp_equalities, smooth_profile
+from dopt.tasks.pick.scene import DeformableScene
 from dopt.validation import check_config, float_array
 
 log = logging.getLogger(__name__)

@@ -1,6 +1,5 @@
 """The pushing wing of ``dopt.tasks``: the Franka Panda pushes rigid cylinders and soft bodies.
 
-    panda.py       the arm (shipped MJCF in assets/, DH table, torch FK chain, IK, table scene)
     task_model.py  TaskModel (one built task: model, initial state, what the cost looks at),
                    planar_dofs, require_generator
     clutter.py     build_clutter; soft.py: build_soft, build_soft_rigid
@@ -10,5 +9,7 @@
     contact.py     robot_contact: whether the robot touches the pushed object, per state
     costs.py       push_cost (Eq. 2-3), PushWeights, goal_distance (imports torch)
 
-The builders are registered by CLI name in ``dopt.tasks.PUSH_TASKS``.
+The arm is the neutral ``dopt.tasks.panda`` (shared with the pick wing's executor: the
+wings never import each other). The builders are registered by CLI name in
+``dopt.tasks.PUSH_TASKS``.
 """

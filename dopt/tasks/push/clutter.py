@@ -19,7 +19,7 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
-from dopt.tasks.push.panda import TOOL_RADIUS, ik_pointing_down, rest_state, table_scene_spec
+from dopt.tasks.panda import TOOL_RADIUS, ik_pointing_down, rest_state, table_scene_spec
 from dopt.tasks.push.task_model import TaskModel, require_generator
 
 log = logging.getLogger(__name__)

@@ -37,8 +37,8 @@ import numpy as np
 
 from dopt.costs import EEDistanceTerm, QuadraticCost
 from dopt.scene import Scene
+from dopt.tasks.panda import TAU_MAX
 from dopt.tasks.push.clutter import STANDOFF
-from dopt.tasks.push.panda import TAU_MAX
 from dopt.tasks.push.task_model import TaskModel, planar_dofs
 from dopt.validation import check_config
 
@@ -160,7 +160,7 @@ def push_cost(tm: TaskModel, scene: Scene, weights: PushWeights = PushWeights())
     r = W.torque / TAU_MAX ** 2
     terms = []
     if W.ee or W.ee_f or W.reach or W.reach_f:
-        from dopt.tasks.push.panda import ee_chain
+        from dopt.tasks.panda import ee_chain
         chain = ee_chain()
 
         def fk(q):

@@ -25,6 +25,8 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
+from dopt.stability import StabilityBounds
+from dopt.tasks.panda import TOOL_RADIUS, ik_pointing_down, rest_state, table_scene_spec
 from dopt.tasks.push.clutter import (
     CYLINDER_HALF_HEIGHT,
     CYLINDER_RADIUS,
@@ -36,7 +38,6 @@ from dopt.tasks.push.clutter import (
     add_goal_marker,
     draw_heading,
 )
-from dopt.tasks.push.panda import TOOL_RADIUS, ik_pointing_down, rest_state, table_scene_spec
 from dopt.tasks.push.task_model import TaskModel, require_generator
 
 log = logging.getLogger(__name__)
@@ -184,9 +185,10 @@ def _half_depth(points: np.ndarray, radius: float = VERTEX_RADIUS) -> float:
 
 
 def _finish(name: str, spec: mujoco.MjSpec, block: _Block, goal: np.ndarray, goal_object: str,
-            horizon: int, slowdown: int, settle_steps: int = SETTLE_STEPS) -> TaskModel:
+            horizon: int, slowdown: int, settle_steps: int = SETTLE_STEPS,
+            stability: StabilityBounds = StabilityBounds()) -> TaskModel:
     """Compile the scene, settle it with the pusher tip at ``block.tip`` (``settle_steps`` of
-    zero control), and describe the task."""
+    zero control), and describe the task (``stability``: its rollouts' bounds)."""
     model = spec.compile()
     state = rest_state(model, ik_pointing_down(np.array([*block.tip, EE_HEIGHT])), settle_steps)
     log.debug("%s: block at %s, heading %.3f, goal %s", name, block.centre, block.heading, goal)
@@ -203,6 +205,7 @@ def _finish(name: str, spec: mujoco.MjSpec, block: _Block, goal: np.ndarray, goa
         timeout=TIMEOUT,
         slowdown=slowdown,
         pushed_object_name=SOFT_BODY,
+        stability=stability,
     )
 
 

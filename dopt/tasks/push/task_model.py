@@ -8,7 +8,8 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
-from dopt.tasks.push.panda import BODY_NAMES, EE_SITE, JOINT_NAMES
+from dopt.stability import StabilityBounds
+from dopt.tasks.panda import BODY_NAMES, EE_SITE, JOINT_NAMES
 
 
 @dataclass(frozen=True, eq=False)
@@ -40,6 +41,8 @@ class TaskModel:
             the torque of ``robot_joints[i]``, N m).
         robot_bodies: the arm's bodies, base first, pusher tool last.
         ee_site: the end-effector site (the centre of the pusher's round tip).
+        stability: the bounds a rollout of this task must keep (``dopt.stability``); the
+            default except where a material needs others (the authors' soft blocks).
     """
 
     name: str
@@ -57,6 +60,7 @@ class TaskModel:
     robot_joints: tuple[str, ...] = JOINT_NAMES
     robot_bodies: tuple[str, ...] = BODY_NAMES
     ee_site: str = EE_SITE
+    stability: StabilityBounds = StabilityBounds()
 
     @property
     def pushed_object(self) -> str:

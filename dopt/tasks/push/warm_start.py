@@ -48,8 +48,8 @@ import mujoco
 import numpy as np
 
 from dopt.state import INTEGRATION
+from dopt.tasks.panda import TOOL_RADIUS
 from dopt.tasks.push.clutter import EE_HEIGHT
-from dopt.tasks.push.panda import TOOL_RADIUS
 from dopt.tasks.push.task_model import TaskModel
 from dopt.validation import check_config, check_int, float_array
 

@@ -17,9 +17,9 @@ import pytest
 from dopt.rollout import RolloutConfig, RolloutService
 from dopt.scene import Scene
 from dopt.tasks import AUTHORS_PUSH_TASKS, PUSH_TASKS, build_push_task
+from dopt.tasks.panda import TABLE_NAME
 from dopt.tasks.push import authors
 from dopt.tasks.push.clutter import DISTRACTORS, GOAL_CYLINDER
-from dopt.tasks.push.panda import TABLE_NAME
 from dopt.tasks.push.soft import SoftMaterial, add_soft_block, block_mesh
 
 EXTERNAL = Path(__file__).resolve().parents[3] / ".." / "shared" / "external"
@@ -180,7 +180,7 @@ def front_gap(task, data) -> float:
 def elastic_stiffness(counts: tuple[int, int, int]) -> np.ndarray:
     """MuJoCo's compiled element stiffness (``flex_stiffness``) of a block of ``counts``
     vertices 0.07 m apart with Young 4e3 Pa and Poisson 0 (it does not depend on the pose)."""
-    from dopt.tasks.push.panda import table_scene_spec
+    from dopt.tasks.panda import table_scene_spec
     points, tets = block_mesh(counts, 0.07)
     spec = table_scene_spec(0.004, mujoco.mjtIntegrator.mjINT_DISCRETE)
     add_soft_block(spec, points, tets, np.zeros(2), 0.0,
@@ -271,7 +271,7 @@ def test_build_push_task_gives_their_soft_scenes(name):
 
 def test_edge_damping_is_rejected_under_discrete():
     """Why their edge damping is carried as Rayleigh damping (module docstring)."""
-    from dopt.tasks.push.panda import table_scene_spec
+    from dopt.tasks.panda import table_scene_spec
     points, tets = block_mesh((3, 4, 3), 0.07)
     spec = table_scene_spec(0.004, mujoco.mjtIntegrator.mjINT_DISCRETE)
     add_soft_block(spec, points, tets, np.array([0.5, 0.0]), 0.0, authors.SOFT_MATERIAL)
@@ -385,3 +385,22 @@ def test_authors_clutter_needs_layouts(tmp_path):
 def test_build_push_task_rejects_bad_arguments(args, error, match):
     with pytest.raises(error, match=match):
         build_push_task(*args)
+
+
+def test_the_authors_soft_blocks_carry_their_strain_bound_into_the_controller():
+    """Their 4 kPa blocks compress by about half under the push, so their tasks judge strain
+    at SOFT_STRAIN_BOUND; ours keep the default; the MPC controller's scene uses the task's."""
+    from dopt.stability import StabilityBounds
+    from dopt.tasks.push.authors import SOFT_STRAIN_BOUND
+    from planners.svr import SelectionConfig
+    from planners.svr_mpc import build_controller
+
+    ours = build_push_task("soft_rigid", "ours", 0)
+    theirs = build_push_task("soft_rigid", "authors", 0)
+    assert ours.stability == StabilityBounds()
+    assert theirs.stability.max_strain == SOFT_STRAIN_BOUND > StabilityBounds().max_strain
+    ctl = build_controller(theirs, SelectionConfig("baseline"), np.random.default_rng(0))
+    try:
+        assert ctl.scene.monitor.bounds.max_strain == SOFT_STRAIN_BOUND
+    finally:
+        ctl.service.close()

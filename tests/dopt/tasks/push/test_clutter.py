@@ -6,6 +6,7 @@ import mujoco
 import numpy as np
 import pytest
 
+from dopt.tasks.panda import TOOL_RADIUS
 from dopt.tasks.push.clutter import (
     CYLINDER_HALF_HEIGHT,
     CYLINDER_RADIUS,
@@ -16,7 +17,6 @@ from dopt.tasks.push.clutter import (
     build_clutter,
     sample_layout,
 )
-from dopt.tasks.push.panda import TOOL_RADIUS
 
 
 @pytest.mark.parametrize("seed", range(20))

@@ -6,7 +6,7 @@ import mujoco
 import numpy as np
 import pytest
 
-from dopt.tasks.push.panda import table_scene_spec
+from dopt.tasks.panda import table_scene_spec
 from dopt.tasks.push.soft import (
     DENSITY,
     SOFT_BODY,

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from dopt.tasks import PUSH_TASKS, TaskModel
-from dopt.tasks.push.panda import BODY_NAMES, JOINT_NAMES, TAU_MAX
+from dopt.tasks.panda import BODY_NAMES, JOINT_NAMES, TAU_MAX
 
 # nv, T, Y, slowdown, iLQR-Naive DoFs (paper Sec. 5.1 and Table 1); nu = 7 and dt = 0.004 for all
 PAPER = {

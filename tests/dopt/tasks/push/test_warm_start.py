@@ -9,9 +9,9 @@ from dopt.costs import EEDistanceTerm
 from dopt.scene import Scene
 from dopt.state import INTEGRATION
 from dopt.tasks import PUSH_TASKS
+from dopt.tasks.panda import TOOL_RADIUS, arm_qpos_index, ik_pointing_down
 from dopt.tasks.push import warm_start as ws
 from dopt.tasks.push.costs import COST_PRESETS, PushWeights, push_cost
-from dopt.tasks.push.panda import TOOL_RADIUS, arm_qpos_index, ik_pointing_down
 
 
 @pytest.fixture(scope="module", params=sorted(PUSH_TASKS))

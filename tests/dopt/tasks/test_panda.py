@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 import torch
 
-from dopt.tasks.push import panda
+from dopt.tasks import panda
 
 
 @pytest.fixture(scope="module")

@@ -1,0 +1,253 @@
+"""The README's map of the papers' figures and tables (the block between the results markers).
+
+One row per figure or table of the two papers: the command that reproduces it, one headline
+sentence read from the result files, and a link to its section of RESULTS.md, where every
+table, per-seed number, setting and recorded command is. No cell is longer than ``MAX_CELL``
+characters. A row whose files are stale or hold trials from uncommitted code says so in its
+link cell. Standard library only (report.py's rule).
+"""
+
+from __future__ import annotations
+
+import os
+import re
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+from report_base import KP, REGENERATE, SVR, Result, _label, cell, mm, num, table
+from report_fig7 import CLOTH_DIFFICULTY, _departs, fig7_claims
+from report_svr import _table1_columns, orderings, paper_preset_table1, paper_table1
+
+#: the longest cell the map may have (characters, Markdown included)
+MAX_CELL = 160
+#: the RESULTS.md section of the headline of every result file (report.headlines_section)
+HEADLINES_TITLE = "Headlines: every result file in one line"
+
+
+def anchor(title: str) -> str:
+    """GitHub's anchor of a Markdown heading: lower case, punctuation but hyphens and
+    underscores dropped, spaces as hyphens."""
+    return re.sub(r"[^\w\- ]", "", title.strip().lower()).replace(" ", "-")
+
+
+def _paper(results: list[Result], kind: str, **where) -> list[Result]:
+    """The files of ``kind`` (not quick) whose fields equal ``where``; Fig. 7 files that
+    depart from their protocol are left out (RESULTS.md shows them beside it)."""
+    return [r for r in results if r.kind == kind and not r.quick and not _departs(r)
+            and all(r.data.get(k) == v for k, v in where.items())]
+
+
+# ---------------------------------------------------------------------------- headlines
+def kp_line(results: list[Result]) -> str | None:
+    """Key counts of the library's goals against the paper's (rope keys, cloth triangles)."""
+    files = _paper(results, "key_particles")
+    if not files:
+        return None
+    d = files[-1].data
+    tasks, paper = d.get("tasks") or {}, d.get("paper") or {}
+
+    def counts(prefix: str, field: str, source: dict) -> str:
+        return " / ".join(str((source.get(t) or {}).get(field, "-")) for t in tasks
+                          if t.startswith(prefix))
+
+    return (f"rope keys {counts('rope', 'n_keys', tasks)} (paper "
+            f"{counts('rope', 'keys', paper)}); cloth keys {counts('cloth', 'n_keys', tasks)} "
+            f"on {counts('cloth', 'n_elements', tasks)} triangles (paper "
+            f"{counts('cloth', 'triangles', paper)})")
+
+
+def _closest(r: Result) -> str:
+    """Which method ends closest to the goal on a Fig. 7 file, and CEM(Simple)'s distance."""
+    ms = {m: e for m, e in r.data["methods"].items()
+          if isinstance(e.get("final_cost_mean"), (int, float))}
+    if not ms:
+        return f"{r.data.get('goal')}: no finite result"
+    best = min(ms, key=lambda m: ms[m]["final_cost_mean"])
+    text = f"{r.data.get('goal')}: {_label(best)} closest, {mm(ms[best]['final_cost_mean'])} mm"
+    if best != "simple" and "simple" in ms:
+        text += f" (Simple {mm(ms['simple']['final_cost_mean'])})"
+    return text
+
+
+def rope_line(results: list[Result]) -> str | None:
+    """The closest method on each rope panel under the paper's protocol."""
+    files = [r for goal in ("straighten", "fold")
+             for r in _paper(results, "fig7", task="rope", goal=goal, protocol="paper")[-1:]]
+    if not files:
+        return None
+    seeds = max(e.get("n") or 0 for r in files for e in r.data["methods"].values())
+    return "; ".join(_closest(r) for r in files) + f" ({seeds} seeds)"
+
+
+def cloth_line(results: list[Result]) -> str | None:
+    """Under the paper's protocol: on how many folds CEM(Simple) ends closest, the family's
+    differences that exclude zero under Holm, and whether the gap to Original grows."""
+    files = [r for goal in CLOTH_DIFFICULTY
+             for r in _paper(results, "fig7", task="cloth", goal=goal, protocol="paper")[-1:]]
+    if not files:
+        return None
+    claims = fig7_claims(files)
+    closest = sum(
+        min(ms, key=lambda m: ms[m]["final_cost_mean"]) == "simple"
+        for r in files
+        if (ms := {m: e for m, e in r.data["methods"].items()
+                   if isinstance(e.get("final_cost_mean"), (int, float))}))
+    n = (files[0].data.get("settings") or {}).get("n")
+    seeds = max(e.get("n") or 0 for r in files for e in r.data["methods"].values())
+    text = (f"CEM(Simple) closest on {closest} of {len(files)} folds ({n} x {n}, "
+            f"{seeds} seeds)")
+    family = next((f for f in claims["families"] if f["task"] == "cloth"), None)
+    if family and family["m"] > 1:
+        text += f"; {len(family['rejected'])} of {family['m']} differences exclude zero (Holm)"
+    grows = next((g["grows"] for g in claims["cloth"]), None)
+    if grows is not None:
+        text += "; the gap to Original " + ("grows" if grows else "does not grow")
+    return text
+
+
+def panda_line(results: list[Result]) -> str | None:
+    """How far the Panda's executions end from the goal against the picker's, per goal."""
+    files = _paper(results, "panda_execute")
+    if not files:
+        return None
+    goals = files[-1].data["goals"]
+
+    def each(field: str) -> str:
+        return " / ".join(mm(e[field]) for e in goals.values())
+
+    seeds = " / ".join(sorted({str(e["n"]) for e in goals.values()}))
+    return (f"the Panda ends {each('panda_final_cost_mean')} mm from the goal, the picker "
+            f"{each('picker_final_cost_mean')} ({' / '.join(goals)}, {seeds} seeds)")
+
+
+def table1_line(results: list[Result]) -> str | None:
+    """The cheapest reduced row per task under the authors' protocol, and Kendall's tau of
+    our order against the paper's printed one."""
+    _, published = paper_table1(results)
+    parts, taus = [], []
+    for task in ("clutter", "soft", "soft_rigid"):
+        r = paper_preset_table1(results, task)
+        if r is None:
+            continue
+        rows = {k: m["mpc_cost_normalised_mean"] for k, m in r.data["methods"].items()
+                if k != "baseline" and isinstance(m.get("mpc_cost_normalised_mean"),
+                                                  (int, float))}
+        if rows:
+            best = min(rows, key=rows.get)
+            parts.append(f"{task} {best} {num(rows[best])}")
+        if task in published:
+            taus.append(num(orderings(*_table1_columns(published[task], r.data))["kendall_tau"]))
+    if not parts:
+        return None
+    text = "cheapest reduced row / baseline: " + ", ".join(parts)
+    if taus:
+        text += f"; order vs the paper's: Kendall tau {' / '.join(taus)}"
+    return text
+
+
+def fig4_line(results: list[Result]) -> str | None:
+    files = _paper(results, "fig4")
+    if not files:
+        return None
+    d = files[-1].data
+    points = [p for p in d.get("points") or [] if isinstance(p.get("mpc_cost_normalised_mean"),
+                                                            (int, float))]
+    if not points:
+        return None
+    best = min(points, key=lambda p: p["mpc_cost_normalised_mean"])
+    rhos = sorted({p.get("rho") for p in points})
+    return (f"{d.get('task')}: lowest cost / baseline {num(best['mpc_cost_normalised_mean'])} at "
+            f"rho {_g(best.get('rho'))}, theta {best.get('theta')}; {len(rhos)} rho from "
+            f"{_g(rhos[0])} to {_g(rhos[-1])}")
+
+
+def _g(x) -> str:
+    """A number as the commands write it: 50, 0.5, 1e6."""
+    return f"{x:g}".replace("e+0", "e").replace("e+", "e") if isinstance(x, (int, float)) \
+        else str(x)
+
+
+# --------------------------------------------------------------------------------- rows
+@dataclass(frozen=True)
+class MapRow:
+    """A figure or table of a paper: the command that reproduces it (the short form; the
+    recorded commands are in RESULTS.md), the RESULTS.md section with its details, the
+    headline sentence from the result files, and which files the row reads."""
+
+    paper: str
+    item: str
+    command: str
+    section: str
+    headline: Callable[[list[Result]], str | None]
+    reads: Callable[[Result], bool]
+
+
+def _fig7(task: str) -> Callable[[Result], bool]:
+    return lambda r: (r.kind == "fig7" and r.data.get("task") == task and not r.quick
+                      and r.data.get("protocol") == "paper" and not _departs(r))
+
+
+ROWS = (
+    MapRow(KP, "Fig. 4, Sec. IV-C.1: key particles of each goal",
+           "python experiments/key_particles.py --task all",
+           "Key particles, Fig. 4 and Sec. IV-C.1: key particles of each goal", kp_line,
+           lambda r: r.kind == "key_particles" and not r.quick),
+    MapRow(KP, "Fig. 7 (a, b): rope straightening, folding",
+           "python experiments/rope.py --preset paper --goal straighten",
+           "Key particles, Fig. 7: final cost of pick-and-place", rope_line, _fig7("rope")),
+    MapRow(KP, "Fig. 7 (c-f): cloth diagonal, side, reflective, underneath folds",
+           "python experiments/cloth_fold.py --preset paper --goal diagonal",
+           "Key particles, Fig. 7: final cost of pick-and-place", cloth_line, _fig7("cloth")),
+    MapRow(KP, "Sec. IV-D: a Panda executes the plans",
+           "python experiments/panda_execute.py --seeds 3",
+           "Key particles, Sec. IV-D: a Panda executes the plans", panda_line,
+           lambda r: r.kind == "panda_execute" and not r.quick),
+    MapRow(SVR, "Table 1: clutter, soft, soft_rigid",
+           "python experiments/mpc.py --task clutter --preset paper",
+           "State-vector reduction, Table 1 beside the paper", table1_line,
+           lambda r: (r.kind == "table1" and r.data.get("preset") == "paper" and not r.quick
+                      and not r.data.get("derivatives_effect") and r.data.get("cost") != "ee")),
+    MapRow(SVR, "Fig. 4: rho and theta",
+           "python experiments/rho_sweep.py --task clutter --preset paper",
+           "State-vector reduction, Fig. 4: importance threshold rho and random DoFs theta",
+           fig4_line, lambda r: r.kind == "fig4" and not r.quick),
+)
+
+
+def _notes(files: list[Result]) -> str:
+    """"stale" and "N of M trials from uncommitted code" over a row's files ("" for none)."""
+    notes = []
+    if any(r.notes.get("stale") for r in files):
+        notes.append("**stale**")
+    infos = [r.notes.get("trials") for r in files if r.notes.get("trials") is not None]
+    dirty, total = sum(i.uncommitted for i in infos), sum(i.n for i in infos)
+    if dirty:
+        notes.append(f"**{dirty} of {total} trials from uncommitted code**")
+    return "".join(f"; {n}" for n in notes)
+
+
+def map_block(results: list[Result], readme: Path, results_md: Path) -> str:
+    """The README's block (between the markers, markers excluded)."""
+    rel = Path(os.path.relpath(results_md, Path(readme).parent)).as_posix()
+    rows = []
+    for row in ROWS:
+        headline = row.headline(results)
+        files = [r for r in results if row.reads(r)]
+        details = f"[RESULTS.md]({rel}#{anchor(row.section)})" + _notes(files)
+        rows.append([row.paper, row.item, f"`{row.command}`",
+                     headline if headline is not None else "not recorded yet", details])
+    for r in rows:
+        for c in r:
+            if len(cell(c)) > MAX_CELL:
+                raise ValueError(f"README map cell over {MAX_CELL} characters: {c!r}")
+    return "\n".join([
+        f"<!-- generated by experiments/report.py from the result files; edit those, then run "
+        f"`{REGENERATE}` -->",
+        *table(["paper", "figure / table", "command", "headline", "details"], rows), "",
+        f"[{rel}]({rel}) holds every table, per-seed number and setting with the command that "
+        f"recorded it, the headline of every result file "
+        f"([{HEADLINES_TITLE.split(':')[0].lower()}]({rel}#{anchor(HEADLINES_TITLE)})), and what "
+        "goes beyond the papers: the end-effector cost term, derivatives at key timesteps, "
+        "control limits in the backward pass, the virtual clock, the physics presets and the "
+        "benchmarks."])
