@@ -161,7 +161,8 @@ def rope_crossed_triangle(n: int = ROPE_PARTICLES, length: float = ROPE_LENGTH,
     A, B, C and D.
 
     Raises:
-        ValueError: if the legs cannot form such a triangle.
+        ValueError: if the legs cannot form such a triangle, or ``n`` is too small to put its
+            four corners on distinct particles.
     """
     _check_rope_size(n, length)
     check_real(cross_at, "cross_at", positive=True, maximum=1.0)
@@ -198,6 +199,10 @@ def rope_crossed_triangle(n: int = ROPE_PARTICLES, length: float = ROPE_LENGTH,
     positions[on_last_leg, 2] += 2 * ROPE_RADIUS * bump[on_last_leg]
     corner_arc = np.array([0.0, l1, l1 + l2, length])
     corners = np.rint(corner_arc / length * (n - 1)).astype(np.int64)
+    if len(np.unique(corners)) < len(corners):
+        raise ValueError(f"n={n} particles cannot place the fold's 4 corners A, B, C, D on "
+                         f"distinct particles (they fall on {corners.tolist()}): use more "
+                         f"particles")
     name = "rope_fold" if np.allclose(legs_arr, legs_arr[0]) else "rope_fold_unequal"
     return RopeGoal(name, positions, corners)
 

@@ -560,3 +560,13 @@ def test_the_memory_bound_can_be_set(monkeypatch):
                                          r"about 6.25 MiB, more than this machine's memory "
                                          r"\(977 KiB; DOPT_MEMORY_BYTES"):
         make_goal("cloth_side", n=40)
+
+
+def test_a_fold_with_too_few_particles_for_its_corners_is_refused():
+    """n=3 put corners A..D on particles [0, 1, 1, 2]: two corners on one particle; with 4 or
+    more each corner has its own particle."""
+    from deformables.goals import make_goal
+    with pytest.raises(ValueError, match="4 corners A, B, C, D on distinct particles"):
+        make_goal("rope_fold", n=3)
+    for n in (4, 5, 8, 40):
+        assert len(set(make_goal("rope_fold", n=n).corners.tolist())) == 4
