@@ -106,7 +106,7 @@ def test_a_gap_in_the_chain_keeps_the_ends_and_corners(shape, split):
     assert result.threshold == pytest.approx(threshold)
 
 
-@pytest.mark.parametrize("n", [3, 4, 5, 6, 7])
+@pytest.mark.parametrize("n", [4, 5, 6, 7])   # n=3 cannot hold its 4 corners (below)
 def test_a_coarse_fold_keeps_both_ends(n):
     """A 5-particle crossed triangle used to give keys [1, 3], neither an end."""
     keys = rope_key_particles(goals.rope_crossed_triangle(n=n).positions).indices
