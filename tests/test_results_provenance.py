@@ -3,7 +3,7 @@ provenance's "git_commit" and its "trial_commits") and no committed trial file u
 docs/results/runs/ comes from uncommitted code ("-dirty") or names a commit that is not an
 ancestor of HEAD (issue 57).
 
-It fails on main today (21 of 63 summaries and 1,096 of 3,238 unique committed trial files are
+It fails on main today (9 of 67 summaries and 1,096 of 3,452 unique committed trial files are
 "-dirty"; every named commit is an ancestor of HEAD): marked xfail(strict=True), so that it
 turns into a failure (XPASS) the day the files are re-recorded from committed code, and the
 mark is removed. ``python tests/test_results_provenance.py`` prints the counts.
@@ -115,7 +115,7 @@ def test_the_auditor_reads_commits_as_git_does():
 
 
 @pytest.mark.xfail(strict=True, reason=(
-    "issue 57: 21 of 63 result summaries, and 1,096 of 3,238 unique committed trial files "
+    "issue 57: 9 of 67 result summaries, and 1,096 of 3,452 unique committed trial files "
     "(all 900 Table 1 clutter trials at 450d745-dirty, all 180 Table 1 soft trials at "
     "a6a0d05-dirty, and those copied into other sweeps), were recorded from uncommitted code; "
     "every named commit is an ancestor of HEAD. Remove this mark when they are re-recorded."))
