@@ -1,0 +1,57 @@
+"""planners.random_reach: the re-drawn candidates are the ones the recorded trials planned
+over, and the blind-draw chance matches an enumeration."""
+
+import itertools
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from planners.random_reach import p_blind, random_reach, reach_summary
+
+RUNS = Path(__file__).resolve().parents[2] / "docs" / "results" / "runs"
+
+
+def test_p_blind_matches_enumeration():
+    rng = np.random.default_rng(3)
+    need = np.where(rng.random(9) < 0.4, 0.05, 0.0)
+    for k in (1, 2, 3, 4):
+        draws = list(itertools.combinations(range(len(need)), k))
+        blind = sum(all(need[i] <= 0.01 for i in d) for d in draws) / len(draws)
+        assert p_blind(need, k) == pytest.approx(blind, abs=1e-12)
+    with pytest.raises(ValueError, match="cannot draw"):
+        p_blind(need, 10)
+
+
+@pytest.mark.parametrize("fold", ["diagonal", "reflective"])
+def test_redrawn_candidates_hold_every_recorded_pick(fold):
+    """Every particle a recorded CEM(Random) trial picked is among the candidates re-drawn for
+    that stage from its seed (a pick of -1 is a no-op action)."""
+    folder = RUNS / f"fig7-cloth-{fold}" / "trials"
+    records = [json.loads(p.read_text()) for p in sorted(folder.glob("random-seed[01]-*.json"))]
+    if not records:
+        pytest.skip(f"no committed CEM(Random) trials under {folder}")
+    reach = random_reach(records)
+    assert [t.seed for t in reach] == sorted(r["params"]["seed"] for r in records)
+    by_seed = {r["params"]["seed"]: r for r in records}
+    for t in reach:
+        stages = {s.stage: set(s.candidates) for s in t.stages}
+        for action in by_seed[t.seed]["result"]["actions"]:
+            picked = {p for p in action["particles"] if p >= 0}
+            assert picked <= stages[action["stage"]], (t.seed, action, stages)
+        for s in t.stages:
+            assert 0.0 <= s.reach <= 1.0 and s.need <= s.max_need
+
+
+def test_reach_summary_counts():
+    from planners.random_reach import StageReach, TrialReach
+
+    def trial(seed, cost, need):
+        st = StageReach("s", [0], need, 0.4, need / 0.4, 0.1)
+        return TrialReach(seed, cost, [st], need / 0.4, need <= 0.01)
+
+    s = reach_summary([trial(0, 0.06, 0.0), trial(1, 0.01, 0.3), trial(2, 0.02, 0.2)])
+    assert s["blind"] == 1 and s["blind_expected"] == pytest.approx(0.3)
+    assert s["spearman_rho"] == pytest.approx(-1.0)
+    assert s["cost_blind"] == pytest.approx(0.06) and s["cost_seeing"] == pytest.approx(0.015)
