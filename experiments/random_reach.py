@@ -19,8 +19,15 @@ import argparse
 import sys
 from pathlib import Path
 
-from cli_args import (EPILOG, existing_dir, guarded, output_dir, positive_float,
-                      record_problem, write_summary)
+from cli_args import (
+    EPILOG,
+    existing_dir,
+    guarded,
+    output_dir,
+    positive_float,
+    record_problem,
+    write_summary,
+)
 
 from dopt.sweep import load_finished
 from planners.random_reach import MOVING, random_reach, reach_summary

@@ -391,3 +391,32 @@ def kp_paper_scale_section(results: list[Result], page: Path) -> list[str]:
                    "against the paper's 0.73 s average.", results, page, body)
 
 
+
+
+# ------------------------------------------------------------ CEM(Random)'s candidate sets
+def random_reach_section(results: list[Result], page: Path) -> list[str]:
+    def body(r: Result) -> list[str]:
+        rows = []
+        for run in r.data["runs"]:
+            s, means = run["summary"], run["mean_final_cost"]
+            rho = "-" if s["spearman_rho"] is None else \
+                f"{num(s['spearman_rho'])} (p {sci(s['spearman_p'])})"
+            rows.append([f"{run['task']} {run['goal']} ({run['n']} per side)", str(s["trials"]),
+                         rho, f"{s['blind']} (expected {num(s['blind_expected'])})",
+                         mm(s["cost_blind"]), mm(s["cost_seeing"]), mm(means.get("random")),
+                         mm(means.get("original")), mm(means.get("simple"))])
+        return [f"### `{r.name}`", "", f"Threshold: {mm(r.data['moving'])} mm.", "",
+                *table(["fold", "Random trials", "Spearman rho of cost and reach",
+                        "blind trials", "Random, blind (mm)", "Random, seeing (mm)",
+                        "Random (mm)", "Original (mm)", "Simple (mm)"], rows)]
+
+    return section("Key particles, Fig. 7: what CEM(Random)'s candidates can reach",
+                   "Each CEM(Random) trial's candidate set re-drawn from its seed "
+                   "(`experiments/random_reach.py`, nothing simulated; a test checks that every "
+                   "recorded pick is among them). Reach: the largest distance a candidate must "
+                   "move in its stage over the largest of all particles (the smallest over "
+                   "stages); blind: a stage none of whose candidates moves more than "
+                   "the file's threshold; expected: the hypergeometric chance summed over "
+                   "trials. "
+                   "Costs: mean final cost (mean particle distance to the goal).",
+                   results, page, body)

@@ -25,8 +25,8 @@ Shapes: N particles, K candidates, S stages.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import asdict, dataclass
-from typing import Sequence
 
 import numpy as np
 
@@ -91,7 +91,7 @@ def trial_reach(settings, seed: int, final_cost: float, moving: float = MOVING) 
     problem = make_problem(settings, seed)
     planner = CEMPlanner(settings.cem, "random", seed)
     stages = []
-    for stage, need in zip(problem.stages, stage_needs(problem)):
+    for stage, need in zip(problem.stages, stage_needs(problem), strict=True):
         cand = planner.candidate_particles(stage.keys, len(need))
         top = float(need.max())
         stages.append(StageReach(stage.name, cand.tolist(), float(need[cand].max()), top,
