@@ -402,7 +402,8 @@ def random_reach_section(results: list[Result], page: Path) -> list[str]:
             rho = "-" if s["spearman_rho"] is None else \
                 f"{num(s['spearman_rho'])} (p {sci(s['spearman_p'])})"
             rows.append([f"{run['task']} {run['goal']} ({run['n']} per side)", str(s["trials"]),
-                         rho, f"{s['blind']} (expected {num(s['blind_expected'])})",
+                         rho, f"{s['blind']} (expected {num(s['blind_expected'])}; chance of "
+                         f"as many {num(s.get('p_blind_at_least'), 3)})",
                          mm(s["cost_blind"]), mm(s["cost_seeing"]), mm(means.get("random")),
                          mm(means.get("original")), mm(means.get("simple"))])
         return [f"### `{r.name}`", "", f"Threshold: {mm(r.data['moving'])} mm.", "",

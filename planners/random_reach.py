@@ -17,7 +17,8 @@ they can reach:
 
 ``random_reach`` pairs each trial's final cost with its smallest stage reach, and
 ``reach_summary`` gives the Spearman rank correlation of the two (scipy), the blind trials
-observed against expected, and the mean final cost of blind and seeing trials.
+observed against expected (and the chance of at least as many), and the mean final cost of
+blind and seeing trials.
 
 Shapes: N particles, K candidates, S stages.
 """
@@ -117,11 +118,23 @@ def random_reach(records: Sequence[dict], moving: float = MOVING) -> list[TrialR
     return sorted(out, key=lambda t: t.seed)
 
 
+def at_least(chances: Sequence[float], k: int) -> float:
+    """The chance that at least ``k`` of independent events with the given chances happen
+    (the Poisson-binomial upper tail, by dynamic programming over the events)."""
+    dist = np.zeros(len(chances) + 1)
+    dist[0] = 1.0
+    for c in chances:
+        dist[1:] = dist[1:] * (1.0 - c) + dist[:-1] * c
+        dist[0] *= 1.0 - c
+    return float(min(1.0, dist[max(k, 0):].sum()))
+
+
 def reach_summary(trials: Sequence[TrialReach]) -> dict:
     """The Spearman correlation of final cost and reach over the trials (rho, two-sided p;
     None under 3 trials or a constant column), blind trials observed and expected (the sum of
     each trial's chance of a blind stage), and the mean final cost of blind and seeing
-    trials (m; None where there are none)."""
+    trials (m; None where there are none), and ``p_blind_at_least`` the chance of at least
+    as many blind trials as observed (``at_least``)."""
     from scipy.stats import spearmanr
 
     costs = np.array([t.final_cost for t in trials])
@@ -131,8 +144,9 @@ def reach_summary(trials: Sequence[TrialReach]) -> dict:
         r = spearmanr(costs, reach)
         rho, p = float(r.statistic), float(r.pvalue)
     blind = np.array([t.blind for t in trials], dtype=bool)
-    expected = sum(1.0 - math.prod(1.0 - s.p_blind for s in t.stages) for t in trials)
+    chances = [1.0 - math.prod(1.0 - s.p_blind for s in t.stages) for t in trials]
     return {"trials": len(trials), "spearman_rho": rho, "spearman_p": p,
-            "blind": int(blind.sum()), "blind_expected": float(expected),
+            "blind": int(blind.sum()), "blind_expected": float(sum(chances)),
+            "p_blind_at_least": at_least(chances, int(blind.sum())),
             "cost_blind": float(costs[blind].mean()) if blind.any() else None,
             "cost_seeing": float(costs[~blind].mean()) if (~blind).any() else None}

@@ -44,6 +44,20 @@ def test_redrawn_candidates_hold_every_recorded_pick(fold):
             assert 0.0 <= s.reach <= 1.0 and s.need <= s.max_need
 
 
+def test_at_least_matches_binomial_and_enumeration():
+    from scipy.stats import binom
+
+    from planners.random_reach import at_least
+
+    for k in range(6):
+        assert at_least([0.3] * 5, k) == pytest.approx(binom.sf(k - 1, 5, 0.3), abs=1e-12)
+    chances = [0.1, 0.5, 0.8]
+    for k in range(4):
+        total = sum(np.prod([c if hit else 1 - c for c, hit in zip(chances, hits, strict=True)])
+                    for hits in itertools.product([0, 1], repeat=3) if sum(hits) >= k)
+        assert at_least(chances, k) == pytest.approx(total, abs=1e-12)
+
+
 def test_reach_summary_counts():
     from planners.random_reach import StageReach, TrialReach
 
@@ -53,5 +67,6 @@ def test_reach_summary_counts():
 
     s = reach_summary([trial(0, 0.06, 0.0), trial(1, 0.01, 0.3), trial(2, 0.02, 0.2)])
     assert s["blind"] == 1 and s["blind_expected"] == pytest.approx(0.3)
+    assert s["p_blind_at_least"] == pytest.approx(1 - 0.9 ** 3)
     assert s["spearman_rho"] == pytest.approx(-1.0)
     assert s["cost_blind"] == pytest.approx(0.06) and s["cost_seeing"] == pytest.approx(0.015)
