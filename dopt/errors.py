@@ -34,7 +34,11 @@ class UnstableRolloutError(RolloutError):
             with that warning), or "non-finite state".
         what: which call ran it ("rollout", "rollout_feedback", "mpc agent", or
             "derivatives t=.. perturbation=..").
+        capture: the folder of the blow-up capture written of it (``dopt.view.blowup``; an
+            MPC agent given ``blowup_out``), else None.
     """
+
+    capture: str | None = None
 
     def __init__(self, rollout: int, step: int, reason: str, what: str = "rollout"):
         self.rollout, self.step, self.reason, self.what = int(rollout), int(step), reason, what

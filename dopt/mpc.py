@@ -22,11 +22,21 @@ Lag then is what the algorithm costs, immune to other processes on the machine, 
 run in parallel.
 
 dopt knows no planner: the optimiser is any object with ``optimise(state, plan) -> Plan``.
+
+Blow-up captures (``MPC(..., blowup_out=OUT)``, opt-in): when the executed episode first breaks
+a stability bound, and when a step makes MuJoCo warn or leaves no valid state (which raises
+``UnstableRolloutError``), the agent writes the last ``dopt.view.blowup.KEEP`` executed state
+rows up to the one after the failing step, the model and the reason to
+``OUT/blowups/<blowup_label>`` (``dopt.view.blowup``; ``dopt-view`` opens it at that step).
+``MPCResult.blowups`` and ``UnstableRolloutError.capture`` name them (after a warning the last
+row is the state MuJoCo reset the data to; the reason names the body the warning points at).
+Writing one holds up the agent (on the real clock: late steps), once per failure.
 """
 
 from __future__ import annotations
 
 import logging
+import os
 import sys
 import threading
 import time
@@ -42,6 +52,7 @@ from dopt.scene import Scene
 from dopt.stability import Stability
 from dopt.state import INTEGRATION, check_states, fault
 from dopt.validation import check_config, check_int, float_array, index_array
+from dopt.view.blowup import KEEP, capture_dir, save_blowup, warning_body
 
 log = logging.getLogger(__name__)
 CLOCKS = ("real", "virtual", "model")
@@ -165,7 +176,8 @@ class MPCResult:
     opt_seconds is its duration on the clock the episode ran on (wall, CPU / threads, or the
     cost model); stability: the verdict on the executed episode (one rollout,
     judged by the scene's ``StabilityBounds`` after every agent step; a broken bound is
-    reported here, MuJoCo warnings and non-finite states raise)."""
+    reported here, MuJoCo warnings and non-finite states raise); blowups: the blow-up
+    capture folders written (``MPC``'s ``blowup_out``; the module docstring)."""
 
     states: np.ndarray
     controls: np.ndarray
@@ -178,6 +190,7 @@ class MPCResult:
     late_steps: int
     stability: Stability
     cpu_seconds: list = field(default_factory=list)
+    blowups: tuple = ()
 
 
 class MPC:
@@ -191,11 +204,16 @@ class MPC:
         success: optional predicate on a state row that ends the task early.
         on_step: optional, called with no argument after every agent step (a progress bar's
             count; it must be quick: on the real clock it runs on the agent's schedule).
+        blowup_out: optional run folder: a failure of the executed episode writes a blow-up
+            capture to ``blowup_out/blowups/<blowup_label>`` (``-2``, ... where one exists;
+            the module docstring). None (default): no capture.
+        blowup_label: the captures' name (in the folder, the console and the viewer).
     """
 
     def __init__(self, scene: Scene, optimiser: Optimiser, config: MPCConfig,
                  rng: np.random.Generator, success: Callable[[np.ndarray], bool] | None = None,
-                 on_step: Callable[[], None] | None = None):
+                 on_step: Callable[[], None] | None = None,
+                 blowup_out: str | os.PathLike | None = None, blowup_label: str = "mpc"):
         if not isinstance(scene, Scene):
             raise TypeError(f"scene must be a dopt.Scene, got {type(scene).__name__}")
         if not callable(getattr(optimiser, "optimise", None)):
@@ -208,6 +226,12 @@ class MPC:
         for name, f in (("success", success), ("on_step", on_step)):
             if f is not None and not callable(f):
                 raise TypeError(f"{name} must be callable, got {type(f).__name__}")
+        if blowup_out is not None and not isinstance(blowup_out, (str, os.PathLike)):
+            raise TypeError(f"blowup_out must be a folder path or None, got "
+                            f"{type(blowup_out).__name__}")
+        if not isinstance(blowup_label, str):
+            raise TypeError(f"blowup_label must be a string, got {type(blowup_label).__name__}")
+        self.blowup_out, self.blowup_label = blowup_out, blowup_label
         self.scene, self.optimiser, self.config = scene, optimiser, config
         self.rng, self.success, self.on_step = rng, success, on_step
         m = scene.model
@@ -250,7 +274,7 @@ class MPC:
         return MPCResult(np.array(self._states[:n + 1]), np.array(self._controls[:n]),
                          self._succeeded, self._log["seconds"], self._log["step"],
                          self._log["n_dofs"], self._log["dofs"], self._log["lag"], self._late,
-                         self._scan.result(), self._log["cpu"])
+                         self._scan.result(), self._log["cpu"], tuple(self._blowups))
 
     # ---------------------------------------------------------------- internals
     def _reset(self, x0: np.ndarray, plan: Plan) -> None:
@@ -260,7 +284,7 @@ class MPC:
         mujoco.mj_forward(m, self._data)
         self._plan, self._step, self._consumed, self._late = plan, 0, 0, 0
         self._states, self._controls = [x0.copy()], []
-        self._succeeded, self._error = False, None
+        self._succeeded, self._error, self._blowups = False, None, []
         self._stop = threading.Event()
         self._log = {"seconds": [], "step": [], "n_dofs": [], "dofs": [], "lag": [], "cpu": []}
         self._scan = self.scene.monitor.start(1)
@@ -326,12 +350,17 @@ class MPC:
         bad = [w for w in _BAD if d.warning[w].number]
         nxt = self.scene.state_of(d)
         if reason := bad[0].name if bad else fault(self.scene.layout, nxt):
-            raise UnstableRolloutError(0, self._step, reason, "mpc agent")
+            err = UnstableRolloutError(0, self._step, reason, "mpc agent")
+            body = warning_body(m, bad[0], d.warning[bad[0]].lastinfo) if bad else None
+            err.capture = self._capture(row, nxt, reason if body is None else
+                                        f"{reason} (body {m.body(body).name or body})")
+            raise err
         if not self._scan.unstable[0]:
             fields = {f: np.asarray(getattr(d, f))[None, None] for f in self.scene.monitor.record}
             if len(self._scan.update(np.zeros(1, int), self._step, fields)):
                 log.warning("MPC agent: the executed episode broke a stability bound at step "
                             "%d (%s)", self._step, self._scan.reason[0])
+                self._capture(row, nxt, self._scan.reason[0])
         with self._lock:
             self._states[-1] = row
             self._controls.append(u)
@@ -341,6 +370,27 @@ class MPC:
                 self._succeeded = True
         if self.on_step is not None:
             self.on_step()
+
+    def _capture(self, row: np.ndarray, nxt: np.ndarray, reason: str) -> str | None:
+        """With ``blowup_out``: a blow-up capture of the current step failing for ``reason``,
+        the executed rows up to ``row`` (this step's, with its control) and ``nxt`` (the state
+        after it), the last KEEP of them; its folder (None: none asked, or it could not be
+        written, which is logged and leaves the episode running)."""
+        if self.blowup_out is None:
+            return None
+        with self._lock:
+            past = self._states[-(KEEP - 1):]
+        rows = np.array(past[:-1] + [row, nxt])
+        try:
+            out = save_blowup(capture_dir(self.blowup_out, self.blowup_label), self.scene.model,
+                              rows, self._step, reason, spec=self.scene.layout.spec,
+                              label=self.blowup_label)
+        except OSError as e:
+            log.error("MPC agent: the blow-up capture of step %d was not written: %s",
+                      self._step, e)
+            return None
+        self._blowups.append(str(out))
+        return str(out)
 
     def _deviation(self, plan: Plan) -> np.ndarray:
         """[q_C (-) q_nom_C ; v_C - v_nom_C] of the agent's state against plan row 0: (2c,)."""

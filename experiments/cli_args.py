@@ -23,8 +23,12 @@ that a path the user cannot write fails before the first trial, not after the ru
 Strict JSON: ``write_summary`` writes with ``dopt.jsonio`` (a value that is not a finite number
 is ``null`` with its reason beside it under "<field>_undefined"; no bare NaN).
 
+Blow-up captures: ``blowup_captures`` names the captures of a run's trials (OUT/blowups,
+``dopt.view.blowup``) on the console and for its summary's "blowups".
+
 Standard library and ``dopt.cli`` / ``dopt.provenance`` / ``dopt.sweep`` only (all pure Python),
-so the MuJoCo-free key-particle experiment can use them without importing torch or MuJoCo.
+so the MuJoCo-free key-particle experiment can use them without importing torch or MuJoCo
+(``blowup_captures`` imports MuJoCo when called).
 """
 from __future__ import annotations
 
@@ -141,6 +145,25 @@ def reuse_mode(args) -> str:
     """``run_sweep``'s ``reuse`` for parsed ``args``: "any" with --reuse-any, else
     "same-code"."""
     return "any" if getattr(args, "reuse_any", False) else "same-code"
+
+
+def blowup_captures(out: Path, labels) -> list[dict]:
+    """The blow-up captures under OUT/blowups of the trials ``labels`` (their capture labels,
+    ``dopt.view.blowup``), one console line each: a summary's "blowups", each {"trial",
+    "path" (relative to OUT), "step", "reason", "body"}. Loads MuJoCo: only the experiments
+    that write captures call it."""
+    import os
+
+    from dopt.view.blowup import list_captures
+
+    labels = set(labels)
+    found = [{"trial": c["label"], "path": os.path.relpath(c["path"], out), "step": c["step"],
+              "reason": c["reason"], "body": c["body"]}
+             for c in list_captures(out) if c.get("label") in labels]
+    for c in found:
+        print(f"blow-up capture {Path(out) / c['path']}: trial {c['trial']}, step {c['step']}"
+              f", {c['reason']}, body {c['body']} (dopt-view opens it at that step)")
+    return found
 
 
 def write_summary(summary: dict, out: Path, record: Path | None, script: str, argv,

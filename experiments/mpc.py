@@ -12,16 +12,16 @@ pool (--workers N), or on Ray (--ray [ADDRESS]; a local instance without ADDRESS
 Writes OUT/summary.json ({"task", the protocol's settings, "row_settings", "methods": {row:
 {"mpc_cost_normalised_mean", "mpc_cost_normalised_ci90", "mpc_cost_normalised_median",
 "mpc_cost_median_ratio", "opt_ms_mean", "n_dofs_mean", "lag_steps_mean", "success_rate",
-"outliers", "n_trials", ...}}, "paired": {row: geometric mean and CI90 of cost / baseline on
-the same seed}, "derivatives_effect": {row with a derivative variant such as
-sum-t10-r1+skip5: its cost over the plain row's on the same seed, and both rows' lag}, "failed",
-"provenance"}), OUT/table1.md and OUT/table1.csv, and the plots of the
-first seed of each row: OUT/mpc_dofs.png (|C| per optimisation over the episode),
-OUT/mpc_goal_distance.png (the goal object's distance to the goal) and OUT/final_<row>.png (the
-final scene; MUJOCO_GL=egl, skipped with --no-render). summary.json also holds "trial_commits"
-(the code commits of the trial results: more than one when a resumed sweep mixes code). Exits 1
-if a trial failed (summary.json lists it under "failed") or the run failed (one line on
-stderr); 2 on a bad flag.
+"outliers", "n_trials", ...}}, "paired": {row: geometric mean and CI90 of cost / baseline on the
+same seed}, "derivatives_effect": {row with a derivative variant such as sum-t10-r1+skip5: its cost
+over the plain row's on the same seed, and both rows' lag}, "failed", "blowups": [the trials'
+blow-up captures, OUT/blowups/<key>, also named on the console], "provenance"}), OUT/table1.md and
+OUT/table1.csv, and the plots of the first seed of each row: OUT/mpc_dofs.png (|C| per optimisation
+over the episode), OUT/mpc_goal_distance.png (the goal object's distance to the goal) and
+OUT/final_<row>.png (the final scene; MUJOCO_GL=egl, skipped with --no-render). summary.json also
+holds "trial_commits" (the code commits of the trial results: more than one when a resumed sweep
+mixes code). Exits 1 if a trial failed (summary.json lists it under "failed") or the run failed
+(one line on stderr); 2 on a bad flag.
 
     python experiments/mpc.py --task clutter --trials 20 --out results/mpc_clutter
     python experiments/mpc.py --task clutter --preset paper --trials 100 --workers 2 \\
@@ -47,6 +47,7 @@ os.environ.setdefault("MUJOCO_GL", "egl")   # offscreen renders; read when mujoc
 from cli_args import (
     EPILOG,
     add_reuse_argument,
+    blowup_captures,
     choices_type,
     guarded,
     no_repeats,
@@ -70,6 +71,7 @@ from planners.svr import METHODS, paper_theta
 from planners.svr_mpc import (
     OUTLIER_DISTANCE,
     TABLE1_ROWS,
+    CapturingTrial,
     SVRMPCSettings,
     derivatives_effect,
     feedback_effect,
@@ -336,14 +338,15 @@ def run(args, trials, fn=None, out: Path | None = None, workers: int | None = No
     episode) under ``out`` (default --out), on ``workers`` processes (default --workers, or
     Ray with --ray), with the sweep's console (``sweep_console``: a bar of the agent steps of
     every trial, a trial's budget its timeout); a stored trial is reused only when it fits
-    ``schema``. Returns their records and the sweep's result (``failed``: {key: error},
-    ``commits``: code commits of the records)."""
+    ``schema``; an MPC episode writes its blow-up captures under ``out``. Returns their
+    records and the sweep's result (``failed``: {key: error}, ``commits``: code commits of the
+    records)."""
     out = out or args.out
     steps = {t.key: int(t.params.get("timeout") or _task_timeout(t.params["task"]))
              for t in trials}
     res = run_with_console(
-        fn or run_trial, trials, out, unit="step", desc=f"{args.task} MPC steps",
-        steps=lambda t: steps[t.key],
+        fn or CapturingTrial(str(out), run_trial), trials, out, unit="step",
+        desc=f"{args.task} MPC steps", steps=lambda t: steps[t.key],
         held=lambda t: steps[t.key] if is_finished(out, t.key, reuse=reuse_mode(args),
                                                    schema=schema) else 0,
         workers=workers or args.workers, ray_address=None if workers else args.ray,
@@ -563,7 +566,8 @@ def _main(args, argv) -> int:
                         for t in trials for row in [row_label(t.params)]},
                "methods": rows, "paired": paired(records, baseline=baseline),
                "authors_statistic": authors_statistic(records, baseline=baseline),
-               "failed": failed, "trial_commits": res.commits}
+               "failed": failed, "trial_commits": res.commits,
+               "blowups": blowup_captures(args.out, [t.key for t in trials])}
     if args.feedback == "both":
         summary["feedback_effect"] = feedback_effect(records)
     if variants := derivatives_effect(records):

@@ -10,7 +10,9 @@ Writes OUT/summary.json (experiment "panda_execute"): per goal the final cost (m
 distance to the goal, m) of the picker's and the arm's execution (mean and 95 % CI over the
 seeds), their paired difference, the mean distance between the two final cloths, the largest
 grasp distance and carry tracking error, and the actions the arm skipped because the pinch did
-not reach the particle; per trial the same. And OUT/panda_<goal>.png, the
+not reach the particle; per trial the same; and "blowups", the blow-up captures of the arm's
+replays that failed the stability verdict (OUT/blowups/<trial key>, each also named on the
+console; ``dopt-view`` opens them at the failing step). And OUT/panda_<goal>.png, the
 first seed's execution as a strip (start, then grasp / carry / release of each action;
 MUJOCO_GL=egl, skipped with --no-render). Exits 1 if a trial failed, 2 on a bad flag.
 
@@ -21,6 +23,7 @@ MUJOCO_GL=egl, skipped with --no-render). Exits 1 if a trial failed, 2 on a bad 
 from __future__ import annotations
 
 import argparse
+import functools
 import logging
 import os
 import sys
@@ -32,6 +35,7 @@ os.environ.setdefault("MUJOCO_GL", "egl")   # offscreen renders; read when mujoc
 
 from cli_args import (
     EPILOG,
+    blowup_captures,
     choices_type,
     guarded,
     nonneg_int,
@@ -44,6 +48,7 @@ from cli_args import (
 
 from dopt.stats import mean_ci
 from dopt.sweep import Trial, run_sweep
+from dopt.view.blowup import retire_captures
 from planners.pick_place import PickPlaceSettings, make_planner, make_problem, run_problem
 
 GOALS = ("diagonal", "side")
@@ -83,26 +88,39 @@ def plan_actions(actions: list[dict]) -> tuple[np.ndarray, np.ndarray]:
     return np.asarray(parts, dtype=np.int64), np.asarray(disps, dtype=float).reshape(-1, 3)
 
 
-def replay(problem, actions: list[dict], snapshots: bool = False):
-    """The arm executing ``actions`` from the problem's start: (executor, PandaExecution)."""
+def replay(problem, actions: list[dict], snapshots: bool = False, blowup_out=None,
+           blowup_label: str = "panda"):
+    """The arm executing ``actions`` from the problem's start: (executor, PandaExecution);
+    ``blowup_out``: the run folder of a blow-up capture (``PandaExecutor.execute``)."""
     from dopt.tasks.pick.panda_gripper import PandaExecutor
 
     parts, disps = plan_actions(actions)
     held = sorted({int(p) for p in parts if p >= 0}) or [0]
     arm = PandaExecutor(problem.scene, pickable=held)
-    return arm, arm.execute(problem.start_state, parts, disps, snapshots=snapshots)
+    return arm, arm.execute(problem.start_state, parts, disps, snapshots=snapshots,
+                            blowup_out=blowup_out, blowup_label=blowup_label)
 
 
-def panda_trial(params: dict) -> dict:
+def trial_key(goal: str, seed: int, n: int, quick: bool) -> str:
+    """A trial's key (its file under OUT/trials, its capture under OUT/blowups)."""
+    return f"{goal}-seed{seed}-n{n}{'-quick' if quick else ''}"
+
+
+def panda_trial(params: dict, blowup_out: str | None = None, quick: bool = False) -> dict:
     """Plan with CEM(Simple) on the picker, replay with the arm; the two final costs and how
-    far apart the two final cloths are (m)."""
+    far apart the two final cloths are (m). ``blowup_out``: the run folder that receives a
+    blow-up capture of the arm's replay as blowups/<trial key> (``quick``: the key's; an
+    earlier run's moves to blowups/outdated/)."""
     from dopt.tasks.pick.scene import mean_distance
 
     s = PickPlaceSettings.from_dict(params["settings"])
     seed = params["seed"]
     problem = make_problem(s, seed)
     res = run_problem(problem, make_planner("simple", s, seed), method="simple", seed=seed)
-    _, done = replay(problem, res.actions)
+    label = trial_key(params["goal"], seed, s.n, quick)
+    if blowup_out is not None:
+        retire_captures(blowup_out, [label])
+    _, done = replay(problem, res.actions, blowup_out=blowup_out, blowup_label=label)
     return {"seed": seed, "n_actions": int(sum(len(a["particles"]) for a in res.actions)),
             "picker_final_cost": float(res.metrics["final_cost"]),
             "panda_final_cost": float(mean_distance(done.positions, problem.final_goal)),
@@ -113,7 +131,8 @@ def panda_trial(params: dict) -> dict:
             "carry_errors": [float(e) for e in done.carry_error],
             "picker_unstable": bool(res.unstable), "panda_unstable": done.unstable,
             "panda_unstable_reason": done.stability.reason[0], "panda_steps": done.steps,
-            "actions": res.actions}
+            "actions": res.actions,
+            "blowups": [os.path.relpath(b, blowup_out) for b in done.blowups]}
 
 
 def summarize(records: list[dict]) -> dict:
@@ -169,9 +188,11 @@ def main(argv=None) -> int:
     for goal in args.goals:
         s = settings_of(goal, args)
         for seed in seeds:
-            trials.append(Trial(f"{goal}-seed{seed}-n{s.n}{'-quick' if args.quick else ''}",
+            trials.append(Trial(trial_key(goal, seed, s.n, args.quick),
                                 {"goal": goal, "seed": int(seed), "settings": s.to_dict()}))
-    res = run_sweep(panda_trial, trials, args.out, workers=1, fresh=args.fresh)
+    keys = [t.key for t in trials]
+    res = run_sweep(functools.partial(panda_trial, blowup_out=str(args.out), quick=args.quick),
+                    trials, args.out, workers=1, fresh=args.fresh)
     for key, err in res.failed.items():
         print(f"FAILED {key}: {err}", file=sys.stderr)
     wanted = {t.key for t in trials}
@@ -183,7 +204,8 @@ def main(argv=None) -> int:
                    "settings": {g: settings_of(g, args).to_dict() for g in args.goals},
                    "physics": {g: settings_of(g, args).resolved_physics()
                                for g in args.goals},
-                   "failed": res.failed, "trial_commits": res.commits},
+                   "failed": res.failed, "trial_commits": res.commits,
+                   "blowups": blowup_captures(args.out, keys)},
                   args.out, args.record, "experiments/panda_execute.py", argv)
     for goal, e in goals.items():
         print(f"{goal}: picker {e['picker_final_cost_mean'] * 1e3:.1f} mm, panda "

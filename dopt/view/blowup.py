@@ -12,6 +12,9 @@ A capture is one folder::
     model.xml     MJCF of it, for reading (MjSpec.to_xml of the given spec, the given XML, or
                   mj_saveLastXML where it matches), when one could be written
 
+``list_captures`` reads the captures of a run folder, ``retire_captures`` moves some aside
+(a rerun of their trials), ``warning_body`` names the body a MuJoCo warning points at.
+
 ``capture_blowup`` re-simulates an executed rollout's controls up to the failing step with
 ``mj_step`` (bit-identical to both rollout routes) keeping a ring buffer of the last ``keep``
 states, and calls ``save_blowup``. The offending body is named by the verdict's reason
@@ -142,6 +145,61 @@ def capture_dir(out, label: str) -> Path:
         k += 1
         path = base / f"{name}-{k}"
     return path
+
+
+def list_captures(out) -> list[dict]:
+    """The captures under ``OUT/blowups`` (not those retired to ``blowups/outdated``), in
+    name order: each its blowup.json with "path" (the folder) added; a folder whose
+    blowup.json is unreadable or of another format is left out (logged)."""
+    found = []
+    for meta_file in sorted((Path(out) / "blowups").glob("*/blowup.json")):
+        try:
+            meta = json.loads(meta_file.read_text())
+        except (OSError, ValueError) as e:
+            log.warning("%s: unreadable (%s)", meta_file, e)
+            continue
+        if isinstance(meta, dict) and meta.get("format") == FORMAT:
+            found.append({**meta, "path": str(meta_file.parent)})
+        else:
+            log.warning("%s: not a %s capture", meta_file, FORMAT)
+    return found
+
+
+def retire_captures(out, labels) -> list[Path]:
+    """Move the captures under ``OUT/blowups`` whose label is in ``labels`` to
+    ``OUT/blowups/outdated/`` (a run that recomputes those trials); returns where they went."""
+    labels, moved = set(labels), []
+    for meta in list_captures(out):
+        if meta.get("label") in labels:
+            src = Path(meta["path"])
+            dst, k = Path(out) / "blowups" / "outdated" / src.name, 1
+            while dst.exists():
+                k += 1
+                dst = dst.with_name(f"{src.name}-{k}")
+            dst.parent.mkdir(parents=True, exist_ok=True)
+            moved.append(src.rename(dst))
+    return moved
+
+
+def warning_body(model: mujoco.MjModel, warning, index: int) -> int | None:
+    """The body a MuJoCo warning's ``lastinfo`` ``index`` points at: the qpos entry of
+    mjWARN_BADQPOS, the DoF of mjWARN_BADQVEL and mjWARN_BADQACC, the actuator of
+    mjWARN_BADCTRL (a joint, body or site transmission); None otherwise."""
+    W, i = mujoco.mjtWarning, int(index)
+    if warning == W.mjWARN_BADQPOS and 0 <= i < model.nq:
+        j = int(np.searchsorted(model.jnt_qposadr, i, side="right") - 1)
+        return int(model.jnt_bodyid[j])
+    if warning in (W.mjWARN_BADQVEL, W.mjWARN_BADQACC) and 0 <= i < model.nv:
+        return int(model.dof_bodyid[i])
+    if warning != W.mjWARN_BADCTRL or not 0 <= i < model.nu:
+        return None
+    T, target = mujoco.mjtTrn, int(model.actuator_trnid[i, 0])
+    kind = int(model.actuator_trntype[i])
+    if kind in (T.mjTRN_JOINT, T.mjTRN_JOINTINPARENT):
+        return int(model.jnt_bodyid[target])
+    if kind == T.mjTRN_BODY:
+        return target
+    return int(model.site_bodyid[target]) if kind == T.mjTRN_SITE else None
 
 
 def offending_body(model: mujoco.MjModel, state: np.ndarray, reason: str = "",

@@ -18,13 +18,15 @@ plan (``dopt.tasks.push.warm_start``), their 5 % control noise, and the virtual 
 Shapes: T horizon, nu controls, ns state row, c = |C| active DoFs.
 
     settings.py  SVRMPCSettings, TABLE1_ROWS, row names and derivative variants, trial keys
-    episode.py   build_controller, run_svr_mpc -> SVRMPCResult, run_trial (for dopt.sweep)
+    episode.py   build_controller, run_svr_mpc -> SVRMPCResult, run_trial and CapturingTrial
+                 (for dopt.sweep)
     summary.py   summarize, paired, feedback_effect, derivatives_effect
     authors_data.py  the authors' Table 1 statistic on their per-episode files and on ours
 """
 
 from planners.svr_mpc.episode import (
     GOAL_DISTANCE_STRIDE,
+    CapturingTrial,
     SVRController,
     SVRMPCResult,
     build_controller,
@@ -55,7 +57,8 @@ from planners.svr_mpc.summary import (
 )
 
 __all__ = ["CLOCK_MODEL_MS", "GOAL_DISTANCE_STRIDE", "OUTLIER_DISTANCE", "PAPER_COSTS",
-           "TABLE1_ROWS", "SVRController", "SVRMPCResult", "SVRMPCSettings", "build_controller",
-           "derivatives_effect", "derivatives_tag", "dofs_mask", "dofs_of_mask",
-           "feedback_effect", "paired", "paired_ratio", "parse_row", "row_label", "row_name",
-           "run_svr_mpc", "run_trial", "summarize", "trial_key", "variant_settings"]
+           "TABLE1_ROWS", "CapturingTrial", "SVRController", "SVRMPCResult", "SVRMPCSettings",
+           "build_controller", "derivatives_effect", "derivatives_tag", "dofs_mask",
+           "dofs_of_mask", "feedback_effect", "paired", "paired_ratio", "parse_row",
+           "row_label", "row_name", "run_svr_mpc", "run_trial", "summarize", "trial_key",
+           "variant_settings"]

@@ -1,11 +1,13 @@
 """One MPC episode of iLQR-SVR on a pushing task: the controller wiring (``build_controller``),
-``run_svr_mpc`` and its ``SVRMPCResult``; ``run_trial`` for ``dopt.sweep``.
+``run_svr_mpc`` and its ``SVRMPCResult``; ``run_trial`` for ``dopt.sweep`` (``CapturingTrial``:
+with blow-up captures of the executed episode under the sweep's folder).
 
 Shapes: T horizon, nu controls, ns state row, c = |C| active DoFs.
 """
 
 from __future__ import annotations
 
+import os
 from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
 
@@ -19,9 +21,10 @@ from dopt.tasks.push.contact import robot_contact
 from dopt.tasks.push.costs import COST_PRESETS, PushWeights, goal_distance, push_cost
 from dopt.tasks.push.task_model import TaskModel
 from dopt.validation import check_int
+from dopt.view.blowup import retire_captures
 from planners.ilqr import ILQR, ILQRConfig
 from planners.svr import DofSelector, SelectionConfig, SVROptimiser
-from planners.svr_mpc.settings import CLOCK_MODEL_MS, SVRMPCSettings
+from planners.svr_mpc.settings import CLOCK_MODEL_MS, SVRMPCSettings, trial_key
 
 
 @dataclass(frozen=True)
@@ -75,7 +78,8 @@ class SVRMPCResult:
     ``goal_distance_stride`` executed steps and at the last (m, the start first), the final
     state row (ns,) as a list, the line-search rollouts the stability verdict flagged, and
     whether the executed episode broke a stability bound (the reason names the step and
-    bound). Lists are rounded (0.01 ms, 10 um, 1e-7) to keep trial files small."""
+    bound), and the blow-up captures written of it (folders; ``run_trial``: relative to the
+    sweep's folder). Lists are rounded (0.01 ms, 10 um, 1e-7) to keep trial files small."""
 
     mpc_cost: float
     success: bool
@@ -99,6 +103,7 @@ class SVRMPCResult:
     cpu_ms: list = field(default_factory=list)
     lag_steps: list = field(default_factory=list)
     goal_distance_stride: int = GOAL_DISTANCE_STRIDE
+    blowups: list = field(default_factory=list)
 
     @property
     def opt_ms_mean(self) -> float:
@@ -135,7 +140,9 @@ def dofs_of_mask(mask: str) -> np.ndarray:
 
 def run_svr_mpc(settings: SVRMPCSettings = SVRMPCSettings(), seed: int = 0,
                 history: list | None = None,
-                on_step: Callable[[], None] | None = None) -> SVRMPCResult:
+                on_step: Callable[[], None] | None = None,
+                blowup_out: str | os.PathLike | None = None,
+                blowup_label: str | None = None) -> SVRMPCResult:
     """One MPC episode of ``settings.method`` on the task instance of ``seed``.
 
     The seed builds the task instance (the same for every method, so costs pair up against baseline:
@@ -148,7 +155,9 @@ def run_svr_mpc(settings: SVRMPCSettings = SVRMPCSettings(), seed: int = 0,
     importances, line-search step, regularisation and costs), with "contact_steps": the states
     of the new nominal in which the robot touches the pushed object
     (``dopt.tasks.push.contact``), of "horizon" + 1. ``on_step``: called after every executed
-    agent step (``dopt.mpc.MPC``'s; a progress bar's count).
+    agent step (``dopt.mpc.MPC``'s; a progress bar's count). ``blowup_out``: a run folder
+    that receives blow-up captures of the executed episode (``dopt.mpc.MPC``'s;
+    ``blowup_out/blowups/<blowup_label>``, default label ``<task>-<method>-seed<seed>``).
     """
     import torch
 
@@ -180,7 +189,9 @@ def run_svr_mpc(settings: SVRMPCSettings = SVRMPCSettings(), seed: int = 0,
 
         ctl.optimiser.probe = contact_in_horizon
     mpc = MPC(ctl.scene, ctl.optimiser, config, np.random.default_rng([seed, 2]),
-              success=lambda x: ctl.goal_distance(x) < radius, on_step=on_step)
+              success=lambda x: ctl.goal_distance(x) < radius, on_step=on_step,
+              blowup_out=blowup_out,
+              blowup_label=blowup_label or f"{settings.task}-{settings.method}-seed{seed}")
     if settings.warm_start:
         start = warm_start.setup(task).final_state
         push = warm_start.WarmStartConfig(moving_tail=settings.push_tail)
@@ -210,13 +221,34 @@ def run_svr_mpc(settings: SVRMPCSettings = SVRMPCSettings(), seed: int = 0,
         unstable_reason=(f"step {res.stability.step[0]}: {res.stability.reason[0]}"
                          if res.stability.unstable[0] else ""),
         clock=config.clock, cpu_ms=[round(1e3 * s, 2) for s in res.cpu_seconds],
-        lag_steps=[int(v) for v in res.lag_steps])
+        lag_steps=[int(v) for v in res.lag_steps], blowups=list(res.blowups))
 
 
-def run_trial(params: dict, report: Callable[[], None] | None = None) -> dict:
+def run_trial(params: dict, report: Callable[[], None] | None = None,
+              blowup_out: str | os.PathLike | None = None) -> dict:
     """``run_svr_mpc`` for ``dopt.sweep``: params holds the ``SVRMPCSettings`` fields and
     "seed" -> ``SVRMPCResult.to_dict()``; ``report`` (the sweep's) is called after every
-    agent step."""
+    agent step. ``blowup_out``: the sweep's folder, which receives the blow-up captures of
+    the episode as ``blowups/<trial key>`` (``trial_key``), listed in the result relative to
+    it; those of an earlier run of the trial move to ``blowups/outdated/`` first."""
     p = dict(params)
     seed = p.pop("seed")
-    return run_svr_mpc(SVRMPCSettings(**p), seed, on_step=report).to_dict()
+    if blowup_out is None:
+        return run_svr_mpc(SVRMPCSettings(**p), seed, on_step=report).to_dict()
+    retire_captures(blowup_out, [trial_key(params)])
+    res = run_svr_mpc(SVRMPCSettings(**p), seed, on_step=report, blowup_out=blowup_out,
+                      blowup_label=trial_key(params)).to_dict()
+    return {**res, "blowups": [os.path.relpath(b, blowup_out) for b in res["blowups"]]}
+
+
+@dataclass(frozen=True)
+class CapturingTrial:
+    """``trial`` (default ``run_trial``) with blow-up captures under the sweep's folder ``out``
+    (its ``blowup_out``): a picklable trial function for ``dopt.sweep``'s pools and Ray (on a
+    cluster the captures land on the worker's file system)."""
+
+    out: str
+    trial: Callable = run_trial
+
+    def __call__(self, params: dict, report: Callable[[], None] | None = None) -> dict:
+        return self.trial(params, report, blowup_out=self.out)

@@ -43,6 +43,7 @@ def test_quick_run_writes_table_and_resumes(tmp_path):
     assert result["goal_distance"][0] == pytest.approx(result["goal_distance_start"], abs=1e-5)
     assert result["goal_distance"][-1] == pytest.approx(result["goal_distance_end"], abs=1e-5)
     assert len(result["final_state"]) > 0
+    assert result["blowups"] == [] and summary["blowups"] == []      # no blow-up to capture
     stamps = [f.stat().st_mtime_ns for f in files]
     run("--quick", "--methods", "baseline,svr-sum", "--out", str(out))
     assert [f.stat().st_mtime_ns for f in files] == stamps     # nothing was redone

@@ -12,6 +12,7 @@ def test_quick_run_writes_both_goals_and_resumes(tmp_path):
     assert panda_execute.main(["--quick", "--out", str(out)]) == 0
     s = json.loads((out / "summary.json").read_text())
     assert s["experiment"] == "panda_execute" and set(s["goals"]) == {"diagonal", "side"}
+    assert s["blowups"] == [] and not (out / "blowups").exists()      # stable replays
     # the settings in full: every field, and what the presets resolved to (the stale check's)
     for goal in ("diagonal", "side"):
         assert s["settings"][goal]["physics"] == "default"

@@ -180,3 +180,35 @@ def test_unstable_trials_leave_the_mean_on_either_side_and_are_counted():
     assert out[SUM]["mpc_cost_normalised_mean"] == pytest.approx(0.5)     # seed 0 only
     assert out[SUM]["n_unstable_trials"] == 1 and out["baseline"]["n_unstable_trials"] == 1
     assert out[SUM]["mpc_cost_normalised_median"] == pytest.approx(0.5)   # 0.09, 0.5, 0.7
+
+
+def test_a_trial_captures_a_flagged_episode_under_the_sweeps_folder(tmp_path, monkeypatch):
+    """run_trial with the sweep's folder (``CapturingTrial``): a speed bound the episode
+    cannot keep flags its first step, and the capture lands in OUT/blowups/<trial key> at
+    that step, listed in the result relative to OUT; a stable episode lists none; a rerun
+    moves the old capture to OUT/blowups/outdated/."""
+    import dataclasses
+    import json
+
+    import planners.svr_mpc.episode as episode
+    from planners.svr_mpc import CapturingTrial, trial_key
+
+    params = {**dataclasses.asdict(SVRMPCSettings(task="clutter", method="baseline",
+                                                  synchronous=True, timeout=3, threads=1,
+                                                  slowdown=1.0)),
+              "seed": 0}
+    calm = CapturingTrial(str(tmp_path))(params)
+    assert not calm["unstable"] and calm["blowups"] == []
+    assert not (tmp_path / "blowups").exists()
+    scene = episode.Scene
+    monkeypatch.setattr(episode, "Scene", lambda model, stability: scene(
+        model, stability=dataclasses.replace(stability, max_speed=1e-9)))
+    res = CapturingTrial(str(tmp_path))(params)
+    key = trial_key(params)
+    assert res["unstable"] and res["blowups"] == [f"blowups/{key}"]
+    meta = json.loads((tmp_path / "blowups" / key / "blowup.json").read_text())
+    assert res["unstable_reason"] == f"step {meta['step']}: {meta['reason']}"
+    assert meta["label"] == key
+    # a rerun of the trial (--fresh, or after a failure) retires the earlier capture
+    assert CapturingTrial(str(tmp_path))(params)["blowups"] == [f"blowups/{key}"]
+    assert (tmp_path / "blowups" / "outdated" / key / "blowup.json").is_file()

@@ -21,12 +21,19 @@ site is within ``grasp_tolerance`` of it: the same hold the picker has, so that 
 with the picker measures the arm's motion, not a grasp model. The fingers close for the
 picture and do not collide with anything.
 
+The replay is judged by the scene's stability bounds and MuJoCo's warnings after every step;
+``execute(..., blowup_out=OUT)`` writes a blow-up capture of its first failure (the last
+``dopt.view.blowup.KEEP`` states of the combined model, kept in a ring buffer) to
+``OUT/blowups/<blowup_label>``, which ``dopt-view`` opens at the failing step.
+
 Shapes: N particles, H actions, ns state row of the combined model.
 """
 
 from __future__ import annotations
 
+import collections
 import logging
+import os
 from dataclasses import dataclass, field
 
 import mujoco
@@ -44,6 +51,7 @@ from dopt.tasks.panda import (
 from dopt.tasks.pick.picker import fix_grasp_anchors, grasp_equalities, smooth_profile
 from dopt.tasks.pick.scene import DeformableScene
 from dopt.validation import check_config, float_array
+from dopt.view.blowup import KEEP, capture_dir, save_blowup
 
 log = logging.getLogger(__name__)
 
@@ -145,9 +153,10 @@ class PandaExecution:
     skipped because the pinch could not reach the particle (indices into the plan), the
     combined model's
     states (``SNAPSHOT_SPEC``) at the start and after each grasp, carry and release (with
-    ``snapshots``; for pictures), the number of steps, and the stability verdict on the replay
+    ``snapshots``; for pictures), the number of steps, the stability verdict on the replay
     (``dopt.stability``, the scene's bounds, checked after every step; MuJoCo's warnings
-    count as unstable)."""
+    count as unstable, at the step they first appear) and the blow-up capture folders written
+    (``execute``'s ``blowup_out``)."""
 
     positions: np.ndarray
     grasp_distance: list = field(default_factory=list)
@@ -156,6 +165,7 @@ class PandaExecution:
     missed: list = field(default_factory=list)
     steps: int = 0
     stability: Stability | None = None
+    blowups: list = field(default_factory=list)
 
     @property
     def unstable(self) -> bool:
@@ -205,6 +215,7 @@ class PandaExecutor:
         self._M = np.zeros((m.nv, m.nv))
         self.monitor = Monitor(m, scene.scene.stability)
         self._scan = None
+        self._blowup, self._ring, self._blowups = None, None, []  # where to capture, the ring
         # the picker's limits, held by the pinch target: the floor stop at one particle radius
         # and the workspace box of C(a_t)
         box = scene.picker.config.workspace
@@ -227,6 +238,8 @@ class PandaExecutor:
         self._qref = d.qpos[self.qadr].copy()
         self._qdref = np.zeros(7)
         self._scan, self._t = self.monitor.start(1), 0
+        self._ring = (None if self._blowup is None
+                      else collections.deque([self.state()], maxlen=KEEP))
 
     # ------------------------------------------------------------------ motion
     def _ik(self, target: np.ndarray) -> np.ndarray:
@@ -261,9 +274,29 @@ class PandaExecutor:
         tau = self._M[np.ix_(self.dadr, self.dadr)] @ acc + self.damping * qd
         d.ctrl[self.motors] = np.clip(tau, -TAU_MAX, TAU_MAX)
         mujoco.mj_step(m, d)
+        if self._ring is not None:
+            self._ring.append(self.state())
+        if not self._scan.unstable[0]:
+            self._judge(d)
+        self._t += 1
+
+    def _judge(self, d: mujoco.MjData) -> None:
+        """The verdict on step ``_t``, not yet unstable: the bounds, then MuJoCo's warnings
+        (which win at the same step); the capture of a failure (``_blowup``)."""
         self._scan.update(np.zeros(1, int), self._t,
                           {k: np.asarray(getattr(d, k))[None, None] for k in self.monitor.record})
-        self._t += 1
+        warned = [mujoco.mjtWarning(w).name for w in range(len(d.warning)) if d.warning[w].number]
+        if warned:
+            self._scan.flag(0, self._t, "MuJoCo warned: " + ", ".join(warned))
+        if self._scan.unstable[0] and self._ring is not None:
+            out, label = self._blowup
+            try:
+                self._blowups.append(str(save_blowup(
+                    capture_dir(out, label), self.model, np.array(self._ring), self._t,
+                    self._scan.reason[0], spec=SNAPSHOT_SPEC, label=label)))
+            except OSError as e:
+                log.error("the blow-up capture of the arm's step %d was not written: %s",
+                          self._t, e)
 
     def pinch(self) -> np.ndarray:
         """(3,) the pinch site's position now (m)."""
@@ -303,11 +336,14 @@ class PandaExecutor:
 
     # ------------------------------------------------------------------ actions
     def execute(self, object_state: np.ndarray, particles, displacements,
-                snapshots: bool = False) -> PandaExecution:
+                snapshots: bool = False, blowup_out: str | os.PathLike | None = None,
+                blowup_label: str = "panda") -> PandaExecution:
         """Run the plan ``particles`` (H,), ``displacements`` (H, 3) from ``object_state``.
 
         An action whose particle the pinch does not reach within ``grasp_tolerance`` (out of
         the arm's reach, or the arm blocked) is skipped and listed in ``missed``.
+        ``blowup_out``: a run folder that receives a blow-up capture of the replay's first
+        failure as ``blowups/<blowup_label>`` (module docstring); None: no capture.
 
         Raises:
             ValueError: a particle the hand cannot grasp, or a plan of bad shape.
@@ -318,6 +354,8 @@ class PandaExecutor:
         if bad:
             raise ValueError(f"particles {bad} have no grasp equality in the arm's model")
         cfg = self.config
+        self._blowup = None if blowup_out is None else (blowup_out, str(blowup_label))
+        self._blowups = []
         self.start(object_state)
         out = PandaExecution(np.empty(0))
         t_free = max(2, int(round(cfg.approach_time / self.dt)))
@@ -365,7 +403,7 @@ class PandaExecutor:
         if warned or not np.all(np.isfinite(self.data.qpos)):
             self._scan.flag(0, self._t, "MuJoCo warned: " + ", ".join(warned) if warned
                             else "non-finite state")
-        out.stability = self._scan.result()
+        out.stability, out.blowups, self._blowup = self._scan.result(), self._blowups, None
         if out.unstable:
             log.warning("the arm's replay went unstable: %s", out.stability.reason[0])
         return out

@@ -98,6 +98,35 @@ def test_the_replay_is_judged_by_the_scenes_stability_bounds(cloth):
     assert done.unstable and done.stability.reason[0].startswith("speed")
 
 
+def test_a_flagged_replay_is_captured_and_opens_at_the_flagged_step(cloth, tmp_path):
+    """With a speed bound the carried cloth breaks, the replay writes a blow-up capture of the
+    combined model at the verdict's step, which the viewer opens there with the body the
+    reason names marked; the same replay within the bounds writes none."""
+    import json
+    from dataclasses import replace
+
+    from dopt.view.blowup import KEEP, load_blowup
+
+    d = np.array([[-0.1, -0.05, 0.02]])
+    calm = PandaExecutor(cloth).execute(cloth.initial_state, [N * N - 1], d,
+                                        blowup_out=tmp_path / "calm")
+    assert not calm.unstable and calm.blowups == [] and not (tmp_path / "calm").exists()
+    strict = PandaExecutor(cloth)
+    strict.monitor = type(strict.monitor)(strict.model, replace(cloth.scene.stability,
+                                                               max_speed=0.01))
+    done = strict.execute(cloth.initial_state, [N * N - 1], d, blowup_out=tmp_path,
+                          blowup_label="cloth seed 0")
+    step = int(done.stability.step[0])
+    assert done.unstable and done.blowups == [str(tmp_path / "blowups" / "cloth-seed-0")]
+    meta = json.loads((tmp_path / "blowups" / "cloth-seed-0" / "blowup.json").read_text())
+    assert meta["step"] == step and meta["reason"] == done.stability.reason[0]
+    assert f"(body {meta['body']})" in meta["reason"]
+    assert meta["rows"] == min(step + 2, KEEP) and meta["first_row"] == step + 2 - meta["rows"]
+    ep = load_blowup(tmp_path / "blowups" / "cloth-seed-0")
+    assert ep.start_frame == ep.n_frames - 1 and "flagged" in ep.captions[ep.start_frame]
+    assert ep.marked_body == strict.model.body(meta["body"]).id
+
+
 def test_a_carry_into_the_floor_stops_at_the_floor_as_the_pickers(cloth):
     """d with dz < 0 from a particle on the floor: the pinch stays at one particle radius or
     above (the picker's floor stop), so the held particle is not pressed into the floor."""
