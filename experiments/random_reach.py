@@ -1,6 +1,7 @@
 """Why CEM(Random) is better or worse than CEM(Original) on a fold: the reach of each seed's
-random candidate set against its final cost (``planners.random_reach``), from a Fig. 7 run's
-committed trials (nothing is simulated; each trial's candidates are re-drawn from its seed).
+random candidate set against its final cost (``planners.pick_place.random_reach``), from a
+Fig. 7 run's committed trials (nothing is simulated; each trial's candidates are re-drawn
+from its seed).
 
 Writes OUT/summary.json (experiment "random_reach"): per run folder, the fold, each
 CEM(Random) trial's seed, final cost, candidates and reach per stage, and the summary (the
@@ -30,7 +31,7 @@ from cli_args import (
 )
 
 from dopt.sweep import load_finished
-from planners.random_reach import MOVING, random_reach, reach_summary
+from planners.pick_place.random_reach import MOVING, random_reach, reach_summary
 
 
 def parse_args(argv):

@@ -40,7 +40,6 @@ import re
 import sys
 from collections import Counter
 from pathlib import Path
-from types import SimpleNamespace
 
 from cli_args import EPILOG, existing_dir, guarded, output_dir
 from report_base import ROOT, Result, load_results
@@ -73,13 +72,12 @@ def commits_of(records: list[dict]) -> dict:
 
 
 def _fig7(d: dict, records: list[dict], info: TrialInfo) -> dict:
-    from planners.pick_place import Problem, summarize
+    from planners.pick_place import metric_names, summarize
 
     results = [r["result"] for r in records]
     task, goal = d.get("task"), d.get("goal")
-    # the library's own metric names, without building the scene
-    names = Problem.metric_names.fget(SimpleNamespace(settings=SimpleNamespace(task=task,
-                                                                              goal=goal)))
+    # the library's own metric names (the goal's registration), without building the scene
+    names = metric_names(task, goal)
     methods = [m for m in d.get("methods") or {}]
     return {"methods": summarize(results, methods, names),
             "trials_wall_s": float(sum(r["wall_s"] for r in results)),

@@ -9,8 +9,9 @@ loop and summaries. Modules:
     ilqr.py           iLQR with state-vector reduction (reduced backward, full forward pass);
                       keypoints.py: derivatives at key timesteps only
     svr.py            DoF importance from the gains K, the DoF selectors, SVROptimiser
-    pick_place.py     the key-particle pipeline: settings and presets, problems, planners by
-                      name, run_problem / solve / run_trial, summarize
+    pick_place/       the key-particle pipeline: the tasks and goals registered once, the
+                      presets of both protocols, settings, problems, planners by name,
+                      run_problem / solve / run_trial, summarize
     svr_mpc/          the state-vector-reduction pipeline: settings and presets, run_svr_mpc,
                       summaries, the authors' statistic
     trial_progress.py the CEM iterations a saved trial holds, the fields of a trial's result and

@@ -55,8 +55,9 @@ class PickTask(Protocol):
 
 @dataclass(frozen=True)
 class CEMConfig:
-    """CEM settings. The defaults are what the experiments run (``paper()`` adds the paper's
-    iteration count); the paper gives no population, elites or distribution parameters.
+    """CEM settings. The defaults are what the experiments run; the paper gives its iteration
+    count (30, ``planners.pick_place.presets.PAPER_CHANGES``) and no population, elites or
+    distribution parameters.
 
     Attributes:
         population: P, sequences sampled per iteration.
@@ -83,12 +84,6 @@ class CEMConfig:
     min_std: float = 0.05
     prob_floor: float = 0.25
     keep_best: bool = True
-
-    @classmethod
-    def paper(cls, horizon: int, **overrides) -> CEMConfig:
-        """The key-particle paper's budget: 30 CEM iterations per plan (Sec. IV-C: "We run
-        each CEM planner for 30 iterations"), H actions, the defaults otherwise."""
-        return cls(**{"iterations": 30, "horizon": horizon, **overrides})
 
     def __post_init__(self):
         # types: ints (not bools), finite numbers, keep_best a bool (TypeError / ValueError)

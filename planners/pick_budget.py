@@ -16,6 +16,7 @@ from __future__ import annotations
 import os
 
 from dopt.validation import check_memory
+from planners.pick_place.tasks import PICK_TASKS
 
 #: bytes one simulated particle takes in MuJoCo's model and in the data of each simulation
 #: thread (a flex vertex body, its slide joints, contacts, the solver's rows; generously)
@@ -57,7 +58,7 @@ def sizes(settings) -> dict:
     except ValueError as e:
         field = "bound" if settings.picker_speed is None else "picker_speed"
         raise BudgetError(field, str(e)) from None
-    N = settings.n * settings.n if settings.task == "cloth" else settings.n
+    N = PICK_TASKS[settings.task].n_particles(settings.n)
     P, H = settings.cem.population, settings.cem.horizon
     threads = settings.threads or os.cpu_count() or 1
     return {"N": N, "K": K, "P": P, "H": H,

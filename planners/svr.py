@@ -82,19 +82,12 @@ class SelectionConfig:
     """method: one of METHODS; rho: importance threshold below which SVR removes a DoF;
     theta: random unused DoFs (re-)introduced per iteration (rand: DoFs besides the robot);
     g: singular values used by svr-svd. The defaults are the paper's svr-sum row of Table 1
-    (rho 1, theta 10); ``paper(method)`` gives any method's."""
+    (rho 1, theta 10); ``paper_theta(method)`` gives any method's theta."""
 
     method: str = "svr-sum"
     rho: float = 1.0
     theta: int = 10
     g: int = 3
-
-    @classmethod
-    def paper(cls, method: str, **overrides) -> SelectionConfig:
-        """The paper's Table 1 setting of ``method``: rho 1 and theta ``paper_theta(method)``
-        (rand 5, svr 10, 0 for methods that draw no random DoFs)."""
-        return cls(**{"method": method, "rho": 1.0, "theta": paper_theta(method),
-                      **overrides})
 
     def __post_init__(self):
         if self.method not in METHODS:

@@ -68,10 +68,9 @@ def main(argv=None) -> int:
         p = sub.add_parser(task, help=f"the {task} physics presets: speed, blow-ups per 1000 "
                                       f"random actions, strain, scripted error")
         add_common_args(p)
-        p.add_argument("--sizes", type=number_list(int, 2, "particle counts"),
-                       default="12" if task == "cloth" else "40",
-                       help="comma-separated particles per side / along the rope "
-                            "(default %(default)s)")
+        p.add_argument("--sizes", type=number_list(int, 2, "particle counts"), default=None,
+                       help="comma-separated particles per side / along the rope (default: "
+                            "the n of the task's first preset, cloth 12, rope 40)")
         p.add_argument("--settings", default=None,
                        help="comma-separated setting names (default: all of "
                             "planners.bench.physics' table)")

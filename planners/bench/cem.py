@@ -16,41 +16,43 @@ import torch
 
 from dopt.bench.timing import best_wall
 from dopt.rollout import RolloutConfig, RolloutService
-from dopt.tasks.pick.cloth_scene import ClothSceneConfig, make_cloth
 from dopt.tasks.pick.picker import CONTROL_SPEC, PickerConfig
-from dopt.tasks.pick.rope_scene import RopeSceneConfig, make_rope
 from dopt.tasks.pick.scene import PickPlaceTask
 from planners.cem import CEM, CEMConfig
+from planners.pick_place import GOALS, PRESETS, pick_task
 
 
-def _cloth_task(n: int, bound: float):
+def _cloth_goal(n: int, radius: float):
+    """The diagonal fold and the sheet's four corners."""
     from deformables.goals import cloth_diagonal
 
-    scene = make_cloth(ClothSceneConfig(n=n), PickerConfig(bound=(bound,) * 3))
-    goal = cloth_diagonal(n=n).positions + np.array([0.0, 0.0, scene.radius])
+    goal = cloth_diagonal(n=n).positions + np.array([0.0, 0.0, radius])
     N = n * n
-    return scene, goal, [0, n - 1, N - n, N - 1]
+    return goal, [0, n - 1, N - n, N - 1]
 
 
-def _rope_task(n: int, bound: float):
+def _rope_goal(n: int, radius: float):
+    """The crossed triangle and four particles a third of the rope apart."""
     from deformables.goals import rope_crossed_triangle
 
-    scene = make_rope(RopeSceneConfig(n=n), PickerConfig(bound=(bound,) * 3))
-    goal = rope_crossed_triangle(n).positions
-    return scene, goal, [0, n // 3, 2 * n // 3, n - 1]
+    return rope_crossed_triangle(n).positions, [0, n // 3, 2 * n // 3, n - 1]
+
+
+#: task -> (n, scene radius) -> the goal (N, 3) one iteration is timed on and its candidates
+BENCH_GOALS = {"cloth": _cloth_goal, "rope": _rope_goal}
 
 
 def bench_cem(task: str, n: int | None, P: int, H: int, bound: float | None, threads: int,
               repeats: int, seed: int) -> dict:
-    """Seconds per CEM iteration against P*H*K mj_step / threads, same run."""
-    if task == "cloth":
-        n, bound = n or 12, bound or 0.3
-        scene, goal, cand = _cloth_task(n, bound)
-    elif task == "rope":
-        n, bound = n or 40, bound or 0.1
-        scene, goal, cand = _rope_task(n, bound)
-    else:
-        raise ValueError(f"unknown task {task!r}; the cem bench knows cloth and rope")
+    """Seconds per CEM iteration against P*H*K mj_step / threads, same run; n and bound
+    default to the preset of the task's first goal (cloth 12 and 0.3 m, rope 40 and 0.1 m)."""
+    if task not in BENCH_GOALS:
+        raise ValueError(f"unknown task {task!r}; the cem bench knows "
+                         f"{' and '.join(BENCH_GOALS)}")
+    pick_spec, preset = pick_task(task), PRESETS[task, GOALS[task][0]]
+    n, bound = n or preset.n, bound or preset.bound
+    scene = pick_spec.build(pick_spec.config(n=n), PickerConfig(bound=(bound,) * 3))
+    goal, cand = BENCH_GOALS[task](n, scene.radius)
     svc = RolloutService(scene.scene, RolloutConfig(threads=threads))
     pick = PickPlaceTask(scene, goal, rollout=svc)
     cem = CEM(CEMConfig(population=P, elites=max(1, P // 5), iterations=1, horizon=H,

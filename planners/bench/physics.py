@@ -19,10 +19,15 @@ import numpy as np
 
 from dopt.provenance import provenance
 from dopt.rollout import RolloutConfig, RolloutService
-from dopt.tasks.pick.cloth_scene import ClothSceneConfig, make_cloth
 from dopt.tasks.pick.picker import CONTROL_SPEC, PickerConfig
-from dopt.tasks.pick.rope_scene import RopeSceneConfig, make_rope
-from planners.pick_place import GOALS, PickPlaceSettings, ScriptedPlanner, make_problem, run_problem
+from planners.pick_place import (
+    GOALS,
+    PickPlaceSettings,
+    ScriptedPlanner,
+    make_problem,
+    pick_task,
+    run_problem,
+)
 
 
 def grid(**fields) -> dict:
@@ -124,8 +129,12 @@ ROPE_SETTINGS = {
 }
 
 
+#: task -> the settings its sweep compares
+SETTINGS = {"cloth": CLOTH_SETTINGS, "rope": ROPE_SETTINGS}
+
+
 def _config(task: str, name: str, overrides: dict | None, n: int):
-    cls = ClothSceneConfig if task == "cloth" else RopeSceneConfig
+    cls = pick_task(task).config
     if overrides is None:
         return cls.preset(name.split(":", 1)[1], n=n)
     return replace(cls(n=n), **overrides)
@@ -145,7 +154,7 @@ def random_actions(task: str, config, actions: int, threads: int, seed: int,
     half after folding one corner onto the opposite one): unstable per 1000, strain
     percentiles, CPU ms per step. ``picker_speed``: ``PickerConfig.speed`` (m/s)."""
     picker = PickerConfig(bound=(bound,) * 3, speed=picker_speed)
-    scene = (make_cloth if task == "cloth" else make_rope)(config, picker)
+    scene = pick_task(task).build(config, picker)
     N = scene.n_particles
     svc = RolloutService(scene.scene, RolloutConfig(threads=threads))
     # the folded start: the last particle carried onto the first, released
@@ -213,17 +222,21 @@ def scripted_goals(task: str, name: str, overrides: dict | None, n: int,
     return out
 
 
-def bench_physics(task: str, sizes: list[int], settings: list[str] | None, actions: int,
-                  threads: int, seed: int, scripted: bool = True,
+def bench_physics(task: str, sizes: list[int] | None, settings: list[str] | None,
+                  actions: int, threads: int, seed: int, scripted: bool = True,
                   picker_speeds: list[float | None] = (None,)) -> dict:
     """The sweep: one row per (setting, size, picker speed); a speed of None is
-    ``PickerConfig``'s default."""
-    table = CLOTH_SETTINGS if task == "cloth" else ROPE_SETTINGS
+    ``PickerConfig``'s default. The bound (and with ``sizes`` None the size) is the preset's
+    of the task's first goal."""
+    if task not in SETTINGS:
+        raise ValueError(f"unknown task {task!r}; the physics bench knows {', '.join(SETTINGS)}")
+    table = SETTINGS[task]
     names = settings or list(table)
     unknown = [s for s in names if s not in table]
     if unknown:
         raise ValueError(f"unknown {task} settings {unknown}; choose from {list(table)}")
-    bound = PickPlaceSettings.preset(task, GOALS[task][0]).bound
+    preset = PickPlaceSettings.preset(task, GOALS[task][0])
+    bound, sizes = preset.bound, sizes or [preset.n]
     rows = []
     for n in sizes:
         for name in names:

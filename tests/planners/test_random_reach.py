@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from planners.random_reach import p_blind, random_reach, reach_summary
+from planners.pick_place.random_reach import p_blind, random_reach, reach_summary
 
 RUNS = Path(__file__).resolve().parents[2] / "docs" / "results" / "runs"
 
@@ -47,7 +47,7 @@ def test_redrawn_candidates_hold_every_recorded_pick(fold):
 def test_at_least_matches_binomial_and_enumeration():
     from scipy.stats import binom
 
-    from planners.random_reach import at_least
+    from planners.pick_place.random_reach import at_least
 
     for k in range(6):
         assert at_least([0.3] * 5, k) == pytest.approx(binom.sf(k - 1, 5, 0.3), abs=1e-12)
@@ -59,7 +59,7 @@ def test_at_least_matches_binomial_and_enumeration():
 
 
 def test_reach_summary_counts():
-    from planners.random_reach import StageReach, TrialReach
+    from planners.pick_place.random_reach import StageReach, TrialReach
 
     def trial(seed, cost, need):
         st = StageReach("s", [0], need, 0.4, need / 0.4, 0.1)

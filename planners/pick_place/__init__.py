@@ -1,0 +1,90 @@
+"""Pick-and-place on rope and cloth: the key-particle paper's pipeline as one library call.
+
+A *problem* is a scene (rope or cloth with the picker), a start state and one or more *stages*:
+the goal shape and, for the multi-step folds, its intermediate goals in turn (Sec. III-D), each
+with the key particles of its goal (``deformables``). A *planner* plans one stage from the
+current state; the plan is executed and the next stage starts from where it left the object.
+
+Planners (the paper's Sec. IV-C.2), one interface (``PickPlanner``), built by name with
+``make_planner``:
+
+    simple    CEM over the key particles of each stage's goal (CEM(Simple))
+    original  CEM over all particles (CEM(Original))
+    random    CEM over a random subset as large as the key set (CEM(Random))
+    scripted  pick each key particle, move it above its goal, release
+
+One call runs a whole trial::
+
+    from planners.pick_place import PickPlaceSettings, solve
+    result = solve(PickPlaceSettings.preset("cloth", "diagonal"), method="simple", seed=0)
+    result.metrics["final_cost"]          # mean particle distance to the goal (m)
+
+Modules, one job each (every name is re-exported here):
+
+    tasks.py     the tasks and goals, registered once: PICK_TASKS (PickTaskSpec: scene,
+                 sizes, goals), PickGoal (stages, start, metrics), PICK_METRICS,
+                 register_goal (a new goal and its budget in one call), GOALS
+    presets.py   the presets of both protocols with the source of every number: PRESETS
+                 (ours), PAPER_PRESETS (the paper's), QUICK_CHANGES, PROTOCOL_SEEDS
+    settings.py  PickPlaceSettings: presets, scene and picker configs, a trial's identity
+    problem.py   Problem and make_problem
+    planners.py  StagePlan, PickPlanner, CEMPlanner, ScriptedPlanner, make_planner, METHODS
+    run.py       run_problem (with checkpoints), solve, run_trial, PickPlaceResult
+    summary.py   summarize, last_improvement
+    random_reach.py  why CEM(Random) lands where it does: each trial's candidates re-drawn
+                 from its seed and what they can reach (``random_reach``, ``reach_summary``)
+
+Shapes: N particles, K key particles, H actions per plan, ns state row.
+"""
+
+from planners.pick_place.planners import (
+    CEM_CANDIDATES,
+    LABELS,
+    METHODS,
+    CEMPlanner,
+    PickPlanner,
+    ScriptedPlanner,
+    StagePlan,
+    make_planner,
+)
+from planners.pick_place.presets import (
+    PAPER_CHANGES,
+    PAPER_PRESETS,
+    PRESETS,
+    PROTOCOL_SEEDS,
+    PROTOCOLS,
+    QUICK_CHANGES,
+    Preset,
+    paper_preset,
+    quick_preset,
+)
+from planners.pick_place.problem import Problem, make_problem
+from planners.pick_place.run import PickPlaceResult, TrialProgress, run_problem, run_trial, solve
+from planners.pick_place.settings import UNSET_SCENE_FIELDS, UNSET_SETTINGS, PickPlaceSettings
+from planners.pick_place.summary import last_improvement, summarize
+from planners.pick_place.tasks import (
+    CRUMPLE_TURN,
+    GOALS,
+    PICK_METRICS,
+    PICK_TASKS,
+    PickGoal,
+    PickTaskSpec,
+    Stage,
+    cloth_sequence,
+    metric_names,
+    pick_task,
+    register_goal,
+    register_task,
+    rope_stage,
+)
+
+__all__ = [
+    "CEM_CANDIDATES", "CRUMPLE_TURN", "GOALS", "LABELS", "METHODS", "PAPER_CHANGES",
+    "PAPER_PRESETS", "PICK_METRICS", "PICK_TASKS", "PRESETS", "PROTOCOLS", "PROTOCOL_SEEDS",
+    "QUICK_CHANGES", "UNSET_SCENE_FIELDS", "UNSET_SETTINGS", "CEMPlanner", "PickGoal",
+    "PickPlaceResult", "PickPlaceSettings", "PickPlanner", "PickTaskSpec", "Preset", "Problem",
+    "ScriptedPlanner", "Stage", "StagePlan", "TrialProgress", "cloth_sequence",
+    "last_improvement", "make_planner", "make_problem", "metric_names", "paper_preset",
+    "pick_task", "quick_preset", "register_goal", "register_task", "rope_stage", "run_problem",
+    "run_trial", "solve", "summarize",
+]
