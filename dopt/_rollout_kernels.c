@@ -71,7 +71,7 @@ static void log_handler(const log_message_t* msg) {
 
 /* the calling convention of this file; dopt/kernels.py refuses a build with another one
  * (a stale extension after an update that changed a signature) */
-int dopt_abi_version(void) { return 5; }
+int dopt_abi_version(void) { return 6; }
 
 /* install once, before the first kernel call */
 void dopt_install_log_handler(void) {
@@ -298,6 +298,10 @@ typedef struct {
   mjtNum max_energy, energy_mass;       /* J/kg; kg of the judged bodies */
   const int* window_eqs; int nwindow;   /* equalities whose activity ends a free window */
   const int* working_act; int nworking; /* actuators whose force ends a free window */
+  const int* spin_dofs;                 /* (nspin, spin_width, 3) qvel indices of the angular
+                                           velocity of each hinge / ball joint of a body, -1 pad */
+  const mjtNum* spin_radius;            /* (nspin, spin_width) their r_j (0 in padding) */
+  int nspin, spin_width;                /* bodies turned by hinge / ball joints, joints per body */
 } bounds_t;
 
 /* one MjData's fields, read in place: flexvert_xpos (nvert, 3), flexedge_length (nedge),
@@ -331,6 +335,20 @@ static int judge(const bounds_t* B, const probe_t* p, const mjtNum* qvel, mjtNum
     }
     const mjtNum s = sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
     if (s > speed) { speed = s; si = g; }
+  }
+  /* farthest geometry of each body turned by hinge / ball joints: sum_j |w_j| r_j */
+  for (int g = 0; g < B->nspin; g++) {
+    mjtNum s = 0;
+    for (int k = 0; k < B->spin_width; k++) {
+      const int slot = g * B->spin_width + k;
+      mjtNum w[3] = {0, 0, 0};
+      for (int c = 0; c < 3; c++) {
+        const int i = B->spin_dofs[3 * slot + c];
+        if (i >= 0) w[c] = qvel[i];
+      }
+      s += sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]) * B->spin_radius[slot];
+    }
+    if (s > speed) { speed = s; si = B->ngroup + g; }
   }
   if (B->nplane) {
     for (int i = 0; i < B->nvert; i++) {
@@ -377,7 +395,7 @@ static int judge(const bounds_t* B, const probe_t* p, const mjtNum* qvel, mjtNum
     if (free && !was_free) stats[STAT_LOW] = e;
     stats[STAT_FREE] = free;
   }
-  if (B->ngroup == 0) speed = 0;
+  if (B->ngroup + B->nspin == 0) speed = 0;
   if (B->nplane == 0 || B->nvert == 0) pen = 0;
   if (strain == -INFINITY) strain = 0;
   stats[STAT_CAPPED] += capped;

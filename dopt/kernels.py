@@ -32,7 +32,7 @@ log = logging.getLogger(__name__)
 #: // 1000; a patch release keeps the public API: 4.0.1's mujoco.h differs from 4.0.0's only in
 #: mjVERSION_HEADER and one added function)
 MUJOCO_MINOR = 4000
-ABI_VERSION = 5                   # dopt_abi_version() of the C file this front matches
+ABI_VERSION = 6                   # dopt_abi_version() of the C file this front matches
 _HERE = os.path.dirname(os.path.abspath(__file__))
 _lib = None
 _load_error: str | None = None
@@ -85,7 +85,9 @@ class Bounds(ctypes.Structure):
                 ("energy_judged", ctypes.c_int), ("max_energy", ctypes.c_double),
                 ("energy_mass", ctypes.c_double), ("window_eqs", ctypes.c_void_p),
                 ("nwindow", ctypes.c_int), ("working_act", ctypes.c_void_p),
-                ("nworking", ctypes.c_int)]
+                ("nworking", ctypes.c_int), ("spin_dofs", ctypes.c_void_p),
+                ("spin_radius", ctypes.c_void_p), ("nspin", ctypes.c_int),
+                ("spin_width", ctypes.c_int)]
 
     @classmethod
     def of(cls, monitor: Monitor) -> Bounds:
@@ -95,7 +97,9 @@ class Bounds(ctypes.Structure):
                 np.ascontiguousarray(monitor.length0, dtype=np.float64),
                 np.ascontiguousarray(monitor.edge_grasps, dtype=np.int32),
                 np.ascontiguousarray(monitor.window_eqs, dtype=np.int32),
-                np.ascontiguousarray(monitor.working_actuators, dtype=np.int32)]
+                np.ascontiguousarray(monitor.working_actuators, dtype=np.int32),
+                np.ascontiguousarray(monitor.spin_dofs, dtype=np.int32),
+                np.ascontiguousarray(monitor.spin_radius, dtype=np.float64)]
         b = monitor.bounds
         out = cls(keep[0].ctypes.data, len(keep[0]), keep[1].ctypes.data, len(keep[1]),
                   keep[2].ctypes.data, len(keep[2]), keep[3].ctypes.data, len(keep[3]),
@@ -104,7 +108,8 @@ class Bounds(ctypes.Structure):
                   b.max_speed, b.max_penetration, b.max_strain, keep[4].ctypes.data,
                   keep[4].shape[1], int(monitor.energy_judged),
                   b.max_energy_gain if monitor.energy_judged else 0.0, monitor.energy_mass,
-                  keep[5].ctypes.data, len(keep[5]), keep[6].ctypes.data, len(keep[6]))
+                  keep[5].ctypes.data, len(keep[5]), keep[6].ctypes.data, len(keep[6]),
+                  keep[7].ctypes.data, keep[8].ctypes.data, keep[8].shape[0], keep[8].shape[1])
         out._keep = keep
         return out
 

@@ -4,10 +4,22 @@ MuJoCo flags a simulation only when a value is NaN or beyond +-1e10. A cloth can
 through the floor and be thrown a metre up at 22 m/s with every state finite and no warning.
 ``StabilityBounds`` (part of a ``dopt.Scene``) names what a trustworthy step must keep:
 
-- speed: the largest translational speed of a body moved by a free joint or by slide joints
-  (flex particles, picker, free objects), |v| over its linear DoFs (m/s; for slide joints the
-  norm over up to three of them, which is the speed when their axes are orthonormal, as a
-  flexcomp's and the picker's are);
+- speed (m/s), the largest of two kinds, each read from qvel alone:
+  - the translational speed of a body moved by a free joint or by slide joints (flex
+    particles, picker, free objects), |v| over its linear DoFs (for slide joints the norm over
+    up to three of them, which is the speed when their axes are orthonormal, as a flexcomp's
+    and the picker's are);
+  - the speed of the farthest geometry of a body turned by its own hinge or ball joints (an
+    arm's links): sum_j |w_j| r_j over those joints j, where |w_j| is the joint's angular
+    speed (|qvel| of a hinge, the norm of a ball's three qvel) and
+    r_j = max_g (|p_g - a_j| + rbound_g) over the geoms g of the body and of the bodies welded
+    to it (descendants through bodies without joints), p_g the geom's centre and a_j the
+    joint's anchor (``jnt_pos``) in the body's frame, rbound_g MuJoCo's bounding-sphere radius
+    of the geom. It bounds the speed of every point of that geometry relative to the parent
+    body (as the slide joints' speed is relative to theirs: each joint of a chain is judged on
+    its own body) and equals it for one joint whose farthest point lies square to its axis
+    (a hinge link: |qvel| times the distance from the axis to its tip). The rotation of free
+    joints is not judged, and a body without geometry is not either;
 - penetration: the deepest flex vertex below a static plane (the floor), counting the
   vertex radius, r - n.(x - p) (m);
 - strain: the largest relative length change of a flex edge, |l / l0 - 1|, over the edges
@@ -31,7 +43,8 @@ actuator forces applied in step t. The C loops of
 ``dopt/_rollout_kernels.c`` evaluate the same expressions in the same order, so both rollout
 routes give the same verdict (tested).
 
-Shapes: P rollouts, K steps of a chunk, G bodies with linear DoFs, V flex vertices, E flex
+Shapes: P rollouts, K steps of a chunk, G groups of linear DoFs (a body each), R bodies turned by
+their hinge or ball joints (W of those joints at most on one body), V flex vertices, E flex
 edges.
 """
 
@@ -50,7 +63,8 @@ class StabilityBounds:
     """What a step must keep to count as physical (see the module docstring).
 
     Attributes:
-        max_speed: m/s, translational speed of any body on a free joint or slide joints.
+        max_speed: m/s, translational speed of any body on a free joint or slide joints, and
+            speed of the farthest geometry of any body turned by its hinge or ball joints.
         max_penetration: m, depth of any flex vertex (radius included) below a static plane.
         max_strain: relative elongation or compression |l / l0 - 1| of any flex edge.
         max_capped_steps: steps at the solver's iteration cap a rollout may take (None: counted
@@ -119,7 +133,11 @@ class Monitor:
     """The bounds of one model, evaluated on batches of MjData fields (see ``scan``).
 
     Attributes (read by the C loops too): groups (G, 3) int32 qvel indices of each body's
-    linear DoFs, -1 padded; group_body (G,) their bodies; planes (nplane, 4) unit normal and
+    linear DoFs, -1 padded; group_body (G,) their bodies; spin_dofs (R, W, 3) int32 the qvel
+    indices of the angular velocity of each hinge (one) or ball (three) joint of each body
+    turned by them, -1 padded, and spin_radius (R, W) their r_j (module docstring; 0 for a
+    padding slot); spin_body (R,) those bodies; speed_body (G + R,) the body of each speed
+    candidate, linear groups first (the index ``speed`` returns); planes (nplane, 4) unit normal and
     offset n.p of each static plane geom; radius (V,) flex vertex radii; length0 (E,) rest
     lengths of the flex edges; edge_grasps (E, w) int32 the equality constraints attaching a
     body to either vertex of each edge, -1 padded (w = 0: none, or ``strain_at_grasps``);
@@ -135,6 +153,8 @@ class Monitor:
         self.model, self.bounds = model, bounds
         unjudged = _body_ids(model, bounds.unjudged_bodies)
         self.groups, self.group_body = _linear_groups(model, unjudged)
+        self.spin_dofs, self.spin_radius, self.spin_body = _spin_groups(model, unjudged)
+        self.speed_body = np.concatenate([self.group_body, self.spin_body]).astype(np.int32)
         self.energy_judged = bounds.max_energy_gain is not None
         if self.energy_judged:
             model.opt.enableflags |= int(mujoco.mjtEnableBit.mjENBL_ENERGY)
@@ -170,13 +190,22 @@ class Monitor:
 
     # ---------------------------------------------------------------- per step values
     def speed(self, qvel: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """(..., nv) -> largest linear body speed (...) and which group (...)."""
-        if not len(self.groups):
+        """(..., nv) -> largest body speed (...), linear or of the farthest geometry turned by
+        hinge and ball joints (module docstring), and which candidate (...): i < G the linear
+        group i, else the turned body i - G (``speed_body[i]`` names the body either way)."""
+        if not len(self.speed_body):
             z = np.zeros(qvel.shape[:-1])
             return z, z.astype(int)
         padded = np.concatenate([qvel, np.zeros(qvel.shape[:-1] + (1,))], axis=-1)
         v = padded[..., self.groups]                                   # (..., G, 3)
-        s = np.sqrt(v[..., 0] * v[..., 0] + v[..., 1] * v[..., 1] + v[..., 2] * v[..., 2])
+        lin = np.sqrt(v[..., 0] * v[..., 0] + v[..., 1] * v[..., 1] + v[..., 2] * v[..., 2])
+        w = padded[..., self.spin_dofs]                                # (..., R, W, 3)
+        tip = np.sqrt(w[..., 0] * w[..., 0] + w[..., 1] * w[..., 1]
+                      + w[..., 2] * w[..., 2]) * self.spin_radius      # (..., R, W)
+        spin = np.zeros(tip.shape[:-1])
+        for k in range(tip.shape[-1]):             # summed in slot order, as the C loop
+            spin = spin + tip[..., k]
+        s = np.concatenate([lin, spin], axis=-1)                       # (..., G + R)
         s = np.where(np.isnan(s), -np.inf, s)
         i = s.argmax(axis=-1)
         return np.take_along_axis(s, i[..., None], -1)[..., 0], i
@@ -251,9 +280,11 @@ class Monitor:
         """The reason text of a violated bound."""
         b, m = self.bounds, self.model
         if bound == "speed":
-            body = mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_BODY, int(self.group_body[index]))
-            return (f"speed {value:.3g} m/s > {b.max_speed:g} m/s (body "
-                    f"{body or int(self.group_body[index])})")
+            b_id = int(self.speed_body[index])
+            body = mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_BODY, b_id)
+            where = " at its farthest geometry" if index >= len(self.groups) else ""
+            return (f"speed {value:.3g} m/s > {b.max_speed:g} m/s{where} (body "
+                    f"{body or b_id})")
         if bound == "penetration":
             return (f"penetration {value * 1e3:.3g} mm > {b.max_penetration * 1e3:g} mm (flex "
                     f"vertex {index})")
@@ -396,6 +427,60 @@ def _linear_groups(model: mujoco.MjModel, skip: set[int]) -> tuple[np.ndarray, n
             bodies.append(b)
     return (np.array(groups, dtype=np.int32).reshape(-1, 3),
             np.array(bodies, dtype=np.int32))
+
+
+def _spin_groups(model: mujoco.MjModel, skip: set[int]
+                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(R, W, 3) int32 qvel indices of the angular velocity of each hinge or ball joint of each
+    body turned by them (-1 padded), (R, W) the joints' r_j (module docstring; 0 in padding),
+    and (R,) the bodies; bodies in ``skip``, and joints whose body has no geometry, left out."""
+    per_body: dict[int, list[tuple[list[int], float]]] = {}
+    points = {}                             # body -> (n, 4): geom centres in its frame, rbound
+    for j in range(model.njnt):
+        jt, b, v = int(model.jnt_type[j]), int(model.jnt_bodyid[j]), int(model.jnt_dofadr[j])
+        if b in skip:
+            continue
+        if jt == mujoco.mjtJoint.mjJNT_HINGE:
+            dofs = [v, -1, -1]
+        elif jt == mujoco.mjtJoint.mjJNT_BALL:
+            dofs = [v, v + 1, v + 2]
+        else:
+            continue
+        if b not in points:
+            points[b] = _welded_geoms(model, b)
+        p = points[b]
+        if not len(p):
+            continue
+        r = float(np.max(np.linalg.norm(p[:, :3] - model.jnt_pos[j], axis=1) + p[:, 3]))
+        per_body.setdefault(b, []).append((dofs, r))
+    width = max((len(e) for e in per_body.values()), default=0)
+    dofs = np.full((len(per_body), width, 3), -1, np.int32)
+    radius = np.zeros((len(per_body), width))
+    for i, entries in enumerate(per_body.values()):
+        for k, (d, r) in enumerate(entries):
+            dofs[i, k], radius[i, k] = d, r
+    return dofs, radius, np.array(list(per_body), dtype=np.int32)
+
+
+def _welded_geoms(model: mujoco.MjModel, body: int) -> np.ndarray:
+    """(n, 4): centre (in ``body``'s frame) and bounding radius of each geom of ``body`` and of
+    the bodies welded to it (descendants reached through bodies without joints)."""
+    out = []
+    stack = [(body, np.zeros(3), np.array([1.0, 0.0, 0.0, 0.0]))]   # body, its pose in `body`
+    while stack:
+        b, pos, quat = stack.pop()
+        for g in range(model.body_geomadr[b], model.body_geomadr[b] + model.body_geomnum[b]):
+            p = np.empty(3)
+            mujoco.mju_rotVecQuat(p, model.geom_pos[g], quat)
+            out.append([*(pos + p), float(model.geom_rbound[g])])
+        for c in np.flatnonzero(model.body_parentid == b):
+            if c == b or model.body_jntnum[c]:
+                continue
+            p, q = np.empty(3), np.empty(4)
+            mujoco.mju_rotVecQuat(p, model.body_pos[c], quat)
+            mujoco.mju_mulQuat(q, quat, model.body_quat[c])
+            stack.append((int(c), pos + p, q))
+    return np.array(out, dtype=float).reshape(-1, 4)
 
 
 def _equalities_attaching(model: mujoco.MjModel, bodies: set[int]) -> np.ndarray:
