@@ -27,7 +27,7 @@ from __future__ import annotations
 import logging
 import time
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Protocol
 
 import numpy as np
@@ -390,56 +390,68 @@ class CEM:
         for name, f in (("on_iteration", on_iteration), ("on_progress", on_progress)):
             if f is not None and not callable(f):
                 raise TypeError(f"{name} must be callable or None, got {f!r}")
-        dist = self.initial(cand.numel(), bound)
-        best_cost, best = float("inf"), None
-        history, elite_hist, seconds = [], [], []
-        n_nonfinite, start = 0, 0
-        if resume is not None:
-            self._check_resume(resume, dist)
-            dist, best, best_cost = resume.dist, resume.best, resume.best_cost
-            history, elite_hist = list(resume.cost_history), list(resume.elite_history)
-            seconds, n_nonfinite = list(resume.seconds), resume.n_nonfinite
-            start = resume.iteration
-            generator.set_state(resume.generator_state)
-            log.info("CEM resumes after iteration %d of %d (best %.4g)", start,
-                     cfg.iterations, best_cost)
-        for it in range(start, cfg.iterations):
-            t0 = time.perf_counter()
-            s = self.sample(dist, cand, bound, generator)
-            if cfg.keep_best and best is not None:
-                s.choice[0], s.particles[0], s.displacements[0] = best
-            costs = _check_costs(task, task.evaluate(s.particles, s.displacements),
-                                 cfg.population)
-            finite = torch.isfinite(costs)
-            if not finite.any():
-                raise RuntimeError(
-                    f"every sample of CEM iteration {it} had a non-finite cost (all "
-                    f"{cfg.population} NaN or inf from {_evaluate_name(task)}); no plan to "
-                    f"return")
-            n_nonfinite += int((~finite).sum())
-            if not finite.all():
-                log.debug("CEM iteration %d: %d of %d costs non-finite, scored +inf", it,
-                          int((~finite).sum()), cfg.population)
-            costs = torch.where(finite, costs, torch.inf)
-            dist, elite = self.refit(dist, s, costs, bound)
-            i = int(elite[0])
-            if float(costs[i]) < best_cost:
-                best_cost = float(costs[i])
-                best = (s.choice[i].clone(), s.particles[i].clone(), s.displacements[i].clone())
-            history.append(best_cost)
-            elite_hist.append(float(costs[elite].mean()))
-            seconds.append(time.perf_counter() - t0)
-            log.debug("CEM iteration %d: best %.4g, elite mean %.4g, %.2f s", it, best_cost,
-                      elite_hist[-1], seconds[-1])
+        run = self._start(cand, bound, resume, generator)
+        for it in range(run.iteration, cfg.iterations):
+            run = self._iterate(task, run, cand, bound, generator)
             if on_iteration is not None:
-                on_iteration(it, best_cost)
+                on_iteration(it, run.best_cost)
             if on_progress is not None:
-                on_progress(CEMProgress(it + 1, dist, best, best_cost, list(history),
-                                        list(elite_hist), list(seconds), n_nonfinite,
-                                        generator.get_state()))
-        return CEMResult(best[1].numpy().copy(), best[2].numpy().copy(), best_cost,
-                         np.array(history), np.array(elite_hist), np.array(seconds),
-                         cand.numpy().copy(), cfg.iterations * cfg.population, n_nonfinite)
+                on_progress(replace(run, cost_history=list(run.cost_history),
+                                    elite_history=list(run.elite_history),
+                                    seconds=list(run.seconds),
+                                    generator_state=generator.get_state()))
+        best = run.best
+        return CEMResult(best[1].numpy().copy(), best[2].numpy().copy(), run.best_cost,
+                         np.array(run.cost_history), np.array(run.elite_history),
+                         np.array(run.seconds), cand.numpy().copy(),
+                         cfg.iterations * cfg.population, run.n_nonfinite)
+
+    def _start(self, cand: torch.Tensor, bound: torch.Tensor, resume: CEMProgress | None,
+               generator: torch.Generator) -> CEMProgress:
+        """Where a plan over ``cand`` (C,) starts: the initial distribution, or ``resume``
+        checked and the generator set to its state (``generator_state`` of the returned
+        progress is filled in only when it is handed out)."""
+        dist = self.initial(cand.numel(), bound)
+        if resume is None:
+            return CEMProgress(0, dist, None, float("inf"), [], [], [], 0, None)
+        self._check_resume(resume, dist)
+        generator.set_state(resume.generator_state)
+        log.info("CEM resumes after iteration %d of %d (best %.4g)", resume.iteration,
+                 self.config.iterations, resume.best_cost)
+        return replace(resume, cost_history=list(resume.cost_history),
+                       elite_history=list(resume.elite_history), seconds=list(resume.seconds))
+
+    def _iterate(self, task, run: CEMProgress, cand: torch.Tensor, bound: torch.Tensor,
+                 generator: torch.Generator) -> CEMProgress:
+        """One CEM iteration from ``run``: sample (the best so far in slot 0 with
+        ``keep_best``), evaluate (non-finite costs score +inf), refit, keep the best."""
+        cfg, it, t0 = self.config, run.iteration, time.perf_counter()
+        s = self.sample(run.dist, cand, bound, generator)
+        if cfg.keep_best and run.best is not None:
+            s.choice[0], s.particles[0], s.displacements[0] = run.best
+        costs = _check_costs(task, task.evaluate(s.particles, s.displacements), cfg.population)
+        finite = torch.isfinite(costs)
+        if not finite.any():
+            raise RuntimeError(
+                f"every sample of CEM iteration {it} had a non-finite cost (all "
+                f"{cfg.population} NaN or inf from {_evaluate_name(task)}); no plan to return")
+        if not finite.all():
+            log.debug("CEM iteration %d: %d of %d costs non-finite, scored +inf", it,
+                      int((~finite).sum()), cfg.population)
+        costs = torch.where(finite, costs, torch.inf)
+        dist, elite = self.refit(run.dist, s, costs, bound)
+        i = int(elite[0])
+        best, best_cost = run.best, run.best_cost
+        if float(costs[i]) < best_cost:
+            best_cost = float(costs[i])
+            best = (s.choice[i].clone(), s.particles[i].clone(), s.displacements[i].clone())
+        run.cost_history.append(best_cost)
+        run.elite_history.append(float(costs[elite].mean()))
+        run.seconds.append(time.perf_counter() - t0)
+        log.debug("CEM iteration %d: best %.4g, elite mean %.4g, %.2f s", it, best_cost,
+                  run.elite_history[-1], run.seconds[-1])
+        return replace(run, iteration=it + 1, dist=dist, best=best, best_cost=best_cost,
+                       n_nonfinite=run.n_nonfinite + int((~finite).sum()))
 
 
     def _check_resume(self, resume, initial: Distribution) -> None:
