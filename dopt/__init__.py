@@ -12,7 +12,8 @@ It knows MuJoCo and no planner (docs/ARCHITECTURE.md has the map and the rule). 
                             with its real, virtual and model clocks, mpc_cost (Eq. 5)
     sweep.py                resumable trial sweeps (inline, process pool, Ray), checkpoints,
                             schemas, the folder's lock, interrupts; its files sweep_store.py,
-                            its runners sweep_exec.py; jsonio.py: strict JSON (no bare NaN)
+                            its runners sweep_exec.py; jsonio.py: strict JSON (no bare NaN);
+                            trialpack.py: finished trials packed, the one reader of trials
     provenance.py           command, commit, versions of a result; the recording and reuse rules
     stats.py, multiple.py   means and intervals; Holm's correction
     validation.py, cli.py   argument checks; the command lines' shared types and guarded()

@@ -8,14 +8,24 @@ on a local process pool, or on Ray (``ray_address``: "local" starts a local inst
 else is passed to ``ray.init``), so a sweep of thousands of trials goes to many machines without
 code changes.
 
+**Packed trials.** A finished sweep's trials can be packed into one file,
+``OUT/trials/pack.jsonl.gz`` (``pack_trials``; ``python -m dopt.sweep pack OUT [OUT ...]``:
+one record a line, sorted by key, gzip without a timestamp, so the same records give the same
+bytes; each loose file is deleted once its line reads back as the same record). Everything
+below reads packed and loose trials alike (``dopt.trialpack``, the one reader): a resume reuses
+a packed trial as it would its file, a loose file overrides the packed record of its key (a
+trial recomputed since), and new trials are written loose. A pack that cannot be read (not
+gzip, a line that is not a record with a key, a key twice) raises ``PackError``, a ValueError
+naming the pack and the line, rather than having its trials recomputed.
+
 Trial files are checked when read: a file that is not a trial record (truncated or invalid
 JSON, not an object, without "key", "params", "result" or the "code" stamp, or whose key is
 not its file name) or whose result does not fit the experiment's ``Schema`` (the keys its
 summary reads: a result ``{}``, another experiment's, an older format) is named in a logged
-warning and moved to ``OUT/trials/corrupt/`` (never deleted), and its trial is recomputed. A
-trial function's own result that does not fit is a failure, never a record. Every file is
-strict JSON (``dopt.jsonio``: a NaN is written ``null`` with the reason beside it, and read
-back as NaN).
+warning and moved to ``OUT/trials/corrupt/`` (never deleted; a packed record stays in the
+pack), and its trial is recomputed. A trial function's own result that does not fit is a
+failure, never a record. Every file is strict JSON (``dopt.jsonio``: a NaN is written ``null``
+with the reason beside it, and read back as NaN).
 
 **Which code a record stands for.** Each record stores ``CodeState.stamp()`` under "code"
 (dopt's version, the git commit, "-dirty" with a fingerprint for uncommitted code; see
@@ -23,10 +33,11 @@ back as NaN).
 key names its settings) and ``dopt.provenance.reuse_problem`` finds nothing that can change its
 result between its commit and HEAD (``git diff X HEAD -- dopt deformables planners experiments
 pyproject.toml setup.py`` empty, X an ancestor of HEAD, the working tree clean there). Anything
-else is recomputed and its old file moved to ``OUT/trials/outdated/`` (never deleted): a record
-of an unknown commit, of no commit ("no git"), of another branch, or marked "-dirty" (except
-in the very tree it was written from, so that a killed run resumes before its code is
-committed). The dopt version is recorded but decides nothing.
+else is recomputed and its old file moved to ``OUT/trials/outdated/`` (never deleted; a
+packed record stays in the pack, shadowed by the new file, until ``pack_trials`` moves it
+there): a record of an unknown commit, of no commit ("no git"), of another branch, or marked
+"-dirty" (except in the very tree it was written from, so that a killed run resumes before its
+code is committed). The dopt version is recorded but decides nothing.
 ``reuse="any"`` reuses every valid record deliberately: ``SweepResult.reused_across`` (and
 ``take_deliberate_reuse()``, which the experiments' ``write_summary`` puts in the summary) list
 the trials reused across a code change and why they would have been recomputed. No field of a
@@ -65,9 +76,11 @@ and Ray's workers as well.
 
 from __future__ import annotations
 
+import argparse
 import inspect
 import logging
 import signal
+import sys
 from collections import Counter
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
@@ -93,6 +106,7 @@ from dopt.sweep_store import (  # noqa: F401  (the public names of dopt.sweep)
     RECORD_FIELDS,
     Checkpoint,
     OutLock,
+    PackResult,
     Report,
     Schema,
     SweepLockedError,
@@ -101,8 +115,11 @@ from dopt.sweep_store import (  # noqa: F401  (the public names of dopt.sweep)
     check_trial_files,
     current_code,
     move_aside,
+    pack_trials,
+    stored_record,
     trial_path,
 )
+from dopt.trialpack import PACK_NAME, PackError  # noqa: F401
 
 log = logging.getLogger(__name__)
 
@@ -130,7 +147,8 @@ class SweepResult:
             deliberately: ``reused_across``).
         recomputed: {key: reason} of trials that had a file but were run again (fresh, written
             by code that may give another result, a corrupt file).
-        corrupt: {file name: reason} of the files moved to OUT/trials/corrupt in this call.
+        corrupt: {file name: reason} of the stored trials not used in this call (a loose
+            file is moved to OUT/trials/corrupt, a packed record stays in the pack).
         reused_across: {key: why it would have been recomputed} of the trials that
             ``reuse="any"`` reused across a code change.
         resumed: keys that started from a checkpoint.
@@ -255,18 +273,19 @@ def _takes(fn: Callable, name: str) -> bool:
 def is_finished(out_dir: Path | str, key: str, *, root: Path | str | None = None,
                 reuse: str = "same-code", schema: Schema = ANY) -> bool:
     """Whether ``run_sweep`` (not fresh, same ``reuse``, ``root`` and ``schema``) would skip
-    trial ``key``: its file under OUT/trials is a valid record that may stand for this code
-    (the code state this process last saw, ``current_code``). Reads only."""
+    trial ``key``: its file under OUT/trials, or else its packed record, is a valid record
+    that may stand for this code (the code state this process last saw, ``current_code``).
+    Reads only (PackError: the pack cannot be read)."""
     _check_reuse(reuse)
-    rec, _ = check_record(trial_path(out_dir, key), schema)
+    rec, _ = stored_record(out_dir, key, schema)
     if rec is None:
         return False
     return reuse == "any" or reuse_problem(rec.get("code"), current_code(root), root) is None
 
 
 def load_finished(out_dir: Path | str, schema: Schema = ANY) -> dict:
-    """{key: record} of every valid trial file under OUT/trials (others are moved aside:
-    ``check_trial_files``)."""
+    """{key: record} of every valid finished trial under OUT/trials, loose or packed (bad
+    loose files are moved aside: ``check_trial_files``)."""
     return check_trial_files(out_dir, schema)[0]
 
 
@@ -283,7 +302,7 @@ def _sort_stored(trials, out_dir, state, *, fresh, reuse, root, schema
     done, corrupt = check_trial_files(out_dir, schema)
     recomputed, across = {}, {}
     for t in trials:
-        if f"{t.key}.json" in corrupt:
+        if f"{t.key}.json" in corrupt and t.key not in done:
             recomputed[t.key] = f"corrupt trial file: {corrupt[f'{t.key}.json']}"
         rec = done.get(t.key)
         if rec is None:
@@ -297,9 +316,11 @@ def _sort_stored(trials, out_dir, state, *, fresh, reuse, root, schema
             continue
         recomputed[t.key] = reason
         del done[t.key]
-        where = move_aside(trial_path(out_dir, t.key), OUTDATED_DIR)
-        log.log(logging.INFO if fresh else logging.WARNING, "trial %s is recomputed: %s (old "
-                "file moved to %s)", t.key, reason, where)
+        path = trial_path(out_dir, t.key)
+        old = (f"old file moved to {move_aside(path, OUTDATED_DIR)}" if path.is_file() else
+               f"its packed record stays in trials/{PACK_NAME}, overridden by the new file")
+        log.log(logging.INFO if fresh else logging.WARNING, "trial %s is recomputed: %s (%s)",
+                t.key, reason, old)
     return done, recomputed, corrupt, across
 
 
@@ -455,3 +476,39 @@ def _execute(fn, todo, out_dir, code, checkpoints, records, progress, tick, sche
     for r in reports.values():
         r.clear()
     return failed, interrupted, stop
+
+
+# ----------------------------------------------------------------------- command line
+def main(argv=None) -> int:
+    """``python -m dopt.sweep pack OUT [OUT ...]``: pack each finished sweep's loose trial
+    files (``pack_trials``), one line per folder; exit 1 when a file was left loose."""
+    from dopt.cli import EPILOG, existing_dir, guarded
+
+    @guarded("python -m dopt.sweep")
+    def run(argv) -> int:
+        p = argparse.ArgumentParser(
+            prog="python -m dopt.sweep", epilog=EPILOG,
+            description="Tools of the resumable sweeps' folders.")
+        sub = p.add_subparsers(dest="command", required=True)
+        pk = sub.add_parser(
+            "pack", epilog=EPILOG,
+            help="pack a finished sweep's trial files into OUT/trials/" + PACK_NAME,
+            description="Merge each OUT/trials/*.json into OUT/trials/" + PACK_NAME + " (one "
+                        "record a line; a sweep and the report read it as they read the "
+                        "files) and delete each file once its line reads back the same.")
+        pk.add_argument("out", nargs="+", type=existing_dir,
+                        help="a sweep's folder (holding trials/)")
+        args = p.parse_args(argv)
+        logging.basicConfig(level=logging.WARNING, format="%(levelname)s %(name)s: %(message)s")
+        left = 0
+        for out in args.out:
+            r = pack_trials(out)
+            print(r.line(), flush=True)
+            left += len(r.left)
+        return 1 if left else 0
+
+    return run(argv)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

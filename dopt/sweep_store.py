@@ -3,6 +3,9 @@
 - ``OUT/trials/<key>.json``: a finished trial's record {"key", "params", "result", "code"}
   (``check_record``: a file that is not one, or whose result does not fit the sweep's
   ``Schema``, is named in a logged warning, moved to ``OUT/trials/corrupt/`` and recomputed);
+- ``OUT/trials/pack.jsonl.gz``: finished trials packed, one record a line (``dopt.trialpack``;
+  ``pack_trials`` merges the loose files into it); a loose file overrides the packed record
+  of its key, and a packed record that does not fit stays in the pack and is recomputed;
 - ``OUT/trials/checkpoints/<key>.json``: an unfinished trial's saved progress
   (``Checkpoint``; its progress is checked against the ``Schema`` too);
 - ``OUT/trials/.progress/<key>.json``: how far a running trial has got (``Report``: what a
@@ -10,11 +13,12 @@
 - ``OUT/.lock``: the process that runs a sweep on OUT (``OutLock``): a second one refuses.
 
 Every file is written atomically and as strict JSON (``dopt.jsonio``: no bare NaN).
-Standard library only (with ``dopt.provenance`` and ``dopt.jsonio``).
+Standard library only (with ``dopt.provenance``, ``dopt.jsonio`` and ``dopt.trialpack``).
 """
 
 from __future__ import annotations
 
+import json
 import logging
 import os
 import socket
@@ -26,6 +30,7 @@ from pathlib import Path
 
 from dopt import jsonio
 from dopt.provenance import COMMIT_ENV, CodeState, code_state, repo_root, reuse_problem
+from dopt.trialpack import StoredTrial, loose_files, read_pack, write_pack
 
 log = logging.getLogger("dopt.sweep")
 
@@ -143,12 +148,18 @@ def check_record(path: Path | str, schema: Schema = ANY) -> tuple[dict | None, s
     rec, problem = read_json(path)
     if problem is not None:
         return None, problem
+    return check_value(rec, path.stem, schema)
+
+
+def check_value(rec, key: str, schema: Schema = ANY) -> tuple[dict | None, str | None]:
+    """(rec, None) if the parsed JSON ``rec`` is the trial record of ``key`` for ``schema``'s
+    experiment, else (None, what is wrong): ``check_record`` once the file is read."""
     if not isinstance(rec, dict):
         return None, f"not a trial record (a JSON {type(rec).__name__}, not an object)"
     missing = [k for k in RECORD_FIELDS if k not in rec]
     if set(missing) - {"code"}:
         return None, f"not a trial record (no {', '.join(repr(k) for k in missing)})"
-    if rec["key"] != path.stem:
+    if rec["key"] != key:
         return None, f"its key {rec['key']!r} is not its file name"
     if not isinstance(rec["params"], dict):
         return None, "its params are not an object"
@@ -159,6 +170,37 @@ def check_record(path: Path | str, schema: Schema = ANY) -> tuple[dict | None, s
     if not (isinstance(code, dict) and "version" in code):
         return None, f"its code version {code!r} is not {{\"version\", \"commit\"}}"
     return (None, problem) if (problem := schema.result_problem(rec["result"])) else (rec, None)
+
+
+def check_packed(trial: StoredTrial, schema: Schema = ANY) -> tuple[dict | None, str | None]:
+    """``check_record`` of a packed record (``dopt.trialpack``); the problem names its line."""
+    try:
+        rec = jsonio.loads(trial.text, strict_numbers=False)
+    except ValueError as e:
+        rec, problem = None, f"not valid JSON ({e})"
+    else:
+        rec, problem = check_value(rec, trial.stem, schema)
+    return rec, (None if problem is None
+                 else f"packed in {trial.pack.name} line {trial.line}: {problem}")
+
+
+def stored_record(out_dir: Path | str, key: str, schema: Schema = ANY
+                  ) -> tuple[dict | None, str | None]:
+    """(record, None) of trial ``key`` under OUT/trials as ``check_trial_files`` would take it
+    (its loose file, else, when that is missing or not a record, its packed record), else
+    (None, what is wrong, or None when there is none). Reads only.
+
+    Raises:
+        dopt.trialpack.PackError: the folder's pack cannot be read.
+    """
+    path = trial_path(out_dir, key)
+    packed = read_pack(path.parent).get(key)        # first: a bad pack is named either way
+    rec, problem = (check_record(path, schema) if path.is_file() else (None, None))
+    if rec is not None:
+        return rec, None
+    if packed is None:
+        return None, problem
+    return check_packed(packed, schema)
 
 
 def move_aside(path: Path, folder: str) -> Path | None:
@@ -180,24 +222,42 @@ def move_aside(path: Path, folder: str) -> Path | None:
 
 
 def check_trial_files(out_dir: Path | str, schema: Schema = ANY) -> tuple[dict, dict]:
-    """({key: record} of the valid trial files under OUT/trials, {file name: reason} of the
-    others, each moved to OUT/trials/corrupt/ with a logged warning). Hidden files (the
-    temporary files of writes that were killed) are left alone."""
+    """({key: record} of the valid finished trials under OUT/trials, loose or packed, {file
+    name: reason} of the others). A loose file that is not used is moved to
+    OUT/trials/corrupt/ (the packed record of its key, if any, is then taken in its place); a
+    packed record that is not used stays in the pack (its trial is recomputed and the new
+    record, written loose, overrides it); each is named in a logged warning. Hidden files
+    (the temporary files of writes that were killed) are left alone.
+
+    Raises:
+        dopt.trialpack.PackError: the folder's pack cannot be read (named with its line).
+    """
     folder = Path(out_dir) / "trials"
     if not folder.is_dir():
         return {}, {}
+    packed = read_pack(folder)
+    loose = loose_files(folder)
     records, corrupt = {}, {}
-    for path in sorted(folder.glob("*.json")):
-        if path.name.startswith(".") or not path.is_file():
-            continue
-        rec, problem = check_record(path, schema)
-        if rec is not None:
-            records[rec["key"]] = rec
-            continue
-        corrupt[path.name] = problem
-        where = move_aside(path, CORRUPT_DIR)
-        log.warning("trial file %s is not used (%s): %s", path, problem,
-                    f"moved to {where}" if where else "it could not be moved aside")
+    for key in sorted(set(loose) | set(packed), key=lambda k: f"{k}.json"):
+        if key in loose:
+            path = loose[key]
+            rec, problem = check_record(path, schema)
+            if rec is not None:
+                records[rec["key"]] = rec
+                continue
+            corrupt[path.name] = problem
+            where = move_aside(path, CORRUPT_DIR)
+            log.warning("trial file %s is not used (%s): %s", path, problem,
+                        f"moved to {where}" if where else "it could not be moved aside")
+        if key in packed:
+            rec, problem = check_packed(packed[key], schema)
+            if rec is not None:
+                records[key] = rec
+                continue
+            corrupt.setdefault(f"{key}.json", problem)
+            log.warning("trial %s is not used (%s): it stays in %s and the trial is "
+                        "recomputed (its new record, written loose, overrides it)", key,
+                        problem, packed[key].pack)
     return records, corrupt
 
 
@@ -455,7 +515,124 @@ def _locked_message(out: Path, holder: dict) -> str:
                         f"{out / LOCK_NAME})" if other else ""))
 
 
+# ------------------------------------------------------------------------------ packing
+@dataclass(frozen=True)
+class PackResult:
+    """What ``pack_trials`` did to one sweep folder.
+
+    Attributes:
+        pack: the pack (``OUT/trials/pack.jsonl.gz``; None when there was nothing to pack).
+        n: records in the pack now; size: its bytes.
+        added: keys of the loose files packed (their files deleted).
+        replaced: {key: where its old packed record went} of the packed records a newer loose
+            file replaced (kept under OUT/trials/outdated/, never deleted).
+        left: {file name: why} of the loose files not packed (not trial records: left where
+            they are; a sweep moves them aside when it reads them).
+    """
+
+    out_dir: Path
+    pack: Path | None
+    n: int
+    size: int
+    added: list
+    replaced: dict
+    left: dict
+
+    def line(self) -> str:
+        """One line: the folder, records packed, loose files added and left."""
+        return (f"{self.out_dir}: {self.n} trials in {self.pack or 'no pack'} "
+                f"({self.size / 1e6:.2f} MB); {len(self.added)} loose files packed and deleted"
+                + (f", {len(self.replaced)} packed records replaced (old ones under "
+                   f"trials/{OUTDATED_DIR}/)" if self.replaced else "")
+                + (f"; {len(self.left)} files left loose (not trial records): "
+                   + "; ".join(f"{k}: {v}" for k, v in self.left.items()) if self.left else ""))
+
+
+def _one_line(path: Path) -> str:
+    """The record of the loose trial file ``path`` as one line of strict JSON (the file's text
+    when it was written by ``dopt.jsonio``; a bare NaN of an older file becomes its note)."""
+    return jsonio.dumps(jsonio.loads(path.read_text(), restore_values=False,
+                                     strict_numbers=False))
+
+
+def _same(text_a: str, text_b: str) -> bool:
+    """Whether two JSON texts load (``dopt.jsonio.loads``) as the same record, member order
+    and NaN included."""
+    def load(t):
+        return json.dumps(jsonio.loads(t, strict_numbers=False))
+    return load(text_a) == load(text_b)
+
+
+def _keep_outdated(folder: Path, key: str, text: str) -> Path:
+    """Write a replaced packed record to OUT/trials/outdated/ under a free name."""
+    dest_dir = folder / OUTDATED_DIR
+    dest, n = dest_dir / f"{key}.json", 0
+    while dest.exists():
+        n += 1
+        dest = dest_dir / f"{key}.{n}.json"
+    jsonio.write_atomic(dest, json.loads(text))
+    return dest
+
+
+def pack_trials(out_dir: Path | str) -> PackResult:
+    """Merge the loose trial files of a sweep folder into its pack (``dopt.trialpack``):
+    every valid record (``check_record``, any schema) joins the pack, a loose file replacing
+    the packed record of its key (the old one is written to OUT/trials/outdated/); the pack is
+    written (only when its records change: the same records give the same bytes) and read
+    back, and each loose file is deleted only once its line in the pack loads as the same
+    record as the file. Checkpoints, corrupt/ and outdated/ are left alone. Holds the folder's
+    lock (``OutLock``): a sweep running on it refuses, and packing waits for none.
+
+    Raises:
+        FileNotFoundError: ``out_dir`` has no trials/ folder.
+        dopt.trialpack.PackError: the existing pack cannot be read (nothing is changed).
+        SweepLockedError: a sweep runs on ``out_dir``.
+        RuntimeError: the pack does not read back as written (no loose file is deleted).
+    """
+    out_dir = Path(out_dir)
+    folder = out_dir / "trials"
+    if not folder.is_dir():
+        raise FileNotFoundError(f"{out_dir} has no trials/ folder (not a sweep's folder)")
+    with OutLock(out_dir):
+        lines = {k: t.text for k, t in read_pack(folder).items()}
+        taken: dict[str, Path] = {}
+        replaced: dict[str, str] = {}
+        left: dict[str, str] = {}
+        for key, path in loose_files(folder).items():
+            rec, problem = check_record(path)
+            if problem is None:
+                try:
+                    line = _one_line(path)
+                    if not _same(line, path.read_text()):
+                        problem = "its record does not survive re-serialising"
+                except (OSError, ValueError, TypeError) as e:
+                    problem = f"cannot be written as one line ({type(e).__name__}: {e})"
+            if problem is not None:
+                left[path.name] = problem
+                continue
+            if key in lines and not _same(lines[key], line):
+                replaced[key] = lines[key]
+            lines[key] = line
+            taken[key] = path
+        if not lines:
+            return PackResult(out_dir, None, 0, 0, [], {}, left)
+        kept = {k: _keep_outdated(folder, k, text) for k, text in replaced.items()}
+        pack = write_pack(folder, lines)
+        back = read_pack(folder)
+        for key, path in taken.items():
+            if key not in back or not _same(back[key].text, path.read_text()):
+                raise RuntimeError(f"{pack}: the record of {key} does not read back as "
+                                   f"{path} holds it; no loose file was deleted")
+        for path in taken.values():
+            path.unlink()
+        log.info("%s: %d trials packed in %s (%d loose files added)", out_dir, len(lines),
+                 pack, len(taken))
+        return PackResult(out_dir, pack, len(lines), pack.stat().st_size, sorted(taken),
+                          {k: str(v) for k, v in kept.items()}, left)
+
+
 __all__ = ["ANY", "CHECKPOINT_DIR", "CORRUPT_DIR", "LOCK_NAME", "OUTDATED_DIR", "PROGRESS_DIR",
-           "RECORD_FIELDS", "Checkpoint", "OutLock", "Report", "Schema", "SweepLockedError",
-           "Trial", "check_record", "check_trial_files", "current_code", "move_aside",
-           "read_json", "trial_path"]
+           "RECORD_FIELDS", "Checkpoint", "OutLock", "PackResult", "Report", "Schema",
+           "SweepLockedError", "Trial", "check_packed", "check_record", "check_trial_files",
+           "check_value", "current_code", "move_aside", "pack_trials", "read_json",
+           "stored_record", "trial_path"]

@@ -1,7 +1,8 @@
 """Fig. 7 sweeps in progress in experiments/report.py: committed trials that no recorded
 summary holds yet, seed by seed, and the checkpoints of trials stopped part-way.
 
-Standard library only (and ``planners.trial_progress``, standard library itself).
+Standard library only (and ``planners.trial_progress`` and ``dopt.trialpack``, the reader of
+committed trials, standard library themselves).
 """
 
 from __future__ import annotations
@@ -23,29 +24,34 @@ from report_base import (
     table,
 )
 
+from dopt.trialpack import PackError, stored_trials
 from planners.trial_progress import iterations_done
 
 
 # ----------------------------------------------------------------- sweeps in progress
 def unrecorded_sweeps(results_dir: Path, results: list[Result]) -> dict[str, list[dict]]:
     """{folder name: its trial records} of every ``runs/fig7-*`` folder under ``results_dir``
-    with committed trials (``trials/*.json``, as ``dopt.sweep`` writes them) that its recorded
-    summary ``<folder>.json`` among ``results`` (``load_results(results_dir)``) does not hold:
-    all of them while no summary is recorded, else those whose method and seed the summary
+    with committed trials (``trials/*.json`` as ``dopt.sweep`` writes them, or packed:
+    ``dopt.trialpack.stored_trials``) that its recorded summary ``<folder>.json`` among
+    ``results`` (``load_results(results_dir)``) does not hold: all of them while no summary
+    is recorded, else those whose method and seed the summary
     lacks (a sweep recorded for some methods or seeds, more committed since). Folders in name
     order, records in file-name order; a folder whose trials the summary holds all of is left
     out."""
     recorded = {r.path.stem: r.data for r in results}
     out = {}
     for folder in sorted(Path(results_dir).glob("runs/fig7-*")):
-        files = sorted(folder.glob("trials/*.json"))
+        try:
+            files = stored_trials(folder / "trials")
+        except PackError as e:
+            raise ReportError(str(e)) from e
         held = {m: set(row.get("seeds") or ())
                 for m, row in recorded.get(folder.name, {}).get("methods", {}).items()}
         records = []
         for path in files:
             try:
                 data = json.loads(path.read_text())
-                # dopt.sweep.RECORD_FIELDS (copied: this script needs no dopt)
+                # dopt.sweep.RECORD_FIELDS (copied: this script imports no dopt.sweep)
                 missing = [k for k in ("key", "params", "result") if k not in data]
                 if missing:
                     raise KeyError(", ".join(missing))

@@ -3,17 +3,19 @@ summary holds, the commits they were written at, and how many came from uncommit
 
 A summary's trials lie in the folder its command wrote them to (``--out
 docs/results/runs/<sweep>``, read from the command of the run whose trials it holds, also for a
-re-summarised file): ``trials/*.json`` there, and ``real/`` and ``virtual/`` below it for the
-clock check. Where several summaries share a folder, or a folder holds more than one summary
-used, only the summary's own are taken: a Fig. 7 summary's methods and seeds (the trial key is
-``<method>-seed<seed>-<settings hash>``), a clock check's seeds. Everything else in the folder
-is the summary's (the docs/results test checks the counts against "trial_commits").
+re-summarised file): ``trials/*.json`` there and the records packed in ``trials/pack.jsonl.gz``
+(``dopt.trialpack``, the one reader: a loose file overrides the packed record of its key), and
+``real/`` and ``virtual/`` below it for the clock check. Where several summaries share a
+folder, or a folder holds more than one summary used, only the summary's own are taken: a
+Fig. 7 summary's methods and seeds (the trial key is ``<method>-seed<seed>-<settings hash>``),
+a clock check's seeds. Everything else in the folder is the summary's (the docs/results test
+checks the counts against "trial_commits").
 
 A trial's commit is read from its record's "code" (``dopt.sweep`` writes it last, so the tail
 of the file is enough; the whole file is parsed when it is not there). "-dirty", "unknown",
 "no git" or no commit at all: uncommitted code, which no one can check out to rerun.
 
-Standard library only (experiments/report.py's rule).
+Standard library only (experiments/report.py's rule; ``dopt.trialpack`` is standard library).
 """
 
 from __future__ import annotations
@@ -24,7 +26,9 @@ from collections import Counter
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from report_base import Result, short_commit
+from report_base import ReportError, Result, short_commit
+
+from dopt.trialpack import PackError, StoredTrial, stored_trials
 
 #: a Fig. 7 trial's key (experiments/pick_place_cli.py's ``trial_key``)
 FIG7_KEY = re.compile(r"^(?P<method>[a-z]+)-seed(?P<seed>\d+)-[0-9a-f]{8}$")
@@ -40,7 +44,8 @@ class TrialInfo:
 
     Attributes:
         folder: their sweep folder, relative to the results folder ("runs/<sweep>").
-        files: the trial files the summary holds.
+        files: the trials the summary holds (``dopt.trialpack.StoredTrial``: a loose file or
+            a packed record, read alike).
         commits: {commit: trials} over ``files``, as recorded.
         recorded: the trials the summary's "trial_commits" counts (None: it has none).
     """
@@ -77,15 +82,15 @@ def out_folder(results_dir: Path, command: str) -> Path | None:
     return Path(results_dir).joinpath(*parts[parts.index("runs"):])
 
 
-def _files(folder: Path, r: Result) -> list[Path]:
-    """The trial files of ``folder`` that summary ``r`` holds, sorted."""
+def _files(folder: Path, r: Result) -> list[StoredTrial]:
+    """The trials of ``folder`` that summary ``r`` holds (loose files and packed records,
+    ``dopt.trialpack``), sorted by folder and name."""
     d = r.data
     if r.kind == "clock_check":
         seeds = set(d.get("seeds") or ())
-        files = sorted(p for sub in ("real", "virtual")
-                       for p in (folder / sub / "trials").glob("*.json"))
+        files = [p for sub in ("real", "virtual") for p in stored_trials(folder / sub / "trials")]
         return [p for p in files if (m := SEED.search(p.stem)) and int(m["seed"]) in seeds]
-    files = sorted(p for p in (folder / "trials").glob("*.json") if not p.name.startswith("."))
+    files = stored_trials(folder / "trials")
     if r.kind == "fig7":
         held = {m: set(e.get("seeds") or ()) for m, e in (d.get("methods") or {}).items()}
         return [p for p in files if (m := FIG7_KEY.match(p.stem))
@@ -93,8 +98,8 @@ def _files(folder: Path, r: Result) -> list[Path]:
     return files
 
 
-def trial_commit(path: Path) -> str:
-    """The commit a trial file records ("unknown" for none or an unreadable file)."""
+def trial_commit(path: Path | StoredTrial) -> str:
+    """The commit a trial records ("unknown" for none or an unreadable file)."""
     try:
         text = path.read_text()
     except OSError:
@@ -117,11 +122,14 @@ def _total(value) -> int:
 
 def summary_trials(results_dir: Path, r: Result) -> TrialInfo | None:
     """The committed trials of summary ``r`` (None when its command wrote them elsewhere or
-    its folder holds none)."""
+    its folder holds none). ReportError: a pack of them cannot be read."""
     folder = out_folder(results_dir, r.origin_command)
     if folder is None or not folder.is_dir():
         return None
-    files = _files(folder, r)
+    try:
+        files = _files(folder, r)
+    except PackError as e:
+        raise ReportError(f"{r.path.name}: its trials cannot be read: {e}") from e
     info = TrialInfo(folder.relative_to(results_dir).as_posix(), files,
                      Counter(trial_commit(p) for p in files),
                      _total(r.data["trial_commits"]) if "trial_commits" in r.data else None)

@@ -1,7 +1,7 @@
 """Every committed result names code anyone can check out: no summary under docs/results/ (its
-provenance's "git_commit" and its "trial_commits") and no committed trial file under
-docs/results/runs/ comes from uncommitted code ("-dirty") or names a commit that is not an
-ancestor of HEAD (issue 57).
+provenance's "git_commit" and its "trial_commits") and no committed trial under
+docs/results/runs/ (a file, or a record packed in a sweep's ``trials/pack.jsonl.gz``) comes
+from uncommitted code ("-dirty") or names a commit that is not an ancestor of HEAD (issue 57).
 
 It fails on main today (9 of 67 summaries and 1,096 of 3,452 unique committed trial files are
 "-dirty"; every named commit is an ancestor of HEAD): marked xfail(strict=True), so that it
@@ -18,6 +18,8 @@ import subprocess
 from pathlib import Path
 
 import pytest
+
+from dopt.trialpack import PACK_NAME, stored_trials
 
 ROOT = Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "docs" / "results"
@@ -59,6 +61,17 @@ def _trial_commits(value, where: str):
             yield where, commit, n
 
 
+def committed_trials():
+    """(path, bytes) of every committed trial record under docs/results/runs/, loose files and
+    packed records alike (``dopt.trialpack``; a packed one under the path its file would have),
+    in folder and name order."""
+    runs = RESULTS / "runs"
+    folders = {p.parent for p in runs.rglob("*.json")} | {p.parent for p in runs.rglob(PACK_NAME)}
+    for folder in sorted(folders):
+        for t in stored_trials(folder):
+            yield t.path, t.read_bytes()
+
+
 def audit() -> dict:
     """{"summaries": {file: problem}, "summary_trials": {file: {commit: (n, problem)}},
     "trials": {problem: [file, ...]} over unique trial files, "n_summaries", "n_trials"}."""
@@ -75,8 +88,7 @@ def audit() -> dict:
             if problem:
                 summary_trials.setdefault(where, {})[commit] = (n, problem)
     trials, seen = {}, set()
-    for path in sorted((RESULTS / "runs").rglob("*.json")):
-        data = path.read_bytes()
+    for path, data in committed_trials():
         digest = hashlib.sha256(data).hexdigest()
         if digest in seen:                 # the same trial committed in several sweep folders
             continue

@@ -10,10 +10,13 @@ import os
 import subprocess
 import sys
 from dataclasses import asdict
+from fnmatch import fnmatch
 from pathlib import Path
 
 import numpy as np
 import pytest
+
+from dopt.trialpack import read_trial_text, stored_trials
 
 os.environ.setdefault("MUJOCO_GL", "egl")
 
@@ -23,7 +26,9 @@ BIN = Path(sys.executable).parent
 
 
 def committed_trial(run: str, pattern: str) -> Path:
-    found = sorted((RUNS / run / "trials").glob(pattern))
+    """The path of the first committed trial of ``run`` whose file name matches ``pattern``
+    (its loose file, or the path a packed trial's file would have: ``dopt.trialpack``)."""
+    found = [t.path for t in stored_trials(RUNS / run / "trials") if fnmatch(t.name, pattern)]
     if not found:
         pytest.skip(f"no committed trial {run}/trials/{pattern}")
     return found[0]
@@ -110,7 +115,7 @@ def test_pick_trial_replays_to_its_recorded_final_state(run, pattern):
     path = committed_trial(run, pattern)
     ep = load_pick(path, max_frames=40)
     assert ep.replay_error <= 1e-9, f"{path.name}: the replay ends {ep.replay_error:.2e} away"
-    final = np.asarray(json.loads(path.read_text())["result"]["final_state"])
+    final = np.asarray(json.loads(read_trial_text(path))["result"]["final_state"])
     assert np.max(np.abs(ep.states[-1] - final)) <= 1e-9
     assert ep.n_frames <= 41 and np.all(np.diff(ep.times) > 0)
     names = [m.name for m in ep.markers]

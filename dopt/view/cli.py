@@ -2,7 +2,7 @@
 blow-up captures in the browser, or write one frame as a PNG.
 
     dopt-view docs/results/runs/fig7-cloth-diagonal          # serve; prints the URL
-    dopt-view OUT/trials/simple-seed0-ab12cd34.json --frame 40
+    dopt-view OUT/trials/simple-seed0-ab12cd34.json --frame 40   # a file, or a packed trial
     dopt-view OUT/blowups/original-seed3 --png blowup.png    # a still, no server
 
 Serving needs the ``viz`` extra (viser); the still needs an offscreen OpenGL context
@@ -26,7 +26,8 @@ def parser() -> argparse.ArgumentParser:
         prog=PROG, epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter,
         description="Replay pick-and-place trials, MPC episodes and blow-up captures in the "
                     "browser (viser, on 127.0.0.1), or write one frame as a PNG.")
-    p.add_argument("path", help="a trial file, a result or trial folder, a blow-up capture "
+    p.add_argument("path", help="a trial file (or the path of a trial packed in its folder's "
+                                "pack.jsonl.gz), a result or trial folder, a blow-up capture "
                                 "or a folder of them")
     p.add_argument("--trial", help="the episode to open first (its label: the trial file's "
                                    "name without .json, or the capture's folder)")

@@ -22,6 +22,7 @@ import numpy as np
 
 from dopt import jsonio
 from dopt.state import INTEGRATION, check_model, check_spec, check_states
+from dopt.trialpack import is_stored_trial, read_pack, read_trial_text
 from dopt.validation import check_int, float_array
 
 log = logging.getLogger(__name__)
@@ -210,9 +211,10 @@ def frame_rows(n_rows: int, max_frames: int, must: Sequence[int] = ()) -> np.nda
 
 # ------------------------------------------------------------------------------ sources
 def read_record(path: Path) -> dict | None:
-    """The JSON object of a file, or None when it is not one (logged)."""
+    """The JSON object of a file, or of the trial packed under its name in its folder's pack
+    (``dopt.trialpack.read_trial_text``), or None when it is not one (logged)."""
     try:
-        record = jsonio.loads(Path(path).read_text(), strict_numbers=False)
+        record = jsonio.loads(read_trial_text(path), strict_numbers=False)
     except (OSError, UnicodeDecodeError, ValueError) as e:
         log.info("%s: not a JSON record (%s)", path, e)
         return None
@@ -237,20 +239,26 @@ def sources() -> list:
 
 def candidates(path: Path) -> list[Path]:
     """The files and folders under ``path`` a source may claim: ``path`` itself when it is a
-    file or a blow-up capture; for a folder its JSON files, those of its ``trials/`` (not
-    checkpoints, corrupt or outdated ones), its sub-folders and those of its ``blowups/``."""
+    file, a packed trial (its loose file's path) or a blow-up capture; for a folder its JSON
+    files, those of its ``trials/`` (not checkpoints, corrupt or outdated ones) and the trials
+    packed there (``dopt.trialpack``: each as the path its loose file would have), its
+    sub-folders and those of its ``blowups/``, in name order."""
     path = Path(path)
-    if path.is_file() or (path / "blowup.json").is_file():
+    if is_stored_trial(path) or (path / "blowup.json").is_file():
         return [path]
     found: list[Path] = []
     for folder in (path, path / "trials", path / "blowups"):
         if not folder.is_dir():
             continue
-        for p in sorted(folder.iterdir()):
+        names = {}
+        for p in folder.iterdir():
             if p.name in SKIPPED_FOLDERS or p.name.startswith("."):
                 continue
             if (p.is_file() and p.suffix == ".json") or (p / "blowup.json").is_file():
-                found.append(p)
+                names[p.name] = p
+        for t in read_pack(folder).values():        # a loose file overrides its packed record
+            names.setdefault(t.name, t.path)
+        found += [names[n] for n in sorted(names)]
     return found
 
 
@@ -264,15 +272,16 @@ def collect(path, source_list: Sequence | None = None) -> dict[str, tuple[object
             sources tried).
     """
     path = Path(path)
-    if not path.exists():
-        raise FileNotFoundError(f"{path} does not exist")
+    if not (path.exists() or is_stored_trial(path)):
+        raise FileNotFoundError(f"{path} does not exist (nor is it a packed trial)")
     srcs = sources() if source_list is None else list(source_list)
     out: dict[str, tuple[object, Path]] = {}
     for p in candidates(path):
-        record = read_record(p) if p.is_file() else None
+        trial = not p.is_dir()                      # a file, or a packed trial
+        record = read_record(p) if trial else None
         for src in srcs:
             if src.claims(p, record):
-                label = p.stem if p.is_file() else p.name
+                label = p.stem if trial else p.name
                 out[label if label not in out else str(p)] = (src, p)
                 break
     if not out:

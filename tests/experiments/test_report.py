@@ -111,9 +111,10 @@ def test_committed_results_md_and_readme_are_generated():
 
 def test_the_script_needs_only_the_standard_library():
     """Besides the standard library it loads dopt.cli (the command-line types),
-    dopt.multiple (Holm's correction), dopt.dicts (nested dicts) and planners.trial_progress
-    (the reader of a trial's checkpoint), standard library themselves, and nothing else of the
-    project or of its dependencies."""
+    dopt.multiple (Holm's correction), dopt.dicts (nested dicts), dopt.trialpack (the reader
+    of committed trials, loose or packed) and planners.trial_progress (the reader of a trial's
+    checkpoint), standard library themselves, and nothing else of the project or of its
+    dependencies."""
     # as `python experiments/report.py`: the script's folder (its sibling cli_args) on the path
     code = ("import sys, runpy; sys.argv = ['report.py', '--help']\n"
             f"sys.path.insert(0, {str(SCRIPT.parent)!r})\n"
@@ -123,7 +124,7 @@ def test_the_script_needs_only_the_standard_library():
             "             {'torch', 'numpy', 'mujoco', 'scipy', 'planners', 'deformables'}\n"
             "             and m not in ('planners', 'planners.trial_progress')\n"
             "             or (m.startswith('dopt.') and m not in ('dopt.cli', 'dopt.multiple',\n"
-            "                                                 'dopt.dicts')))\n"
+            "                                                 'dopt.dicts', 'dopt.trialpack')))\n"
             "assert not bad, bad\n")
     subprocess.run([sys.executable, "-c", code], check=True, capture_output=True, timeout=60)
 
@@ -904,6 +905,39 @@ def test_trials_from_uncommitted_code_are_counted_next_to_the_result(site):
     assert ("Trial commits (the summary's \"trial_commits\"; its trials are not committed): "
             "`aaaaaaaa-dirty` (2), `bbbbbbbb` (1).") in site["md"].read_text()
     assert "uncommitted code" not in headlines(site)
+
+
+def test_packed_trials_are_reported_as_their_files_were(site, capsys):
+    """``python -m dopt.sweep pack`` changes nothing the report says: a summary's committed
+    trials and a Fig. 7 sweep in progress read the same from the pack (dopt.trialpack); a pack
+    that cannot be read is named (exit 2)."""
+    from dopt.sweep import pack_trials
+    from dopt.trialpack import pack_path
+
+    data = table1()
+    data["provenance"] = provenance("python experiments/mpc.py --task clutter --out "
+                                    "docs/results/runs/t1 --record docs/results/t1.json")
+    write(site["results"], "table1-clutter.json", data)
+    runs = site["results"] / "runs"
+    params = {"task": "clutter", "method": "baseline", "rho": 1.0, "theta": 0}
+    for seed, commit in enumerate(["a" * 40 + "-dirty", "b" * 40]):
+        _trial(runs / "t1" / "trials", f"clutter-baseline-seed{seed}", {**params, "seed": seed},
+               commit)
+    write(runs / "fig7-cloth-side" / "trials", "simple-seed0-abc.json",
+          trial_record("simple", 0, 0.0069, 2100.0))
+    write(site["results"], "fig7_cloth_diagonal.json", fig7())
+    assert run(site) == 0
+    before = site["md"].read_text(), site["readme"].read_text()
+    assert "Trials: 2 committed under `runs/t1/`" in before[0]
+    assert "## Fig. 7 sweeps in progress" in before[0]
+    for sweep, n in (("t1", 2), ("fig7-cloth-side", 1)):
+        assert pack_trials(runs / sweep).n == n
+        assert not list((runs / sweep / "trials").glob("*.json"))
+    assert run(site) == 0
+    assert (site["md"].read_text(), site["readme"].read_text()) == before
+    pack_path(runs / "t1" / "trials").write_bytes(b"not gzip")
+    assert run(site) == 2
+    assert "pack.jsonl.gz cannot be read" in capsys.readouterr().err
 
 
 def snapshot(site, **extra) -> None:

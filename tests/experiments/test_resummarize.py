@@ -87,7 +87,7 @@ def test_in_place_rewrites_only_a_dirty_summary_of_clean_trials(tmp_path, capsys
     if "resummarized_from" in copy:       # uncommitted code, before its re-summary
         copy["provenance"] = copy.pop("resummarized_from")
     path.write_text(json.dumps(copy))
-    trials = {p: p.read_bytes() for p in (results / "runs").rglob("*.json")}
+    trials = {p: p.read_bytes() for p in (results / "runs").rglob("*") if p.is_file()}
     monkeypatch.setenv(COMMIT_ENV, "f" * 40 + "-dirty")
     assert resummarize.main(["--results-dir", str(results), "--in-place"]) == 1
     assert "cannot record from uncommitted code" in capsys.readouterr().err
@@ -99,7 +99,7 @@ def test_in_place_rewrites_only_a_dirty_summary_of_clean_trials(tmp_path, capsys
     assert new["provenance"]["git_commit"] == "f" * 40
     assert new["resummarized_from"] == old["provenance"]
     assert new["methods"] == old["methods"] and new["settings"] == old["settings"]
-    assert {p: p.read_bytes() for p in (results / "runs").rglob("*.json")} == trials
+    assert {p: p.read_bytes() for p in (results / "runs").rglob("*") if p.is_file()} == trials
     before = path.read_text()                  # clean now: left alone
     assert resummarize.main(["--results-dir", str(results), "--in-place",
                              "--only", path.name]) == 0

@@ -3,11 +3,13 @@ over, and the blind-draw chance matches an enumeration."""
 
 import itertools
 import json
+from fnmatch import fnmatch
 from pathlib import Path
 
 import numpy as np
 import pytest
 
+from dopt.trialpack import stored_trials
 from planners.pick_place.random_reach import p_blind, random_reach, reach_summary
 
 RUNS = Path(__file__).resolve().parents[2] / "docs" / "results" / "runs"
@@ -29,7 +31,8 @@ def test_redrawn_candidates_hold_every_recorded_pick(fold):
     """Every particle a recorded CEM(Random) trial picked is among the candidates re-drawn for
     that stage from its seed (a pick of -1 is a no-op action)."""
     folder = RUNS / f"fig7-cloth-{fold}" / "trials"
-    records = [json.loads(p.read_text()) for p in sorted(folder.glob("random-seed[01]-*.json"))]
+    records = [json.loads(t.read_text()) for t in stored_trials(folder)     # loose or packed
+               if fnmatch(t.name, "random-seed[01]-*.json")]
     if not records:
         pytest.skip(f"no committed CEM(Random) trials under {folder}")
     reach = random_reach(records)
