@@ -72,6 +72,8 @@ from planners.svr_mpc import (
     OUTLIER_DISTANCE,
     TABLE1_ROWS,
     CapturingTrial,
+    Derivatives,
+    Row,
     SVRMPCSettings,
     derivatives_effect,
     feedback_effect,
@@ -79,9 +81,10 @@ from planners.svr_mpc import (
     parse_row,
     row_label,
     run_trial,
+    split_params,
     summarize,
     trial_key,
-    variant_settings,
+    trial_params,
 )
 from planners.svr_mpc.authors_data import authors_statistic
 
@@ -129,7 +132,8 @@ def add_rows_argument(ap: argparse.ArgumentParser, default: tuple[str, ...] | No
     ap.add_argument("--rows", type=rows_list,
                     default=None if default is None else ",".join(default),
                     help="comma-separated Table 1 rows by name (" + ", ".join(TABLE1_ROWS)
-                    + "), each optionally with derivative variants +skip<K>, +adaptive, "
+                    + ", or a registered optimiser's name: planners.svr_mpc.OPTIMISERS), "
+                    "each optionally with derivative variants +skip<K>, +adaptive, "
                     "+boxqp, +central (e.g. sum-t10-r1+skip5; they override --fd-skip, "
                     "--keypoints, --box-qp and --fd for that row); default "
                     + ("with --preset paper: all nine" if default is None
@@ -230,8 +234,8 @@ def parse_args(argv=None, ap: argparse.ArgumentParser | None = None,
     if args.threads is None:
         args.threads = 1 if (args.workers > 1 or args.ray) else 0
     try:               # the pipeline's own checks of the settings, as usage errors
-        for method, theta, rho, row in grid(args):
-            settings_of(args, method, theta, rho, args.feedback == "on", row)
+        for row in grid(args):
+            settings_of(args, row, args.feedback == "on")
     except (ValueError, TypeError) as e:
         ap.error(str(e))
     if record_problem(args.record, args.out):
@@ -239,17 +243,11 @@ def parse_args(argv=None, ap: argparse.ArgumentParser | None = None,
     return args
 
 
-def settings_of(args, method: str, theta: int, rho: float, feedback: bool,
-                row: dict | None = None) -> SVRMPCSettings:
-    """The settings of one row under the flags: the preset's, then the flags that override
-    it, then the row's own derivative variants (``row``, from ``parse_row``)."""
-    if args.preset == "authors":
-        preset = SVRMPCSettings.authors(
-            args.task, layouts=str(args.layouts) if args.layouts else None)
-    elif args.preset == "paper":
-        preset = SVRMPCSettings.paper(args.task)
-    else:
-        preset = SVRMPCSettings()
+def settings_of(args, row: Row, feedback: bool) -> SVRMPCSettings:
+    """The settings of one row (``parse_row``) under the flags: the preset's, then the flags
+    that override it, then the row's own derivative variants."""
+    preset = SVRMPCSettings.preset(args.preset, args.task,
+                                   str(args.layouts) if args.layouts else None)
     if args.islands == "off":
         preset = replace(preset, islands=False)
     if args.push_tail == "off":
@@ -258,13 +256,11 @@ def settings_of(args, method: str, theta: int, rho: float, feedback: bool,
     over = {k: v for k, v in over.items() if v is not None}
     if args.warm_start is not None:
         over["warm_start"] = args.warm_start == "on"
-    flags = ((["central"] if args.fd == "central" else [])
-             + (["adaptive"] if args.keypoints == "adaptive" else
-                [f"skip{args.fd_skip}"] if args.fd_skip > 1 else [])
-             + (["boxqp"] if args.box_qp else []))
-    over.update(variant_settings(flags, "--fd, --fd-skip, --keypoints, --box-qp"))
-    over.update(row or {})
-    return replace(preset, task=args.task, method=method, theta=theta, rho=float(rho),
+    kp = args.keypoints or ("skip" if args.fd_skip > 1 else "every")
+    flags = Derivatives(args.fd, kp, args.fd_skip if kp == "skip" else 1, args.box_qp)
+    over.update(replace(flags, **row.variants).fields())
+    return replace(preset, task=args.task, method=row.method, theta=row.theta,
+                   rho=float(row.rho),
                    slowdown=args.slowdown or _task_slowdown(args.task), timeout=args.timeout,
                    threads=args.threads or 0, feedback=feedback,
                    nominal_threads=float(args.nominal_threads), **over)
@@ -273,21 +269,20 @@ def settings_of(args, method: str, theta: int, rho: float, feedback: bool,
 def baseline_label(args) -> str:
     """The row label (``row_label``) of the baseline trials of the flags: the row every other
     is normalised by."""
-    p = asdict(settings_of(args, "baseline", 0, 1.0, args.feedback == "on"))
-    return row_label(p)
+    return row_label(asdict(settings_of(args, Row("baseline", 0, 1.0), args.feedback == "on")))
 
 
-def grid(args, methods=None, rhos=None, thetas=None) -> list[tuple]:
-    """The (method, theta, rho, row variants) rows of the flags: those of --rows (default with
-    --preset paper: the nine of Table 1; ``parse_row``), else every (method, rho, theta) of the
-    arguments or flags, without variants of their own."""
+def grid(args, methods=None, rhos=None, thetas=None) -> list[Row]:
+    """The rows of the flags: those of --rows (default with --preset paper: the nine of Table
+    1; ``parse_row``), else every (method, rho, theta) of the arguments or flags, without
+    variants of their own."""
     rows = getattr(args, "rows", None)
     if (rows is None and methods is None and args.preset in ("paper", "authors")
             and hasattr(args, "rows")):
         rows = list(TABLE1_ROWS)
     if rows:
         return [parse_row(r) for r in rows]
-    return [(m, t, rho, {}) for m in methods or getattr(args, "methods", ["baseline"])
+    return [Row(m, t, rho) for m in methods or getattr(args, "methods", ["baseline"])
             for rho in rhos or [getattr(args, "rho", 1.0)]
             for t in thetas or [_theta(getattr(args, "theta", None), m)]]
 
@@ -297,10 +292,10 @@ def make_trials(args, methods=None, rhos=None, thetas=None, **override) -> list[
     fields replaced in every trial (e.g. clock="real")."""
     out = []
     for seed in range(args.seed, args.seed + args.trials):
-        for method, theta, rho, row in grid(args, methods, rhos, thetas):
+        for row in grid(args, methods, rhos, thetas):
             for feedback in FEEDBACK[args.feedback]:
-                s = replace(settings_of(args, method, theta, rho, feedback, row), **override)
-                p = {**asdict(s), "seed": seed}
+                s = replace(settings_of(args, row, feedback), **override)
+                p = trial_params(s, seed, row.optimiser)
                 out.append(Trial(trial_key(p), p))
     return out
 
@@ -468,8 +463,8 @@ def final_panels(params: dict, final_state, size=(640, 480)):
 
     from dopt import render
     from dopt.scene import Scene
-    p = dict(params)
-    tm = SVRMPCSettings(**{k: v for k, v in p.items() if k != "seed"}).build_task(p["seed"])
+    settings, seed, _ = split_params(params)
+    tm = settings.build_task(seed)
     m = tm.model
     spec = Scene(m).layout.spec
     fovy, (w, h) = m.vis.global_.fovy, size

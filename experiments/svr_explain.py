@@ -37,7 +37,7 @@ from cli_args import EPILOG, guarded, positive_int, write_summary
 from sweep_console import out_lock
 
 from dopt.sweep import Schema
-from planners.svr_mpc import SVRMPCSettings, row_label, run_svr_mpc
+from planners.svr_mpc import row_label, run_svr_mpc, split_params
 
 DEFAULT_ROWS = ("rand-t5", "sum-t10-r1", "sum-t10-r500", "svd-t10-r1")
 #: importance decades counted: 10^k <= v < 10^(k+1) for k in DECADES (and the ends beyond)
@@ -70,11 +70,9 @@ def explain_trial(params: dict, report=None) -> dict:
     after every agent step."""
     from dopt.tasks.push.task_model import planar_dofs
 
-    p = dict(params)
-    seed = p.pop("seed")
-    settings = SVRMPCSettings(**p)
+    settings, seed, optimiser = split_params(params)
     history: list = []
-    result = run_svr_mpc(settings, seed, history=history, on_step=report)
+    result = run_svr_mpc(settings, seed, history=history, on_step=report, optimiser=optimiser)
     task = settings.build_task(seed)
     goal = planar_dofs(task.model, task.goal_bodies)
     robot = set(task.robot_dofs.tolist())

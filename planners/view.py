@@ -9,7 +9,7 @@
   target of the action in progress; the distance to the goal over time and CEM's best cost per
   iteration.
 - ``MPC``: an MPC trial file (``experiments/mpc.py``, ``planners.svr_mpc.run_trial``): the task
-  rebuilt (``SVRMPCSettings(**params).build_task(seed)``), each object shaded by the share of
+  rebuilt (``split_params(params)[0].build_task(seed)``), each object shaded by the share of
   its DoFs in the active set C of the optimisation under way (the SVR paper's Fig. 1), the goal
   region; the goal distance and |C| over time. The recorded controls (optional fields
   ``start_state`` and ``controls`` of the result) are re-simulated exactly; a trial without
@@ -193,13 +193,12 @@ def load_mpc(path, max_frames: int = 300) -> Episode:
     """An MPC trial file as an ``Episode`` (module docstring)."""
     from dopt.tasks.push import warm_start
     from planners.svr_mpc.episode import dofs_of_mask
-    from planners.svr_mpc.settings import SVRMPCSettings
+    from planners.svr_mpc.settings import split_params
 
     record = _record(path, "MPC")
-    params = dict(record["params"])
-    seed = int(params.pop("seed"))
+    settings, seed, _ = split_params(record["params"])
+    seed = int(seed)
     res = record["result"]
-    settings = SVRMPCSettings(**params)
     task = settings.build_task(seed)
     model = task.model
     final = np.asarray(res["final_state"], dtype=float)

@@ -9,6 +9,12 @@ returns an ``SVRMPCResult``::
     result = run_svr_mpc(SVRMPCSettings(task="clutter", method="svr-sum"), seed=0)
     result.mpc_cost, result.success, result.dofs_mean
 
+The optimiser is a seam: ``run_svr_mpc(settings, seed, optimiser=...)`` takes a name of
+``OPTIMISERS`` (``register_optimiser`` adds one) or a factory ``OptimiserContext -> optimiser``
+(any object with ``optimise(state, plan)``), and a trial's params carry the name, so the
+sweeps, summaries and command lines (``DOPT_OPTIMISERS``: the modules that register theirs) run
+a new optimiser as they run iLQR-SVR (docs/GUIDE.md, "A new MPC optimiser").
+
 ``summarize`` turns many finished trials of one task into the rows of Table 1 (costs normalised
 by baseline on the same task instance), ``paired`` compares each row with baseline seed by
 seed. ``SVRMPCSettings.paper(task, row)`` is the paper's protocol for one of its nine Table 1
@@ -17,9 +23,11 @@ plan (``dopt.tasks.push.warm_start``), their 5 % control noise, and the virtual 
 
 Shapes: T horizon, nu controls, ns state row, c = |C| active DoFs.
 
-    settings.py  SVRMPCSettings, TABLE1_ROWS, row names and derivative variants, trial keys
-    episode.py   build_controller, run_svr_mpc -> SVRMPCResult, run_trial and CapturingTrial
-                 (for dopt.sweep)
+    settings.py  SVRMPCSettings, Derivatives (typed derivative options), TABLE1_ROWS, rows
+                 by name (parse_row -> Row), trial params, keys and row labels
+    optimisers.py  OPTIMISERS by name, register_optimiser, OptimiserContext, svr_optimiser
+    episode.py   build_controller, wire_controller, run_svr_mpc -> SVRMPCResult, run_trial
+                 and CapturingTrial (for dopt.sweep)
     summary.py   summarize, paired, feedback_effect, derivatives_effect
     authors_data.py  the authors' Table 1 statistic on their per-episode files and on ours
 """
@@ -34,18 +42,34 @@ from planners.svr_mpc.episode import (
     dofs_of_mask,
     run_svr_mpc,
     run_trial,
+    wire_controller,
+)
+from planners.svr_mpc.optimisers import (
+    DEFAULT_OPTIMISER,
+    OPTIMISERS,
+    OptimiserContext,
+    optimiser_factory,
+    optimiser_names,
+    register_optimiser,
+    svr_optimiser,
 )
 from planners.svr_mpc.settings import (
     CLOCK_MODEL_MS,
+    FINITE_DIFFERENCES,
     PAPER_COSTS,
+    PRESETS,
     TABLE1_ROWS,
+    Derivatives,
+    Row,
     SVRMPCSettings,
     derivatives_tag,
     parse_row,
+    parse_variants,
     row_label,
     row_name,
+    split_params,
     trial_key,
-    variant_settings,
+    trial_params,
 )
 from planners.svr_mpc.summary import (
     OUTLIER_DISTANCE,
@@ -56,9 +80,12 @@ from planners.svr_mpc.summary import (
     summarize,
 )
 
-__all__ = ["CLOCK_MODEL_MS", "GOAL_DISTANCE_STRIDE", "OUTLIER_DISTANCE", "PAPER_COSTS",
-           "TABLE1_ROWS", "CapturingTrial", "SVRController", "SVRMPCResult", "SVRMPCSettings",
-           "build_controller", "derivatives_effect", "derivatives_tag", "dofs_mask",
-           "dofs_of_mask", "feedback_effect", "paired", "paired_ratio", "parse_row",
-           "row_label", "row_name", "run_svr_mpc", "run_trial", "summarize", "trial_key",
-           "variant_settings"]
+__all__ = ["CLOCK_MODEL_MS", "DEFAULT_OPTIMISER", "FINITE_DIFFERENCES", "GOAL_DISTANCE_STRIDE",
+           "OPTIMISERS", "OUTLIER_DISTANCE", "PAPER_COSTS", "PRESETS", "TABLE1_ROWS",
+           "CapturingTrial", "Derivatives", "OptimiserContext", "Row", "SVRController",
+           "SVRMPCResult", "SVRMPCSettings", "build_controller", "derivatives_effect",
+           "derivatives_tag", "dofs_mask", "dofs_of_mask", "feedback_effect",
+           "optimiser_factory", "optimiser_names", "paired", "paired_ratio", "parse_row",
+           "parse_variants", "register_optimiser", "row_label", "row_name", "run_svr_mpc",
+           "run_trial", "split_params", "summarize", "svr_optimiser", "trial_key",
+           "trial_params", "wire_controller"]

@@ -1,6 +1,7 @@
-"""One MPC episode of iLQR-SVR on a pushing task: the controller wiring (``build_controller``),
-``run_svr_mpc`` and its ``SVRMPCResult``; ``run_trial`` for ``dopt.sweep`` (``CapturingTrial``:
-with blow-up captures of the executed episode under the sweep's folder).
+"""One MPC episode on a pushing task: the controller wiring (``build_controller``: iLQR-SVR;
+``wire_controller``: any optimiser of ``planners.svr_mpc.optimisers``), ``run_svr_mpc`` and its
+``SVRMPCResult``; ``run_trial`` for ``dopt.sweep`` (``CapturingTrial``: with blow-up captures of
+the executed episode under the sweep's folder).
 
 Shapes: T horizon, nu controls, ns state row, c = |C| active DoFs.
 """
@@ -24,20 +25,27 @@ from dopt.validation import check_int
 from dopt.view.blowup import retire_captures
 from planners.ilqr import ILQR, ILQRConfig
 from planners.svr import DofSelector, SelectionConfig, SVROptimiser
-from planners.svr_mpc.settings import CLOCK_MODEL_MS, SVRMPCSettings, trial_key
+from planners.svr_mpc.optimisers import (
+    DEFAULT_OPTIMISER,
+    OptimiserContext,
+    OptimiserFactory,
+    optimiser_factory,
+)
+from planners.svr_mpc.settings import CLOCK_MODEL_MS, SVRMPCSettings, split_params, trial_key
 
 
 @dataclass(frozen=True)
 class SVRController:
-    """A task instance wired for MPC: its scene, cost, rollout service, the optimiser
-    (``planners.svr.SVROptimiser``: selector -> one iLQR iteration -> selector) and the goal
-    object's distance to the goal (state row (ns,) -> m)."""
+    """A task instance wired for MPC: its scene, cost, rollout service, the optimiser (any
+    ``dopt.mpc.Optimiser``; iLQR-SVR's, ``planners.svr.SVROptimiser``: selector -> one iLQR
+    iteration -> selector, has the ``selector`` and ``ilqr`` below) and the goal object's
+    distance to the goal (state row (ns,) -> m)."""
 
     task: TaskModel
     scene: Scene
     cost: object
     service: RolloutService
-    optimiser: SVROptimiser
+    optimiser: object
     goal_distance: Callable[[np.ndarray], float]
 
     @property
@@ -61,6 +69,27 @@ def build_controller(task: TaskModel, selection: SelectionConfig, rng: np.random
     return SVRController(task, scene, cost, service,
                          SVROptimiser(ILQR(service, cost, ilqr), selector),
                          goal_distance(task, scene))
+
+
+def wire_controller(task: TaskModel, settings: SVRMPCSettings, rng: np.random.Generator,
+                    optimiser: str | OptimiserFactory = DEFAULT_OPTIMISER) -> SVRController:
+    """Wire ``task`` to the push cost of ``settings.cost``, a rollout service with
+    ``settings.threads`` threads and the optimiser that ``optimiser`` (a name of
+    ``OPTIMISERS`` or a factory) builds from them, ``settings`` and ``rng``
+    (``OptimiserContext``)."""
+    name, factory = optimiser_factory(optimiser)
+    scene = Scene(task.model, stability=task.stability)
+    cost = push_cost(task, scene, COST_PRESETS[settings.cost])
+    service = RolloutService(scene, RolloutConfig(threads=settings.threads))
+    try:
+        built = factory(OptimiserContext(task, scene, cost, service, settings, rng))
+        if not callable(getattr(built, "optimise", None)):
+            raise TypeError(f"optimiser {name!r}: its factory returned a "
+                            f"{type(built).__name__!r}, which has no optimise(state, plan)")
+    except BaseException:
+        service.close()
+        raise
+    return SVRController(task, scene, cost, service, built, goal_distance(task, scene))
 
 
 #: the goal distance is kept every this many executed steps (and at the last)
@@ -142,8 +171,11 @@ def run_svr_mpc(settings: SVRMPCSettings = SVRMPCSettings(), seed: int = 0,
                 history: list | None = None,
                 on_step: Callable[[], None] | None = None,
                 blowup_out: str | os.PathLike | None = None,
-                blowup_label: str | None = None) -> SVRMPCResult:
-    """One MPC episode of ``settings.method`` on the task instance of ``seed``.
+                blowup_label: str | None = None,
+                optimiser: str | OptimiserFactory = DEFAULT_OPTIMISER) -> SVRMPCResult:
+    """One MPC episode of ``settings.method`` on the task instance of ``seed``, optimised by
+    ``optimiser`` (``planners.svr_mpc.optimisers``: a name of ``OPTIMISERS`` or a factory
+    ``context -> optimiser``; default the paper's iLQR-SVR).
 
     The seed builds the task instance (the same for every method, so costs pair up against baseline:
     problem ``ours`` draws its layout from ``default_rng(seed)``; the authors' clutter loads
@@ -151,26 +183,27 @@ def run_svr_mpc(settings: SVRMPCSettings = SVRMPCSettings(), seed: int = 0,
     ([seed, 2]). The episode starts at the task's initial state with zero controls, or
     (``warm_start``) at the state the authors' set-up motion ends in with their push plan; it
     runs on the settings' clock (real: real time times the slowdown) unless ``synchronous``.
-    ``history``: a list that receives ``SVROptimiser.history`` (each optimisation's set,
-    importances, line-search step, regularisation and costs), with "contact_steps": the states
-    of the new nominal in which the robot touches the pushed object
-    (``dopt.tasks.push.contact``), of "horizon" + 1. ``on_step``: called after every executed
+    ``history``: a list that receives the optimiser's ``history`` (``SVROptimiser``'s: each
+    optimisation's set, importances, line-search step, regularisation and costs), with
+    "contact_steps": the states of the new nominal in which the robot touches the pushed
+    object (``dopt.tasks.push.contact``), of "horizon" + 1; an optimiser without one is a
+    TypeError. ``on_step``: called after every executed
     agent step (``dopt.mpc.MPC``'s; a progress bar's count). ``blowup_out``: a run folder
     that receives blow-up captures of the executed episode (``dopt.mpc.MPC``'s;
-    ``blowup_out/blowups/<blowup_label>``, default label ``<task>-<method>-seed<seed>``).
+    ``blowup_out/blowups/<blowup_label>``, default label ``<task>-<method>-seed<seed>``, the
+    optimiser's name for the method's where it is not ``svr``).
     """
     import torch
 
     if not isinstance(settings, SVRMPCSettings):
         raise TypeError(f"settings must be SVRMPCSettings, got {type(settings).__name__}")
     check_int(seed, "seed", minimum=0)
+    name, _ = optimiser_factory(optimiser)        # ValueError / TypeError before any work
 
     torch.set_num_threads(1)
     seed = int(seed)
     task = settings.build_task(seed)
-    ctl = build_controller(task, settings.selection, np.random.default_rng([seed, 1]),
-                           settings.threads, settings.ilqr,
-                           COST_PRESETS[settings.cost])
+    ctl = wire_controller(task, settings, np.random.default_rng([seed, 1]), optimiser)
     radius = PushWeights().success_radius
     config = MPCConfig(timeout=int(settings.timeout or task.timeout),
                        slowdown=float(settings.slowdown or task.slowdown),
@@ -179,8 +212,13 @@ def run_svr_mpc(settings: SVRMPCSettings = SVRMPCSettings(), seed: int = 0,
                        threads=float(settings.nominal_threads),
                        model_ms=(CLOCK_MODEL_MS[settings.task] if settings.clock == "model"
                                  else None))
-    ctl.optimiser.keep_history = history is not None
     if history is not None:
+        if not hasattr(ctl.optimiser, "keep_history"):
+            ctl.service.close()
+            raise TypeError(f"history needs an optimiser that keeps one (keep_history, "
+                            f"probe, history: planners.svr.SVROptimiser's); {name!r} does "
+                            f"not")
+        ctl.optimiser.keep_history = True
         touching = robot_contact(task)
 
         def contact_in_horizon(states: np.ndarray) -> dict:
@@ -191,7 +229,8 @@ def run_svr_mpc(settings: SVRMPCSettings = SVRMPCSettings(), seed: int = 0,
     mpc = MPC(ctl.scene, ctl.optimiser, config, np.random.default_rng([seed, 2]),
               success=lambda x: ctl.goal_distance(x) < radius, on_step=on_step,
               blowup_out=blowup_out,
-              blowup_label=blowup_label or f"{settings.task}-{settings.method}-seed{seed}")
+              blowup_label=blowup_label or f"{settings.task}-"
+              f"{settings.method if name == DEFAULT_OPTIMISER else name}-seed{seed}")
     if settings.warm_start:
         start = warm_start.setup(task).final_state
         push = warm_start.WarmStartConfig(moving_tail=settings.push_tail)
@@ -216,7 +255,7 @@ def run_svr_mpc(settings: SVRMPCSettings = SVRMPCSettings(), seed: int = 0,
         slowdown=config.slowdown, timeout=config.timeout,
         goal_distance=[round(ctl.goal_distance(res.states[t]), 5) for t in kept],
         final_state=[float(v) for v in np.round(res.states[-1], 7)],
-        n_unstable_rollouts=ctl.optimiser.n_unstable_rollouts,
+        n_unstable_rollouts=int(getattr(ctl.optimiser, "n_unstable_rollouts", 0)),
         unstable=bool(res.stability.unstable[0]),
         unstable_reason=(f"step {res.stability.step[0]}: {res.stability.reason[0]}"
                          if res.stability.unstable[0] else ""),
@@ -226,18 +265,18 @@ def run_svr_mpc(settings: SVRMPCSettings = SVRMPCSettings(), seed: int = 0,
 
 def run_trial(params: dict, report: Callable[[], None] | None = None,
               blowup_out: str | os.PathLike | None = None) -> dict:
-    """``run_svr_mpc`` for ``dopt.sweep``: params holds the ``SVRMPCSettings`` fields and
-    "seed" -> ``SVRMPCResult.to_dict()``; ``report`` (the sweep's) is called after every
+    """``run_svr_mpc`` for ``dopt.sweep``: params holds the ``SVRMPCSettings`` fields,
+    "seed" and, where it is not ``svr``, "optimiser" (``trial_params``) ->
+    ``SVRMPCResult.to_dict()``; ``report`` (the sweep's) is called after every
     agent step. ``blowup_out``: the sweep's folder, which receives the blow-up captures of
     the episode as ``blowups/<trial key>`` (``trial_key``), listed in the result relative to
     it; those of an earlier run of the trial move to ``blowups/outdated/`` first."""
-    p = dict(params)
-    seed = p.pop("seed")
+    settings, seed, optimiser = split_params(params)
     if blowup_out is None:
-        return run_svr_mpc(SVRMPCSettings(**p), seed, on_step=report).to_dict()
+        return run_svr_mpc(settings, seed, on_step=report, optimiser=optimiser).to_dict()
     retire_captures(blowup_out, [trial_key(params)])
-    res = run_svr_mpc(SVRMPCSettings(**p), seed, on_step=report, blowup_out=blowup_out,
-                      blowup_label=trial_key(params)).to_dict()
+    res = run_svr_mpc(settings, seed, on_step=report, blowup_out=blowup_out,
+                      blowup_label=trial_key(params), optimiser=optimiser).to_dict()
     return {**res, "blowups": [os.path.relpath(b, blowup_out) for b in res["blowups"]]}
 
 

@@ -1,10 +1,13 @@
-"""The settings of one iLQR-SVR MPC trial (``SVRMPCSettings``), the paper's Table 1 rows by
-name, derivative variants, and the key and row label a trial is stored and reported under."""
+"""The settings of one iLQR-SVR MPC trial (``SVRMPCSettings``), its derivative options as
+typed fields (``Derivatives``), the paper's Table 1 rows by name (``parse_row`` -> ``Row``), and
+the params, key and row label a trial is stored and reported under (``trial_params``,
+``trial_key``, ``row_label``)."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
+from typing import Literal
 
 import mujoco
 
@@ -15,8 +18,10 @@ from dopt.tasks.push.costs import COST_PRESETS
 from dopt.tasks.push.task_model import TaskModel
 from dopt.validation import check_config
 from planners.ilqr import ILQRConfig
+from planners.keypoints import METHODS as KEYPOINT_METHODS
 from planners.keypoints import KeypointConfig
 from planners.svr import METHODS, SelectionConfig, paper_theta
+from planners.svr_mpc.optimisers import DEFAULT_OPTIMISER, optimiser_names
 
 #: the nine rows of the paper's Table 1 by name: (method, theta, rho)
 TABLE1_ROWS = {
@@ -34,6 +39,9 @@ TABLE1_ROWS = {
 #: the problems a trial can run on: ``ours`` (dopt's own scenes, ``dopt.tasks.PUSH_TASKS``) or
 #: ``authors`` (the authors' scenes, objects and contacts, ``dopt.tasks.push.authors``)
 PROBLEMS = PUSH_PROBLEMS
+
+#: the protocols by name (``SVRMPCSettings.preset``)
+PRESETS = ("ours", "paper", "authors")
 
 #: the authors' cost per task where it is not Eq. 2 alone (``COST_PRESETS["paper"]``): their
 #: push_soft task file adds a terminal reach residual (``dopt.tasks.push.costs``)
@@ -54,27 +62,50 @@ def row_name(method: str, theta: int, rho: float) -> str:
     return f"{method[4:]}-t{theta}-r{rho:g}"
 
 
-def parse_row(spec: str) -> tuple[str, int, float, dict]:
-    """A row of ``TABLE1_ROWS`` by name, optionally with derivative variants
-    (``variant_settings``): ``sum-t10-r1+skip5``, ``sum-t10-r1+adaptive``,
-    ``sum-t10-r1+skip5+boxqp``, ``sum-t10-r1+central``. Returns (method, theta, rho, the
-    ``SVRMPCSettings`` fields the variants set)."""
-    name, *mods = spec.split("+")
-    if name not in TABLE1_ROWS:
-        raise ValueError(f"unknown Table 1 row {name!r}: choose from {', '.join(TABLE1_ROWS)}")
-    return (*TABLE1_ROWS[name], variant_settings(mods, f"row {spec!r}"))
+#: the finite differences by name: (centred, eps): forward eps 1e-3 (``FDConfig``'s default)
+#: or the authors' central differences, eps 1e-6
+FINITE_DIFFERENCES = {"forward": (False, 1e-3), "central": (True, 1e-6)}
 
 
-def variant_settings(mods, what: str = "variants") -> dict:
-    """The ``SVRMPCSettings`` fields of derivative variants: ``skip<K>`` or ``adaptive`` (key
-    timesteps, ``planners.keypoints``), ``boxqp`` (the box-QP backward pass), ``central`` (the
-    authors' central differences, eps 1e-6); ``what`` names them in errors."""
+@dataclass(frozen=True)
+class Derivatives:
+    """iLQR's derivative options, typed: ``fd`` the finite differences (a name of
+    ``FINITE_DIFFERENCES``), ``keypoints`` the timesteps they cover (``every``, ``skip`` every
+    ``fd_skip``-th, ``adaptive``; ``planners.keypoints``; fd_skip is 1 unless ``skip``),
+    ``box_qp`` control limits in the backward pass. ``fields()``: the ``SVRMPCSettings``
+    fields they set. The command lines' flags build one, a row's variants (``parse_variants``)
+    replace some of its fields; ``derivatives_tag`` and ``trial_key`` spell them."""
+
+    fd: Literal["forward", "central"] = "forward"
+    keypoints: Literal["every", "skip", "adaptive"] = "every"
+    fd_skip: int = 1
+    box_qp: bool = False
+
+    def __post_init__(self):
+        check_config(self, minimum={"fd_skip": 1},
+                     choices={"fd": tuple(FINITE_DIFFERENCES), "keypoints": KEYPOINT_METHODS})
+        if self.keypoints != "skip" and self.fd_skip != 1:
+            raise ValueError(f"Derivatives.fd_skip must be 1 with keypoints "
+                             f"{self.keypoints!r} (a skip needs keypoints 'skip'), got "
+                             f"{self.fd_skip}")
+
+    def fields(self) -> dict:
+        """The ``SVRMPCSettings`` fields: fd_centered, fd_eps, keypoints, fd_skip, box_qp."""
+        centred, eps = FINITE_DIFFERENCES[self.fd]
+        return {"fd_centered": centred, "fd_eps": eps, "keypoints": self.keypoints,
+                "fd_skip": self.fd_skip, "box_qp": self.box_qp}
+
+
+def parse_variants(mods, what: str = "variants") -> dict:
+    """The ``Derivatives`` fields that a row's derivative variants set: ``skip<K>`` or
+    ``adaptive`` (key timesteps, ``planners.keypoints``), ``boxqp`` (the box-QP backward pass),
+    ``central`` (the authors' central differences); ``what`` names them in errors."""
     over: dict = {}
     for mod in mods:
         if mod == "boxqp" and "box_qp" not in over:
             over["box_qp"] = True
-        elif mod == "central" and "fd_centered" not in over:
-            over.update(fd_centered=True, fd_eps=1e-6)
+        elif mod == "central" and "fd" not in over:
+            over["fd"] = "central"
         elif mod not in ("boxqp", "central") and "keypoints" not in over:
             try:
                 kp = KeypointConfig.parse(mod)
@@ -85,6 +116,35 @@ def variant_settings(mods, what: str = "variants") -> dict:
         else:
             raise ValueError(f"{what}: {mod!r} repeats a variant")
     return over
+
+
+@dataclass(frozen=True)
+class Row:
+    """One row of a run (``parse_row``): the DoF-selection method, theta and rho of a Table 1
+    row, the ``Derivatives`` fields its variants set (the run's flags give the others), and
+    the optimiser that runs it (a name of ``OPTIMISERS``)."""
+
+    method: str
+    theta: int
+    rho: float
+    variants: dict = field(default_factory=dict)
+    optimiser: str = DEFAULT_OPTIMISER
+
+
+def parse_row(spec: str) -> Row:
+    """A row of ``TABLE1_ROWS`` by name, or a registered optimiser's (``optimiser_names``; it
+    runs with every DoF, as baseline), optionally with derivative variants (``parse_variants``):
+    ``sum-t10-r1+skip5``, ``sum-t10-r1+adaptive``, ``sum-t10-r1+skip5+boxqp``,
+    ``sum-t10-r1+central``."""
+    name, *mods = spec.split("+")
+    if name in TABLE1_ROWS:
+        return Row(*TABLE1_ROWS[name], parse_variants(mods, f"row {spec!r}"))
+    names = optimiser_names()
+    if name in names and name != DEFAULT_OPTIMISER:
+        return Row("baseline", 0, 1.0, parse_variants(mods, f"row {spec!r}"), name)
+    extra = [o for o in names if o != DEFAULT_OPTIMISER]
+    raise ValueError(f"unknown Table 1 row {name!r}: choose from {', '.join(TABLE1_ROWS)}"
+                     + (f", or an optimiser: {', '.join(extra)}" if extra else ""))
 
 
 def derivatives_tag(p: dict) -> str:
@@ -128,7 +188,8 @@ class SVRMPCSettings:
             centred 1e-6).
         keypoints, fd_skip: the timesteps the finite differences cover (``every``, ``skip``
             every fd_skip-th, ``adaptive``; ``planners.keypoints``), A and B linear between.
-        box_qp: control limits in the backward pass (``ILQRConfig.box_qp``).
+        box_qp: control limits in the backward pass (``ILQRConfig.box_qp``). The five set
+            together: ``replace(settings, **Derivatives(...).fields())``.
         problem: ``ours`` or ``authors`` (``PROBLEMS``): whose scenes the task builds.
         layouts: the folder of the authors' clutter scenes (``push_mcl_layouts``, one CSV per
             scene; seed i loads scene i); needed by problem ``authors`` on clutter only.
@@ -214,6 +275,18 @@ class SVRMPCSettings:
                                        "cost": f"authors-{task}", "control_noise": 0.0,
                                        **overrides})
 
+    @classmethod
+    def preset(cls, name: str, task: str, layouts: str | None = None) -> SVRMPCSettings:
+        """The protocol ``name`` (``PRESETS``) on ``task``: ``ours`` (the defaults), ``paper``
+        (``paper``, its default row) or ``authors`` (``authors``, with ``layouts``)."""
+        if name == "authors":
+            return cls.authors(task, layouts=layouts)
+        if name == "paper":
+            return cls.paper(task)
+        if name == "ours":
+            return cls(task=task)
+        raise ValueError(f"unknown preset {name!r}; choose from {PRESETS}")
+
     def build_task(self, seed: int) -> TaskModel:
         """The task instance of ``seed`` under these settings (``problem``, ``layouts``,
         ``islands``): the same for every method, so costs pair up seed by seed."""
@@ -235,6 +308,28 @@ class SVRMPCSettings:
         """The DoF selector's config (theta None -> the paper's for the method)."""
         theta = paper_theta(self.method) if self.theta is None else self.theta
         return SelectionConfig(self.method, rho=float(self.rho), theta=int(theta))
+
+
+def trial_params(settings: SVRMPCSettings, seed: int,
+                 optimiser: str = DEFAULT_OPTIMISER) -> dict:
+    """A trial's params (``dopt.sweep``'s, what ``run_trial`` runs): every ``SVRMPCSettings``
+    field, "seed", and "optimiser" where it is not ``svr`` (a name of ``OPTIMISERS``)."""
+    if not isinstance(settings, SVRMPCSettings):
+        raise TypeError(f"settings must be SVRMPCSettings, got {type(settings).__name__}")
+    if not isinstance(optimiser, str):
+        raise TypeError(f"optimiser must be a name of OPTIMISERS (a trial's params are JSON), "
+                        f"got {type(optimiser).__name__}")
+    if optimiser not in optimiser_names():
+        raise ValueError(f"unknown optimiser {optimiser!r}; choose from {optimiser_names()}")
+    extra = {} if optimiser == DEFAULT_OPTIMISER else {"optimiser": optimiser}
+    return {**asdict(settings), "seed": seed, **extra}
+
+
+def split_params(params: dict) -> tuple[SVRMPCSettings, int, str]:
+    """A trial's params (``trial_params``) -> (its settings, its seed, its optimiser's name)."""
+    p = dict(params)
+    seed, optimiser = p.pop("seed"), p.pop("optimiser", DEFAULT_OPTIMISER)
+    return SVRMPCSettings(**p), seed, optimiser
 
 
 def trial_key(p: dict) -> str:
@@ -265,11 +360,16 @@ def trial_key(p: dict) -> str:
         parts.append("noislands")
     if not p.get("push_tail", True):
         parts.append("notail")
+    if p.get("optimiser", DEFAULT_OPTIMISER) != DEFAULT_OPTIMISER:
+        parts.append(f"opt{p['optimiser']}")
     return "-".join(parts)
 
 
 def row_label(p: dict) -> str:
-    """Table row of a trial: ``row_name`` of its method, theta and rho, its
+    """Table row of a trial: ``row_name`` of its method, theta and rho (with another optimiser
+    than ``svr``: its name, and ``:row_name`` unless the method is baseline), its
     ``derivatives_tag`` and ' +fb' when it executed the K feedback term."""
-    return (row_name(p["method"], p["theta"], p["rho"]) + derivatives_tag(p)
-            + (" +fb" if p.get("feedback") else ""))
+    name = row_name(p["method"], p["theta"], p["rho"])
+    if (opt := p.get("optimiser", DEFAULT_OPTIMISER)) != DEFAULT_OPTIMISER:
+        name = opt if p["method"] == "baseline" else f"{opt}:{name}"
+    return name + derivatives_tag(p) + (" +fb" if p.get("feedback") else "")

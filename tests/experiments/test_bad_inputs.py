@@ -122,6 +122,8 @@ BAD = [
     ("mpc", ["--nominal-threads", "0"], "argument --nominal-threads: must be > 0"),
     ("mpc", ["--keypoints", "often"], "argument --keypoints: invalid choice: 'often'"),
     ("svr_explain", ["--rows", "sum-t7"], "argument --rows: unknown Table 1 row 'sum-t7'"),
+    ("mpc", ["--rows", "baseline,svr"], "argument --rows: unknown Table 1 row 'svr'"),
+    ("mpc", ["--rows", "shooting+boxqp"], "argument --rows: unknown Table 1 row 'shooting'"),
     ("svr_explain", ["--bins", "0"], "argument --bins: must be >= 1, got 0"),
     ("svr_explain", ["--feedback", "both"], "--feedback both is for experiments/mpc.py"),
     ("clock_check", ["--real-threads", "0"], "argument --real-threads: must be >= 1, got 0"),

@@ -187,3 +187,79 @@ def test_bad_row_variants_are_usage_errors(rows, message, capsys):
     with pytest.raises(SystemExit) as e:
         mpc.parse_args(["--rows", rows, "--out", "unused"])
     assert e.value.code == 2 and message in capsys.readouterr().err
+
+
+#: the committed results whose rows carry derivative variants (their --rows)
+VARIANT_RESULTS = ["boxqp-clutter", "boxqp-soft", "boxqp-soft_rigid", "fd-central-clutter",
+                   "keypoints-clutter", "keypoints-soft"]
+
+
+@pytest.mark.parametrize("name", VARIANT_RESULTS)
+def test_committed_variant_rows_find_their_trials_by_key(name, tmp_path):
+    """The command line of a committed result with variant rows (+boxqp, +central, +skip<K>)
+    makes the keys of its committed trials, every one: the typed derivative options give the
+    keys the variant strings gave, so a rerun reuses the trials and resummarize finds them."""
+    import json
+    import shlex
+    from pathlib import Path
+
+    import mpc
+
+    from dopt.sweep import load_finished
+
+    root = Path(__file__).resolve().parents[2]
+    argv = shlex.split(json.loads((root / "docs" / "results" / f"{name}.json").read_text())
+                       ["provenance"]["command"])[2:]
+    runs = Path(argv[argv.index("--out") + 1])
+    argv[argv.index("--out") + 1] = str(tmp_path / "o")
+    del argv[argv.index("--record"):argv.index("--record") + 2]
+    assert any("+" in row for row in argv[argv.index("--rows") + 1].split(","))
+    trials = mpc.make_trials(mpc.parse_args(argv))
+    committed = load_finished(root / runs)                         # loose or packed
+    missing = [t.key for t in trials if t.key not in committed]
+    assert trials and not missing, missing[:3]
+    for t in trials:
+        stored = committed[t.key]["params"]
+        assert {k: t.params[k] for k in stored} == stored
+
+
+@pytest.mark.parametrize("flags, row", [
+    (["--fd", "central"], "sum-t10-r1+central"),
+    (["--fd-skip", "5"], "sum-t10-r1+skip5"),
+    (["--fd-skip", "10"], "sum-t10-r1+skip10"),
+    (["--box-qp"], "sum-t10-r1+boxqp"),
+    (["--keypoints", "adaptive", "--fd-skip", "3"], "sum-t10-r1+adaptive"),
+    (["--fd", "central", "--fd-skip", "5", "--box-qp"], "sum-t10-r1+central+skip5+boxqp"),
+])
+def test_derivative_flags_and_row_variants_make_the_same_trials(flags, row, tmp_path):
+    """The flags build typed ``Derivatives``, a row's variants replace some of its fields:
+    both routes give the same params and keys for the same options."""
+    import mpc
+
+    def trials(*argv):
+        return [(t.key, t.params) for t in mpc.make_trials(mpc.parse_args(
+            ["--preset", "paper", "--trials", "2", "--out", str(tmp_path / "o"), *argv]))]
+
+    assert trials("--rows", "sum-t10-r1", *flags) == trials("--rows", row)
+
+
+def test_a_registered_optimiser_is_a_row_of_the_command_line(tmp_path, monkeypatch):
+    """--rows baseline,NAME: the optimiser's trials name it in their params and keys, have a
+    row of their own and are normalised by the iLQR baseline; its variants apply to it."""
+    import mpc
+
+    from planners.svr_mpc import OPTIMISERS, row_label, svr_optimiser
+
+    monkeypatch.setitem(OPTIMISERS, "mine", svr_optimiser)
+    args = mpc.parse_args(["--preset", "paper", "--rows", "baseline,mine,mine+skip5",
+                           "--trials", "1", "--out", str(tmp_path / "o")])
+    base, mine, skip = mpc.make_trials(args)
+    assert [row_label(t.params) for t in (base, mine, skip)] == \
+        ["baseline", "mine", "mine +skip5"]
+    assert "optimiser" not in base.params and mine.params["optimiser"] == "mine"
+    assert mine.key == base.key + "-optmine" and skip.key == base.key + "-skip5-optmine"
+    assert mpc.baseline_label(args) == "baseline"
+    monkeypatch.setenv("DOPT_OPTIMISERS", "no_such_optimisers_module")
+    with pytest.raises(SystemExit) as e:
+        mpc.parse_args(["--rows", "baseline,theirs", "--out", str(tmp_path / "p")])
+    assert e.value.code == 2

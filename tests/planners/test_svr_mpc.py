@@ -212,3 +212,156 @@ def test_a_trial_captures_a_flagged_episode_under_the_sweeps_folder(tmp_path, mo
     # a rerun of the trial (--fresh, or after a failure) retires the earlier capture
     assert CapturingTrial(str(tmp_path))(params)["blowups"] == [f"blowups/{key}"]
     assert (tmp_path / "blowups" / "outdated" / key / "blowup.json").is_file()
+
+
+# ----------------------------------------------------------------- the optimiser seam
+@pytest.fixture
+def registry():
+    """OPTIMISERS as it was after the test (a test registers its own)."""
+    from planners.svr_mpc import OPTIMISERS
+
+    saved = dict(OPTIMISERS)
+    yield OPTIMISERS
+    OPTIMISERS.clear()
+    OPTIMISERS.update(saved)
+
+
+class Constant:
+    """An optimiser that plans ``u`` at every step on the DoF set ``dofs`` and counts its
+    calls."""
+
+    def __init__(self, u, dofs):
+        self.u, self.dofs, self.calls = np.asarray(u, dtype=float), np.asarray(dofs), 0
+
+    def optimise(self, state, plan):
+        from dopt.mpc import Plan
+
+        self.calls += 1
+        return Plan(np.tile(self.u, (len(plan.controls), 1)), dofs=self.dofs)
+
+
+def test_a_registered_optimiser_runs_the_episode(registry):
+    """run_svr_mpc(optimiser=name) builds the optimiser from its factory (the task, scene,
+    cost, service, settings and the episode's generator) and executes its plans: the agent's
+    states are those of its controls rolled out from the start, every optimisation covers its
+    DoF set, and run_trial runs it from a trial's params, under a key and row of its own."""
+    from dopt.rollout import RolloutService
+    from planners.svr_mpc import (
+        OptimiserContext,
+        register_optimiser,
+        row_label,
+        run_trial,
+        trial_key,
+        trial_params,
+    )
+
+    built = []
+
+    def constant(context):
+        assert isinstance(context, OptimiserContext)
+        assert isinstance(context.settings, SVRMPCSettings)
+        assert isinstance(context.rng, np.random.Generator)
+        u = 0.3 * context.scene.model.actuator_ctrlrange[:, 1]
+        built.append(Constant(u, context.task.robot_dofs[:3]))
+        return built[-1]
+
+    register_optimiser("constant", constant)
+    settings = SVRMPCSettings(task="clutter", method="baseline", synchronous=True, timeout=6,
+                              threads=1, slowdown=1.0)
+    res = run_svr_mpc(settings, seed=1, optimiser="constant")
+    (opt,) = built
+    assert opt.calls == len(res.opt_ms) >= 1 and res.steps == 6
+    assert res.n_dofs == [3] * opt.calls
+    assert set(res.active_sets) == {dofs_mask(opt.dofs)}
+    task = settings.build_task(1)
+    from dopt.scene import Scene
+
+    scene = Scene(task.model, stability=task.stability)
+    with RolloutService(scene) as service:
+        states = service.trajectory(task.initial_state, np.tile(opt.u, (6, 1))).states
+    np.testing.assert_allclose(res.final_state, states[-1], atol=1e-6)
+    svr = run_svr_mpc(settings, seed=1)
+    assert svr.mpc_cost != res.mpc_cost and svr.n_dofs[0] == 55
+
+    params = trial_params(settings, 1, "constant")
+    assert params["optimiser"] == "constant" and trial_key(params).endswith("-optconstant")
+    assert row_label(params) == "constant"
+    assert row_label({**params, "method": "svr-sum", "theta": 10}) == "constant:sum-t10-r1"
+    again = run_trial(params)
+    assert again["mpc_cost"] == res.mpc_cost and again["final_state"] == res.final_state
+    # the default optimiser adds nothing to the params: the paper's trials keep their keys
+    plain = trial_params(settings, 1)
+    assert "optimiser" not in plain and trial_key(plain) == trial_key(params)[:-len(
+        "-optconstant")]
+
+
+def test_a_factory_runs_without_a_name_and_summaries_give_it_a_row():
+    """A factory passed as such needs no registry; a registered optimiser's trials summarise
+    as a row of their own, normalised by the baseline trials on the same seeds."""
+    settings = SVRMPCSettings(task="clutter", method="baseline", synchronous=True, timeout=3,
+                              threads=1)
+    res = run_svr_mpc(settings, seed=0,
+                      optimiser=lambda c: Constant(np.zeros(c.scene.nu), [0, 1]))
+    assert res.n_dofs == [2] * len(res.opt_ms)
+    records = [rec("baseline", 0, 100.0), rec("baseline", 1, 200.0),
+               rec("baseline", 0, 50.0), rec("baseline", 1, 300.0)]
+    for r in records[2:]:
+        r["params"]["optimiser"] = "constant"
+    out = aggregate(records)
+    assert set(out) == {"baseline", "constant"}
+    assert out["constant"]["mpc_cost_normalised_mean"] == pytest.approx((0.5 + 1.5) / 2)
+
+
+def test_history_needs_an_optimiser_that_keeps_one():
+    settings = SVRMPCSettings(task="clutter", method="baseline", synchronous=True, timeout=2,
+                              threads=1)
+    with pytest.raises(TypeError, match="history needs an optimiser that keeps one"):
+        run_svr_mpc(settings, 0, history=[],
+                    optimiser=lambda c: Constant(np.zeros(c.scene.nu), [0]))
+
+
+def test_modules_named_by_the_environment_register_their_optimisers(registry, tmp_path,
+                                                                    monkeypatch):
+    """DOPT_OPTIMISERS: the modules are imported before a name is looked up, so a command
+    line's --rows (parse_row) and a spawned worker's run_trial know their optimisers."""
+    import sys
+
+    from planners.svr_mpc import parse_row
+
+    (tmp_path / "plugged_optimisers.py").write_text(
+        "from planners.svr_mpc import register_optimiser, svr_optimiser\n"
+        "register_optimiser('plugged', svr_optimiser)\n")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    monkeypatch.delitem(sys.modules, "plugged_optimisers", raising=False)
+    with pytest.raises(ValueError, match="unknown Table 1 row 'plugged'"):
+        parse_row("plugged")
+    monkeypatch.setenv("DOPT_OPTIMISERS", "plugged_optimisers")
+    row = parse_row("plugged+boxqp")
+    assert (row.method, row.optimiser, row.variants) == ("baseline", "plugged",
+                                                         {"box_qp": True})
+    monkeypatch.setenv("DOPT_OPTIMISERS", "no_such_module_here")
+    assert parse_row("sum-t10-r1").optimiser == "svr"         # a Table 1 row looks none up
+    with pytest.raises(ValueError, match="DOPT_OPTIMISERS: cannot import 'no_such_module"):
+        parse_row("nope")
+
+
+# ------------------------------------------------------------ typed derivative options
+def test_derivatives_are_typed_fields_of_the_settings():
+    """Derivatives sets the five SVRMPCSettings fields of iLQR's derivatives; its defaults
+    are the settings' own; a row's variants parse once into its fields."""
+    from dataclasses import asdict, replace
+
+    from planners.svr_mpc import Derivatives, parse_variants
+
+    plain = asdict(SVRMPCSettings())
+    assert {k: plain[k] for k in Derivatives().fields()} == Derivatives().fields()
+    d = Derivatives(fd="central", keypoints="skip", fd_skip=5, box_qp=True)
+    assert d.fields() == {"fd_centered": True, "fd_eps": 1e-6, "keypoints": "skip",
+                          "fd_skip": 5, "box_qp": True}
+    s = replace(SVRMPCSettings(), **d.fields())
+    assert (s.ilqr.fd.centered, s.ilqr.fd.eps, s.ilqr.keypoints.skip, s.ilqr.box_qp) == \
+        (True, 1e-6, 5, True)
+    assert parse_variants(["central", "skip5", "boxqp"]) == {
+        "fd": "central", "keypoints": "skip", "fd_skip": 5, "box_qp": True}
+    assert replace(Derivatives(), **parse_variants(["central", "skip5", "boxqp"])) == d
+    assert parse_variants(["adaptive"]) == {"keypoints": "adaptive", "fd_skip": 1}
