@@ -1,18 +1,24 @@
 """Exact point-to-surface distances and the Hausdorff distance between triangle meshes.
 
-Shape letters: Q query points, V vertices, F faces of a mesh.
+Shape letters: Q query points, V vertices, F faces of a mesh, P pieces of its triangles.
 
 Point-triangle distances come from ``trimesh.triangles.closest_point``. Candidate triangles are
-found with a k-d tree over triangle centroids and made exact with the bound
-``dist(p, T) >= |p - centroid(T)| - radius(T)``, where ``radius(T)`` is the largest
-centroid-vertex distance of T: no triangle that could be nearer than the best one found is
-skipped.
+found with a k-d tree over small pieces of the triangles and made exact with the bound
+``dist(p, T) >= min_i |p - centre_i| - radius_i`` over the pieces ``i`` of T (each piece, a
+sub-triangle of a barycentric grid on T, lies in the ball of its ``centre`` and ``radius``): no
+triangle that could be nearer than the best one found is skipped.
 
 The largest distance of many points (the Hausdorff distance) needs exact distances for few of
 them: a dense sample of the surface whose covering radius ``rho`` is known (every surface point
 lies within ``rho`` of a sample) bounds each point's distance ``d`` by ``u - rho <= d <= u``,
 with ``u`` the distance to the nearest sample (one k-d tree query). Only points whose upper
-bound exceeds every other point's lower bound can hold the maximum.
+bound exceeds every other point's lower bound can hold the maximum. Where the maximum must be
+exact (a model under the threshold), the distance to each point's nearest triangles is a far
+tighter upper bound than ``u``.
+
+The pieces, the tightened bounds and the copies dropped from the cover change the time, not
+the values: distances, maxima and the lower bounds returned at a limit are those of the plain
+search (docs/DESIGN-NOTES.md, "Key particles at the paper's size").
 """
 from __future__ import annotations
 
@@ -20,32 +26,73 @@ import numpy as np
 import trimesh
 from scipy.spatial import cKDTree
 
-#: centroids fetched per point and triangle group before falling back to a ball search
+#: pieces fetched per point before falling back to a ball search
 _NEIGHBOURS = 16
-#: nearest centroids whose triangles give the first upper bound of a point's distance
-_FIRST_GUESS = 4
+#: nearest pieces whose triangles give the first upper bound of a point's distance
+_FIRST_GUESS = 2
 #: every this many points form the probe that gives max_distance its first exact value
 _PROBE_STRIDE = 16
 #: probe points (largest upper bounds first) resolved exactly for that first value
 _PROBE_EXACT = 32
+#: a triangle is cut into pieces whose radius is at most this many times the median
+#: triangle radius, or this many cover steps if that is less
+_PIECE_SCALE = 2.0
+#: pieces per triangle on average at most (beyond a few thousand): a mesh of a few huge
+#: triangles among small ones gets larger pieces (looser bounds, the same distances)
+_PIECE_BUDGET = 16
 
 
-class _TriangleGroup:
-    """Triangles of similar size: their centroids in a k-d tree and their largest radius."""
+def _grid(m: int) -> np.ndarray:
+    """Barycentric corners ``(m * m, 3, 3)`` (weights of a triangle's vertices) of the
+    sub-triangles of an ``m``-grid on a triangle: ``m (m + 1) / 2`` upright, ``m (m - 1) / 2``
+    turned; together they tile the triangle."""
+    i, j = (a.ravel() for a in np.meshgrid(np.arange(m), np.arange(m), indexing="ij"))
+    up = i + j <= m - 1
+    down = i + j <= m - 2
+    corners = [np.stack([i[up], j[up]], 1) + np.array(d)[None] for d in ((0, 0), (1, 0), (0, 1))]
+    turned = [np.stack([i[down], j[down]], 1) + np.array(d)[None]
+              for d in ((1, 0), (0, 1), (1, 1))]
+    ij = np.concatenate([np.stack(corners, 1), np.stack(turned, 1)]) / m        # (m*m, 3, 2)
+    return np.concatenate([1.0 - ij.sum(axis=2, keepdims=True), ij], axis=2)
 
-    def __init__(self, ids: np.ndarray, centroids: np.ndarray, radius: np.ndarray):
-        self.ids = ids
-        self.tree = cKDTree(centroids[ids])
-        self.max_radius = float(radius[ids].max())
+
+def triangle_pieces(triangles: np.ndarray, scale: float
+                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Bounding balls of pieces of ``triangles`` ``(F, 3, 3)``: each triangle whose centroid
+    radius exceeds ``scale`` is cut by a barycentric grid into sub-triangles of radius at most
+    ``scale`` (a larger scale if that gives more than ``_PIECE_BUDGET`` pieces per triangle
+    beyond a few thousand), the others are one piece.
+
+    Returns:
+        ``(centres, radii, parents)``: ``(P, 3)`` piece centroids, ``(P,)`` their largest
+        centroid-corner distances and ``(P,)`` the triangle each piece belongs to.
+    """
+    centroids = triangles.mean(axis=1)
+    radius = np.linalg.norm(triangles - centroids[:, None], axis=2).max(axis=1)
+    splits = np.maximum(1, np.ceil(radius / scale)).astype(np.int64)
+    budget = _PIECE_BUDGET * len(triangles) + _PIECE_BUDGET ** 3
+    while int((splits ** 2).sum()) > budget:         # a few huge triangles: coarser pieces
+        scale *= 2.0
+        splits = np.maximum(1, np.ceil(radius / scale)).astype(np.int64)
+    centres, radii, parents = [centroids[splits == 1]], [radius[splits == 1]], \
+        [np.flatnonzero(splits == 1)]
+    for m in np.unique(splits[splits > 1]):
+        ids = np.flatnonzero(splits == m)
+        corners = np.einsum("gkv,tvd->tgkd", _grid(int(m)), triangles[ids])   # (T, G, 3, 3)
+        mid = corners.mean(axis=2)
+        centres.append(mid.reshape(-1, 3))
+        radii.append(np.linalg.norm(corners - mid[:, :, None], axis=3).max(axis=2).ravel())
+        parents.append(np.repeat(ids, m * m))
+    return np.concatenate(centres), np.concatenate(radii), np.concatenate(parents)
 
 
 class SurfaceDistance:
     """Exact distances from points to the surface of one triangle mesh, built once per mesh.
 
-    A triangle T can only be nearer to p than ``u`` if ``|p - centroid(T)| < u + radius(T)``,
-    with ``radius(T)`` the largest centroid-vertex distance of T. Triangles are grouped by
-    radius (powers of two of the median), so the tall triangles of a crease in the z-stretched
-    space do not widen the search around the small ones.
+    A triangle T can only be nearer to p than ``u`` if one of its pieces (sub-triangles, see
+    :func:`triangle_pieces`) has ``|p - centre| - radius < u``. Pieces are small (about the
+    median triangle, or the cover step), so the tall triangles of a crease in the z-stretched
+    space and the large faces of a simplified mesh are searched only where p is close to them.
 
     Args:
         vertices: ``(V, 3)`` mesh vertices.
@@ -62,49 +109,63 @@ class SurfaceDistance:
         vertices = np.asarray(vertices, dtype=float)
         faces = np.asarray(faces, dtype=np.int64)
         self.triangles = vertices[faces]                                       # (F, 3, 3)
-        self.centroids = self.triangles.mean(axis=1)
-        self.radius = np.linalg.norm(self.triangles - self.centroids[:, None], axis=2).max(axis=1)
-        scale = max(float(np.median(self.radius)), 1e-300)
-        level = np.ceil(np.log2(np.maximum(self.radius / scale, 1.0))).astype(np.int64)
-        self.groups = [_TriangleGroup(np.flatnonzero(level == g), self.centroids, self.radius)
-                       for g in np.unique(level)]
-        self.tree = cKDTree(self.centroids)
         if cover_step is None:
             sides = np.linalg.norm(self.triangles - np.roll(self.triangles, 1, axis=1), axis=2)
             cover_step = float(np.median(sides))
+        centroids = self.triangles.mean(axis=1)
+        median = float(np.median(np.linalg.norm(self.triangles - centroids[:, None],
+                                                axis=2).max(axis=1)))
+        scale = max(_PIECE_SCALE * min(median, cover_step), 1e-300)
+        self.centres, self.radii, self.parents = triangle_pieces(self.triangles, scale)
+        self.max_radius = float(self.radii.max())
+        self.tree = cKDTree(self.centres, leafsize=32)
         if cover is None:
             cover = sample_surface(vertices, faces, cover_step)
-        self.cover_tree = cKDTree(cover)
+        # the grids of neighbouring triangles share their corners: without the copies the
+        # tree is smaller and its nearest-sample distances the same
+        self.cover_tree = cKDTree(unique_points(cover), leafsize=32)
         #: every surface point lies within this distance of a point of ``cover``
         self.cover_radius = cover_step / np.sqrt(3.0)
 
     def distances(self, points: np.ndarray) -> np.ndarray:
         """Exact distances ``(Q,)`` from ``points`` ``(Q, 3)`` to the surface."""
         points = np.asarray(points, dtype=float)
-        # upper bound: the triangles of the nearest few centroids, then the exhaustive search
-        k = min(_FIRST_GUESS, len(self.centroids))
-        near = self.tree.query(points, k=k)[1].reshape(len(points), k)
+        return self._refine(points, *self._guess(points))
+
+    def _guess(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Upper bounds ``(Q,)`` of the distances of ``points`` ``(Q, 3)``: the distance to the
+        nearest of the triangles ``(Q, k)`` (also returned) of their ``k`` nearest pieces."""
+        k = min(_FIRST_GUESS, len(self.centres))
+        near = self.parents[self.tree.query(points, k=k)[1].reshape(len(points), k)]
         rows = np.repeat(np.arange(len(points)), k)
-        best = self._pair_distance(points, rows, near.ravel()).reshape(len(points), k).min(axis=1)
-        for group in self.groups:
-            reach = best + group.max_radius
-            k = min(_NEIGHBOURS, len(group.ids))
-            _, near = group.tree.query(points, k=k, distance_upper_bound=float(reach.max()))
-            near = near.reshape(len(points), k)
-            rows, cols = np.nonzero(near < len(group.ids))
-            tris = near[rows, cols]
-            crowded = np.flatnonzero(near[:, -1] < len(group.ids))   # maybe more than k
-            if len(crowded):
-                balls = group.tree.query_ball_point(points[crowded], reach[crowded])
-                extra = [np.asarray(b, dtype=np.int64) for b in balls]
-                rows = np.concatenate([rows, np.repeat(crowded, [len(b) for b in extra])])
-                tris = np.concatenate([tris] + extra)
-            tris = group.ids[tris]
-            lower = np.linalg.norm(points[rows] - self.centroids[tris], axis=1) - self.radius[tris]
-            keep = lower < best[rows]
-            rows, tris = rows[keep], tris[keep]
-            if len(rows):
-                np.minimum.at(best, rows, self._pair_distance(points, rows, tris))
+        guess = self._pair_distance(points, rows, near.ravel()).reshape(len(points), k)
+        return guess.min(axis=1), near
+
+    def _refine(self, points: np.ndarray, best: np.ndarray, near: np.ndarray) -> np.ndarray:
+        """Exact distances ``(Q,)`` of ``points`` ``(Q, 3)`` from their :meth:`_guess`
+        ``best`` ``(Q,)`` and the triangles ``near`` ``(Q, k)`` it came from: every triangle
+        with a piece that could hold a nearer point is measured."""
+        best = np.array(best, dtype=float)
+        reach = best + self.max_radius
+        k = min(_NEIGHBOURS, len(self.centres))
+        dist, found = self.tree.query(points, k=k, distance_upper_bound=float(reach.max()))
+        dist, found = dist.reshape(len(points), k), found.reshape(len(points), k)
+        rows, cols = np.nonzero(dist < reach[:, None])
+        pieces = found[rows, cols]
+        crowded = np.flatnonzero(dist[:, -1] < reach)             # maybe more within reach
+        if len(crowded):
+            balls = self.tree.query_ball_point(points[crowded], reach[crowded])
+            extra = [np.asarray(b, dtype=np.int64) for b in balls]
+            rows = np.concatenate([rows, np.repeat(crowded, [len(b) for b in extra])])
+            pieces = np.concatenate([pieces] + extra)
+        lower = np.linalg.norm(points[rows] - self.centres[pieces], axis=1) - self.radii[pieces]
+        keep = lower < best[rows]
+        n = len(self.triangles)
+        pairs = np.unique(rows[keep] * n + self.parents[pieces[keep]])
+        pairs = pairs[~np.isin(pairs, (np.arange(len(points))[:, None] * n + near).ravel())]
+        rows, tris = np.divmod(pairs, n)
+        if len(rows):
+            np.minimum.at(best, rows, self._pair_distance(points, rows, tris))
         return best
 
     def _pair_distance(self, points: np.ndarray, rows: np.ndarray, tris: np.ndarray) -> np.ndarray:
@@ -128,6 +189,11 @@ class SurfaceDistance:
         With a finite ``limit`` the search stops as soon as some point is known to be at least
         ``limit`` away and returns that point's distance (or the lower bound ``L``): a value
         ``>= limit`` is then a lower bound of the maximum, which is all a threshold test needs.
+        When no ``u`` reaches ``limit`` (always without one) nothing can stop the search early
+        and the maximum is wanted exactly: the bounds are then first tightened by each point's
+        nearest triangles (:meth:`_max_below`), which on a model that fits the surface leaves
+        a handful of points to resolve instead of all of them. Either way the value is the
+        same.
         """
         points = np.asarray(points, dtype=float)
         probe = points[::_PROBE_STRIDE]
@@ -143,6 +209,8 @@ class SurfaceDistance:
         best = max(best, float(upper.max()) - self.cover_radius)
         if best >= limit:
             return best
+        if float(upper.max()) < limit:         # no early stop: the exact maximum is wanted
+            return self._max_below(candidates, upper, best, chunk)
         order = np.argsort(-upper, kind="stable")
         for begin in range(0, len(order), chunk):
             batch = order[begin:begin + chunk]
@@ -153,6 +221,33 @@ class SurfaceDistance:
             if best >= limit:
                 break
         return best
+
+    def _max_below(self, points: np.ndarray, upper: np.ndarray, best: float,
+                   chunk: int) -> float:
+        """``max(best, max_q dist(points[q], surface))`` for ``points`` ``(Q, 3)`` with upper
+        bounds ``upper`` ``(Q,)``, all below the limit of :meth:`max_distance`: the bounds are
+        first tightened by the nearest triangles (:meth:`_guess`, nearly exact on a close
+        model), then points are resolved from the largest bound down while it exceeds
+        ``best``."""
+        guess, near = self._guess(points)
+        upper = np.minimum(upper, guess)
+        order = np.argsort(-upper, kind="stable")
+        for begin in range(0, len(order), chunk):
+            batch = order[begin:begin + chunk]
+            batch = batch[upper[batch] > best]
+            if len(batch) == 0:
+                break
+            best = max(best, float(self._refine(points[batch], guess[batch], near[batch]).max()))
+        return best
+
+
+def unique_points(points: np.ndarray) -> np.ndarray:
+    """``points`` ``(Q, 3)`` without exact copies, sorted lexicographically: ``(U, 3)``."""
+    points = np.asarray(points, dtype=float)
+    ordered = points[np.lexsort(points.T[::-1])]
+    keep = np.ones(len(ordered), dtype=bool)
+    keep[1:] = np.any(ordered[1:] != ordered[:-1], axis=1)
+    return ordered[keep]
 
 
 def sample_surface(vertices: np.ndarray, faces: np.ndarray, step: float) -> np.ndarray:

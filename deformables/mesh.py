@@ -27,10 +27,29 @@ logger = logging.getLogger(__name__)
 _COCIRCULAR_TOL = 1e-6
 
 
+def unique_rows(rows: np.ndarray, return_index: bool = False):
+    """``np.unique(rows, axis=0)`` (and the index of each row's first occurrence) for
+    non-negative integer rows ``(R, C)``, through one integer key per row: the same sorted rows
+    ``(U, C)``, without sorting rows as records.
+
+    Returns:
+        ``(U, C)`` rows, or ``((U, C), (U,))`` with ``return_index``.
+    """
+    rows = np.asarray(rows)
+    base = int(rows.max()) + 1 if rows.size else 1
+    if rows.ndim != 2 or not np.issubdtype(rows.dtype, np.integer) or rows.size == 0 \
+            or rows.min() < 0 or base ** rows.shape[1] >= 2 ** 62:
+        return np.unique(rows, axis=0, return_index=return_index)
+    key = rows[:, 0].astype(np.int64)
+    for column in range(1, rows.shape[1]):
+        key = key * base + rows[:, column]
+    _, first = np.unique(key, return_index=True)
+    return (rows[first], first) if return_index else rows[first]
+
+
 def edges(faces: np.ndarray) -> np.ndarray:
     """Unique undirected edges ``(E, 2)`` (sorted pairs) of ``faces`` ``(F, 3)``."""
-    pairs = np.sort(faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1)
-    return np.unique(pairs, axis=0)
+    return unique_rows(np.sort(faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1))
 
 
 def _angle(at: np.ndarray, p: np.ndarray, q: np.ndarray) -> np.ndarray:

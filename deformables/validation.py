@@ -18,6 +18,8 @@ from scipy.sparse.csgraph import connected_components
 
 from dopt.validation import is_real
 
+from .mesh import edges, unique_rows
+
 logger = logging.getLogger(__name__)
 
 #: a rest mesh whose median goal/rest edge length ratio lies outside this range is not the
@@ -122,7 +124,7 @@ def check_faces(faces, n_particles: int, area_positions: np.ndarray | None = Non
         raise ValueError(f"{int(repeated.sum())} faces have zero area: they repeat a vertex "
                          f"(first: face {row} = {arr[row].tolist()}); remove degenerate "
                          f"triangles")
-    _, first = np.unique(ordered, axis=0, return_index=True)
+    _, first = unique_rows(ordered, return_index=True)
     if len(first) < len(arr):
         logger.warning("removed %d duplicate faces (same three vertices) of %d",
                        len(arr) - len(first), len(arr))
@@ -176,7 +178,7 @@ def non_manifold(faces: np.ndarray, n_particles: int) -> tuple[np.ndarray, np.nd
     rows, cols = np.concatenate(rows), np.concatenate(cols)
     graph = coo_matrix((np.ones(len(rows)), (rows, cols)), shape=(3 * f, 3 * f))
     _, component = connected_components(graph, directed=False)
-    fans = np.unique(np.stack([corner_vertex, component], axis=1), axis=0)
+    fans = unique_rows(np.stack([corner_vertex, component], axis=1))
     vertices, n_fans = np.unique(fans[:, 0], return_counts=True)
     return edges, vertices[n_fans > 1]
 
@@ -200,7 +202,7 @@ def check_rest_matches(goal: np.ndarray, rest: np.ndarray, faces: np.ndarray) ->
     2/pi), so a median goal/rest edge ratio outside ``REST_RATIO_RANGE`` means the rest
     positions are of another sheet, in another order or another unit. Goal edges stretched
     beyond ``STRETCH_LIMIT`` times their rest length are logged as a warning."""
-    pairs = np.unique(np.sort(faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1), axis=0)
+    pairs = edges(faces)
     rest_len = np.linalg.norm(rest[pairs[:, 0]] - rest[pairs[:, 1]], axis=1)
     goal_len = np.linalg.norm(goal[pairs[:, 0]] - goal[pairs[:, 1]], axis=1)
     if np.any(rest_len <= 0):
