@@ -15,12 +15,14 @@ iterations per stage).
 
 Writes OUT/summary.json ({"goal", "settings", "methods": {method: {"final_cost_mean" (m),
 "final_cost_ci95", "final_costs", "n_candidates", "s_per_iteration", "seeds", "n"}},
-"failed", "provenance"}), OUT/curves.csv (best cost per iteration), OUT/cost_curves.png,
-for the first seed of each method OUT/goal_vs_<method>.png (goal | result from above and
-obliquely, key and picked particles marked) and OUT/plan_<method>.gif (the executed plan
-replayed) (renders; MUJOCO_GL=egl, skipped with --no-render), OUT/trials/*.json (one per
-finished trial; a rerun resumes, --fresh recomputes). Exits 1 if a trial failed
-(summary.json lists it under "failed") or the run failed (one line on stderr).
+"failed", "blowups": [the blow-up captures of flagged executed plans, OUT/blowups/<trial
+key>-<stage>, also named on the console], "provenance"}), OUT/curves.csv (best cost per
+iteration), OUT/cost_curves.png, for the first seed of each method OUT/goal_vs_<method>.png
+(goal | result from above and obliquely, key and picked particles marked) and
+OUT/plan_<method>.gif (the executed plan replayed) (renders; MUJOCO_GL=egl, skipped with
+--no-render), OUT/trials/*.json (one per finished trial; a rerun resumes, --fresh recomputes).
+Exits 1 if a trial failed (summary.json lists it under "failed") or the run failed (one line on
+stderr).
 
     python experiments/cloth_fold.py --goal diagonal                  # one seed: a first answer
     python experiments/cloth_fold.py --goal diagonal --preset ours    # the experiments' 3 seeds

@@ -6,16 +6,17 @@ finished trial under OUT/trials, a rerun resumes; the key holds a hash of the se
 progress, and writes the report: summary.json (with the command line, git commit and package
 versions), curves.csv, cost_curves.png and, for the first seed of each method, the renders
 goal_vs_<method>.png (goal | result from above and obliquely, key and picked particles
-marked) and plan_<method>.gif (the executed plan replayed). The MuJoCo-only image making is
-``dopt.render``; this module composes, labels and writes the pictures.
+marked) and plan_<method>.gif (the executed plan replayed), and a blow-up capture of each
+executed plan the stability verdict flags, OUT/blowups/<trial key>-<stage> (named on the
+console and under summary.json's "blowups"; ``dopt-view`` opens it at the flagged step). The
+MuJoCo-only image making is ``dopt.render``; this module composes, labels and writes the
+pictures.
 """
 
 from __future__ import annotations
 
 import argparse
 import csv
-import hashlib
-import json
 import logging
 import sys
 import time
@@ -25,6 +26,7 @@ from pathlib import Path
 import numpy as np
 from cli_args import (
     EPILOG,
+    blowup_captures,
     choices_type,
     folder_problem,
     guarded,
@@ -52,8 +54,10 @@ from planners.pick_place import (
     PROTOCOL_SEEDS,
     PROTOCOLS,
     PickPlaceSettings,
+    capture_label,
     make_problem,
     summarize,
+    trial_key,
 )
 
 log = logging.getLogger(__name__)
@@ -170,15 +174,6 @@ def parse(ap: argparse.ArgumentParser, task: str, argv) -> tuple[argparse.Namesp
     return args, s
 
 
-def trial_key(method: str, seed: int, settings: PickPlaceSettings) -> str:
-    """<method>-seed<seed>-<hash of the settings that change results>
-    (``PickPlaceSettings.identity``: not the threads; what the presets and picker resolve
-    to)."""
-    digest = hashlib.sha1(json.dumps(settings.identity(), sort_keys=True).encode()
-                          ).hexdigest()[:8]
-    return f"{method}-seed{seed}-{digest}"
-
-
 def main(task: str, script: str, doc: str, help_: dict, argv=None) -> int:
     """The whole experiment ``script`` (its path, for the provenance): every trial (resuming),
     the report, a printed table. Returns the exit code (1 when a trial failed, the failures
@@ -219,6 +214,8 @@ def _experiment(task: str, script: str, args, settings: PickPlaceSettings, argv)
                "physics": settings.resolved_physics(),
                "methods": summarize(results, args.methods, problem.metric_names),
                "failed": failed, "trial_commits": res.commits,
+               "blowups": blowup_captures(out, [capture_label(t.key, s.name) for t in trials
+                                                for s in problem.stages]),
                # this run's wall time (a resumed run reuses finished trials), and the trials'
                # own wall times summed, wherever and whenever they ran
                "wall_s": time.perf_counter() - start,

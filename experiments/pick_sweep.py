@@ -2,10 +2,12 @@
 ``dopt.sweep`` with the sweep's console (``sweep_console``), their schema (what a stored
 result and checkpoint must hold to be reused or resumed), the CEM iterations a folder already
 holds, and the flags ``planners.pick_budget`` may name. ``pick_place_cli`` is the command line
-around it."""
+around it. The trials write their blow-up captures under the sweep's folder
+(``planners.pick_place.run_trial``'s ``blowup_out``)."""
 
 from __future__ import annotations
 
+import functools
 from pathlib import Path
 
 from sweep_console import run_with_console
@@ -32,10 +34,11 @@ def run_trials(trials: list[Trial], iterations_per_trial: int, out: Path,
     pool of ``workers`` processes, with the sweep's console (a bar of the CEM iterations of
     every trial, the running ones of the pool included). Returns the results of the given
     trials and the sweep's result (``failed``: {key: error}, ``commits``: the code versions of
-    the results)."""
+    the results); a trial's blow-up captures go to ``out``/blowups."""
     cem = {t.key for t in trials if t.params["method"] != "scripted"}
     res = run_with_console(
-        cem_trial, trials, out, unit="it", desc="CEM iterations", workers=workers,
+        functools.partial(cem_trial, blowup_out=str(out)), trials, out, unit="it",
+        desc="CEM iterations", workers=workers,
         fresh=fresh, schema=SCHEMA,
         steps=lambda t: iterations_per_trial if t.key in cem else 0,
         held=lambda t: iterations_held([t], iterations_per_trial, out) if t.key in cem else 0)
@@ -43,11 +46,13 @@ def run_trials(trials: list[Trial], iterations_per_trial: int, out: Path,
     return [r["result"] for k, r in res.records.items() if k in keys], res
 
 
-def cem_trial(params: dict, checkpoint: Checkpoint | None = None, report=None) -> dict:
+def cem_trial(params: dict, checkpoint: Checkpoint | None = None, report=None,
+              blowup_out: str | None = None) -> dict:
     """``run_trial`` for the sweep (inline or in a pool's worker): each CEM iteration is
-    given to ``report`` (the sweep's bar counts them), progress saved to ``checkpoint``."""
+    given to ``report`` (the sweep's bar counts them), progress saved to ``checkpoint``,
+    blow-up captures written under ``blowup_out``."""
     tick = None if report is None else (lambda i, best: report())
-    return run_trial(params, on_iteration=tick, checkpoint=checkpoint)
+    return run_trial(params, on_iteration=tick, checkpoint=checkpoint, blowup_out=blowup_out)
 
 
 def iterations_held(trials: list[Trial], iterations_per_trial: int, out: Path) -> int:

@@ -16,7 +16,8 @@ The pipeline is ``planners.pick_place``; the defaults are its ``PRESETS``: 40 pa
 
 Writes OUT/summary.json (as cloth_fold.py, plus "end_to_end_ratio_mean" for straighten),
 OUT/curves.csv, OUT/cost_curves.png, OUT/goal_vs_<method>.png and OUT/plan_<method>.gif
-(renders, as cloth_fold.py) and OUT/trials/*.json (a rerun resumes, --fresh recomputes).
+(renders, as cloth_fold.py), OUT/trials/*.json (a rerun resumes, --fresh recomputes) and
+OUT/blowups/ (as cloth_fold.py).
 Exits 1 if a trial failed (listed under "failed") or the run failed (one line on stderr).
 
     python experiments/rope.py --goal straighten --out results/rope_straighten

@@ -27,9 +27,11 @@ Modules, one job each (every name is re-exported here):
     presets.py   the presets of both protocols with the source of every number: PRESETS
                  (ours), PAPER_PRESETS (the paper's), QUICK_CHANGES, PROTOCOL_SEEDS
     settings.py  PickPlaceSettings: presets, scene and picker configs, a trial's identity
+                 and name (trial_key)
     problem.py   Problem and make_problem
     planners.py  StagePlan, PickPlanner, CEMPlanner, ScriptedPlanner, make_planner, METHODS
-    run.py       run_problem (with checkpoints), solve, run_trial, PickPlaceResult
+    run.py       run_problem (with checkpoints and blow-up captures: capture_label), solve,
+                 run_trial, PickPlaceResult
     summary.py   summarize, last_improvement
     random_reach.py  why CEM(Random) lands where it does: each trial's candidates re-drawn
                  from its seed and what they can reach (``random_reach``, ``reach_summary``)
@@ -59,8 +61,20 @@ from planners.pick_place.presets import (
     quick_preset,
 )
 from planners.pick_place.problem import Problem, make_problem
-from planners.pick_place.run import PickPlaceResult, TrialProgress, run_problem, run_trial, solve
-from planners.pick_place.settings import UNSET_SCENE_FIELDS, UNSET_SETTINGS, PickPlaceSettings
+from planners.pick_place.run import (
+    PickPlaceResult,
+    TrialProgress,
+    capture_label,
+    run_problem,
+    run_trial,
+    solve,
+)
+from planners.pick_place.settings import (
+    UNSET_SCENE_FIELDS,
+    UNSET_SETTINGS,
+    PickPlaceSettings,
+    trial_key,
+)
 from planners.pick_place.summary import last_improvement, summarize
 from planners.pick_place.tasks import (
     CRUMPLE_TURN,
@@ -83,8 +97,8 @@ __all__ = [
     "PAPER_PRESETS", "PICK_METRICS", "PICK_TASKS", "PRESETS", "PROTOCOLS", "PROTOCOL_SEEDS",
     "QUICK_CHANGES", "UNSET_SCENE_FIELDS", "UNSET_SETTINGS", "CEMPlanner", "PickGoal",
     "PickPlaceResult", "PickPlaceSettings", "PickPlanner", "PickTaskSpec", "Preset", "Problem",
-    "ScriptedPlanner", "Stage", "StagePlan", "TrialProgress", "cloth_sequence",
+    "ScriptedPlanner", "Stage", "StagePlan", "TrialProgress", "capture_label", "cloth_sequence",
     "last_improvement", "make_planner", "make_problem", "metric_names", "paper_preset",
     "pick_task", "quick_preset", "register_goal", "register_task", "rope_stage", "run_problem",
-    "run_trial", "solve", "summarize",
+    "run_trial", "solve", "summarize", "trial_key",
 ]

@@ -40,7 +40,8 @@ class StagePlan:
     (one entry for the scripted policy), the candidates planned over, the seconds of
     each CEM iteration (empty for the scripted policy), the rollouts simulated while planning,
     how many of them the stability verdict flagged and how many broke the stretch limit of
-    C(a_t), and whether the executed plan was unstable (with the reason)."""
+    C(a_t), whether the executed plan was unstable (with the reason), and the blow-up
+    captures of it (``run_problem``'s ``blowup_out``; folders relative to it)."""
 
     particles: np.ndarray
     displacements: np.ndarray
@@ -54,6 +55,7 @@ class StagePlan:
     unstable: bool = False
     unstable_reason: str = ""
     n_infeasible_rollouts: int = 0
+    blowups: list = field(default_factory=list)
 
     def to_dict(self) -> dict:
         """JSON-able form (arrays as lists; float64 round-trips exactly)."""

@@ -2,24 +2,31 @@
 call (``solve``), and the same for ``dopt.sweep`` (``run_trial``); a trial saves its progress
 to a checkpoint and resumes from it to the result it gives unstopped.
 
+Blow-up captures (``blowup_out``, opt-in): every stage's executed plan that the stability
+verdict flags (``PickPlaceTask``'s, never a CEM sample) is written to
+``blowup_out/blowups/<label>-<stage>`` (``capture_label``; ``dopt.view.blowup``, which
+``dopt-view`` opens at the flagged step) and listed in the result.
+
 Shapes: ns state row.
 """
 
 from __future__ import annotations
 
 import logging
+import os
 import time
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 
 import numpy as np
 
 from dopt.rollout import RolloutConfig, RolloutService
 from dopt.tasks import PickPlaceTask
+from dopt.view.blowup import retire_captures
 from planners.pick_place.planners import PickPlanner, StagePlan, make_planner
 from planners.pick_place.problem import Problem, make_problem
-from planners.pick_place.settings import PickPlaceSettings
+from planners.pick_place.settings import PickPlaceSettings, trial_key
 
 log = logging.getLogger(__name__)
 
@@ -33,7 +40,9 @@ class PickPlaceResult:
     verdict flagged, and whether an executed plan was unstable (``unstable_reason`` names the
     stage, step and bound): such a trial's metrics are not those of a physical result.
     ``segments``: the runs the trial took (more than 1 when it was resumed from a checkpoint;
-    ``wall_s`` is then their sum, and the same result as in one run)."""
+    ``wall_s`` is then their sum, and the same result as in one run). ``blowups``: the blow-up
+    capture folders of its flagged executed plans, relative to ``run_problem``'s
+    ``blowup_out`` (none without it)."""
 
     method: str
     seed: int
@@ -52,6 +61,7 @@ class PickPlaceResult:
     unstable_reason: str = ""
     n_infeasible_rollouts: int = 0
     segments: int = 1
+    blowups: list = field(default_factory=list)
 
     def to_dict(self) -> dict:
         """JSON-able form: the metrics at the top level, the final state as a list."""
@@ -121,10 +131,50 @@ class TrialProgress:
                 "on_progress": lambda progress, rng=rng: self.save(progress, rng)}
 
 
+def capture_label(prefix: str, stage: str) -> str:
+    """The label of the blow-up capture of a trial's stage: "<prefix>-<stage name>" (its
+    folder under OUT/blowups, ``dopt.view.blowup.capture_dir``)."""
+    return f"{prefix}-{stage}"
+
+
+@dataclass(frozen=True)
+class _Captures:
+    """Where ``run_problem`` writes the blow-up captures of a trial (``out``; None: nowhere)
+    and the label prefix of its stages' captures (``capture_label``)."""
+
+    out: str | os.PathLike | None
+    prefix: str
+
+    def __post_init__(self):
+        if self.out is not None and not isinstance(self.out, (str, os.PathLike)):
+            raise TypeError(f"blowup_out must be a folder path or None, got "
+                            f"{type(self.out).__name__}")
+        if not isinstance(self.prefix, str):
+            raise TypeError(f"blowup_label must be a string or None, got {self.prefix!r}")
+
+    def retire(self, stages) -> None:
+        """Move the captures of ``stages`` (an earlier run's) to ``blowups/outdated/``."""
+        if self.out is not None:
+            retire_captures(self.out, [capture_label(self.prefix, s.name) for s in stages])
+
+    def task_kwargs(self, stage) -> dict:
+        """The blow-up arguments of the stage's ``PickPlaceTask``."""
+        if self.out is None:
+            return {}
+        return {"blowup_out": self.out, "blowup_label": capture_label(self.prefix, stage.name)}
+
+    def record(self, plan: StagePlan, task: PickPlaceTask) -> StagePlan:
+        """``plan`` with the captures its task wrote (relative to ``out``)."""
+        if self.out is None or not task.blowups:
+            return plan
+        return replace(plan, blowups=[os.path.relpath(b, self.out) for b in task.blowups])
+
+
 def run_problem(problem: Problem, planner: PickPlanner, *, method: str = "", seed: int = 0,
                 service: RolloutService | None = None,
                 on_iteration: Callable[[int, float], None] | None = None,
-                checkpoint=None) -> PickPlaceResult:
+                checkpoint=None, blowup_out: str | os.PathLike | None = None,
+                blowup_label: str | None = None) -> PickPlaceResult:
     """Plan and execute every stage of ``problem`` in turn with ``planner``.
 
     ``service`` defaults to a new one with the settings' threads (closed at the end);
@@ -133,15 +183,24 @@ def run_problem(problem: Problem, planner: PickPlanner, *, method: str = "", see
     saved after every stage and, with a resumable planner (``PickPlanner``), after every step
     of its planning; a progress found there is resumed, and the result is the one the trial
     gives without a stop (only ``wall_s``, summed over the runs, and ``segments`` differ).
+    ``blowup_out``: a run folder that receives a blow-up capture of each stage's executed plan
+    that the verdict flags, as ``blowups/<blowup_label>-<stage>`` (default label
+    ``<method>-seed<seed>``; the module docstring), listed in ``PickPlaceResult.blowups``;
+    those of the stages still to run from an earlier run move to ``blowups/outdated/`` first.
+    None (default): no capture.
     """
     checkpoint = _check_run(problem, planner, on_iteration, checkpoint)
+    captures = _Captures(blowup_out, f"{method}-seed{seed}" if blowup_label is None
+                        else blowup_label)
     progress = TrialProgress.open(checkpoint, problem, planner, method, seed)
+    captures.retire(problem.stages[len(progress.done):])
     with _services(problem, service) as (svc, plan_svc):
         state = progress.done[-1].final_state if progress.done else problem.start_state
         for stage in problem.stages[len(progress.done):]:
             task = PickPlaceTask(problem.scene, stage.goal, state, svc,
-                                 problem.planning_scene, plan_svc)
+                                 problem.planning_scene, plan_svc, **captures.task_kwargs(stage))
             plan = planner.plan(task, stage.keys, on_iteration, **progress.plan_kwargs(planner))
+            plan = captures.record(plan, task)
             progress.partial = None
             state = plan.final_state
             progress.done.append(plan)
@@ -216,7 +275,7 @@ def _result(problem: Problem, progress: TrialProgress, state: np.ndarray, method
                            sum(p.n_rollouts for p in done),
                            sum(p.n_unstable_rollouts for p in done), bool(reasons),
                            "; ".join(reasons), sum(p.n_infeasible_rollouts for p in done),
-                           progress.segments)
+                           progress.segments, [b for p in done for b in p.blowups])
 
 
 def _trial_difference(saved, trial: dict) -> str:
@@ -235,10 +294,12 @@ def _trial_difference(saved, trial: dict) -> str:
 
 def solve(settings: PickPlaceSettings, method: str = "simple", seed: int = 0,
           on_iteration: Callable[[int, float], None] | None = None,
-          checkpoint=None) -> PickPlaceResult:
+          checkpoint=None, blowup_out: str | os.PathLike | None = None,
+          blowup_label: str | None = None) -> PickPlaceResult:
     """One trial in one call: build the problem, plan every stage with ``method``, execute,
     measure. The same settings, method and seed give the same result, also when the trial
-    is stopped and resumed from its ``checkpoint`` (``run_problem``).
+    is stopped and resumed from its ``checkpoint`` (``run_problem``, as are ``blowup_out``
+    and ``blowup_label``).
 
     Raises:
         TypeError / ValueError: settings that are not PickPlaceSettings, an unknown method, a
@@ -247,17 +308,22 @@ def solve(settings: PickPlaceSettings, method: str = "simple", seed: int = 0,
     if on_iteration is not None and not callable(on_iteration):
         raise TypeError(f"on_iteration must be callable or None, got {on_iteration!r}")
     planner = make_planner(method, settings, seed)      # checks all three before any scene
+    _Captures(blowup_out, "" if blowup_label is None else blowup_label)     # and these two
     problem = make_problem(settings, seed)
     return run_problem(problem, planner, method=method, seed=seed, on_iteration=on_iteration,
-                       checkpoint=checkpoint)
+                       checkpoint=checkpoint, blowup_out=blowup_out, blowup_label=blowup_label)
 
 
 def run_trial(params: dict, on_iteration: Callable[[int, float], None] | None = None,
-              checkpoint=None) -> dict:
+              checkpoint=None, blowup_out: str | os.PathLike | None = None) -> dict:
     """``solve`` for ``dopt.sweep``: params {"settings": PickPlaceSettings.to_dict(),
     "method", "seed"} -> ``PickPlaceResult.to_dict()``; the sweep's ``checkpoint`` lets a
-    stopped trial resume."""
+    stopped trial resume. ``blowup_out``: the sweep's folder, which receives the blow-up
+    captures of the trial's executed plans as ``blowups/<trial key>-<stage>`` (``trial_key``,
+    ``capture_label``), listed in the result's "blowups" relative to it."""
     settings = PickPlaceSettings.from_dict(params["settings"])
-    return solve(settings, params["method"], int(params["seed"]), on_iteration,
-                 checkpoint).to_dict()
+    method, seed = params["method"], int(params["seed"])
+    label = None if blowup_out is None else trial_key(method, seed, settings)
+    return solve(settings, method, seed, on_iteration, checkpoint, blowup_out,
+                 label).to_dict()
 

@@ -49,6 +49,10 @@ def _check_summary(out: Path, goal: str, extra=()):
     assert summary["trials_wall_s"] == pytest.approx(sum(t["result"]["wall_s"] for t in trials))
     # the verdict is part of the recorded physics: rope and cloth judge energy
     assert summary["physics"]["stability"]["max_energy_gain"] > 0
+    # blow-up captures: those of the trials with a flagged executed plan, all listed
+    assert all(bool(t["result"]["blowups"]) == t["result"]["unstable"] for t in trials)
+    assert sorted(c["path"] for c in summary["blowups"]) == sorted(
+        b for t in trials for b in t["result"]["blowups"])
     return summary
 
 
@@ -56,6 +60,7 @@ def test_cloth_fold_quick_writes_everything_and_resumes(tmp_path, capsys):
     out = tmp_path / "diag"
     assert cloth_fold.main(["--quick", "--goal", "diagonal", "--out", str(out)]) == 0
     first = _check_summary(out, "diagonal")
+    assert first["blowups"] == [] and not (out / "blowups").exists()     # every plan stable
     # said before the run: how long, from a calibration rollout
     printed = capsys.readouterr().out
     assert "1 seed x 4 methods: about " in printed and "calibration rollout" in printed

@@ -608,6 +608,8 @@ def test_pick_place_settings_from_dict(d, error, match):
     (lambda s: solve(s, "simple", -3), ValueError, "seed.*>= 0"),
     (lambda s: solve(s, "simple", 0.5), TypeError, "seed.*int"),
     (lambda s: solve(s, "simple", 0, on_iteration=3), TypeError, "on_iteration must be"),
+    (lambda s: solve(s, "simple", 0, blowup_out=3), TypeError, "blowup_out must be"),
+    (lambda s: solve(s, "simple", 0, blowup_label=7), TypeError, "blowup_label must be"),
     (lambda s: run_problem(None, make_planner("simple", s)), TypeError,
      "problem must be a Problem"),
     (lambda s: CEMPlanner(s.cem, "every", 0), ValueError, "candidates must be one of"),
@@ -656,6 +658,77 @@ def test_svr_mpc_settings_fields(kwargs, error, match):
 def test_run_svr_mpc_arguments(settings, seed, error, match):
     with pytest.raises(error, match=match):
         run_svr_mpc(settings, seed)
+
+
+@pytest.mark.parametrize("optimiser, error, match", [
+    ("nope", ValueError, "unknown optimiser 'nope'; choose from .*'svr'"),
+    (3, TypeError, "optimiser must be a name of OPTIMISERS or a factory.*got int"),
+    (None, TypeError, "optimiser must be a name of OPTIMISERS or a factory.*got NoneType"),
+    (lambda context: object(), TypeError, "'custom': its factory returned a 'object', which "
+                                          r"has no optimise\(state, plan\)"),
+])
+def test_run_svr_mpc_optimiser(optimiser, error, match):
+    settings = SVRMPCSettings(method="baseline", synchronous=True, timeout=1, threads=1)
+    with pytest.raises(error, match=match):
+        run_svr_mpc(settings, 0, optimiser=optimiser)
+
+
+@pytest.mark.parametrize("name, factory, error, match", [
+    ("Shooting", print, ValueError, "'Shooting' must be lower case letters"),
+    ("random-shooting", print, ValueError, "must be lower case letters, digits and _"),
+    ("svr", print, ValueError, "'svr' is taken"),
+    ("baseline", print, ValueError, "'baseline' is taken"),
+    (3, print, TypeError, "optimiser name must be a str, got int"),
+    ("shooting", "not callable", TypeError, "optimiser factory must be callable.*got str"),
+])
+def test_register_optimiser_arguments(name, factory, error, match):
+    from planners.svr_mpc import OPTIMISERS, register_optimiser
+
+    with pytest.raises(error, match=match):
+        register_optimiser(name, factory)
+    assert "shooting" not in OPTIMISERS
+
+
+def test_an_optimiser_is_registered_once_unless_replaced():
+    from planners.svr_mpc import OPTIMISERS, register_optimiser, svr_optimiser
+
+    register_optimiser("twice", svr_optimiser)
+    try:
+        with pytest.raises(ValueError, match="'twice' is registered already"):
+            register_optimiser("twice", svr_optimiser)
+        register_optimiser("twice", print, replace=True)
+        assert OPTIMISERS["twice"] is print
+    finally:
+        del OPTIMISERS["twice"]
+
+
+@pytest.mark.parametrize("optimiser, error, match", [
+    ("nope", ValueError, "unknown optimiser 'nope'"),
+    (print, TypeError, "optimiser must be a name of OPTIMISERS .*params are JSON"),
+])
+def test_trial_params_name_a_registered_optimiser(optimiser, error, match):
+    from planners.svr_mpc import trial_params
+
+    with pytest.raises(error, match=match):
+        trial_params(SVRMPCSettings(), 0, optimiser)
+    with pytest.raises(TypeError, match="settings must be SVRMPCSettings"):
+        trial_params({"task": "clutter"}, 0)
+
+
+@pytest.mark.parametrize("kwargs, error, match", [
+    (dict(fd="centred"), ValueError, r"Derivatives.fd must be one of \['central', 'forward'\]"),
+    (dict(keypoints="skip5"), ValueError, "Derivatives.keypoints must be one of"),
+    (dict(keypoints="skip", fd_skip=0), ValueError, "Derivatives.fd_skip must be >= 1"),
+    (dict(keypoints="skip", fd_skip=2.0), TypeError, "Derivatives.fd_skip must be an int"),
+    (dict(fd_skip=5), ValueError, "fd_skip must be 1 with keypoints 'every'"),
+    (dict(keypoints="adaptive", fd_skip=3), ValueError, "must be 1 with keypoints 'adaptive'"),
+    (dict(box_qp=1), TypeError, "Derivatives.box_qp must be a bool"),
+])
+def test_derivatives_fields(kwargs, error, match):
+    from planners.svr_mpc import Derivatives
+
+    with pytest.raises(error, match=match):
+        Derivatives(**kwargs)
 
 
 def test_make_problem_checks_the_sizes_its_settings_imply_before_building_anything():

@@ -6,11 +6,19 @@ shape, and turns a population of pick-and-place action sequences into costs with
 rollout: the paper's objective (Eq. 2), the mean distance of the particles to their goal
 positions.
 
+Blow-up captures (``PickPlaceTask(..., blowup_out=OUT)``, opt-in): an executed action sequence
+(``execute``, ``step``; never a population that ``evaluate`` scores) that the stability verdict
+flags is re-simulated from its start to the flagged step (``dopt.view.blowup.capture_blowup``)
+and its last ``dopt.view.blowup.KEEP`` states, the model and the verdict are written to
+``OUT/blowups/<blowup_label>``, which ``dopt-view`` opens at that step; ``blowups`` lists them.
+
 Shapes: P population, H actions per sequence, K steps per action, N particles, ns state size.
 """
 
 from __future__ import annotations
 
+import logging
+import os
 from collections.abc import Iterable
 from dataclasses import dataclass, replace
 
@@ -24,6 +32,9 @@ from dopt.state import check_model, check_states
 from dopt.tasks.pick.constraints import ActionConstraint
 from dopt.tasks.pick.picker import CONTROL_SPEC, Picker, PickerConfig, fix_grasp_anchors
 from dopt.validation import check_real, float_array, index_array, is_int
+from dopt.view.blowup import capture_blowup, capture_dir
+
+log = logging.getLogger(__name__)
 
 #: the bounds rope and cloth rollouts are judged by: the defaults, and the energy gain while
 #: nothing holds the object (grasp released, or the None action): 0.5 J/kg, the energy of a
@@ -242,18 +253,29 @@ class PickPlaceTask:
             every cost reported of an executed plan, stay on ``scene``. Its states must have
             the layout of ``scene``'s (the start state carries over).
         planning_rollout: the planning scene's rollout service.
+        blowup_out: optional run folder: an executed sequence the verdict flags writes a
+            blow-up capture to ``blowup_out/blowups/<blowup_label>`` (``-2``, ... where one
+            exists; the module docstring), listed in ``blowups``. None (default): no capture.
+        blowup_label: the captures' name (in the folder, the console and the viewer).
     """
 
     def __init__(self, scene: DeformableScene, goal: np.ndarray,
                  start_state: np.ndarray | None = None,
                  rollout: RolloutService | None = None,
                  planning_scene: DeformableScene | None = None,
-                 planning_rollout: RolloutService | None = None):
+                 planning_rollout: RolloutService | None = None,
+                 blowup_out: str | os.PathLike | None = None, blowup_label: str = "pick"):
         if not isinstance(scene, DeformableScene):
             raise TypeError(f"scene must be a DeformableScene, got {type(scene).__name__}")
         if rollout is not None and not callable(getattr(rollout, "rollout", None)):
             raise TypeError(f"rollout must be a dopt.RolloutService, got "
                             f"{type(rollout).__name__}")
+        if blowup_out is not None and not isinstance(blowup_out, (str, os.PathLike)):
+            raise TypeError(f"blowup_out must be a folder path or None, got "
+                            f"{type(blowup_out).__name__}")
+        if not isinstance(blowup_label, str):
+            raise TypeError(f"blowup_label must be a string, got {type(blowup_label).__name__}")
+        self.blowup_out, self.blowup_label, self.blowups = blowup_out, blowup_label, []
         self.scene = scene
         self.goal = float_array(goal, "goal", (scene.n_particles, 3))
         state = scene.initial_state if start_state is None else start_state
@@ -335,13 +357,19 @@ class PickPlaceTask:
 
     def execute(self, particles, displacements, start: np.ndarray | None = None) -> Execution:
         """One action sequence, (H,), (H, 3), from ``start`` (ns,) (default: the task's start
-        state): its final state and verdict."""
-        res = self.rollout(np.asarray(_numpy(particles))[None],
-                           np.asarray(_numpy(displacements), dtype=float)[None], start)
+        state): its final state and verdict (with ``blowup_out``, a flagged one is captured:
+        the module docstring)."""
+        particles = np.asarray(_numpy(particles))[None]
+        displacements = np.asarray(_numpy(displacements), dtype=float)[None]
+        res = self.rollout(particles, displacements, start)
         st = res.stability
-        return Execution(res.final_states[0], bool(st.unstable[0]), int(st.step[0]),
+        done = Execution(res.final_states[0], bool(st.unstable[0]), int(st.step[0]),
                          st.reason[0], float(st.max_speed[0]), float(st.max_penetration[0]),
                          float(st.max_strain[0]))
+        if done.unstable and self.blowup_out is not None:
+            self._capture(self.picker.encode(particles, displacements)[0],
+                          self.start_state if start is None else start, done)
+        return done
 
     def step(self, state: np.ndarray, particle: int, displacement) -> Execution:
         """One action from ``state`` (ns,): ``particle`` an int (NONE = -1), ``displacement``
@@ -350,6 +378,22 @@ class PickPlaceTask:
             raise TypeError(f"particle must be an int (or NONE = -1), got {particle!r}")
         disp = float_array(_numpy(displacement), "displacement", (3,), finite=False)
         return self.execute([particle], disp[None], state)
+
+    def _capture(self, controls: np.ndarray, start: np.ndarray, done: Execution) -> None:
+        """The blow-up capture of an executed sequence, its control rows (T, nc) of
+        ``CONTROL_SPEC`` from ``start`` (ns), that ``done`` flagged: re-simulated up to
+        ``done.step``, its folder added to ``blowups`` (one that cannot be written is logged,
+        and the run goes on)."""
+        try:
+            out = capture_blowup(capture_dir(self.blowup_out, self.blowup_label),
+                                 self.scene.model, start, controls, done.step, done.reason,
+                                 spec=self.scene.scene.layout.spec, control_spec=CONTROL_SPEC,
+                                 xml=self.scene.xml, label=self.blowup_label)
+        except OSError as e:
+            log.error("the blow-up capture of step %d (%s) was not written: %s", done.step,
+                      done.reason, e)
+            return
+        self.blowups.append(str(out))
 
 
 @dataclass(frozen=True)
