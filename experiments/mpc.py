@@ -21,7 +21,9 @@ over the episode), OUT/mpc_goal_distance.png (the goal object's distance to the 
 OUT/final_<row>.png (the final scene; MUJOCO_GL=egl, skipped with --no-render). summary.json also
 holds "trial_commits" (the code commits of the trial results: more than one when a resumed sweep
 mixes code). Exits 1 if a trial failed (summary.json lists it under "failed") or the run failed
-(one line on stderr); 2 on a bad flag.
+(one line on stderr); 2 on a bad flag. --keep-controls also keeps each trial's start state
+and executed controls (about 280 KB a trial), which dopt-view re-simulates exactly; the keys
+are the same either way, and a stored trial without controls is rerun.
 
     python experiments/mpc.py --task clutter --trials 20 --out results/mpc_clutter
     python experiments/mpc.py --task clutter --preset paper --trials 100 --workers 2 \\
@@ -32,7 +34,6 @@ from __future__ import annotations
 
 import argparse
 import csv
-import functools
 import importlib.util
 import logging
 import os
@@ -69,6 +70,7 @@ from dopt.tasks import PUSH_TASKS
 from dopt.tasks.push.costs import COST_PRESETS
 from planners.svr import METHODS, paper_theta
 from planners.svr_mpc import (
+    CONTROLS_FIELDS,
     OUTLIER_DISTANCE,
     TABLE1_ROWS,
     CapturingTrial,
@@ -83,6 +85,7 @@ from planners.svr_mpc import (
     run_trial,
     split_params,
     summarize,
+    task_defaults,
     trial_key,
     trial_params,
 )
@@ -113,6 +116,9 @@ def parser() -> argparse.ArgumentParser:
     add_run_arguments(ap)
     ap.add_argument("--no-render", action="store_true",
                     help="skip the renders of the final scenes (final_<method>.png)")
+    ap.add_argument("--keep-controls", action="store_true",
+                    help="keep each trial's start state and executed controls, for dopt-view "
+                         "replays (~280 KB per trial; stored trials without them are rerun)")
     return ap
 
 
@@ -261,7 +267,7 @@ def settings_of(args, row: Row, feedback: bool) -> SVRMPCSettings:
     over.update(replace(flags, **row.variants).fields())
     return replace(preset, task=args.task, method=row.method, theta=row.theta,
                    rho=float(row.rho),
-                   slowdown=args.slowdown or _task_slowdown(args.task), timeout=args.timeout,
+                   slowdown=args.slowdown or task_defaults(args.task)[0], timeout=args.timeout,
                    threads=args.threads or 0, feedback=feedback,
                    nominal_threads=float(args.nominal_threads), **over)
 
@@ -317,30 +323,23 @@ def protocol(args, params: dict) -> dict:
             "islands": params["islands"], "push_tail": params["push_tail"]}
 
 
-@functools.cache
-def _task_slowdown(task: str) -> float:
-    return float(PUSH_TASKS[task](np.random.default_rng(0)).slowdown)
-
-
-@functools.cache
-def _task_timeout(task: str) -> int:
-    return int(PUSH_TASKS[task](np.random.default_rng(0)).timeout)
-
-
 def run(args, trials, fn=None, out: Path | None = None, workers: int | None = None,
         schema: Schema = SCHEMA) -> tuple[list, SweepResult]:
     """Run (or resume; ``args.fresh``: recompute) the trials with ``fn`` (default one MPC
     episode) under ``out`` (default --out), on ``workers`` processes (default --workers, or
     Ray with --ray), with the sweep's console (``sweep_console``: a bar of the agent steps of
     every trial, a trial's budget its timeout); a stored trial is reused only when it fits
-    ``schema``; an MPC episode writes its blow-up captures under ``out``. Returns their
+    ``schema``; an MPC episode writes its blow-up captures under ``out`` and, with
+    --keep-controls, keeps its controls (a stored trial without them is rerun). Returns their
     records and the sweep's result (``failed``: {key: error}, ``commits``: code commits of the
     records)."""
-    out = out or args.out
-    steps = {t.key: int(t.params.get("timeout") or _task_timeout(t.params["task"]))
+    out, keep = out or args.out, getattr(args, "keep_controls", False)
+    if keep and fn is None:
+        schema = replace(schema, result=schema.result + CONTROLS_FIELDS)
+    steps = {t.key: int(t.params.get("timeout") or task_defaults(t.params["task"])[1])
              for t in trials}
     res = run_with_console(
-        fn or CapturingTrial(str(out), run_trial), trials, out, unit="step",
+        fn or CapturingTrial(str(out), run_trial, keep), trials, out, unit="step",
         desc=f"{args.task} MPC steps", steps=lambda t: steps[t.key],
         held=lambda t: steps[t.key] if is_finished(out, t.key, reuse=reuse_mode(args),
                                                    schema=schema) else 0,

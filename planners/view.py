@@ -12,8 +12,10 @@
   rebuilt (``split_params(params)[0].build_task(seed)``), each object shaded by the share of
   its DoFs in the active set C of the optimisation under way (the SVR paper's Fig. 1), the goal
   region; the goal distance and |C| over time. The recorded controls (optional fields
-  ``start_state`` and ``controls`` of the result) are re-simulated exactly; a trial without
-  them shows its start and its recorded final state only.
+  ``start_state`` and ``controls`` of the result: ``run_trial(..., keep_controls=True)``,
+  ``experiments/mpc.py --keep-controls``) are re-simulated exactly; a trial without them shows
+  its start and its recorded final state only, and its summary says how to get them
+  (``NO_CONTROLS``).
 
 Shapes: S executed steps, F frames, N particles, K key particles, ns state row.
 """
@@ -38,6 +40,9 @@ from dopt.view.episode import (
 )
 
 log = logging.getLogger(__name__)
+#: what an MPC trial without controls shows, and how to get them
+NO_CONTROLS = ("no controls recorded: start and recorded end only; for a replay, rerun this "
+               "trial with experiments/mpc.py --keep-controls")
 
 
 def _record(path, kind: str) -> dict:
@@ -207,7 +212,7 @@ def load_mpc(path, max_frames: int = 300) -> Episode:
         error = float(np.max(np.abs(states[-1] - final)))
         steps = np.arange(len(states))
     else:
-        log.info("%s keeps no controls: start and end only", path)
+        log.warning("%s: %s", path, NO_CONTROLS)
         start = (warm_start.setup(task).final_state if settings.warm_start
                  else task.initial_state)
         states, error, steps = np.stack([start, final]), None, np.array([0, int(res["steps"])])
@@ -229,9 +234,8 @@ def load_mpc(path, max_frames: int = 300) -> Episode:
     site = model.site("goal")
     region = Region(np.asarray(task.goal_position, dtype=float), float(site.size[0]),
                     2 * float(site.size[1]))
-    replay = ("no controls recorded: start and recorded end only" if error is None else
-              f"replay of {len(states) - 1} steps ends {error:.1e} from the recorded final "
-              f"state (recorded to 1e-7)")
+    replay = (NO_CONTROLS if error is None else
+              f"replay of {len(states) - 1} steps ends {error:.1e} from the recorded final state")
     summary = (f"**{settings.method}** seed {seed} · {settings.task} ({settings.problem}) · "
                f"MPC cost {res.get('mpc_cost', float('nan')):.4g} · success "
                f"{res.get('success')}  \n{replay}  \nshade: share of each object's DoFs in C "

@@ -104,6 +104,95 @@ def test_mpc_trial_without_controls_shows_start_and_end(mpc_trial, tmp_path):
     assert "no controls recorded" in ep.summary
 
 
+#: a short synchronous MPC trial (deterministic), as the sweeps store it
+KEEP_SETTINGS = {"task": "clutter", "method": "baseline", "timeout": 10, "slowdown": 1.0,
+                 "synchronous": True, "threads": 1}
+
+
+def write_run_trial(path: Path, **kwargs) -> tuple[dict, dict]:
+    """``planners.svr_mpc.run_trial`` on KEEP_SETTINGS (seed 0) with ``kwargs``, written as
+    ``dopt.sweep`` writes a trial: its params and result."""
+    from dopt import jsonio
+    from planners.svr_mpc import SVRMPCSettings, run_trial, trial_key, trial_params
+
+    params = trial_params(SVRMPCSettings(**KEEP_SETTINGS), 0)
+    result = run_trial(params, **kwargs)
+    path.write_text(jsonio.dumps({"key": trial_key(params), "params": params,
+                                  "result": result}))
+    return params, result
+
+
+@pytest.mark.parametrize("c_kernels", [True, False], ids=["c-kernels", "batch"])
+def test_mpc_trial_with_keep_controls_replays_to_its_final_state(c_kernels, tmp_path,
+                                                                 monkeypatch):
+    """run_trial(keep_controls=True), its optimiser's rollouts on the C kernels or on
+    mujoco.batch.Batch alone: the viewer's replay (mj_step) and an open-loop rollout of the
+    recorded controls (mujoco.batch.Batch) both end within 1e-9 of the recorded final state,
+    and every replayed row matches; the params (and so the key) are those of any trial."""
+    import planners.svr_mpc.episode as episode
+    from dopt import kernels
+    from dopt.rollout import RolloutConfig, RolloutService
+    from dopt.scene import Scene
+    from planners.svr_mpc import CONTROLS_FIELDS, SVRMPCSettings
+    from planners.view import load_mpc
+
+    if c_kernels and kernels.load() is None:
+        pytest.skip("dopt.kernels was not built")
+    routes = []
+
+    def config(**kw):
+        routes.append(c_kernels)
+        return RolloutConfig(**kw, c_kernels=c_kernels)
+
+    monkeypatch.setattr(episode, "RolloutConfig", config)
+    path = tmp_path / "trial.json"
+    params, result = write_run_trial(path, keep_controls=True)
+    assert routes == [c_kernels]                  # the episode ran on the route asked for
+    assert set(CONTROLS_FIELDS) <= set(result) and "keep_controls" not in params
+    final = np.asarray(result["final_state"])
+    controls = np.asarray(result["controls"])
+    assert controls.shape[0] == result["steps"] == KEEP_SETTINGS["timeout"]
+    assert len(result["start_state"]) == len(final)
+
+    ep = load_mpc(path)
+    assert ep.replay_error is not None and ep.replay_error <= 1e-9
+    assert np.max(np.abs(ep.states[-1] - final)) <= 1e-9
+    assert ep.n_frames == result["steps"] + 1
+    assert "replay of 10 steps ends" in ep.summary
+
+    task = SVRMPCSettings(**KEEP_SETTINGS).build_task(0)
+    with RolloutService(Scene(task.model, stability=task.stability),
+                        RolloutConfig(threads=1, c_kernels=c_kernels)) as svc:
+        batch = svc.trajectory(result["start_state"], controls).states
+    assert np.max(np.abs(batch[-1] - final)) <= 1e-9
+    assert np.max(np.abs(batch - ep.states)) <= 1e-9
+
+
+def test_mpc_trial_without_keep_controls_has_none_and_says_how_to_get_them(tmp_path, caplog):
+    """Without keep_controls a trial keeps no controls (its final state rounded, as the
+    committed trials') and is otherwise the same episode under the same params and key as
+    with them; the viewer's summary and log say to rerun it with --keep-controls."""
+    import logging
+
+    from planners.svr_mpc import CONTROLS_FIELDS
+    from planners.view import NO_CONTROLS, load_mpc
+
+    path = tmp_path / "trial.json"
+    params, result = write_run_trial(path)
+    kept_params, kept = write_run_trial(tmp_path / "kept.json", keep_controls=True)
+    assert not set(CONTROLS_FIELDS) & set(result) and set(CONTROLS_FIELDS) <= set(kept)
+    assert params == kept_params
+    assert json.loads(path.read_text())["key"] == \
+        json.loads((tmp_path / "kept.json").read_text())["key"]
+    assert result["mpc_cost"] == kept["mpc_cost"] and result["steps"] == kept["steps"]
+    assert result["final_state"] == [round(v, 7) for v in kept["final_state"]]
+    with caplog.at_level(logging.WARNING, logger="planners.view"):
+        ep = load_mpc(path)
+    assert ep.n_frames == 2 and ep.replay_error is None
+    assert "--keep-controls" in NO_CONTROLS and NO_CONTROLS in ep.summary
+    assert NO_CONTROLS in caplog.text
+
+
 # ------------------------------------------------------------------------ pick trials
 @pytest.mark.parametrize("run, pattern", [
     ("fig7-ours-cloth-diagonal", "scripted-seed0-*.json"),

@@ -24,15 +24,16 @@ plan (``dopt.tasks.push.warm_start``), their 5 % control noise, and the virtual 
 Shapes: T horizon, nu controls, ns state row, c = |C| active DoFs.
 
     settings.py  SVRMPCSettings, Derivatives (typed derivative options), TABLE1_ROWS, rows
-                 by name (parse_row -> Row), trial params, keys and row labels
+                 by name (parse_row -> Row), task_defaults, trial params, keys and row labels
     optimisers.py  OPTIMISERS by name, register_optimiser, OptimiserContext, svr_optimiser
     episode.py   build_controller, wire_controller, run_svr_mpc -> SVRMPCResult, run_trial
-                 and CapturingTrial (for dopt.sweep)
+                 and CapturingTrial (for dopt.sweep; keep_controls: for an exact replay)
     summary.py   summarize, paired, feedback_effect, derivatives_effect
     authors_data.py  the authors' Table 1 statistic on their per-episode files and on ours
 """
 
 from planners.svr_mpc.episode import (
+    CONTROLS_FIELDS,
     GOAL_DISTANCE_STRIDE,
     CapturingTrial,
     SVRController,
@@ -68,6 +69,7 @@ from planners.svr_mpc.settings import (
     row_label,
     row_name,
     split_params,
+    task_defaults,
     trial_key,
     trial_params,
 )
@@ -80,12 +82,12 @@ from planners.svr_mpc.summary import (
     summarize,
 )
 
-__all__ = ["CLOCK_MODEL_MS", "DEFAULT_OPTIMISER", "FINITE_DIFFERENCES", "GOAL_DISTANCE_STRIDE",
-           "OPTIMISERS", "OUTLIER_DISTANCE", "PAPER_COSTS", "PRESETS", "TABLE1_ROWS",
-           "CapturingTrial", "Derivatives", "OptimiserContext", "Row", "SVRController",
-           "SVRMPCResult", "SVRMPCSettings", "build_controller", "derivatives_effect",
-           "derivatives_tag", "dofs_mask", "dofs_of_mask", "feedback_effect",
+__all__ = ["CLOCK_MODEL_MS", "CONTROLS_FIELDS", "DEFAULT_OPTIMISER", "FINITE_DIFFERENCES",
+           "GOAL_DISTANCE_STRIDE", "OPTIMISERS", "OUTLIER_DISTANCE", "PAPER_COSTS", "PRESETS",
+           "TABLE1_ROWS", "CapturingTrial", "Derivatives", "OptimiserContext", "Row",
+           "SVRController", "SVRMPCResult", "SVRMPCSettings", "build_controller",
+           "derivatives_effect", "derivatives_tag", "dofs_mask", "dofs_of_mask", "feedback_effect",
            "optimiser_factory", "optimiser_names", "paired", "paired_ratio", "parse_row",
            "parse_variants", "register_optimiser", "row_label", "row_name", "run_svr_mpc",
-           "run_trial", "split_params", "summarize", "svr_optimiser", "trial_key",
-           "trial_params", "wire_controller"]
+           "run_trial", "split_params", "summarize", "svr_optimiser", "task_defaults",
+           "trial_key", "trial_params", "wire_controller"]

@@ -1,7 +1,9 @@
 """One MPC episode on a pushing task: the controller wiring (``build_controller``: iLQR-SVR;
 ``wire_controller``: any optimiser of ``planners.svr_mpc.optimisers``), ``run_svr_mpc`` and its
 ``SVRMPCResult``; ``run_trial`` for ``dopt.sweep`` (``CapturingTrial``: with blow-up captures of
-the executed episode under the sweep's folder).
+the executed episode under the sweep's folder). ``keep_controls`` (opt-in: about 280 KB a
+trial) keeps the executed episode's start state and controls (``CONTROLS_FIELDS``), which
+``planners.view`` re-simulates exactly.
 
 Shapes: T horizon, nu controls, ns state row, c = |C| active DoFs.
 """
@@ -94,6 +96,8 @@ def wire_controller(task: TaskModel, settings: SVRMPCSettings, rng: np.random.Ge
 
 #: the goal distance is kept every this many executed steps (and at the last)
 GOAL_DISTANCE_STRIDE = 10
+#: the result fields of an episode run with ``keep_controls`` (what ``planners.view`` replays)
+CONTROLS_FIELDS = ("start_state", "controls")
 
 
 @dataclass(frozen=True)
@@ -108,7 +112,11 @@ class SVRMPCResult:
     state row (ns,) as a list, the line-search rollouts the stability verdict flagged, and
     whether the executed episode broke a stability bound (the reason names the step and
     bound), and the blow-up captures written of it (folders; ``run_trial``: relative to the
-    sweep's folder). Lists are rounded (0.01 ms, 10 um, 1e-7) to keep trial files small."""
+    sweep's folder). Lists are rounded (0.01 ms, 10 um, 1e-7) to keep trial files small.
+    With ``keep_controls`` (``run_svr_mpc``) also the executed episode's start state (ns,)
+    and controls (S, nu) as lists, and the final state unrounded, so that re-simulating the
+    controls from the start (``dopt.view.replay_controls``) ends exactly on it; None (and
+    absent from ``to_dict``) otherwise."""
 
     mpc_cost: float
     success: bool
@@ -133,6 +141,8 @@ class SVRMPCResult:
     lag_steps: list = field(default_factory=list)
     goal_distance_stride: int = GOAL_DISTANCE_STRIDE
     blowups: list = field(default_factory=list)
+    start_state: list | None = None
+    controls: list | None = None
 
     @property
     def opt_ms_mean(self) -> float:
@@ -147,9 +157,11 @@ class SVRMPCResult:
         return dofs_of_mask(self.active_sets[i])
 
     def to_dict(self) -> dict:
-        """JSON-able form, with the means and the optimisation count."""
-        return {**asdict(self), "opt_ms_mean": self.opt_ms_mean, "dofs_mean": self.dofs_mean,
-                "n_optimisations": len(self.opt_ms)}
+        """JSON-able form, with the means and the optimisation count (``CONTROLS_FIELDS``
+        only when kept)."""
+        out = {**asdict(self), "opt_ms_mean": self.opt_ms_mean, "dofs_mean": self.dofs_mean,
+               "n_optimisations": len(self.opt_ms)}
+        return {k: v for k, v in out.items() if k not in CONTROLS_FIELDS or v is not None}
 
 
 def dofs_mask(dofs) -> str:
@@ -172,7 +184,8 @@ def run_svr_mpc(settings: SVRMPCSettings = SVRMPCSettings(), seed: int = 0,
                 on_step: Callable[[], None] | None = None,
                 blowup_out: str | os.PathLike | None = None,
                 blowup_label: str | None = None,
-                optimiser: str | OptimiserFactory = DEFAULT_OPTIMISER) -> SVRMPCResult:
+                optimiser: str | OptimiserFactory = DEFAULT_OPTIMISER,
+                keep_controls: bool = False) -> SVRMPCResult:
     """One MPC episode of ``settings.method`` on the task instance of ``seed``, optimised by
     ``optimiser`` (``planners.svr_mpc.optimisers``: a name of ``OPTIMISERS`` or a factory
     ``context -> optimiser``; default the paper's iLQR-SVR).
@@ -191,13 +204,17 @@ def run_svr_mpc(settings: SVRMPCSettings = SVRMPCSettings(), seed: int = 0,
     agent step (``dopt.mpc.MPC``'s; a progress bar's count). ``blowup_out``: a run folder
     that receives blow-up captures of the executed episode (``dopt.mpc.MPC``'s;
     ``blowup_out/blowups/<blowup_label>``, default label ``<task>-<method>-seed<seed>``, the
-    optimiser's name for the method's where it is not ``svr``).
+    optimiser's name for the method's where it is not ``svr``). ``keep_controls``: the result
+    keeps the executed episode's start state and controls and its final state unrounded
+    (``SVRMPCResult``), for an exact replay.
     """
     import torch
 
     if not isinstance(settings, SVRMPCSettings):
         raise TypeError(f"settings must be SVRMPCSettings, got {type(settings).__name__}")
     check_int(seed, "seed", minimum=0)
+    if not isinstance(keep_controls, bool):
+        raise TypeError(f"keep_controls must be a bool, got {type(keep_controls).__name__}")
     name, _ = optimiser_factory(optimiser)        # ValueError / TypeError before any work
 
     torch.set_num_threads(1)
@@ -245,6 +262,7 @@ def run_svr_mpc(settings: SVRMPCSettings = SVRMPCSettings(), seed: int = 0,
         history.extend(ctl.optimiser.history)
     S = len(res.controls)
     kept = sorted(set(range(0, S + 1, GOAL_DISTANCE_STRIDE)) | {S})
+    final = res.states[-1] if keep_controls else np.round(res.states[-1], 7)
     return SVRMPCResult(
         mpc_cost=mpc_cost(ctl.cost, res), success=bool(res.success), steps=S,
         goal_distance_start=ctl.goal_distance(start),
@@ -254,29 +272,38 @@ def run_svr_mpc(settings: SVRMPCSettings = SVRMPCSettings(), seed: int = 0,
         lag_steps_mean=float(np.mean(res.lag_steps)), late_steps=int(res.late_steps),
         slowdown=config.slowdown, timeout=config.timeout,
         goal_distance=[round(ctl.goal_distance(res.states[t]), 5) for t in kept],
-        final_state=[float(v) for v in np.round(res.states[-1], 7)],
+        final_state=[float(v) for v in final],
         n_unstable_rollouts=int(getattr(ctl.optimiser, "n_unstable_rollouts", 0)),
         unstable=bool(res.stability.unstable[0]),
         unstable_reason=(f"step {res.stability.step[0]}: {res.stability.reason[0]}"
                          if res.stability.unstable[0] else ""),
         clock=config.clock, cpu_ms=[round(1e3 * s, 2) for s in res.cpu_seconds],
-        lag_steps=[int(v) for v in res.lag_steps], blowups=list(res.blowups))
+        lag_steps=[int(v) for v in res.lag_steps], blowups=list(res.blowups),
+        start_state=res.states[0].tolist() if keep_controls else None,
+        controls=res.controls.tolist() if keep_controls else None)
 
 
 def run_trial(params: dict, report: Callable[[], None] | None = None,
-              blowup_out: str | os.PathLike | None = None) -> dict:
+              blowup_out: str | os.PathLike | None = None,
+              keep_controls: bool = False) -> dict:
     """``run_svr_mpc`` for ``dopt.sweep``: params holds the ``SVRMPCSettings`` fields,
     "seed" and, where it is not ``svr``, "optimiser" (``trial_params``) ->
     ``SVRMPCResult.to_dict()``; ``report`` (the sweep's) is called after every
     agent step. ``blowup_out``: the sweep's folder, which receives the blow-up captures of
     the episode as ``blowups/<trial key>`` (``trial_key``), listed in the result relative to
-    it; those of an earlier run of the trial move to ``blowups/outdated/`` first."""
+    it; those of an earlier run of the trial move to ``blowups/outdated/`` first.
+    ``keep_controls``: the result also holds "start_state" (ns,) and "controls" (S, nu) of
+    the executed episode (``CONTROLS_FIELDS``; about 280 KB a trial) and its final state
+    unrounded, for ``dopt-view``'s exact replay; the params, and so the key, are the same
+    either way."""
     settings, seed, optimiser = split_params(params)
     if blowup_out is None:
-        return run_svr_mpc(settings, seed, on_step=report, optimiser=optimiser).to_dict()
+        return run_svr_mpc(settings, seed, on_step=report, optimiser=optimiser,
+                           keep_controls=keep_controls).to_dict()
     retire_captures(blowup_out, [trial_key(params)])
     res = run_svr_mpc(settings, seed, on_step=report, blowup_out=blowup_out,
-                      blowup_label=trial_key(params), optimiser=optimiser).to_dict()
+                      blowup_label=trial_key(params), optimiser=optimiser,
+                      keep_controls=keep_controls).to_dict()
     return {**res, "blowups": [os.path.relpath(b, blowup_out) for b in res["blowups"]]}
 
 
@@ -284,10 +311,13 @@ def run_trial(params: dict, report: Callable[[], None] | None = None,
 class CapturingTrial:
     """``trial`` (default ``run_trial``) with blow-up captures under the sweep's folder ``out``
     (its ``blowup_out``): a picklable trial function for ``dopt.sweep``'s pools and Ray (on a
-    cluster the captures land on the worker's file system)."""
+    cluster the captures land on the worker's file system). ``keep_controls``: passed on to
+    ``trial`` when True (``run_trial``'s)."""
 
     out: str
     trial: Callable = run_trial
+    keep_controls: bool = False
 
     def __call__(self, params: dict, report: Callable[[], None] | None = None) -> dict:
-        return self.trial(params, report, blowup_out=self.out)
+        keep = {"keep_controls": True} if self.keep_controls else {}
+        return self.trial(params, report, blowup_out=self.out, **keep)

@@ -1,15 +1,17 @@
 """The settings of one iLQR-SVR MPC trial (``SVRMPCSettings``), its derivative options as
-typed fields (``Derivatives``), the paper's Table 1 rows by name (``parse_row`` -> ``Row``), and
-the params, key and row label a trial is stored and reported under (``trial_params``,
-``trial_key``, ``row_label``)."""
+typed fields (``Derivatives``), the paper's Table 1 rows by name (``parse_row`` -> ``Row``), a
+task's own slowdown and timeout (``task_defaults``), and the params, key and row label a trial
+is stored and reported under (``trial_params``, ``trial_key``, ``row_label``)."""
 
 from __future__ import annotations
 
+import functools
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Literal
 
 import mujoco
+import numpy as np
 
 from dopt.mpc import CLOCKS
 from dopt.rollout import FDConfig
@@ -308,6 +310,14 @@ class SVRMPCSettings:
         """The DoF selector's config (theta None -> the paper's for the method)."""
         theta = paper_theta(self.method) if self.theta is None else self.theta
         return SelectionConfig(self.method, rho=float(self.rho), theta=int(theta))
+
+
+@functools.cache
+def task_defaults(task: str) -> tuple[float, int]:
+    """The slowdown and timeout (agent steps) of ``task``'s own instance (``PUSH_TASKS``, seed
+    0; the paper's), what a trial's settings without them run with."""
+    built = get_task(task)(np.random.default_rng(0))
+    return float(built.slowdown), int(built.timeout)
 
 
 def trial_params(settings: SVRMPCSettings, seed: int,

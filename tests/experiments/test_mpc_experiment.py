@@ -49,6 +49,29 @@ def test_quick_run_writes_table_and_resumes(tmp_path):
     assert [f.stat().st_mtime_ns for f in files] == stamps     # nothing was redone
 
 
+def test_keep_controls_reaches_the_trials_and_reruns_those_without(tmp_path):
+    """--keep-controls: a trial keeps its start state and controls under the key it has
+    without the flag, a stored trial without them is rerun (one with them is reused), and
+    dopt-view's replay of the kept controls ends within 1e-9 of its recorded final state."""
+    from planners.view import load_mpc
+
+    out = tmp_path / "mpc"
+    flags = ("--quick", "--timeout", "8", "--methods", "baseline", "--no-render",
+             "--out", str(out))
+    run(*flags)
+    (plain,) = (out / "trials").glob("*.json")
+    assert "controls" not in json.loads(plain.read_text())["result"]
+    run(*flags, "--keep-controls")
+    (kept,) = (out / "trials").glob("*.json")
+    assert kept.name == plain.name
+    result = json.loads(kept.read_text())["result"]
+    assert len(result["controls"]) == result["steps"] == 8 and result["start_state"]
+    assert load_mpc(kept).replay_error <= 1e-9
+    stamp = kept.stat().st_mtime_ns
+    run(*flags, "--keep-controls")
+    assert kept.stat().st_mtime_ns == stamp                    # it has them: reused
+
+
 def test_ray_path(tmp_path):
     pytest.importorskip("ray")
     out = tmp_path / "ray"
