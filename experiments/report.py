@@ -26,9 +26,9 @@ sentences say so.
 
 Result kinds (the file's "experiment" field): "fig7" (experiments/cloth_fold.py, rope.py),
 "table1" (experiments/mpc.py), "fig4" (experiments/rho_sweep.py), "svr_explain"
-(experiments/svr_explain.py), "clock_model" (python -m planners.bench clock), "key_particles"
-(experiments/key_particles.py), "random_reach" (experiments/random_reach.py). Files of other
-kinds are listed by name.
+(experiments/svr_explain.py), "clock_model" (python -m planners.bench clock), "cem_limit"
+(python -m planners.bench cem-limit), "key_particles" (experiments/key_particles.py),
+"random_reach" (experiments/random_reach.py). Files of other kinds are listed by name.
 
     python experiments/report.py            # regenerate both files
     python experiments/report.py --check    # exit 1 if either file is not what it would write
@@ -81,6 +81,7 @@ from report_fig7 import (
     fig7_section,
 )
 from report_kp import (
+    cem_limit_section,
     cloth_steps_section,
     cloth_warp_section,
     kp_compare_section,
@@ -222,7 +223,8 @@ SECTIONS = {"key_particles": kp_section, "kp_compare": kp_compare_section,
             "clock_model": clock_model_section, "svr_explain": svr_explain_section,
             "ilqr_bench": ilqr_bench_section, "clock_check": clock_check_section,
             "paper_svr": paper_svr_section, "panda_execute": panda_section,
-            "cloth_steps": cloth_steps_section, "cloth_warp": cloth_warp_section,
+            "cloth_steps": cloth_steps_section, "cem_limit": cem_limit_section,
+            "cloth_warp": cloth_warp_section,
             "random_reach": random_reach_section}
 HEADLINES = {"key_particles": kp_headline, "fig7": fig7_headline, "table1": table1_headline,
              "fig4": fig4_headline, "panda_execute": panda_headline,

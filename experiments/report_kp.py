@@ -1,5 +1,6 @@
 """The key-particle sections of experiments/report.py besides Fig. 7: the key particles of
-each goal, the physics presets and the cloth step benchmarks, and the Panda's execution.
+each goal, the physics presets, the cloth step benchmarks and a CEM iteration against its
+physical limit, and the Panda's execution.
 
 Standard library only.
 """
@@ -111,6 +112,41 @@ def cloth_steps_section(results: list[Result], page: Path) -> list[str]:
                    "while the scene was built, settled and stepped. Variant rows change the "
                    "named fields of the preset (`dopt.bench.cloth_steps.VARIANTS`).",
                    results, page, body)
+
+
+# ------------------------------------------------- a CEM iteration against its limit (KP)
+#: the pieces of an iteration's time (planners.bench.cem.SHARES; copied: no torch here)
+CEM_LIMIT_SHARES = ("simulate", "service", "stability", "encode", "cost", "cem", "python")
+
+
+def cem_limit_section(results: list[Result], page: Path) -> list[str]:
+    def body(r: Result) -> list[str]:
+        d = r.data
+        rows = [[f"{row['n']} x {row['n']}", str(row["candidates"]), str(row["steps"]),
+                 num(row["mj_step_ms"], 3), str(row["cores"]), num(row["limit_s"], 2),
+                 num(row["iteration_s"], 2), num(row["ratio"], 2),
+                 num(row["simulate_ratio"], 2), num(row.get("cpu_ratio"), 2),
+                 *[num(row["shares"][k], 1, 100) for k in CEM_LIMIT_SHARES]]
+                for row in d["rows"]]
+        return [f"### `{r.name}`: {d.get('task')} {d.get('goal')}, protocol "
+                f"{d.get('protocol')}, candidates {d.get('candidates')}, "
+                f"{d.get('iterations')} iterations per size", "",
+                *table(["cloth", "candidates", "steps / iteration", "ms / mj_step", "cores",
+                        "limit s", "iteration s", "ratio", "simulation / limit",
+                        "CPU / steps", *[f"{k} %" for k in CEM_LIMIT_SHARES]], rows)]
+
+    return section("Key particles: a CEM iteration against its physical limit",
+                   "`python -m planners.bench cem-limit`: per cloth size, CEM iterations of the "
+                   "paper protocol's diagonal fold (its preset at that size) through the real "
+                   "path, against the limit = the steps an iteration simulates (population x "
+                   "horizon x steps per action) x one `mj_step` of that scene on one core "
+                   "(the median CPU time, from a mid-action state) / the cores used; the "
+                   "batched simulation alone against the limit; the process's CPU time against "
+                   "the steps' own "
+                   "(what a loaded machine's wall ratio hides); and where the iteration's time "
+                   "goes (%): the batched simulation, the rollout service's own array building, "
+                   "the stability verdict, the control rows' encoding, the cost, CEM's sampling "
+                   "and refit, and the rest.", results, page, body)
 
 
 # ------------------------------------------------------ cloth step on MuJoCo Warp (KP)

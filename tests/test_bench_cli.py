@@ -38,6 +38,7 @@ def no_run(monkeypatch):
                          (planners.bench.ilqr, "bench_ilqr"),
                          (planners.bench.clock, "bench_clock"),
                          (planners.bench.cem, "bench_cem"),
+                         (planners.bench.cem, "bench_cem_limit"),
                          (planners.bench.physics, "bench_physics"),
                          (deformables_bench, "bench"), (deformables_bench, "paper_scale"),
                          (deformables_bench, "compare")]:
@@ -62,6 +63,9 @@ BAD = [
     ("planners", ["clock", "--sizes", "1"], "argument --sizes: must be >= 2, got 1"),
     ("planners", ["cem", "--bound", "-0.1"], "argument --bound: must be > 0, got -0.1"),
     ("planners", ["cem", "--n", "1"], "argument --n: must be >= 2, got 1"),
+    ("planners", ["cem-limit", "--sizes", "10,2"], "argument --sizes: particles per side must "
+                                                   "be finite and >= 3, got 2 in '10,2'"),
+    ("planners", ["cem-limit", "--iterations", "0"], "argument --iterations: must be >= 1"),
     ("planners", ["cloth", "--sizes", "12,abc"], "argument --sizes: 'abc' in '12,abc' is not "
                                                  "an integer"),
     ("planners", ["rope", "--picker-speeds", "0.5,0"], "argument --picker-speeds: picker "
@@ -88,6 +92,7 @@ def test_a_bad_flag_is_a_usage_error_naming_it(capsys, no_run, package, argv, me
 
 @pytest.mark.parametrize("package, argv", [("dopt", ["cloth-steps"]),
                                             ("planners", ["ilqr"]),
+                                            ("planners", ["cem-limit"]),
                                             ("deformables", ["tasks"])])
 def test_an_unwritable_record_is_a_usage_error(tmp_path, capsys, no_run, package, argv):
     flag = "--out" if package == "deformables" else "--record"

@@ -1,3 +1,4 @@
-"""Planner benchmarks: ``python -m planners.bench {ilqr,cem} [...]`` prints one JSON object per
-measurement, with a ratio measured in the same run (against the physical limit or a baseline),
-as ``python -m dopt.bench`` does for the runtime alone."""
+"""Planner benchmarks: ``python -m planners.bench {ilqr,clock,cem,cem-limit,cloth,rope} [...]``
+prints one JSON object per measurement (``cem-limit``: a table, one line per cloth size), with
+a ratio measured in the same run (against the physical limit or a baseline), as ``python -m
+dopt.bench`` does for the runtime alone; ``--record`` writes a result file."""

@@ -1,4 +1,5 @@
-"""python -m planners.bench {ilqr,clock,cem,cloth,rope} [options]: print timings as JSON."""
+"""python -m planners.bench {ilqr,clock,cem,cem-limit,cloth,rope} [options]: print timings as
+JSON (cem-limit: a table, one line per cloth size; --record writes its rows as JSON)."""
 
 from __future__ import annotations
 
@@ -64,6 +65,25 @@ def main(argv=None) -> int:
     p.add_argument("--bound", type=positive_float, default=None,
                    help="picker displacement bound per axis, m (default: cloth 0.3, rope 0.1)")
 
+    p = sub.add_parser("cem-limit", help="CEM iterations of the paper protocol's cloth "
+                                         "diagonal fold per cloth size against the physical "
+                                         "limit (steps x one mj_step / cores), and where the "
+                                         "rest goes")
+    p.add_argument("--sizes", type=number_list(int, 3, "particles per side"),
+                   default=[10, 15, 20],
+                   help="comma-separated cloth particles per side (default 10,15,20)")
+    p.add_argument("--threads", type=nonneg_int, default=0,
+                   help="simulation threads (0: all cores)")
+    p.add_argument("--iterations", type=positive_int, default=2,
+                   help="timed CEM iterations per size (default %(default)s)")
+    p.add_argument("--candidates", choices=("keys", "all"), default="keys",
+                   help="plan over the key particles (CEM(Simple)) or all particles "
+                        "(CEM(Original)) (default %(default)s)")
+    p.add_argument("--step-samples", type=positive_int, default=2000,
+                   help="mj_step calls timed for the step cost (default %(default)s)")
+    p.add_argument("--seed", type=nonneg_int, default=0, help="seed of the CEM plan")
+    add_record_arg(p, "cem_limit", "as each size finishes")
+
     for task in ("cloth", "rope"):
         p = sub.add_parser(task, help=f"the {task} physics presets: speed, blow-ups per 1000 "
                                       f"random actions, strain, scripted error")
@@ -99,6 +119,19 @@ def main(argv=None) -> int:
         from planners.bench.cem import bench_cem
         out = bench_cem(args.task, args.n, args.P, args.H, args.bound, args.threads,
                         args.repeats, args.seed)
+    elif args.bench == "cem-limit":
+        from planners.bench.cem import bench_cem_limit, limit_table
+
+        def on_row(out: dict) -> None:
+            rows = out["rows"]
+            print(limit_table(rows[-1:], header=len(rows) == 1), flush=True)
+            if args.record:
+                write_record(args.record, "cem_limit", rows,
+                             **{k: v for k, v in out.items() if k != "rows"})
+
+        bench_cem_limit(args.sizes, args.threads, args.iterations, args.seed, args.candidates,
+                        args.step_samples, on_row=on_row)
+        return 0
     elif args.bench in ("cloth", "rope"):
         from planners.bench.physics import bench_physics
         out = bench_physics(args.bench, args.sizes,

@@ -579,6 +579,23 @@ def test_cloth_step_bench_renders_the_ratio_to_the_smallest_size(site):
             "2070 | - | - |") in md
 
 
+def test_cem_limit_bench_renders_the_ratio_per_size(site):
+    shares = {"simulate": 0.9, "service": 0.02, "stability": 0.05, "encode": 0.01,
+              "cost": 0.0, "cem": 0.01, "python": 0.01}
+    row = {"n": 10, "candidates": 4, "steps": 17344, "mj_step_ms": 0.5, "cores": 2,
+           "limit_s": 4.336, "iteration_s": 6.5, "ratio": 1.499, "simulate_ratio": 1.35,
+           "cpu_ratio": 1.1, "shares": shares}
+    write(site["results"], "cem-limit.json",
+          {"experiment": "cem_limit", "task": "cloth", "goal": "diagonal", "protocol": "paper",
+           "candidates": "keys", "iterations": 2, "rows": [row],
+           "provenance": provenance("python -m planners.bench cem-limit")})
+    assert run(site) == 0
+    md = site["md"].read_text()
+    assert "## Key particles: a CEM iteration against its physical limit" in md
+    assert ("| 10 x 10 | 4 | 17344 | 0.500 | 2 | 4.34 | 6.50 | 1.50 | 1.35 | 1.10 | 90.0 | 2.0 "
+            "| 5.0 | 1.0 | 0.0 | 1.0 | 1.0 |") in md
+
+
 def test_clock_check_headline_gives_the_lag_ratios(site):
     row = {"real": {"n_trials": 10, "lag_steps_mean": 20.0}, "virtual": {"n_trials": 10},
            "lag_ratio": 0.64, "opt_ms_ratio": 0.64, "lag_within_10_percent": False,
