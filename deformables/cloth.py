@@ -455,13 +455,47 @@ def cloth_key_particles(positions, faces, threshold: float | None = None,
     if rest is not None and config.canonical_triangulation:
         tri = canonical_triangulation(goal, tri, rest)
     axis = stacking_axis(goal, tri)
-    # the rest sheet's shorter side (a fold's panels are fractions of either side); without
-    # rest positions, the goal's largest extent
+    extent, z_scale = _stretch_of(goal, rest, tri, gap, config)
+    thr = threshold / metres if threshold is not None else config.threshold_gaps * gap * z_scale
+    scaled = _stretch(goal, axis, z_scale)
+    reduction = _decimate_below(scaled, tri, spacing, thr, metres, config)
+    mesh = reduction.model
+    radius = max(config.geodesic_radius * extent,
+                 min(config.geodesic_spacings * spacing, config.geodesic_cap * extent))
+    keys = extract_keys(goal, tri, rest, scaled, mesh.vertices, radius)
+    result = KeyParticles(
+        indices=keys, n_elements=len(mesh.faces),
+        vertices=frame.to_metres(_stretch(mesh.vertices, axis, 1.0 / z_scale)),
+        elements=mesh.faces, sizes=reduction.sizes, errors=reduction.errors,
+        error=reduction.error, threshold=thr * metres, seconds=time.perf_counter() - start,
+        reached_threshold=reduction.reached, layer_gap=float(gap * metres))
+    logger.info("cloth (%d particles, %d faces, layer gap %.4g mm): %d faces, error %.4g "
+                "(threshold %.4g%s), %d keys", len(goal), len(tri), result.layer_gap * 1e3,
+                result.n_elements, result.error, result.threshold,
+                "" if reduction.reached else ", not reached", result.n_keys)
+    return result
+
+
+def _stretch_of(goal: np.ndarray, rest: np.ndarray | None, tri: np.ndarray, gap: float,
+                config: ClothConfig) -> tuple[float, float]:
+    """``(extent, z_scale)`` of ``cloth_key_particles`` (working-frame units): the rest
+    sheet's shorter side (a fold's panels are fractions of either side; without rest
+    positions, the goal's largest extent), and the stretch along the stacking axis,
+    ``config.z_scale`` reduced (to no less than 1) so that ``gap * z_scale`` is at most
+    ``config.max_stretched_gap`` times that extent."""
     extent = (float(np.ptp(goal @ np.linalg.svd(goal - goal.mean(axis=0))[2].T, axis=0).max())
               if rest is None else sheet_sides(rest, tri)[1])
     z_scale = min(config.z_scale, max(1.0, config.max_stretched_gap * extent / gap))
-    thr = threshold / metres if threshold is not None else config.threshold_gaps * gap * z_scale
-    scaled = _stretch(goal, axis, z_scale)
+    return extent, z_scale
+
+
+def _decimate_below(scaled: np.ndarray, tri: np.ndarray, spacing: float, thr: float,
+                    metres: float, config: ClothConfig):
+    """Alg. 1's loop for cloth: decimate the stretched goal ``scaled`` ``(N, 3)``, faces
+    ``tri`` ``(F, 3)``, to growing face counts (``grow_until_below``, errors in metres) until
+    the surface distance to it is below ``thr`` (units). Each size tries the renumbered
+    restarts (``config.restarts``; decimated first to ``config.coarse_faces`` if set) and keeps
+    the best ``Mesh``, stopping at the first below the threshold."""
     original = SurfaceDistance(scaled, tri)
     step = config.sample_spacings * spacing
     meshes = renumberings(scaled, tri, config.restarts, config.restart_seed)
@@ -496,21 +530,6 @@ def cloth_key_particles(positions, faces, threshold: float | None = None,
             return mesh.error
         return distance(mesh.vertices, mesh.faces, np.inf)
 
-    reduction = grow_until_below(simplify, lambda mesh: mesh.error * metres, thr * metres,
-                                 config.max_faces, strict=config.strict,
-                                 exact_error=lambda mesh: exact(mesh) * metres)
-    mesh = reduction.model
-    radius = max(config.geodesic_radius * extent,
-                 min(config.geodesic_spacings * spacing, config.geodesic_cap * extent))
-    keys = extract_keys(goal, tri, rest, scaled, mesh.vertices, radius)
-    result = KeyParticles(
-        indices=keys, n_elements=len(mesh.faces),
-        vertices=frame.to_metres(_stretch(mesh.vertices, axis, 1.0 / z_scale)),
-        elements=mesh.faces, sizes=reduction.sizes, errors=reduction.errors,
-        error=reduction.error, threshold=thr * metres, seconds=time.perf_counter() - start,
-        reached_threshold=reduction.reached, layer_gap=float(gap * metres))
-    logger.info("cloth (%d particles, %d faces, layer gap %.4g mm): %d faces, error %.4g "
-                "(threshold %.4g%s), %d keys", len(goal), len(tri), result.layer_gap * 1e3,
-                result.n_elements, result.error, result.threshold,
-                "" if reduction.reached else ", not reached", result.n_keys)
-    return result
+    return grow_until_below(simplify, lambda mesh: mesh.error * metres, thr * metres,
+                            config.max_faces, strict=config.strict,
+                            exact_error=lambda mesh: exact(mesh) * metres)

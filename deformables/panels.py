@@ -298,48 +298,9 @@ def panel_weights(rest: np.ndarray, labels: np.ndarray, n_panels: int, width: fl
             not a finite number > 0 (>= 0 for ``l2``), ``fit`` not an ``(N,)`` bool mask with
             a particle, ``miss`` not a finite ``(P, N)`` array.
     """
-    rest = check_positions(rest, "rest")
-    n_panels = check_int(n_panels, "n_panels", 1)
-    check_real(width, "width", positive=True)
-    check_real(l2, "l2", minimum=0.0)
-    labels = check_numeric(labels, "labels")
-    if labels.dtype.kind not in "iu":
-        raise TypeError(f"labels must be integer panel indices, got dtype {labels.dtype}")
-    if labels.shape != (len(rest),):
-        raise ValueError(f"labels must have shape ({len(rest)},), got {labels.shape}")
-    if np.any((labels < 0) | (labels >= n_panels)):
-        raise ValueError(f"labels must lie in [0, {n_panels}), got values "
-                         f"{np.unique(labels[(labels < 0) | (labels >= n_panels)])[:5].tolist()}")
-    if fit is None:
-        fit = np.ones(len(rest), dtype=bool)
-    else:
-        fit = np.asarray(fit)
-        if fit.dtype != bool or fit.shape != (len(rest),) or not fit.any():
-            raise ValueError(f"fit must be a ({len(rest)},) bool mask with at least one True")
-    if miss is not None:
-        miss = np.asarray(check_numeric(miss, "miss"), dtype=float)
-        if miss.shape != (n_panels, len(rest)) or not np.all(np.isfinite(miss)):
-            raise ValueError(f"miss must be a finite ({n_panels}, {len(rest)}) array, got shape "
-                             f"{miss.shape}")
-    centred = rest - rest.mean(axis=0)
-    plane = centred @ np.linalg.svd(centred, full_matrices=False)[2][:2].T        # (N, 2)
-    extent = np.ptp(plane, axis=0).max()
-    features = np.c_[plane / extent, np.ones(len(rest))]
-    target = np.eye(n_panels)[labels]
-    known, count = features[fit], int(fit.sum())
-
-    def loss(w: np.ndarray) -> tuple[float, np.ndarray]:
-        weights = w.reshape(3, n_panels)
-        logits = known @ weights
-        logits -= logits.max(axis=1, keepdims=True)
-        log_p = logits - np.log(np.exp(logits).sum(axis=1, keepdims=True))
-        value = -(target[fit] * log_p).sum() / count + l2 * (weights[:2] ** 2).sum()
-        grad = known.T @ (np.exp(log_p) - target[fit]) / count
-        grad[:2] += 2.0 * l2 * weights[:2]
-        return value, grad.ravel()
-
-    w = minimize(loss, np.zeros(3 * n_panels), jac=True, method="L-BFGS-B").x.reshape(3, n_panels)
-    logits = features @ w
+    rest, n_panels, labels, fit, miss = _check_weight_args(rest, labels, n_panels, width, l2,
+                                                           fit, miss)
+    logits, w, extent = _boundary_regression(rest, labels, n_panels, l2, fit)
 
     def distance(p: np.ndarray, q: np.ndarray) -> np.ndarray:
         """Signed distance (metres, positive on p's side) from the p|q line, per particle."""
@@ -366,6 +327,62 @@ def panel_weights(rest: np.ndarray, labels: np.ndarray, n_panels: int, width: fl
                 d = distance(np.full(len(rest), p), np.full(len(rest), q))
                 weight[:, p] *= np.clip(0.5 + d / (2.0 * width), 0.0, 1.0)
     return weight / weight.sum(axis=1, keepdims=True)
+
+
+def _check_weight_args(rest, labels, n_panels, width, l2, fit, miss):
+    """``panel_weights``' argument checks: ``(rest, n_panels, labels, fit, miss)`` checked
+    (``fit`` all True when None, ``miss`` a float array or None); raises as it documents."""
+    rest = check_positions(rest, "rest")
+    n_panels = check_int(n_panels, "n_panels", 1)
+    check_real(width, "width", positive=True)
+    check_real(l2, "l2", minimum=0.0)
+    labels = check_numeric(labels, "labels")
+    if labels.dtype.kind not in "iu":
+        raise TypeError(f"labels must be integer panel indices, got dtype {labels.dtype}")
+    if labels.shape != (len(rest),):
+        raise ValueError(f"labels must have shape ({len(rest)},), got {labels.shape}")
+    if np.any((labels < 0) | (labels >= n_panels)):
+        raise ValueError(f"labels must lie in [0, {n_panels}), got values "
+                         f"{np.unique(labels[(labels < 0) | (labels >= n_panels)])[:5].tolist()}")
+    if fit is None:
+        fit = np.ones(len(rest), dtype=bool)
+    else:
+        fit = np.asarray(fit)
+        if fit.dtype != bool or fit.shape != (len(rest),) or not fit.any():
+            raise ValueError(f"fit must be a ({len(rest)},) bool mask with at least one True")
+    if miss is not None:
+        miss = np.asarray(check_numeric(miss, "miss"), dtype=float)
+        if miss.shape != (n_panels, len(rest)) or not np.all(np.isfinite(miss)):
+            raise ValueError(f"miss must be a finite ({n_panels}, {len(rest)}) array, got shape "
+                             f"{miss.shape}")
+    return rest, n_panels, labels, fit, miss
+
+
+def _boundary_regression(rest: np.ndarray, labels: np.ndarray, n_panels: int, l2: float,
+                         fit: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:
+    """``panel_weights``' multinomial logistic regression of ``labels`` ``(N,)`` on the rest
+    sheet's in-plane coordinates (scaled to its extent, plus a bias), fitted (L-BFGS, weight
+    decay ``l2`` off the bias) to the particles in ``fit``: ``(logits (N, P), weights (3, P),
+    extent (metres))``."""
+    centred = rest - rest.mean(axis=0)
+    plane = centred @ np.linalg.svd(centred, full_matrices=False)[2][:2].T        # (N, 2)
+    extent = np.ptp(plane, axis=0).max()
+    features = np.c_[plane / extent, np.ones(len(rest))]
+    target = np.eye(n_panels)[labels]
+    known, count = features[fit], int(fit.sum())
+
+    def loss(w: np.ndarray) -> tuple[float, np.ndarray]:
+        weights = w.reshape(3, n_panels)
+        logits = known @ weights
+        logits -= logits.max(axis=1, keepdims=True)
+        log_p = logits - np.log(np.exp(logits).sum(axis=1, keepdims=True))
+        value = -(target[fit] * log_p).sum() / count + l2 * (weights[:2] ** 2).sum()
+        grad = known.T @ (np.exp(log_p) - target[fit]) / count
+        grad[:2] += 2.0 * l2 * weights[:2]
+        return value, grad.ravel()
+
+    w = minimize(loss, np.zeros(3 * n_panels), jac=True, method="L-BFGS-B").x.reshape(3, n_panels)
+    return features @ w, w, extent
 
 
 def project_on_panels(goal: np.ndarray, rest: np.ndarray, faces: np.ndarray, layer_gap: float,
@@ -409,23 +426,9 @@ def project_on_panels(goal: np.ndarray, rest: np.ndarray, faces: np.ndarray, lay
             ``tolerance`` and ``min_noise`` None or >= 0 (``tolerance`` may be ``inf``),
             ``merge_deg`` None or in (0, 180].
     """
-    goal = check_positions(goal, "goal")
-    rest = check_positions(rest, "rest")
-    if rest.shape != goal.shape:
-        raise ValueError(f"rest {rest.shape} and goal {goal.shape} differ in shape")
-    faces = check_faces(faces, len(goal))
-    check_real(layer_gap, "layer_gap", positive=True)
-    check_int(neighbours, "neighbours", 3)
-    check_real(angle_deg, "angle_deg", positive=True, maximum=180.0)
-    check_real(min_fraction, "min_fraction", minimum=0.0, maximum=1.0)
-    check_real(min_width, "min_width", minimum=0.0)
-    check_real(crease_width, "crease_width", positive=True)
-    if tolerance is not None and tolerance != np.inf:       # inf: every particle moves
-        check_real(tolerance, "tolerance", minimum=0.0)
-    if min_noise is not None:
-        check_real(min_noise, "min_noise", minimum=0.0)
-    if merge_deg is not None:
-        check_real(merge_deg, "merge_deg", positive=True, maximum=180.0)
+    goal, rest, faces = _check_projection_args(goal, rest, faces, layer_gap, neighbours,
+                                               angle_deg, min_fraction, min_width,
+                                               crease_width, tolerance, min_noise, merge_deg)
     n = len(goal)
     pairs = edges(faces)
     spacing = float(np.median(np.linalg.norm(rest[pairs[:, 0]] - rest[pairs[:, 1]], axis=1)))
@@ -449,20 +452,56 @@ def project_on_panels(goal: np.ndarray, rest: np.ndarray, faces: np.ndarray, lay
         logger.info("panel projection: noise %.3g <= %.3g spacings; goal left as measured",
                     noise / spacing, min_noise / spacing)
         return PanelFit(goal, np.full(n, -1), rot, shift, noise, np.zeros(n, dtype=bool))
-    if len(members) > 1:
-        # a particle two panels explain about as well (the middle of a rounded crease) says
-        # nothing of where the boundary runs
-        ranked = np.sort(miss, axis=0)
-        clear = ranked[1] - ranked[0] > max(3.0 * noise, 1e-3 * spacing)
-        weights = panel_weights(rest, labels, len(members), crease_width * spacing,
-                                fit=clear if clear.any() else None, miss=miss)
-        labels = weights.argmax(axis=1)
-        own = np.einsum("np,pni->ni", weights, predicted)
-    else:
-        own = predicted[0]
+    labels, own = _panel_predictions(rest, labels, miss, predicted, noise, spacing,
+                                     crease_width)
     limit = layer_gap + 3.0 * np.sqrt(3.0) * noise if tolerance is None else tolerance
     moved = np.linalg.norm(own - goal, axis=1) <= limit
     positions = np.where(moved[:, None], own, goal)
     logger.info("panel projection: %d panels, noise %.3g spacings, %d/%d particles moved",
                 len(members), noise / spacing, int(moved.sum()), n)
     return PanelFit(positions, np.where(moved, labels, -1), rot, shift, noise, moved)
+
+
+def _check_projection_args(goal, rest, faces, layer_gap, neighbours, angle_deg, min_fraction,
+                           min_width, crease_width, tolerance, min_noise, merge_deg):
+    """``project_on_panels``' argument checks: ``(goal, rest, faces)`` checked; raises as it
+    documents."""
+    goal = check_positions(goal, "goal")
+    rest = check_positions(rest, "rest")
+    if rest.shape != goal.shape:
+        raise ValueError(f"rest {rest.shape} and goal {goal.shape} differ in shape")
+    faces = check_faces(faces, len(goal))
+    check_real(layer_gap, "layer_gap", positive=True)
+    check_int(neighbours, "neighbours", 3)
+    check_real(angle_deg, "angle_deg", positive=True, maximum=180.0)
+    check_real(min_fraction, "min_fraction", minimum=0.0, maximum=1.0)
+    check_real(min_width, "min_width", minimum=0.0)
+    check_real(crease_width, "crease_width", positive=True)
+    if tolerance is not None and tolerance != np.inf:       # inf: every particle moves
+        check_real(tolerance, "tolerance", minimum=0.0)
+    if min_noise is not None:
+        check_real(min_noise, "min_noise", minimum=0.0)
+    if merge_deg is not None:
+        check_real(merge_deg, "merge_deg", positive=True, maximum=180.0)
+    return goal, rest, faces
+
+
+def _panel_predictions(rest: np.ndarray, labels: np.ndarray, miss: np.ndarray,
+                       predicted: np.ndarray, noise: float, spacing: float,
+                       crease_width: float) -> tuple[np.ndarray, np.ndarray]:
+    """``(labels (N,), own (N, 3))`` of ``project_on_panels``: each particle's panel and the
+    position its panel predicts, from each panel's ``predicted`` positions ``(P, N, 3)`` and
+    distances ``miss`` ``(P, N)``. With more than one panel the boundaries are straight lines
+    of the rest sheet (:func:`panel_weights`, bands ``crease_width`` spacings wide)."""
+    if len(predicted) > 1:
+        # a particle two panels explain about as well (the middle of a rounded crease) says
+        # nothing of where the boundary runs
+        ranked = np.sort(miss, axis=0)
+        clear = ranked[1] - ranked[0] > max(3.0 * noise, 1e-3 * spacing)
+        weights = panel_weights(rest, labels, len(predicted), crease_width * spacing,
+                                fit=clear if clear.any() else None, miss=miss)
+        labels = weights.argmax(axis=1)
+        own = np.einsum("np,pni->ni", weights, predicted)
+    else:
+        own = predicted[0]
+    return labels, own

@@ -13,7 +13,8 @@ It knows MuJoCo and no planner (docs/ARCHITECTURE.md has the map and the rule). 
     sweep.py                resumable trial sweeps (inline, process pool, Ray), checkpoints,
                             schemas, the folder's lock, interrupts; its files sweep_store.py,
                             its runners sweep_exec.py; jsonio.py: strict JSON (no bare NaN);
-                            trialpack.py: finished trials packed, the one reader of trials
+                            trialpack.py: finished trials packed, the one reader of trials;
+                            sweep_pack.py: pack_trials, loose trial files into the pack
     provenance.py           command, commit, versions of a result; the recording and reuse rules
     stats.py, multiple.py   means and intervals; Holm's correction
     validation.py, cli.py   argument checks; the command lines' shared types and guarded()

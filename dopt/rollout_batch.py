@@ -293,6 +293,14 @@ class BatchRoute:
         All perturbed rows of all timesteps go through one ``Batch.step``: per timestep the
         nominal row, then nu control, |C| velocity and |C| position perturbations (each block
         twice when centred, + then -)."""
+        rows, fwd_ok, back_ok, vel_rows, pos_rows = self._fd_rows(x, C, eps, centered)
+        nxt = self._fd_step(rows)
+        return self._fd_jacobian(nxt, C, eps, centered, fwd_ok, back_ok, vel_rows, pos_rows)
+
+    def _fd_rows(self, x: np.ndarray, C: np.ndarray, eps: float, centered: bool):
+        """The perturbed rows of ``derivatives``: (rows (T, K, ns), fwd_ok, back_ok (T, nu):
+        which one-sided control nudges stay inside ctrlrange, vel_rows, pos_rows: the indices
+        of the velocity and position blocks among the K rows of a timestep)."""
         m = self.model
         T, c, nu = x.shape[0], len(C), m.nu
         sides = (1.0, -1.0) if centered else (1.0,)
@@ -324,7 +332,13 @@ class BatchRoute:
             block = rows[:, pos_rows[k * c:(k + 1) * c], self._qpos]   # (T, c, nq)
             flat = self.scene.tangent.perturb(block.reshape(-1, m.nq), np.tile(C, T), side * eps)
             rows[:, pos_rows[k * c:(k + 1) * c], self._qpos] = flat.reshape(T, c, m.nq)
+        return rows, fwd_ok, back_ok, vel_rows, pos_rows
 
+    def _fd_step(self, rows: np.ndarray) -> np.ndarray:
+        """The next states (T, K, ns) of the perturbed rows (T, K, ns), all in one
+        ``Batch.step``; an unstable row raises ``UnstableRolloutError`` (rollout: its
+        perturbation k, step: its timestep t)."""
+        T, K = rows.shape[:2]
         batch, ids = self._batch_of(T * K)
         n = T * K
         batch.state[:n] = rows.reshape(n, -1)
@@ -337,7 +351,15 @@ class BatchRoute:
         if bad := first_unstable(batch, n, nxt.reshape(n, -1), self.scene.layout):
             t, k = divmod(bad[0], K)                        # row i: timestep i // K
             raise UnstableRolloutError(k, t, bad[1], f"derivatives t={t} perturbation={k}")
+        return nxt
 
+    def _fd_jacobian(self, nxt: np.ndarray, C: np.ndarray, eps: float, centered: bool,
+                     fwd_ok: np.ndarray, back_ok: np.ndarray, vel_rows: np.ndarray,
+                     pos_rows: np.ndarray) -> np.ndarray:
+        """F = [A B] (T, 2|C|, 2|C| + nu) from the next states ``nxt`` (T, K, ns) of the rows
+        ``_fd_rows`` built: finite differences on the tangent of C, control columns one-sided
+        where the other side leaves ctrlrange (zero where neither fits)."""
+        c, nu = len(C), self.model.nu
         qpos, qvel = nxt[..., self._qpos], nxt[..., self._qvel]       # (T, K, nq|nv)
         diff = self.scene.tangent.difference
 

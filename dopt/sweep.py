@@ -97,6 +97,7 @@ from dopt.sweep_exec import (
     run_pool,
     run_ray,
 )
+from dopt.sweep_pack import PackResult, pack_trials  # noqa: F401
 from dopt.sweep_store import (  # noqa: F401  (the public names of dopt.sweep)
     ANY,
     CHECKPOINT_DIR,
@@ -106,7 +107,6 @@ from dopt.sweep_store import (  # noqa: F401  (the public names of dopt.sweep)
     RECORD_FIELDS,
     Checkpoint,
     OutLock,
-    PackResult,
     Report,
     Schema,
     SweepLockedError,
@@ -115,7 +115,6 @@ from dopt.sweep_store import (  # noqa: F401  (the public names of dopt.sweep)
     check_trial_files,
     current_code,
     move_aside,
-    pack_trials,
     stored_record,
     trial_path,
 )

@@ -403,6 +403,79 @@ def check_sizes(ap: argparse.ArgumentParser, args) -> None:
 
 
 @guarded("key_particles.py")
+def reduce_tasks(tasks: list[str], cloth_n: int, rope_config: RopeConfig,
+                 cloth_config: ClothConfig, curve_config: ClothConfig, out: Path,
+                 summary: dict, commits: dict, commit: str) -> None:
+    """Reduce each task's goal sequence (the Fig. 4 curves, with ``curve_config``): its
+    entry in ``summary["tasks"]``, its curve and plot under ``out``, a failure listed in
+    ``summary["failed"]`` (the other tasks go on), each success counted for ``commit``."""
+    failed = summary["failed"]
+    for task in tasks:
+        kwargs = {} if task in ROPE_TASKS else {"n": cloth_n}
+        try:
+            sequence = goal_sequence(task, **kwargs)
+            results = [reduce_goal(goal, rope_config, curve_config) for goal in sequence]
+        except Exception as exc:        # listed, the other tasks go on
+            failed[task] = one_line(exc)
+            logger.error("%s failed: %s", task, failed[task])
+            continue
+        commits[commit] += 1
+        goal, result = sequence[-1], results[-1]
+        entry = record(result)
+        entry["particles"] = len(goal.positions)
+        if len(sequence) > 1:
+            entry["intermediate_goals"] = [
+                {"goal": g.name, **record(r)}
+                for g, r in zip(sequence[:-1], results[:-1], strict=True)]
+        summary["tasks"][task] = entry
+        write_curve(out / f"curve_{task}.csv", result)
+        plot_task(out / f"{task}.png", task, goal, result, cloth_config.z_scale)
+        logger.info("%s: %d elements, %d key particles %s, %.4f s", task, result.n_elements,
+                    result.n_keys, result.indices.tolist(), result.seconds)
+
+
+def robustness(args, rng: np.random.Generator, rope_config: RopeConfig,
+               cloth_config: ClothConfig, summary: dict, commits: dict, commit: str) -> None:
+    """The full run's robustness sweeps (noise, cloth resolution, simulated goals) into
+    ``summary["robustness"]``; a sweep that fails as a whole is listed in
+    ``summary["failed"]``, and each trial counted under the commit that ran it."""
+    failed = summary["failed"]
+    journal = args.out / "noise.jsonl"
+    if args.fresh and journal.exists():
+        journal.replace(args.out / "noise.jsonl.old")
+    noise, grid = [], []
+    try:
+        noise, noise_failed = noise_sweep(
+            journal, rope_config, cloth_config,
+            sigmas=[2e-5, 5e-5, 1e-4, 3e-4, 5e-4, 1e-3, 2e-3], resolutions=args.noise_n,
+            seeds=args.noise_seeds, panel_modes=args.noise_panels)
+        failed.update(noise_failed)
+    except Exception as exc:        # the sweep as a whole (its reference counts)
+        failed["noise"] = one_line(exc)
+    try:
+        grid, grid_failed = resolution_sweep(rng, cloth_config,
+                                             [12, 16, 21, 25, 28, 32, 40])
+        failed.update(grid_failed)
+    except Exception as exc:
+        failed["grid"] = one_line(exc)
+    simulated = []
+    try:
+        simulated, simulated_failed = simulated_goals(args.simulated_n, cloth_config,
+                                                      tuple(args.simulated_physics))
+        failed.update(simulated_failed)
+    except Exception as exc:
+        failed["simulated"] = one_line(exc)
+    summary["robustness"] = {"cloth_grid": grid, "noise": noise_table(noise),
+                             "simulated": simulated}
+    summary["settings"]["simulated_scenes"] = simulated_scenes(args.simulated_physics)
+    logger.info("noise: %s", summary["robustness"]["noise"])
+    commits[commit] += sum("error" not in g for g in grid + simulated)
+    for row in noise:
+        if "error" not in row:
+            c = str((row.get("code") or {}).get("commit") or "unknown")
+            commits[c] = commits.get(c, 0) + 1
+
+
 def main(argv=None) -> int:
     ap = parser()
     args = ap.parse_args(argv)
@@ -430,65 +503,12 @@ def main(argv=None) -> int:
                                           "cloth_config": cloth_config,
                                           "curve_cloth_config": curve_config}),
                "paper": PAPER, "tasks": {}, "failed": {}}
-    failed = summary["failed"]
     commits = {code["commit"]: 0}
-    for task in tasks:
-        kwargs = {} if task in ROPE_TASKS else {"n": cloth_n}
-        try:
-            sequence = goal_sequence(task, **kwargs)
-            results = [reduce_goal(goal, rope_config, curve_config) for goal in sequence]
-        except Exception as exc:        # listed, the other tasks go on
-            failed[task] = one_line(exc)
-            logger.error("%s failed: %s", task, failed[task])
-            continue
-        commits[code["commit"]] += 1
-        goal, result = sequence[-1], results[-1]
-        entry = record(result)
-        entry["particles"] = len(goal.positions)
-        if len(sequence) > 1:
-            entry["intermediate_goals"] = [
-                {"goal": g.name, **record(r)}
-                for g, r in zip(sequence[:-1], results[:-1], strict=True)]
-        summary["tasks"][task] = entry
-        write_curve(args.out / f"curve_{task}.csv", result)
-        plot_task(args.out / f"{task}.png", task, goal, result, cloth_config.z_scale)
-        logger.info("%s: %d elements, %d key particles %s, %.4f s", task, result.n_elements,
-                    result.n_keys, result.indices.tolist(), result.seconds)
+    reduce_tasks(tasks, cloth_n, rope_config, cloth_config, curve_config, args.out, summary,
+                 commits, code["commit"])
     if not args.quick:
-        journal = args.out / "noise.jsonl"
-        if args.fresh and journal.exists():
-            journal.replace(args.out / "noise.jsonl.old")
-        noise, grid = [], []
-        try:
-            noise, noise_failed = noise_sweep(
-                journal, rope_config, cloth_config,
-                sigmas=[2e-5, 5e-5, 1e-4, 3e-4, 5e-4, 1e-3, 2e-3], resolutions=args.noise_n,
-                seeds=args.noise_seeds, panel_modes=args.noise_panels)
-            failed.update(noise_failed)
-        except Exception as exc:        # the sweep as a whole (its reference counts)
-            failed["noise"] = one_line(exc)
-        try:
-            grid, grid_failed = resolution_sweep(rng, cloth_config,
-                                                 [12, 16, 21, 25, 28, 32, 40])
-            failed.update(grid_failed)
-        except Exception as exc:
-            failed["grid"] = one_line(exc)
-        simulated = []
-        try:
-            simulated, simulated_failed = simulated_goals(args.simulated_n, cloth_config,
-                                                          tuple(args.simulated_physics))
-            failed.update(simulated_failed)
-        except Exception as exc:
-            failed["simulated"] = one_line(exc)
-        summary["robustness"] = {"cloth_grid": grid, "noise": noise_table(noise),
-                                 "simulated": simulated}
-        summary["settings"]["simulated_scenes"] = simulated_scenes(args.simulated_physics)
-        logger.info("noise: %s", summary["robustness"]["noise"])
-        commits[code["commit"]] += sum("error" not in g for g in grid + simulated)
-        for row in noise:
-            if "error" not in row:
-                c = str((row.get("code") or {}).get("commit") or "unknown")
-                commits[c] = commits.get(c, 0) + 1
+        robustness(args, rng, rope_config, cloth_config, summary, commits, code["commit"])
+    failed = summary["failed"]
     summary["trial_commits"] = {c: n for c, n in commits.items() if n}
     write_summary(summary, args.out, args.record, "experiments/key_particles.py", argv,
                   indent=1)

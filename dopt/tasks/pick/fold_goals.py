@@ -174,22 +174,8 @@ def fold_goal(scene: DeformableScene, creases: Sequence[Crease], start: np.ndarr
     rest = scene.positions(state)
     spacing = _spacing(rest)
     slack = check_real(slack, "slack", minimum=0)
-    plan = []
-    for i, crease in enumerate(creases):
-        dist = crease.distance(rest)
-        moving = dist > 0
-        if not moving.any():
-            raise ValueError(f"fold {i}: {crease} moves no particle of the sheet")
-        plan.append((crease, moving,
-                     np.flatnonzero(moving & (dist >= dist[moving].max() - GRIP * spacing))))
-    grasped = np.unique(np.concatenate([held for _, _, held in plan]))
-    holds = "".join(f'<connect name="hold{i}" body1="{scene.flex}_{i}" body2="world" '
-                    f'anchor="0 0 0" active="false"/>' for i in grasped)
-    m = mujoco.MjModel.from_xml_string(scene.xml.replace("</equality>", holds + "</equality>"))
-    fix_grasp_anchors(m)
-    hold_eq = np.full(scene.n_particles, -1)
-    hold_eq[grasped] = [mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_EQUALITY, f"hold{i}")
-                        for i in grasped]
+    plan = _fold_plan(creases, rest, spacing)
+    m, hold_eq = _hold_model(scene, plan)
     data, source = mujoco.MjData(m), mujoco.MjData(scene.model)
     mujoco.mj_setState(scene.model, source, state, scene.scene.layout.spec)
     mujoco.mj_setState(scene.model, source, scene.picker.idle_row, CONTROL_SPEC)
@@ -201,36 +187,92 @@ def fold_goal(scene: DeformableScene, creases: Sequence[Crease], start: np.ndarr
     for i, (crease, moving, held) in enumerate(plan):
         _copy_state(m, data, scene.model, source)
         p = scene.positions(scene.scene.state_of(source))
-        turn = _place(crease, rest, p, moving, spacing)
-        turn = replace(turn, point=turn.point + 0.5 * (np.pi * gap / 2 + slack) * turn.normal)
-        height = _axis_height(p, moving, gap)
-        start_pos = p[held]
-        radius = float(np.hypot(turn.distance(start_pos), start_pos[:, 2] - height).max())
-        duration = np.pi ** 2 * radius / (2 * speed)    # peak of the cosine profile = speed
-        nsteps = max(1, int(np.ceil(duration / m.opt.timestep)))
+        turn, height, nsteps = _fold_path(crease, rest, p, moving, held, spacing, gap, slack,
+                                          speed, m.opt.timestep)
         log.info("fold %d: %d moving, %d held, %.2f s", i, int(moving.sum()), len(held),
                  nsteps * m.opt.timestep)
-        m.eq_data[hold_eq[held], 3:6] = start_pos
-        data.eq_active[hold_eq[held]] = 1
-        scan = judges[0].start(1)
-        for k in range(1, nsteps + 1):
-            angle = np.pi * (1 - np.cos(np.pi * k / nsteps)) / 2
-            m.eq_data[hold_eq[held], 3:6] = _turn_over(start_pos, turn, height, angle)
-            mujoco.mj_step(m, data)
-            reason = reason or _judge(scan, data, step)
-            step += 1
-        data.eq_active[hold_eq[held]] = 0
-        scan = judges[1].start(1)
-        for _ in range(int(round(settle / m.opt.timestep))):
-            mujoco.mj_step(m, data)
-            reason = reason or _judge(scan, data, step)
-            step += 1
+        step, reason = _turn_and_settle(m, data, hold_eq[held], p[held], turn, height, nsteps,
+                                        settle, judges, step, reason)
     _copy_state(m, data, scene.model, source)
     final = scene.scene.state_of(source)
     if reason:
         log.warning("fold goal: %s", reason)
     return FoldGoal(scene.positions(final), final, tuple(h for _, _, h in plan), bool(reason),
                     reason)
+
+
+def _fold_plan(creases: tuple[Crease, ...], rest: np.ndarray, spacing: float
+               ) -> list[tuple[Crease, np.ndarray, np.ndarray]]:
+    """[(crease, moving (N,) bool, held particle indices)] of each fold of ``fold_goal``: the
+    particles on the crease's moving side, and those of them within ``GRIP`` grid spacings of
+    the farthest one.
+
+    Raises:
+        ValueError: a crease that moves no particle.
+    """
+    plan = []
+    for i, crease in enumerate(creases):
+        dist = crease.distance(rest)
+        moving = dist > 0
+        if not moving.any():
+            raise ValueError(f"fold {i}: {crease} moves no particle of the sheet")
+        plan.append((crease, moving,
+                     np.flatnonzero(moving & (dist >= dist[moving].max() - GRIP * spacing))))
+    return plan
+
+
+def _hold_model(scene: DeformableScene, plan) -> tuple[mujoco.MjModel, np.ndarray]:
+    """(a copy of the scene's model with one inactive ``connect`` equality per particle held
+    in any fold of ``plan``, hold_eq (N,): the equality id of each particle, -1 if none)."""
+    grasped = np.unique(np.concatenate([held for _, _, held in plan]))
+    holds = "".join(f'<connect name="hold{i}" body1="{scene.flex}_{i}" body2="world" '
+                    f'anchor="0 0 0" active="false"/>' for i in grasped)
+    m = mujoco.MjModel.from_xml_string(scene.xml.replace("</equality>", holds + "</equality>"))
+    fix_grasp_anchors(m)
+    hold_eq = np.full(scene.n_particles, -1)
+    hold_eq[grasped] = [mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_EQUALITY, f"hold{i}")
+                        for i in grasped]
+    return m, hold_eq
+
+
+def _fold_path(crease: Crease, rest: np.ndarray, p: np.ndarray, moving: np.ndarray,
+               held: np.ndarray, spacing: float, gap: float, slack: float, speed: float,
+               timestep: float) -> tuple[_Turn, float, int]:
+    """(the turning line, its height, the number of steps) of one fold from the positions
+    ``p`` (N, 3) (``fold_goal``: the line shifted by the rounded crease's length, the
+    duration from the held particles' largest radius and the top speed)."""
+    turn = _place(crease, rest, p, moving, spacing)
+    turn = replace(turn, point=turn.point + 0.5 * (np.pi * gap / 2 + slack) * turn.normal)
+    height = _axis_height(p, moving, gap)
+    start_pos = p[held]
+    radius = float(np.hypot(turn.distance(start_pos), start_pos[:, 2] - height).max())
+    duration = np.pi ** 2 * radius / (2 * speed)    # peak of the cosine profile = speed
+    return turn, height, max(1, int(np.ceil(duration / timestep)))
+
+
+def _turn_and_settle(m: mujoco.MjModel, data: mujoco.MjData, eq: np.ndarray,
+                     start_pos: np.ndarray, turn: _Turn, height: float, nsteps: int,
+                     settle: float, judges, step: int, reason: str) -> tuple[int, str]:
+    """One fold in ``data``: the held particles' equalities ``eq`` turn them from
+    ``start_pos`` over ``turn`` in ``nsteps`` steps (a smooth start and stop), let go, and
+    the sheet settles ``settle`` seconds; each phase judged by its monitor of ``judges``.
+    Returns (the step count, the first broken bound) carried on from ``step``, ``reason``."""
+    m.eq_data[eq, 3:6] = start_pos
+    data.eq_active[eq] = 1
+    scan = judges[0].start(1)
+    for k in range(1, nsteps + 1):
+        angle = np.pi * (1 - np.cos(np.pi * k / nsteps)) / 2
+        m.eq_data[eq, 3:6] = _turn_over(start_pos, turn, height, angle)
+        mujoco.mj_step(m, data)
+        reason = reason or _judge(scan, data, step)
+        step += 1
+    data.eq_active[eq] = 0
+    scan = judges[1].start(1)
+    for _ in range(int(round(settle / m.opt.timestep))):
+        mujoco.mj_step(m, data)
+        reason = reason or _judge(scan, data, step)
+        step += 1
+    return step, reason
 
 
 def _copy_state(ma: mujoco.MjModel, a: mujoco.MjData, mb: mujoco.MjModel,
