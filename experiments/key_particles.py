@@ -402,7 +402,6 @@ def check_sizes(ap: argparse.ArgumentParser, args) -> None:
                 ap.error(str(e))
 
 
-@guarded("key_particles.py")
 def reduce_tasks(tasks: list[str], cloth_n: int, rope_config: RopeConfig,
                  cloth_config: ClothConfig, curve_config: ClothConfig, out: Path,
                  summary: dict, commits: dict, commit: str) -> None:
@@ -476,6 +475,7 @@ def robustness(args, rng: np.random.Generator, rope_config: RopeConfig,
             commits[c] = commits.get(c, 0) + 1
 
 
+@guarded("key_particles.py")
 def main(argv=None) -> int:
     ap = parser()
     args = ap.parse_args(argv)
