@@ -222,44 +222,68 @@ def run_svr_mpc(settings: SVRMPCSettings = SVRMPCSettings(), seed: int = 0,
     task = settings.build_task(seed)
     ctl = wire_controller(task, settings, np.random.default_rng([seed, 1]), optimiser)
     radius = PushWeights().success_radius
-    config = MPCConfig(timeout=int(settings.timeout or task.timeout),
-                       slowdown=float(settings.slowdown or task.slowdown),
-                       synchronous=settings.synchronous, feedback=settings.feedback,
-                       control_noise=float(settings.control_noise), clock=settings.clock,
-                       threads=float(settings.nominal_threads),
-                       model_ms=(CLOCK_MODEL_MS[settings.task] if settings.clock == "model"
-                                 else None))
+    config = mpc_config(settings, task)
     if history is not None:
-        if not hasattr(ctl.optimiser, "keep_history"):
-            ctl.service.close()
-            raise TypeError(f"history needs an optimiser that keeps one (keep_history, "
-                            f"probe, history: planners.svr.SVROptimiser's); {name!r} does "
-                            f"not")
-        ctl.optimiser.keep_history = True
-        touching = robot_contact(task)
-
-        def contact_in_horizon(states: np.ndarray) -> dict:
-            steps = touching(states)
-            return {"contact_steps": int(steps.sum()), "horizon": len(steps) - 1}
-
-        ctl.optimiser.probe = contact_in_horizon
+        keep_history(ctl, task, name)
     mpc = MPC(ctl.scene, ctl.optimiser, config, np.random.default_rng([seed, 2]),
               success=lambda x: ctl.goal_distance(x) < radius, on_step=on_step,
               blowup_out=blowup_out,
               blowup_label=blowup_label or f"{settings.task}-"
               f"{settings.method if name == DEFAULT_OPTIMISER else name}-seed{seed}")
-    if settings.warm_start:
-        start = warm_start.setup(task).final_state
-        push = warm_start.WarmStartConfig(moving_tail=settings.push_tail)
-        plan = Plan(warm_start.push(task, start, task.horizon, push).controls)
-    else:
-        start, plan = task.initial_state, Plan(np.zeros((task.horizon, ctl.scene.nu)))
+    start, plan = start_and_plan(settings, task, ctl.scene.nu)
     try:
         res = mpc.run(start, plan)
     finally:
         ctl.service.close()
     if history is not None:
         history.extend(ctl.optimiser.history)
+    return episode_result(ctl, res, start, config, keep_controls)
+
+
+def mpc_config(settings: SVRMPCSettings, task) -> MPCConfig:
+    """The MPC loop's config of an episode: the settings' timeout and slowdown (else the
+    task's), clock, noise, feedback and, on the model clock, the task's cost model."""
+    return MPCConfig(timeout=int(settings.timeout or task.timeout),
+                     slowdown=float(settings.slowdown or task.slowdown),
+                     synchronous=settings.synchronous, feedback=settings.feedback,
+                     control_noise=float(settings.control_noise), clock=settings.clock,
+                     threads=float(settings.nominal_threads),
+                     model_ms=(CLOCK_MODEL_MS[settings.task] if settings.clock == "model"
+                               else None))
+
+
+def keep_history(ctl, task, name: str) -> None:
+    """Make the controller's optimiser keep its history, each new nominal probed for the
+    states in which the robot touches the pushed object; a TypeError (the service closed)
+    for an optimiser that keeps none."""
+    if not hasattr(ctl.optimiser, "keep_history"):
+        ctl.service.close()
+        raise TypeError(f"history needs an optimiser that keeps one (keep_history, probe, "
+                        f"history: planners.svr.SVROptimiser's); {name!r} does not")
+    ctl.optimiser.keep_history = True
+    touching = robot_contact(task)
+
+    def contact_in_horizon(states: np.ndarray) -> dict:
+        steps = touching(states)
+        return {"contact_steps": int(steps.sum()), "horizon": len(steps) - 1}
+
+    ctl.optimiser.probe = contact_in_horizon
+
+
+def start_and_plan(settings: SVRMPCSettings, task, nu: int) -> tuple[np.ndarray, Plan]:
+    """The episode's start state (ns,) and first plan (T, nu): with ``warm_start`` the state
+    the authors' set-up motion ends in and their push plan, else the task's initial state
+    and zero controls."""
+    if settings.warm_start:
+        start = warm_start.setup(task).final_state
+        push = warm_start.WarmStartConfig(moving_tail=settings.push_tail)
+        return start, Plan(warm_start.push(task, start, task.horizon, push).controls)
+    return task.initial_state, Plan(np.zeros((task.horizon, nu)))
+
+
+def episode_result(ctl, res, start: np.ndarray, config: MPCConfig,
+                   keep_controls: bool) -> SVRMPCResult:
+    """The ``SVRMPCResult`` of an executed episode ``res`` (``dopt.mpc.MPCResult``)."""
     S = len(res.controls)
     kept = sorted(set(range(0, S + 1, GOAL_DISTANCE_STRIDE)) | {S})
     final = res.states[-1] if keep_controls else np.round(res.states[-1], 7)
