@@ -18,12 +18,8 @@ from dopt.cli import (
 )
 
 
-@guarded("python -m planners.bench")
-def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(prog="python -m planners.bench", description=__doc__,
-                                 epilog=EPILOG)
-    sub = ap.add_subparsers(dest="bench", required=True)
-
+def _add_ilqr(sub) -> None:
+    """The ``ilqr`` subcommand's flags."""
     p = sub.add_parser("ilqr", help="one iLQR(-SVR) iteration per DoF-selection method")
     add_common_args(p)
     p.add_argument("--methods", default="baseline,rand,naive,svr-sum,svr-svd",
@@ -43,6 +39,9 @@ def main(argv=None) -> int:
     p.add_argument("--warmup", type=nonneg_int, default=3,
                    help="untimed iterations per method first")
 
+
+def _add_clock(sub) -> None:
+    """The ``clock`` subcommand's flags."""
     p = sub.add_parser("clock", help="CPU time of an MPC optimisation against |C| per push "
                                      "task, and the model clock's fit ms = a + b |C|")
     p.add_argument("--tasks", default="clutter,soft,soft_rigid",
@@ -56,6 +55,9 @@ def main(argv=None) -> int:
                    help="threads the CPU time is divided by (default %(default)s)")
     p.add_argument("--seed", type=nonneg_int, default=0, help="seed of the task instances")
 
+
+def _add_cem(sub) -> None:
+    """The ``cem`` subcommand's flags."""
     p = sub.add_parser("cem", help="one CEM iteration of the cloth or rope pick-and-place task")
     add_common_args(p, task="cloth")
     p.add_argument("--n", type=int_at_least(2), default=None,
@@ -65,6 +67,9 @@ def main(argv=None) -> int:
     p.add_argument("--bound", type=positive_float, default=None,
                    help="picker displacement bound per axis, m (default: cloth 0.3, rope 0.1)")
 
+
+def _add_cem_limit(sub) -> None:
+    """The ``cem-limit`` subcommand's flags."""
     p = sub.add_parser("cem-limit", help="CEM iterations of the paper protocol's cloth "
                                          "diagonal fold per cloth size against the physical "
                                          "limit (steps x one mj_step / cores), and where the "
@@ -84,6 +89,9 @@ def main(argv=None) -> int:
     p.add_argument("--seed", type=nonneg_int, default=0, help="seed of the CEM plan")
     add_record_arg(p, "cem_limit", "as each size finishes")
 
+
+def _add_physics(sub) -> None:
+    """The ``cloth`` and ``rope`` subcommands' flags."""
     for task in ("cloth", "rope"):
         p = sub.add_parser(task, help=f"the {task} physics presets: speed, blow-ups per 1000 "
                                       f"random actions, strain, scripted error")
@@ -103,7 +111,20 @@ def main(argv=None) -> int:
                        help="comma-separated picker speeds (m/s, the average on the longest "
                             "move), a row each (default: the picker's 0.5)")
 
-    args = ap.parse_args(argv)
+
+def parser() -> argparse.ArgumentParser:
+    """The command line: one subcommand per bench."""
+    ap = argparse.ArgumentParser(prog="python -m planners.bench", description=__doc__,
+                                 epilog=EPILOG)
+    sub = ap.add_subparsers(dest="bench", required=True)
+
+    for add in (_add_ilqr, _add_clock, _add_cem, _add_cem_limit, _add_physics):
+        add(sub)
+    return ap
+
+
+def run(args) -> int:
+    """Run the bench ``args.bench`` names and print (or record) its result."""
     if args.bench == "ilqr":
         from planners.bench.ilqr import bench_ilqr
         out = bench_ilqr(args.task, args.methods.split(","), args.rho, args.theta,
@@ -141,6 +162,10 @@ def main(argv=None) -> int:
     print_json(out)
     return 0
 
+
+@guarded("python -m planners.bench")
+def main(argv=None) -> int:
+    return run(parser().parse_args(argv))
 
 if __name__ == "__main__":
     sys.exit(main())
