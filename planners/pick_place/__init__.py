@@ -33,6 +33,8 @@ Modules, one job each (every name is re-exported here):
     run.py       run_problem (with checkpoints and blow-up captures: capture_label), solve,
                  run_trial, PickPlaceResult
     summary.py   summarize, last_improvement
+    scaling.py   the gain against the particle count: scaling_trials (Fig. 7's trials at
+                 several cloth sizes), scaling_summary (intervals, the trend test on log N)
     random_reach.py  why CEM(Random) lands where it does: each trial's candidates re-drawn
                  from its seed and what they can reach (``random_reach``, ``reach_summary``)
 

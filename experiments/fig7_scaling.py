@@ -1,0 +1,212 @@
+"""The gain of key particles against the particle count (issue #60, item 2): the Fig. 7 cloth
+folds at several sizes.
+
+Every (size, seed, method) trial of one cloth goal at the paper protocol's settings
+(``PickPlaceSettings.preset("cloth", goal, protocol="paper")``: 30 CEM iterations per stage,
+population 32, 6 elites, the physics preset "default" at every size) with only n, the
+particles per side, changed (``planners.pick_place.scaling``). The trials run through
+``dopt.sweep`` into OUT/trials (a rerun resumes); ``--reuse-from`` first copies the matching
+finished trials of a Fig. 7 sweep folder (docs/results/runs/fig7-cloth-<goal>: its 20 x 20
+trials, loose or packed) into OUT/trials, so they count. The statistics are the library's
+(``scaling_summary``): per size and method the mean final cost with its 95 % interval, the
+paired Original - Simple and Random - Simple differences, and the trend test (the OLS slope of
+the paired difference against log N, Holm over the two comparisons), whose verdict is printed.
+
+Writes OUT/summary.json (experiment "fig7_scaling": the settings of every size in full, the
+physics preset, the statistics, the failures, the provenance), OUT/scaling.png (final cost and
+the gaps against the particle count, 95 % bars; only where matplotlib is installed).
+Exits 1 if a trial failed, 2 on bad flags (one line).
+
+    python experiments/fig7_scaling.py --goal diagonal --sizes 10,15,20,30 --seeds 5 \\
+        --out /tmp/scaling-diagonal --reuse-from docs/results/runs/fig7-cloth-diagonal
+"""
+
+from __future__ import annotations
+
+import argparse
+import functools
+import logging
+import sys
+import time
+from pathlib import Path
+
+from cli_args import (
+    EPILOG,
+    add_reuse_argument,
+    choices_type,
+    guarded,
+    number_list,
+    output_dir,
+    output_file,
+    positive_int,
+    record_problem,
+    reuse_mode,
+    settings_dict,
+    write_summary,
+)
+from pick_sweep import SCHEMA, cem_trial, iterations_held
+from sweep_console import out_lock, run_with_console
+
+from dopt.trialpack import is_stored_trial, read_trial_text
+from planners.pick_place.scaling import (
+    COMPARED,
+    scaling_settings,
+    scaling_summary,
+    scaling_trials,
+)
+from planners.pick_place.tasks import GOALS
+
+#: the goals with a scaling run (the single-layer folds: no self-collision)
+SCALING_GOALS = ("diagonal", "side")
+#: the CEM methods compared (the scripted policy has no gain to scale)
+SCALING_METHODS = ("simple", "original", "random")
+COLOURS = {"simple": "tab:blue", "original": "tab:red", "random": "tab:green"}
+
+
+def parser() -> argparse.ArgumentParser:
+    """The flags of the module docstring."""
+    ap = argparse.ArgumentParser(prog="fig7_scaling.py", description=__doc__, epilog=EPILOG,
+                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--goal", choices=[g for g in SCALING_GOALS if g in GOALS["cloth"]],
+                    required=True, help="the cloth fold")
+    ap.add_argument("--sizes", type=number_list(int, 3, "sizes"),
+                    default="10,15,20,30", help="particles per side, comma-separated "
+                                                "(default %(default)s)")
+    ap.add_argument("--seeds", type=positive_int, default=5,
+                    help="seeds 0 .. SEEDS-1 per method and size (default %(default)s)")
+    ap.add_argument("--methods", type=choices_type(SCALING_METHODS, "methods"),
+                    default=",".join(SCALING_METHODS),
+                    help="comma-separated subset of " + ", ".join(SCALING_METHODS))
+    ap.add_argument("--workers", type=positive_int, default=1,
+                    help="trials at once (processes; default 1)")
+    ap.add_argument("--out", type=output_dir, required=True, help="the run's folder")
+    ap.add_argument("--record", type=output_file, default=None,
+                    help="also write the summary here (committed code only)")
+    ap.add_argument("--reuse-from", type=Path, default=None,
+                    help="a Fig. 7 sweep folder (with trials/) whose matching finished "
+                         "trials are copied into OUT/trials first")
+    ap.add_argument("--fresh", action="store_true", help="recompute every trial")
+    ap.add_argument("-v", "--verbose", action="store_true")
+    add_reuse_argument(ap)
+    return ap
+
+
+def parse(argv=None) -> argparse.Namespace:
+    """Parsed flags; exit 2 with one line on a bad one."""
+    ap = parser()
+    args = ap.parse_args(argv)
+    if "simple" not in args.methods:
+        ap.error("argument --methods: the gains are against simple, which it must name")
+    if args.reuse_from is not None and not (args.reuse_from / "trials").is_dir():
+        ap.error(f"argument --reuse-from: {args.reuse_from}/trials is not a folder")
+    if (problem := record_problem(args.record, args.out)) is not None:
+        ap.error(problem)
+    return args
+
+
+def copy_finished(trials, source: Path, out: Path) -> int:
+    """Copy the stored trials of ``source``/trials (loose or packed) whose key is a trial of
+    ``trials`` into ``out``/trials as loose files, where ``out`` has none yet. Returns how many
+    were copied (the sweep still judges whether each may stand for this code)."""
+    dest = out / "trials"
+    dest.mkdir(parents=True, exist_ok=True)
+    copied = 0
+    for t in trials:
+        src, dst = source / "trials" / f"{t.key}.json", dest / f"{t.key}.json"
+        if dst.exists() or is_stored_trial(dst) or not is_stored_trial(src):
+            continue
+        dst.write_text(read_trial_text(src))
+        copied += 1
+    return copied
+
+
+def main(argv=None) -> int:
+    """The run of the module docstring; the exit code."""
+    return guarded("fig7_scaling.py")(_main)(argv)
+
+
+def _main(argv=None) -> int:
+    args = parse(argv)
+    logging.basicConfig(level=logging.INFO if args.verbose else logging.WARNING,
+                        format="%(levelname)s %(name)s: %(message)s")
+    out = args.out
+    out.mkdir(parents=True, exist_ok=True)
+    with out_lock(out):
+        return _experiment(args, argv)
+
+
+def _experiment(args, argv) -> int:
+    """The sweep, the summary, the plot and the printed verdict."""
+    start = time.perf_counter()
+    out = args.out
+    threads = 1 if args.workers > 1 else 0
+    trials = scaling_trials(args.goal, args.sizes, range(args.seeds), args.methods, threads)
+    if args.reuse_from is not None:
+        print(f"copied {copy_finished(trials, args.reuse_from, out)} finished trials from "
+              f"{args.reuse_from}")
+    settings = {n: scaling_settings(args.goal, n, threads) for n in args.sizes}
+    per_trial = next(iter(settings.values())).cem.iterations   # one stage: diagonal, side
+    res = run_with_console(
+        functools.partial(cem_trial, blowup_out=str(out)), trials, out, unit="it",
+        desc="CEM iterations", workers=args.workers, fresh=args.fresh, schema=SCHEMA,
+        reuse=reuse_mode(args), steps=lambda t: per_trial,
+        held=lambda t: iterations_held([t], per_trial, out))
+    keys = {t.key for t in trials}
+    records = [r for k, r in res.records.items() if k in keys]
+    stats = scaling_summary(records)
+    any_settings = next(iter(settings.values()))
+    summary = {"experiment": "fig7_scaling", "task": "cloth", "goal": args.goal,
+               "protocol": "paper", "physics_preset": any_settings.physics,
+               "sizes": list(args.sizes), "seeds": list(range(args.seeds)),
+               "methods_run": list(args.methods),
+               "settings": {str(n): settings_dict(s) for n, s in settings.items()},
+               "physics": {str(n): s.resolved_physics() for n, s in settings.items()},
+               **stats, "failed": res.failed, "trial_commits": res.commits,
+               "wall_s": time.perf_counter() - start}
+    write_summary(summary, out, args.record, __file__, argv)
+    plot(out / "scaling.png", stats, args.goal)
+    print(f"{args.goal}, physics preset {any_settings.physics!r}: {stats['verdict']}")
+    print(f"wrote {out}/summary.json")
+    for key, err in res.failed.items():
+        print(f"FAILED {key}: {err}", file=sys.stderr)
+    return 1 if res.failed else 0
+
+
+def plot(path: Path, stats: dict, goal: str) -> None:
+    """Final cost per method and the gaps over CEM(Simple) against N = n * n (log axis), with
+    95 % bars; nothing where matplotlib is not installed."""
+    try:
+        import matplotlib
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+    except ImportError:
+        return
+    fig, (a, b) = plt.subplots(1, 2, figsize=(10, 4))
+    for m, colour in COLOURS.items():
+        rows = [(n * n, e["methods"][m]) for n, e in
+                ((int(k), v) for k, v in stats["per_size"].items()) if m in e["methods"]]
+        if rows:
+            a.errorbar([x for x, _ in rows], [r["final_cost_mean"] * 1e3 for _, r in rows],
+                       yerr=[(r["final_cost_ci95"] or 0) * 1e3 for _, r in rows],
+                       color=colour, marker="o", capsize=3, label=m)
+    for m in COMPARED:
+        rows = [(int(k) ** 2, v[f"{m}_minus_simple"]) for k, v in stats["per_size"].items()
+                if v[f"{m}_minus_simple"]["mean"] is not None]
+        if rows:
+            b.errorbar([x for x, _ in rows], [r["mean"] * 1e3 for _, r in rows],
+                       yerr=[(r["ci95"] or 0) * 1e3 for _, r in rows], color=COLOURS[m],
+                       marker="o", capsize=3, label=f"{m} - simple")
+    b.axhline(0, color="k", lw=0.5)
+    for ax, ylabel in ((a, "final cost (mm)"), (b, "paired difference (mm)")):
+        ax.set_xscale("log")
+        ax.set_xlabel("particles N")
+        ax.set_ylabel(ylabel)
+        ax.legend()
+    fig.suptitle(f"{goal}: {stats['verdict']}", fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

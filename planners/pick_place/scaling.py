@@ -1,0 +1,165 @@
+"""The gain of key particles against the particle count: the Fig. 7 trials
+of one cloth goal at several sizes (``scaling_trials``) and their statistics
+(``scaling_summary``).
+
+A size is the paper protocol's settings (``PickPlaceSettings.preset(task="cloth", goal,
+protocol="paper")``: its CEM budget and its physics preset, "default", at every size) with only
+``n`` (particles per side) changed, so the 20 x 20 trials of the Fig. 7 sweep
+(docs/results/runs/fig7-cloth-<goal>/) have the same keys and count here.
+
+The trend test: the paired difference of the final cost, method minus CEM(Simple), per seed
+common to both at each size, regressed on log N (N = n * n particles) by ordinary least squares
+(``scipy.stats.linregress``; the slope's 95 % interval from the t quantile with n_points - 2
+degrees of freedom); the p-values of Original - Simple and Random - Simple are Holm-adjusted
+together (``dopt.multiple.holm``). A positive slope: the gain of CEM(Simple) grows with the
+particle count. Means and differences are over the stable trials only (as ``summarize``).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Sequence
+from dataclasses import replace
+
+import numpy as np
+from scipy import stats
+
+from dopt.multiple import holm
+from dopt.stats import mean_ci
+from dopt.sweep import Trial
+from planners.pick_place.settings import PickPlaceSettings, trial_key
+
+#: the methods compared to CEM(Simple) by the trend test
+COMPARED = ("original", "random")
+#: the family-wise level of the trend test's verdict (and the intervals' level)
+LEVEL = 0.95
+#: the verdict when the Holm-adjusted slope's p-value is above 1 - LEVEL
+NO_TREND = "no trend detected at 95 %"
+
+
+def scaling_settings(goal: str, n: int, threads: int = 0) -> PickPlaceSettings:
+    """The paper protocol's cloth settings of ``goal`` with ``n`` particles per side (and the
+    simulation ``threads``, not part of a trial's identity)."""
+    return replace(PickPlaceSettings.preset("cloth", goal, protocol="paper"), n=int(n),
+                   threads=int(threads))
+
+
+def scaling_trials(goal: str, sizes: Sequence[int], seeds: Iterable[int],
+                   methods: Sequence[str], threads: int = 0) -> list[Trial]:
+    """The ``dopt.sweep`` trials of every (size, seed, method): key ``trial_key(method, seed,
+    settings)`` and params {"settings": settings.to_dict(), "method", "seed"}, exactly as the
+    Fig. 7 sweep (experiments/pick_place_cli.py) builds them, so ``run_trial`` runs them.
+
+    Returns len(sizes) * len(seeds) * len(methods) trials, size-major."""
+    out = []
+    seeds = [int(s) for s in seeds]
+    for n in sizes:
+        settings = scaling_settings(goal, n, threads)
+        out += [Trial(trial_key(m, s, settings),
+                      {"settings": settings.to_dict(), "method": m, "seed": s})
+                for s in seeds for m in methods]
+    return out
+
+
+def _by_size(records: Iterable[dict]) -> dict[int, dict[str, dict[int, float]]]:
+    """{n: {method: {seed: final cost}}} of the stable trials of sweep ``records`` ({"params":
+    {"settings", "method", "seed"}, "result": ``PickPlaceResult.to_dict()``})."""
+    out: dict = {}
+    for rec in records:
+        p, r = rec["params"], rec["result"]
+        if r.get("unstable"):
+            continue
+        cost = r["final_cost"]
+        if cost is None or not np.isfinite(cost):
+            continue
+        out.setdefault(int(p["settings"]["n"]), {}).setdefault(p["method"], {})[
+            int(p["seed"])] = float(cost)
+    return out
+
+
+def _ci(values) -> tuple[float | None, float | None]:
+    if not values:
+        return None, None
+    mean, half = mean_ci(values, LEVEL)
+    return mean, (half if np.isfinite(half) else None)
+
+
+def trend(sizes: Sequence[int], diffs: Sequence[float]) -> dict:
+    """OLS of the paired differences ``diffs`` (k,) on log N, N = n * n for the sizes ``sizes``
+    (k,): {"slope" (per unit log N), "slope_ci95" (half-width), "intercept", "p" (two-sided,
+    unadjusted), "n_points", "n_sizes"}; slope and p None with fewer than 2 sizes or 3 points."""
+    x = np.log(np.asarray(sizes, dtype=float) ** 2)
+    y = np.asarray(diffs, dtype=float)
+    out = {"n_points": int(y.size), "n_sizes": int(len(set(sizes))), "slope": None,
+           "slope_ci95": None, "intercept": None, "p": None}
+    if out["n_sizes"] < 2 or y.size < 3:
+        return out
+    fit = stats.linregress(x, y)
+    half = float(stats.t.ppf(0.5 + LEVEL / 2, y.size - 2) * fit.stderr)
+    p = float(fit.pvalue) if np.isfinite(fit.pvalue) else 1.0
+    return {**out, "slope": float(fit.slope), "slope_ci95": half,
+            "intercept": float(fit.intercept), "p": p}
+
+
+def verdict(slope: float | None, p_holm: float | None) -> str:
+    """"grows" / "shrinks" (the slope's sign) where the Holm-adjusted p is at most
+    1 - LEVEL, else ``NO_TREND``."""
+    if slope is None or p_holm is None or p_holm > 1 - LEVEL:
+        return NO_TREND
+    return "grows" if slope > 0 else "shrinks"
+
+
+def scaling_summary(records: Iterable[dict]) -> dict:
+    """The statistics of the scaling sweep's records (``dopt.sweep`` records: {"params",
+    "result"}).
+
+    Returns {"sizes": [n, ...] ascending, "n_particles": [n * n, ...],
+    "per_size": {n: {"methods": {method: {"final_cost_mean", "final_cost_ci95" (half-width,
+    None with one seed), "seeds", "n"}}, "<m>_minus_simple": {"mean", "ci95", "seeds",
+    "values"} for m in ``COMPARED`` (paired over the common seeds)}},
+    "trend": {"<m>_minus_simple": {"slope", "slope_ci95", "intercept", "p", "p_holm",
+    "n_points", "n_sizes", "verdict"}}, "verdict": one line}. Costs in m; keys of "per_size"
+    are str(n) (JSON)."""
+    data = _by_size(records)
+    sizes = sorted(data)
+    per_size, points = {}, {m: ([], []) for m in COMPARED}
+    for n in sizes:
+        entry = {"methods": {}}
+        for m, costs in sorted(data[n].items()):
+            mean, half = _ci(list(costs.values()))
+            entry["methods"][m] = {"final_cost_mean": mean, "final_cost_ci95": half,
+                                   "seeds": sorted(costs), "n": len(costs)}
+        simple = data[n].get("simple", {})
+        for m in COMPARED:
+            other = data[n].get(m, {})
+            seeds = sorted(set(simple) & set(other))
+            values = [other[s] - simple[s] for s in seeds]
+            mean, half = _ci(values)
+            entry[f"{m}_minus_simple"] = {"mean": mean, "ci95": half, "seeds": seeds,
+                                          "values": values}
+            points[m][0].extend([n] * len(values))
+            points[m][1].extend(values)
+        per_size[str(n)] = entry
+    fits = {m: trend(*points[m]) for m in COMPARED}
+    tested = [m for m in COMPARED if fits[m]["p"] is not None]
+    adjusted = dict(zip(tested, holm([fits[m]["p"] for m in tested]), strict=True))
+    out_trend = {}
+    for m in COMPARED:
+        p_holm = adjusted.get(m)
+        out_trend[f"{m}_minus_simple"] = {**fits[m], "p_holm": p_holm,
+                                          "verdict": verdict(fits[m]["slope"], p_holm)}
+    return {"sizes": sizes, "n_particles": [n * n for n in sizes], "per_size": per_size,
+            "trend": out_trend, "verdict": verdict_line(out_trend)}
+
+
+def verdict_line(trends: dict) -> str:
+    """One line: per compared method, whether the gap over CEM(Simple) grows with log N, its
+    slope with the 95 % interval and the Holm-adjusted p."""
+    parts = []
+    for m in COMPARED:
+        t = trends[f"{m}_minus_simple"]
+        if t["slope"] is None:
+            parts.append(f"{m} - simple: {NO_TREND} (too few sizes or seeds)")
+            continue
+        parts.append(f"{m} - simple {t['verdict']} (slope {t['slope'] * 1e3:+.2f} mm per log N"
+                     f" +- {t['slope_ci95'] * 1e3:.2f}, Holm p {t['p_holm']:.3g})")
+    return "; ".join(parts)
