@@ -163,7 +163,7 @@ def _experiment(args, argv) -> int:
                "physics": {str(n): s.resolved_physics() for n, s in settings.items()},
                **stats, "failed": res.failed, "trial_commits": res.commits,
                "wall_s": time.perf_counter() - start}
-    write_summary(summary, out, args.record, __file__, argv)
+    write_summary(summary, out, args.record, "experiments/fig7_scaling.py", argv)
     plot(out / "scaling.png", stats, args.goal)
     print(f"{args.goal}, physics preset {any_settings.physics!r}: {stats['verdict']}")
     print(f"wrote {out}/summary.json")

@@ -28,7 +28,8 @@ Result kinds (the file's "experiment" field): "fig7" (experiments/cloth_fold.py,
 "table1" (experiments/mpc.py), "fig4" (experiments/rho_sweep.py), "svr_explain"
 (experiments/svr_explain.py), "clock_model" (python -m planners.bench clock), "cem_limit"
 (python -m planners.bench cem-limit), "key_particles" (experiments/key_particles.py),
-"random_reach" (experiments/random_reach.py). Files of other kinds are listed by name.
+"random_reach" (experiments/random_reach.py), "fig7_scaling" (experiments/fig7_scaling.py).
+Files of other kinds are listed by name.
 
     python experiments/report.py            # regenerate both files
     python experiments/report.py --check    # exit 1 if either file is not what it would write
@@ -92,6 +93,7 @@ from report_kp import (
     panda_section,
     physics_section,
     random_reach_section,
+    scaling_section,
 )
 from report_map import HEADLINES_TITLE, map_block
 from report_stale import (
@@ -225,7 +227,7 @@ SECTIONS = {"key_particles": kp_section, "kp_compare": kp_compare_section,
             "paper_svr": paper_svr_section, "panda_execute": panda_section,
             "cloth_steps": cloth_steps_section, "cem_limit": cem_limit_section,
             "cloth_warp": cloth_warp_section,
-            "random_reach": random_reach_section}
+            "random_reach": random_reach_section, "fig7_scaling": scaling_section}
 HEADLINES = {"key_particles": kp_headline, "fig7": fig7_headline, "table1": table1_headline,
              "fig4": fig4_headline, "panda_execute": panda_headline,
              "clock_check": clock_check_headline}

@@ -1086,3 +1086,31 @@ def test_map_rows_read_the_protocols_files(site):
     assert line == "CEM(Simple) closest on 1 of 1 folds (12 x 12, 3 seeds)"
     assert report_map.anchor("Key particles, Fig. 7: final cost of pick-and-place") == \
         "key-particles-fig-7-final-cost-of-pick-and-place"
+
+
+def test_scaling_study_renders_sizes_and_the_trend(site):
+    """A fig7_scaling record built by the library's own summary renders its table and the
+    verdict of each trend."""
+    from planners.pick_place.scaling import scaling_summary
+
+    records = []
+    for n in (10, 20):
+        for seed in range(3):
+            gap = 0.01 * (1 + n / 10) + 0.001 * seed
+            for method, cost in (("simple", 0.01), ("original", 0.01 + gap),
+                                 ("random", 0.02)):
+                records.append({"params": {"settings": {"n": n}, "method": method,
+                                           "seed": seed},
+                                "result": {"final_cost": cost + 0.0001 * seed,
+                                           "unstable": False}})
+    stats = scaling_summary(records)
+    write(site["results"], "fig7-scaling-diagonal.json",
+          {"experiment": "fig7_scaling", "task": "cloth", "goal": "diagonal",
+           "protocol": "paper", "physics_preset": "default", **stats, "failed": {},
+           "provenance": provenance("python experiments/fig7_scaling.py --goal diagonal")})
+    assert run(site) == 0
+    md = site["md"].read_text()
+    assert "## Key particles: the gain against the cloth's size" in md
+    assert "| 10 x 10 | 100 | 10.1 ± " in md
+    assert f"**{stats['trend']['original_minus_simple']['verdict']}**" in md
+    assert stats["trend"]["original_minus_simple"]["verdict"] == "grows"
