@@ -127,7 +127,7 @@ def test_the_auditor_reads_commits_as_git_does():
 
 
 @pytest.mark.xfail(strict=True, reason=(
-    "issue 57: 9 of 67 result summaries, and 1,096 of 3,452 unique committed trial files "
+    "issue 57: 9 result summaries and 1,096 unique committed trial files "
     "(all 900 Table 1 clutter trials at 450d745-dirty, all 180 Table 1 soft trials at "
     "a6a0d05-dirty, and those copied into other sweeps), were recorded from uncommitted code; "
     "every named commit is an ancestor of HEAD. Remove this mark when they are re-recorded."))
