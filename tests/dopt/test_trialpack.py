@@ -159,15 +159,25 @@ def test_a_corrupt_loose_file_over_a_packed_record_gives_way_to_it(tmp_path):
     assert (tmp_path / "trials" / "corrupt" / "x1.json").read_text() == "{"
 
 
-@pytest.mark.parametrize("content, match", [
-    (b"not gzip", r"pack\.jsonl\.gz cannot be read"),
-    (gzip.compress(b'{"key": "a"}\n{"key": "b"'), r"pack\.jsonl\.gz line 2: not valid JSON"),
-    (gzip.compress(b'{"key": "a"}\n[1]\n'), "line 2: not a trial record"),
-    (gzip.compress(b'{"key": "a"}\n{"key": "../b"}\n'), "line 2: its key '../b' is not a valid"),
-    (gzip.compress(b'{"key": "a"}\n{"key": "a"}\n'), "line 2: key 'a' is packed twice"),
-    (gzip.compress(b'{"key": "a"}\n{"key": "b"}\n')[:-6], "cannot be read"),
-])
-def test_a_pack_that_cannot_be_read_is_named_with_its_line(tmp_path, content, match):
+#: (raw bytes, gzip them?, cut bytes off the end, what the error names); gzip with mtime 0,
+#: so that every pytest-xdist worker collects the same parameters
+BAD_PACKS = {
+    "not-gzip": (b"not gzip", False, 0, r"pack\.jsonl\.gz cannot be read"),
+    "bad-json": (b'{"key": "a"}\n{"key": "b"', True, 0,
+                 r"pack\.jsonl\.gz line 2: not valid JSON"),
+    "not-a-record": (b'{"key": "a"}\n[1]\n', True, 0, "line 2: not a trial record"),
+    "bad-key": (b'{"key": "a"}\n{"key": "../b"}\n', True, 0,
+                "line 2: its key '../b' is not a valid"),
+    "twice": (b'{"key": "a"}\n{"key": "a"}\n', True, 0, "line 2: key 'a' is packed twice"),
+    "truncated": (b'{"key": "a"}\n{"key": "b"}\n', True, 6, "cannot be read"),
+}
+
+
+@pytest.mark.parametrize("case", list(BAD_PACKS))
+def test_a_pack_that_cannot_be_read_is_named_with_its_line(tmp_path, case):
+    raw, packed, cut, match = BAD_PACKS[case]
+    content = gzip.compress(raw, mtime=0) if packed else raw
+    content = content[:len(content) - cut]
     swept(tmp_path, [1])
     pack_path(tmp_path / "trials").write_bytes(content)
     for read in (lambda: load_finished(tmp_path), lambda: is_finished(tmp_path, "x1"),
