@@ -23,6 +23,7 @@ from planners.pick_place import (
     run_problem,
     trial_key,
 )
+from tests.planners.checkpoints import MemoryCheckpoint, Stop
 
 #: m/s: a particle the picker snaps onto or carries moves faster (the defaults' bound is 5)
 SLOW = 0.01
@@ -151,28 +152,6 @@ def test_a_trial_names_its_captures_by_its_key_and_a_rerun_retires_them(settings
     assert run.run_trial(params, blowup_out=str(tmp_path))["blowups"] == [f"blowups/{label}"]
     assert (tmp_path / "blowups" / "outdated" / label / "blowup.json").is_file()
     json.dumps(res)
-
-
-class Stop(Exception):
-    """Stands for the kill of a trial."""
-
-
-class MemoryCheckpoint:
-    """Keeps the last progress saved (through JSON); raises Stop at the ``stop_after``-th
-    save, once."""
-
-    def __init__(self, stop_after=None):
-        self.saved, self.saves, self.stop_after = None, 0, stop_after
-
-    def load(self):
-        return self.saved
-
-    def save(self, progress):
-        self.saved = json.loads(json.dumps(progress))
-        self.saves += 1
-        if self.saves == self.stop_after:
-            self.stop_after = None
-            raise Stop
 
 
 def test_a_resumed_trial_keeps_the_captures_of_its_finished_stages(tmp_path):

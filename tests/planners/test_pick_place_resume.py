@@ -3,39 +3,17 @@ the trial that was never stopped (the rollouts, both generators and the counters
 on a two-stage fold with CEM(Random), whose candidates come from the numpy generator and whose
 samples from the torch one."""
 
-import json
 from dataclasses import replace
 
 import pytest
 
 from planners.pick_place import PickPlaceSettings, ScriptedPlanner, make_problem, run_problem, solve
 from planners.trial_progress import iterations_done
+from tests.planners.checkpoints import MemoryCheckpoint, Stop
 
 #: what a resumed trial may differ in: its wall time (summed over its runs), the mean seconds
 #: per CEM iteration (measured in two runs) and the number of runs
 TIMINGS = ("wall_s", "s_per_iteration", "segments")
-
-
-class Stop(Exception):
-    """Stands for the kill of a trial."""
-
-
-class MemoryCheckpoint:
-    """Keeps the last progress saved (through JSON, as a checkpoint file does); raises Stop at
-    the ``stop_after``-th save, once."""
-
-    def __init__(self, stop_after=None):
-        self.saved, self.saves, self.stop_after = None, 0, stop_after
-
-    def load(self):
-        return self.saved
-
-    def save(self, progress):
-        self.saved = json.loads(json.dumps(progress))
-        self.saves += 1
-        if self.saves == self.stop_after:
-            self.stop_after = None
-            raise Stop
 
 
 @pytest.fixture(scope="module")
