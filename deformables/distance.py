@@ -211,16 +211,8 @@ class SurfaceDistance:
             return best
         if float(upper.max()) < limit:         # no early stop: the exact maximum is wanted
             return self._max_below(candidates, upper, best, chunk)
-        order = np.argsort(-upper, kind="stable")
-        for begin in range(0, len(order), chunk):
-            batch = order[begin:begin + chunk]
-            batch = batch[upper[batch] > best]
-            if len(batch) == 0:
-                break
-            best = max(best, float(self.distances(candidates[batch]).max()))
-            if best >= limit:
-                break
-        return best
+        return _max_from_top(upper, best, chunk,
+                             lambda batch: self.distances(candidates[batch]), limit)
 
     def _max_below(self, points: np.ndarray, upper: np.ndarray, best: float,
                    chunk: int) -> float:
@@ -231,14 +223,26 @@ class SurfaceDistance:
         ``best``."""
         guess, near = self._guess(points)
         upper = np.minimum(upper, guess)
-        order = np.argsort(-upper, kind="stable")
-        for begin in range(0, len(order), chunk):
-            batch = order[begin:begin + chunk]
-            batch = batch[upper[batch] > best]
-            if len(batch) == 0:
-                break
-            best = max(best, float(self._refine(points[batch], guess[batch], near[batch]).max()))
-        return best
+        return _max_from_top(
+            upper, best, chunk,
+            lambda batch: self._refine(points[batch], guess[batch], near[batch]))
+
+
+def _max_from_top(upper: np.ndarray, best: float, chunk: int, distances,
+                  limit: float = np.inf) -> float:
+    """``max(best, ...)`` of the exact distances ``distances(batch)`` of the points with upper
+    bounds ``upper`` ``(Q,)``, resolved ``chunk`` at a time from the largest bound down while
+    it exceeds the best so far, stopping once the best reaches ``limit``."""
+    order = np.argsort(-upper, kind="stable")
+    for begin in range(0, len(order), chunk):
+        batch = order[begin:begin + chunk]
+        batch = batch[upper[batch] > best]
+        if len(batch) == 0:
+            break
+        best = max(best, float(distances(batch).max()))
+        if best >= limit:
+            break
+    return best
 
 
 def unique_points(points: np.ndarray) -> np.ndarray:
