@@ -277,7 +277,7 @@ def is_finished(out_dir: Path | str, key: str, *, root: Path | str | None = None
     Reads only (PackError: the pack cannot be read)."""
     _check_reuse(reuse)
     rec, _ = stored_record(out_dir, key, schema)
-    if rec is None:
+    if rec is None or schema.wanted_problem(rec["result"]):
         return False
     return reuse == "any" or reuse_problem(rec.get("code"), current_code(root), root) is None
 
@@ -306,10 +306,12 @@ def _sort_stored(trials, out_dir, state, *, fresh, reuse, root, schema
         rec = done.get(t.key)
         if rec is None:
             continue
-        reason = "fresh sweep" if fresh else reuse_problem(rec.get("code"), state, root)
+        lacks = schema.wanted_problem(rec["result"])
+        reason = ("fresh sweep" if fresh else lacks
+                  or reuse_problem(rec.get("code"), state, root))
         if reason is None:
             continue
-        if reuse == "any" and not fresh:
+        if reuse == "any" and not fresh and lacks is None:
             across[t.key] = reason
             log.warning("trial %s is reused deliberately (reuse='any'): %s", t.key, reason)
             continue

@@ -87,15 +87,20 @@ class Schema:
         check_result, check_progress: further checks (picklable functions: a checkpoint
             travels to the pool's workers with its schema): the problem in a few words, or
             None.
+        wanted: keys this run needs that a sound record of the experiment may lack (a run
+            that did not ask for them wrote it, e.g. an MPC trial without --keep-controls):
+            such a record is not corrupt but outdated, moved to OUT/trials/outdated/ and
+            recomputed (``dopt.sweep``), even where the sweep reuses across code changes.
     """
 
     result: tuple[str, ...] = ()
     progress: tuple[str, ...] = ()
     check_result: Callable[[dict], str | None] | None = None
     check_progress: Callable[[dict], str | None] | None = None
+    wanted: tuple[str, ...] = ()
 
     def __post_init__(self):
-        for name in ("result", "progress"):
+        for name in ("result", "progress", "wanted"):
             keys = getattr(self, name)
             if isinstance(keys, str) or not all(isinstance(k, str) for k in keys):
                 raise TypeError(f"Schema.{name} must be a tuple of key names, got {keys!r}")
@@ -107,6 +112,13 @@ class Schema:
     def result_problem(self, result) -> str | None:
         """Why ``result`` is not a trial result of this experiment, or None."""
         return _fields_problem(result, self.result, self.check_result, "result")
+
+    def wanted_problem(self, result: dict) -> str | None:
+        """Why the sound trial ``result`` cannot stand for this run (it lacks a ``wanted``
+        key), or None."""
+        missing = [k for k in self.wanted if k not in result]
+        return (f"it lacks {', '.join(repr(k) for k in missing)} (written by a run that did "
+                f"not ask for them)") if missing else None
 
     def progress_problem(self, progress) -> str | None:
         """Why ``progress`` is not a checkpoint of this experiment, or None."""

@@ -77,19 +77,15 @@ from planners.svr_mpc import (
     Derivatives,
     Row,
     SVRMPCSettings,
-    derivatives_effect,
-    feedback_effect,
-    paired,
     parse_row,
     row_label,
     run_trial,
     split_params,
-    summarize,
+    table1_fields,
     task_defaults,
     trial_key,
     trial_params,
 )
-from planners.svr_mpc.authors_data import authors_statistic
 
 log = logging.getLogger(__name__)
 FEEDBACK = {"off": (False,), "on": (True,), "both": (False, True)}
@@ -335,7 +331,7 @@ def run(args, trials, fn=None, out: Path | None = None, workers: int | None = No
     records)."""
     out, keep = out or args.out, getattr(args, "keep_controls", False)
     if keep and fn is None:
-        schema = replace(schema, result=schema.result + CONTROLS_FIELDS)
+        schema = replace(schema, wanted=schema.wanted + CONTROLS_FIELDS)
     steps = {t.key: int(t.params.get("timeout") or task_defaults(t.params["task"])[1])
              for t in trials}
     res = run_with_console(
@@ -551,21 +547,14 @@ def _main(args, argv) -> int:
     records, res = run(args, trials)
     failed = res.failed
     baseline = baseline_label(args)
-    rows = summarize(records, baseline=baseline)
-    order = {name: i for i, name in enumerate(TABLE1_ROWS)}
-    rows = dict(sorted(rows.items(), key=lambda kv: (order.get(kv[0].split()[0], 99), kv[0])))
+    fields = table1_fields(records, baseline=baseline)
+    rows = fields["methods"]
     summary = {"experiment": "table1", "task": args.task, **protocol(args, trials[0].params),
                "row_settings": {row: {"method": t.params["method"], "theta": t.params["theta"],
                               "rho": t.params["rho"]}
                         for t in trials for row in [row_label(t.params)]},
-               "methods": rows, "paired": paired(records, baseline=baseline),
-               "authors_statistic": authors_statistic(records, baseline=baseline),
-               "failed": failed, "trial_commits": res.commits,
+               **fields, "failed": failed, "trial_commits": res.commits,
                "blowups": blowup_captures(args.out, [t.key for t in trials])}
-    if args.feedback == "both":
-        summary["feedback_effect"] = feedback_effect(records)
-    if variants := derivatives_effect(records):
-        summary["derivatives_effect"] = variants
     write_summary(summary, args.out, args.record, "experiments/mpc.py", argv)
     write_table(args.out, args.task, rows, summary.get("feedback_effect"))
     write_plots(args.out, args.task, records, list(rows), render=not args.no_render)

@@ -26,6 +26,7 @@ from report_stats import (
     FAMILY_ALPHA,
     holm_family,
     normal_p_from_intervals,
+    pval,
     welch_p_from_intervals,
 )
 
@@ -62,6 +63,7 @@ def table1_section(results: list[Result], page: Path) -> list[str]:
             tau = kendall_tau_b([p[0] for p in pairs], [p[1] for p in pairs])
             lines += ["", f"Kendall tau of the rows' mean lag and mean normalised cost: "
                           f"{num(tau)} (1: the less a row lags, the less it costs)."]
+        lines += versus_lines(d.get("versus"))
         fb = d.get("feedback_effect")
         if fb:
             lines += ["", "Feedback vs open loop, paired by seed (MPC cost ratio: geometric mean "
@@ -97,6 +99,37 @@ def table1_section(results: list[Result], page: Path) -> list[str]:
                    "bound; counted in its own column), median over all.", results, page, body)
 
 
+def versus_lines(v: dict | None) -> list[str]:
+    """The table of each SVR row against rand and baseline (``planners.svr_mpc.versus``);
+    nothing for a summary without it."""
+    if not v or not v.get("pairs"):
+        return []
+    alpha = v["alpha"]
+    return ["", f"Each SVR row against {' and '.join(v['references'])}, paired by seed (MPC "
+            f"cost ratio: geometric mean and a simultaneous {(1 - alpha) * 100:g} % interval "
+            f"over the family of {v['family_size']}; a t-test on the log ratios, {CORRECTION} "
+            f"over the family at {alpha * 100:g} %; pairs where the SVR row cost less):", "",
+            *table(["row", "versus", "cost ratio", "simultaneous interval", "p", "p (Holm)",
+                    "SVR better", "verdict"],
+                   [[x["row"], x["reference"], num(x["ratio_geomean"]),
+                     span(x["ratio_ci_simultaneous"]), pval(x["p"]), pval(x["p_holm"]),
+                     f"{x['better']}/{x['pairs']}", x["verdict"]]
+                    for x in v["pairs"].values()])]
+
+
+def versus_headline(v: dict | None) -> str:
+    """One clause: how many SVR rows are cheaper / dearer than each reference under Holm."""
+    if not v or not v.get("pairs"):
+        return ""
+    parts = []
+    for ref in v["references"]:
+        verdicts = [x["verdict"] for x in v["pairs"].values() if x["reference"] == ref]
+        if verdicts:
+            parts.append(f"against {ref}, {verdicts.count('cheaper')} of {len(verdicts)} SVR "
+                         f"rows cheaper and {verdicts.count('dearer')} dearer")
+    return f"; {CORRECTION} at {v['alpha'] * 100:g} %: " + ", ".join(parts) if parts else ""
+
+
 def protocol_line(d: dict) -> str:
     """How a Table 1 file's trials ran (files without a "preset" ran ours, the only one then)."""
     if "preset" not in d:
@@ -130,7 +163,8 @@ def table1_headline(r: Result) -> str:
     cost_used = f", cost `{r.data['cost']}`" if r.data.get("cost") else ""
     return (f"protocol `{r.data.get('preset', 'ours')}`{cost_used}; MPC cost / baseline "
             f"(opt. time, DoFs): " + "; ".join(parts)
-            + f" ({trials} trial{'s' if trials != 1 else ''} each)")
+            + f" ({trials} trial{'s' if trials != 1 else ''} each)"
+            + versus_headline(r.data.get("versus")))
 
 
 # ------------------------------------------------------------- table1 beside the paper
@@ -142,11 +176,15 @@ def paper_table1(results: list[Result]) -> tuple[Result | None, dict]:
 
 
 def paper_preset_table1(results: list[Result], task: str) -> Result | None:
-    """The Table 1 file of ``task`` run under the authors' protocol (not quick), if any."""
-    chosen = [r for r in results if r.kind == "table1" and r.data.get("task") == task
-              and r.data.get("preset") == "paper" and not r.quick
-              and not r.data.get("derivatives_effect")]
-    return chosen[-1] if chosen else None
+    """The Table 1 file of ``task`` run under the authors' protocol (not quick), if any: on
+    the authors' problems (preset ``authors``) where there is one, else on ours (``paper``)."""
+    for preset in ("authors", "paper"):
+        chosen = [r for r in results if r.kind == "table1" and r.data.get("task") == task
+                  and r.data.get("preset") == preset and not r.quick
+                  and not r.data.get("derivatives_effect")]
+        if chosen:
+            return chosen[-1]
+    return None
 
 
 def orderings(paper: dict, ours: dict) -> dict:
@@ -254,8 +292,9 @@ def table1_vs_paper_section(results: list[Result], page: Path) -> list[str]:
         return []
     lines = ["## State-vector reduction, Table 1 beside the paper", "",
              "Per row: the paper's printed MPC cost (normalised by its baseline's; mean ± 90 % "
-             "CI, clutter without outliers), ours under `--preset paper` (mean ± 90 % CI of the "
-             "per-seed cost / baseline, outliers left out; the median of the per-seed ratios; "
+             "CI, clutter without outliers), ours under `--preset authors` (else `paper`; "
+             "mean ± 90 % CI of the per-seed cost / baseline, outliers left out; the median of "
+             "the per-seed ratios; "
              "the geometric mean of the per-seed ratios with its 90 % CI), the authors' data's "
              "median final cost over baseline's (absent for rand and naive), DoFs and "
              "optimisation time. Paired ratios and medians are ours only: the paper prints "

@@ -8,8 +8,8 @@ the fields an experiment computes from its trials (``TRIAL_FIELDS``) are compute
 
     fig7           planners.pick_place.summarize (experiments/pick_place_cli.py), the trials'
                    wall time
-    table1         planners.svr_mpc.summarize, paired, authors_statistic, feedback_effect,
-                   derivatives_effect (experiments/mpc.py)
+    table1         planners.svr_mpc.summarize, paired, authors_statistic, versus,
+                   feedback_effect, derivatives_effect (experiments/mpc.py)
     fig4           planners.svr_mpc.summarize per (rho, theta) (experiments/rho_sweep.py)
     clock_check    experiments/clock_check.py's compare
     svr_explain    experiments/svr_explain.py's summarize_rows
@@ -25,10 +25,12 @@ field of the committed summary among those: a number that differs beyond roundin
     python experiments/resummarize.py --in-place [--only A.json,B.json]
 
 ``--in-place`` writes the rebuilt summary over the committed one, with this run's provenance
-(and the original run's under "resummarized_from"), only for a summary written from
-uncommitted code whose trials are all from committed code and whose numbers its trials give:
-that is what makes such a summary pass the docs/results test without rerunning anything. It
-is refused, like ``--record``, from a tree with uncommitted changes. Trial files are only read.
+(and the original run's under "resummarized_from"), only for a summary whose trials are all
+from committed code and whose numbers its trials give, and which was written from uncommitted
+code or lacks a field its trials give (an older format, e.g. a Table 1 summary written before
+``versus``): that is what makes such a summary pass the docs/results test, or show what the
+summaries compute today, without rerunning anything. It is refused, like ``--record``, from a
+tree with uncommitted changes. Trial files are only read.
 """
 
 from __future__ import annotations
@@ -50,7 +52,7 @@ from dopt import jsonio
 #: the fields each kind of summary computes from its trials
 TRIAL_FIELDS = {
     "fig7": ("methods", "trials_wall_s", "trial_commits"),
-    "table1": ("methods", "paired", "authors_statistic", "feedback_effect",
+    "table1": ("methods", "paired", "authors_statistic", "versus", "feedback_effect",
                "derivatives_effect", "row_settings", "trial_commits"),
     "fig4": ("points", "trial_commits"),
     "clock_check": ("rows", "trial_commits"),
@@ -95,31 +97,13 @@ def _baseline(records: list[dict]) -> str:
 
 
 def _table1(d: dict, records: list[dict], info: TrialInfo) -> dict:
-    from planners.svr_mpc import (
-        TABLE1_ROWS,
-        derivatives_effect,
-        feedback_effect,
-        paired,
-        row_label,
-        summarize,
-    )
-    from planners.svr_mpc.authors_data import authors_statistic
+    from planners.svr_mpc import row_label, table1_fields
 
-    baseline = _baseline(records)
-    order = {name: i for i, name in enumerate(TABLE1_ROWS)}
-    rows = dict(sorted(summarize(records, baseline=baseline).items(),
-                       key=lambda kv: (order.get(kv[0].split()[0], 99), kv[0])))
-    out = {"row_settings": {row_label(r["params"]): {k: r["params"][k]
-                                                     for k in ("method", "theta", "rho")}
-                            for r in records},
-           "methods": rows, "paired": paired(records, baseline=baseline),
-           "authors_statistic": authors_statistic(records, baseline=baseline),
-           "trial_commits": commits_of(records)}
-    if len({bool(r["params"].get("feedback")) for r in records}) == 2:
-        out["feedback_effect"] = feedback_effect(records)
-    if variants := derivatives_effect(records):
-        out["derivatives_effect"] = variants
-    return out
+    return {"row_settings": {row_label(r["params"]): {k: r["params"][k]
+                                                      for k in ("method", "theta", "rho")}
+                             for r in records},
+            **table1_fields(records, baseline=_baseline(records)),
+            "trial_commits": commits_of(records)}
 
 
 def _fig4(d: dict, records: list[dict], info: TrialInfo) -> dict:
@@ -236,9 +220,11 @@ def matches(found: dict) -> bool:
 
 
 def eligible(r: Result, found: dict) -> str | None:
-    """Why ``--in-place`` leaves a summary alone (None: it is re-summarised)."""
-    if not str(r.provenance.get("git_commit") or "").endswith("-dirty"):
-        return "its summary is from committed code already"
+    """Why ``--in-place`` leaves a summary alone (None: it is re-summarised): one from
+    committed code that holds every field its trials give is left alone."""
+    if (not str(r.provenance.get("git_commit") or "").endswith("-dirty")
+            and not found["diff"]["new"]):
+        return "its summary is from committed code and holds every field its trials give"
     bad = sum(n for c, n in found["info"].commits.items() if uncommitted(c))
     if bad:
         return f"{bad} of {found['info'].n} trials from uncommitted code: rerun them"
@@ -282,7 +268,8 @@ def parser() -> argparse.ArgumentParser:
                        help="write every rebuilt summary to OUT/<name>.json")
     where.add_argument("--in-place", action="store_true",
                        help="write over the committed summaries that are from uncommitted code "
-                            "while their trials are not (refused from a dirty tree)")
+                            "or lack a field their trials give, while their trials are from "
+                            "committed code (refused from a dirty tree)")
     ap.add_argument("--only", default=None, metavar="NAMES",
                     help="comma-separated summary file names (default: all)")
     ap.add_argument("--check", action="store_true",

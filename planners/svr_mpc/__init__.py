@@ -28,7 +28,8 @@ Shapes: T horizon, nu controls, ns state row, c = |C| active DoFs.
     optimisers.py  OPTIMISERS by name, register_optimiser, OptimiserContext, svr_optimiser
     episode.py   build_controller, wire_controller, run_svr_mpc -> SVRMPCResult, run_trial
                  and CapturingTrial (for dopt.sweep; keep_controls: for an exact replay)
-    summary.py   summarize, paired, feedback_effect, derivatives_effect
+    summary.py   summarize, paired, versus (SVR rows against rand and baseline, Holm),
+                 feedback_effect, derivatives_effect; table1_fields: all of them at once
     authors_data.py  the authors' Table 1 statistic on their per-episode files and on ours
 """
 
@@ -80,6 +81,8 @@ from planners.svr_mpc.summary import (
     paired,
     paired_ratio,
     summarize,
+    table1_fields,
+    versus,
 )
 
 __all__ = ["CLOCK_MODEL_MS", "CONTROLS_FIELDS", "DEFAULT_OPTIMISER", "FINITE_DIFFERENCES",
@@ -89,5 +92,5 @@ __all__ = ["CLOCK_MODEL_MS", "CONTROLS_FIELDS", "DEFAULT_OPTIMISER", "FINITE_DIF
            "derivatives_effect", "derivatives_tag", "dofs_mask", "dofs_of_mask", "feedback_effect",
            "optimiser_factory", "optimiser_names", "paired", "paired_ratio", "parse_row",
            "parse_variants", "register_optimiser", "row_label", "row_name", "run_svr_mpc",
-           "run_trial", "split_params", "summarize", "svr_optimiser", "task_defaults",
-           "trial_key", "trial_params", "wire_controller"]
+           "run_trial", "split_params", "summarize", "svr_optimiser", "table1_fields",
+           "task_defaults", "trial_key", "trial_params", "versus", "wire_controller"]

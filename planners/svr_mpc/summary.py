@@ -1,5 +1,6 @@
 """Many finished iLQR-SVR MPC trials of one task -> the rows of Table 1 (``summarize``), paired
-comparisons with baseline (``paired``) and the effects of feedback and derivative variants.
+comparisons with baseline (``paired``), whether each SVR row beats rand and baseline under
+Holm's correction (``versus``) and the effects of feedback and derivative variants.
 
 records: lists of {"params", "result"} as ``dopt.sweep`` stores them.
 """
@@ -7,9 +8,12 @@ records: lists of {"params", "result"} as ``dopt.sweep`` stores them.
 from __future__ import annotations
 
 import numpy as np
+from scipy import stats
 
+from dopt.multiple import holm
 from dopt.stats import mean_ci
-from planners.svr_mpc.settings import row_label
+from planners.svr_mpc.authors_data import authors_statistic
+from planners.svr_mpc.settings import TABLE1_ROWS, row_label
 
 #: a goal object that ends farther than this from the goal (m) was knocked over and rolled away;
 #: the paper removes such outliers from its clutter means, and so do we (they are counted)
@@ -99,6 +103,71 @@ def paired(records: list[dict], baseline: str = "baseline", level: float = 0.90)
             for row, costs in by.items() if row != baseline}
 
 
+#: the rows every SVR row is compared with by ``versus``: the full-state baseline and random
+#: selection of theta DoFs (the paper's "Rand" row)
+VERSUS_REFERENCES = ("baseline", "rand-t5")
+
+
+def versus(records: list[dict], references: tuple[str, ...] = VERSUS_REFERENCES,
+           alpha: float = 0.05) -> dict:
+    """Does each SVR row (method ``svr-*``) cost less than each of ``references``, seed by seed?
+
+    One family: every (SVR row, reference) pair present. Per pair, on the seeds both ran (all
+    trials, outliers and unstable ones included, as ``paired``): the per-seed log cost ratios,
+    their geometric mean, a two-sided one-sample t-test of mean log ratio 0 (``p``), Holm's
+    adjusted p over the family (``p_holm``), and a simultaneous (Bonferroni) interval of the
+    ratio at family-wise level 1 - ``alpha`` (``ratio_ci_simultaneous``: each pair's t-interval
+    at 1 - alpha / m; it excludes 1 only where Holm also rejects). ``verdict``: "cheaper" or
+    "dearer" where Holm rejects at ``alpha`` (by the sign of the mean log ratio), else "no
+    difference shown" (also with fewer than 3 pairs or no spread).
+
+    Returns {"alpha", "family_size", "references", "pairs": {"<row> vs <reference>":
+    {"row", "reference", "ratio_geomean", "ratio_ci_simultaneous": [lo, hi] | None, "p",
+    "p_holm", "better", "pairs", "verdict"}}}.
+    """
+    if not 0.0 < alpha < 1.0:
+        raise ValueError(f"alpha must be in (0, 1), got {alpha}")
+    by: dict = {}
+    for r in records:
+        by.setdefault(row_label(r["params"]), {})[r["params"]["seed"]] = r["result"]["mpc_cost"]
+    svr_rows = sorted(row for row in by
+                      if any(row.startswith(m) for m in ("sum-", "svd-")))
+    logs = {}
+    for row in svr_rows:
+        for ref in references:
+            seeds = sorted(set(by[row]) & set(by.get(ref, {})))
+            if seeds:
+                logs[row, ref] = np.log([by[row][k] / by[ref][k] for k in seeds])
+    m = len(logs)
+    pvals = {k: _t_test_p(x) for k, x in logs.items()}
+    tested = [k for k in logs if pvals[k] is not None]
+    adjusted = dict(zip(tested, holm([pvals[k] for k in tested]), strict=True))
+    pairs = {}
+    for (row, ref), x in logs.items():
+        p_holm = adjusted.get((row, ref))
+        mean = float(x.mean())
+        ci = None
+        if x.size >= 2 and x.std(ddof=1) > 0:
+            half = float(stats.t.ppf(1 - alpha / (2 * m), x.size - 1)
+                         * x.std(ddof=1) / np.sqrt(x.size))
+            ci = [float(np.exp(mean - half)), float(np.exp(mean + half))]
+        verdict = ("no difference shown" if p_holm is None or p_holm > alpha
+                   else "cheaper" if mean < 0 else "dearer")
+        pairs[f"{row} vs {ref}"] = {
+            "row": row, "reference": ref, "ratio_geomean": float(np.exp(mean)),
+            "ratio_ci_simultaneous": ci, "p": pvals[(row, ref)], "p_holm": p_holm,
+            "better": int((x < 0).sum()), "pairs": int(x.size), "verdict": verdict}
+    return {"alpha": alpha, "family_size": m, "references": list(references), "pairs": pairs}
+
+
+def _t_test_p(x: np.ndarray) -> float | None:
+    """Two-sided p of a one-sample t-test of mean 0; None with fewer than 3 values or no
+    spread (no test is possible)."""
+    if x.size < 3 or not x.std(ddof=1) > 0:
+        return None
+    return float(stats.ttest_1samp(x, 0.0).pvalue)
+
+
 def _variant_pairs(records: list[dict], plain) -> dict:
     """{row label: (plain row label, {seed: result}, {seed: plain result})} for every row
     (``row_label``) that differs from its ``plain(params)`` row, over the seeds both ran."""
@@ -158,3 +227,21 @@ def derivatives_effect(records: list[dict], level: float = 0.90) -> dict:
                        for field in ("lag_steps_mean", "opt_ms_mean")
                        for who, res in (("", var), ("versus_", ref))}}
             for label, (base, var, ref) in _variant_pairs(records, plain).items()}
+
+
+def table1_fields(records: list[dict], baseline: str = "baseline") -> dict:
+    """Everything a Table 1 summary computes from its trials: "methods" (``summarize``, rows
+    in ``TABLE1_ROWS`` order, variants after their row), "paired", "authors_statistic",
+    "versus", and where the trials hold them "feedback_effect" (both feedback settings ran)
+    and "derivatives_effect" (a derivative variant ran)."""
+    order = {name: i for i, name in enumerate(TABLE1_ROWS)}
+    rows = dict(sorted(summarize(records, baseline=baseline).items(),
+                       key=lambda kv: (order.get(kv[0].split()[0], 99), kv[0])))
+    out = {"methods": rows, "paired": paired(records, baseline=baseline),
+           "authors_statistic": authors_statistic(records, baseline=baseline),
+           "versus": versus(records)}
+    if len({bool(r["params"].get("feedback")) for r in records}) == 2:
+        out["feedback_effect"] = feedback_effect(records)
+    if variants := derivatives_effect(records):
+        out["derivatives_effect"] = variants
+    return out

@@ -236,6 +236,26 @@ def test_reuse_any_reuses_every_valid_record_and_lists_it(tmp_path, code, caplog
         run_sweep(square, trials([1]), tmp_path, reuse="always")
 
 
+def test_a_sound_record_without_a_wanted_field_is_outdated_not_corrupt(tmp_path, code, caplog):
+    """A record that fits the experiment but lacks what this run wants (Schema.wanted) is
+    recomputed, even when reusing across code changes, and kept under trials/outdated/."""
+    from dopt.sweep import Schema
+
+    run_sweep(square, trials([1, 2]), tmp_path)
+    wants = Schema(result=("y",), wanted=("pid", "z"))
+    assert not is_finished(tmp_path, "x1", schema=wants)
+    assert is_finished(tmp_path, "x1", schema=Schema(result=("y",), wanted=("pid",)))
+    with caplog.at_level(logging.WARNING, logger="dopt.sweep"):
+        res = run_sweep(square, trials([1, 2]), tmp_path, schema=wants, reuse="any")
+    assert sorted(res.ran) == ["x1", "x2"] and res.corrupt == {} and res.reused_across == {}
+    assert res.recomputed["x1"] == "it lacks 'z' (written by a run that did not ask for them)"
+    assert sorted(p.name for p in (tmp_path / "trials" / "outdated").iterdir()) == [
+        "x1.json", "x2.json"]
+    assert not (tmp_path / "trials" / "corrupt").exists()
+    with pytest.raises(TypeError, match="Schema.wanted"):
+        Schema(wanted="z")
+
+
 def test_is_finished_names_the_trials_a_sweep_skips_and_reads_only(tmp_path, code):
     _record(tmp_path, "x1", 1, {"version": "0.9.0", "commit": COMMIT})    # another version
     _record(tmp_path, "x2", 2, {"version": "1.0.0", "commit": UNKNOWN})  # unknown commit

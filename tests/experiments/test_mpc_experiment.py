@@ -51,7 +51,8 @@ def test_quick_run_writes_table_and_resumes(tmp_path):
 
 def test_keep_controls_reaches_the_trials_and_reruns_those_without(tmp_path):
     """--keep-controls: a trial keeps its start state and controls under the key it has
-    without the flag, a stored trial without them is rerun (one with them is reused), and
+    without the flag, a stored trial without them is rerun (its file kept under
+    trials/outdated/, not corrupt/: it is sound), one with them is reused, and
     dopt-view's replay of the kept controls ends within 1e-9 of its recorded final state."""
     from planners.view import load_mpc
 
@@ -64,6 +65,9 @@ def test_keep_controls_reaches_the_trials_and_reruns_those_without(tmp_path):
     run(*flags, "--keep-controls")
     (kept,) = (out / "trials").glob("*.json")
     assert kept.name == plain.name
+    (moved,) = (out / "trials" / "outdated").glob("*.json")
+    assert moved.name.startswith(plain.stem) and not (out / "trials" / "corrupt").exists()
+    assert "controls" not in json.loads(moved.read_text())["result"]
     result = json.loads(kept.read_text())["result"]
     assert len(result["controls"]) == result["steps"] == 8 and result["start_state"]
     assert load_mpc(kept).replay_error <= 1e-9

@@ -181,6 +181,22 @@ def test_table1_renders_its_rows(site):
     assert "svr-sum 0.86 ± 0.10 (93 ms, 21.0 DoFs)" in headlines(site)
 
 
+def test_table1_says_whether_each_svr_row_beats_rand_and_baseline(site):
+    from planners.svr_mpc import versus
+
+    records = [{"params": {"method": m, "theta": t, "rho": 1.0, "seed": k},
+                "result": {"mpc_cost": c * (1 + 0.01 * ((k * i) % 5))}}
+               for k in range(8) for i, (m, t, c) in enumerate(
+                   (("baseline", 0, 100.0), ("rand", 5, 60.0), ("svr-sum", 10, 80.0)))]
+    write(site["results"], "table1_clutter.json", {**table1(), "versus": versus(records)})
+    assert run(site) == 0
+    md = site["md"].read_text()
+    assert "| sum-t10-r1 | baseline | 0.82 |" in md and "| cheaper |" in md
+    assert "| sum-t10-r1 | rand-t5 | 1.34 |" in md and "| dearer |" in md
+    assert ("against baseline, 1 of 1 SVR rows cheaper and 0 dearer, against rand-t5, 0 of 1 "
+            "SVR rows cheaper and 1 dearer") in headlines(site)
+
+
 def test_fig4_and_key_particles(site):
     points = [dict(rho=r, theta=0, **mpc_row(c, 0.05, ms, d, 5))
               for r, c, ms, d in [(0.1, 0.95, 120.0, 30.0), (10.0, 0.9, 80.0, 15.0)]]

@@ -104,5 +104,23 @@ def test_in_place_rewrites_only_a_dirty_summary_of_clean_trials(tmp_path, capsys
     assert resummarize.main(["--results-dir", str(results), "--in-place",
                              "--only", path.name]) == 0
     assert path.read_text() == before
-    assert "left alone: its summary is from committed code already" in \
-        capsys.readouterr().out
+    assert ("left alone: its summary is from committed code and holds every field its "
+            "trials give") in capsys.readouterr().out
+
+
+def test_in_place_brings_a_clean_summary_of_an_older_format_up_to_date(tmp_path, capsys,
+                                                                     monkeypatch):
+    """A summary from committed code that lacks a field its trials give (a Table 1 summary
+    written before ``versus``) is rewritten with it; its other fields stay as they were."""
+    results = tmp_path / "results"
+    path = _copy_sweep(results, "table1-soft_rigid-ee.json", "table1-soft_rigid-ee")
+    old = json.loads(path.read_text())
+    old.pop("versus", None)
+    path.write_text(json.dumps(old))
+    monkeypatch.setenv(COMMIT_ENV, "f" * 40)
+    assert resummarize.main(["--results-dir", str(results), "--in-place"]) == 0
+    assert "versus)" in capsys.readouterr().out          # "(the rebuild adds ..., versus)"
+    new = json.loads(path.read_text())
+    assert new["resummarized_from"] == old["provenance"]
+    assert new["methods"] == old["methods"] and new["versus"]["pairs"]
+    assert resummarize.main(["--results-dir", str(results), "--check"]) == 0

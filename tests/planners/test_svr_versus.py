@@ -1,0 +1,106 @@
+"""planners.svr_mpc.versus: each SVR row against rand and baseline, seed by seed, one family
+under Holm's correction. References: scipy's paired t-test on the log costs, Holm's procedure
+worked by hand, and properties any such family must have."""
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from scipy import stats
+
+from planners.svr_mpc import versus
+
+ROWS = {"baseline": ("baseline", 0, 1.0), "rand-t5": ("rand", 5, 1.0),
+        "sum-t10-r1": ("svr-sum", 10, 1.0), "svd-t10-r500": ("svr-svd", 10, 500.0)}
+
+
+def records(costs: dict) -> list[dict]:
+    """{row name: [cost per seed]} -> trial records as dopt.sweep stores them."""
+    out = []
+    for row, values in costs.items():
+        method, theta, rho = ROWS[row]
+        out += [{"params": {"method": method, "theta": theta, "rho": rho, "seed": seed},
+                 "result": {"mpc_cost": float(c)}} for seed, c in enumerate(values)]
+    return out
+
+
+def test_p_values_are_the_paired_t_test_on_log_costs_and_holm_by_hand():
+    rng = np.random.default_rng(3)
+    base = rng.uniform(50, 150, 12)
+    costs = {"baseline": base, "rand-t5": base * np.exp(rng.normal(-0.05, 0.1, 12)),
+             "sum-t10-r1": base * np.exp(rng.normal(-0.3, 0.1, 12)),
+             "svd-t10-r500": base * np.exp(rng.normal(0.0, 0.1, 12))}
+    out = versus(records(costs))
+    assert out["family_size"] == 4
+    expected = {f"{row} vs {ref}": stats.ttest_rel(np.log(costs[row]), np.log(costs[ref])).pvalue
+                for row in ("sum-t10-r1", "svd-t10-r500") for ref in ("baseline", "rand-t5")}
+    for name, p in expected.items():
+        assert out["pairs"][name]["p"] == pytest.approx(p, rel=1e-9)
+    # Holm by hand: sort ascending, multiply the k-th smallest by m - k + 1, running maximum
+    names = sorted(expected, key=expected.get)
+    running = 0.0
+    for k, name in enumerate(names):
+        running = max(running, min(1.0, (4 - k) * expected[name]))
+        assert out["pairs"][name]["p_holm"] == pytest.approx(running, rel=1e-9)
+    sum_vs_base = out["pairs"]["sum-t10-r1 vs baseline"]
+    assert sum_vs_base["verdict"] == "cheaper" and sum_vs_base["ratio_geomean"] < 0.8
+    assert sum_vs_base["better"] == int(np.sum(costs["sum-t10-r1"] < base))
+
+
+def test_a_row_no_cheaper_than_its_reference_shows_no_difference():
+    rng = np.random.default_rng(0)
+    base = rng.uniform(50, 150, 30)
+    noise = rng.normal(0, 0.2, 15)
+    same = base * np.exp(np.concatenate([noise, -noise]))    # log ratios with mean exactly 0
+    out = versus(records({"baseline": base, "sum-t10-r1": same}), references=("baseline",))
+    pair = out["pairs"]["sum-t10-r1 vs baseline"]
+    assert pair["verdict"] == "no difference shown"
+    assert pair["ratio_geomean"] == pytest.approx(1.0)
+    lo, hi = pair["ratio_ci_simultaneous"]
+    assert lo < 1.0 < hi
+
+
+def test_missing_references_and_unpaired_seeds_are_left_out():
+    out = versus(records({"baseline": [1.0, 2.0, 3.0], "sum-t10-r1": [0.5, 1.0, 1.5, 9.0]}))
+    assert list(out["pairs"]) == ["sum-t10-r1 vs baseline"]     # no rand row ran
+    assert out["pairs"]["sum-t10-r1 vs baseline"]["pairs"] == 3
+    # three identical ratios: no spread, no test, no interval, no verdict
+    assert out["pairs"]["sum-t10-r1 vs baseline"]["p"] is None
+    assert out["pairs"]["sum-t10-r1 vs baseline"]["verdict"] == "no difference shown"
+
+
+def test_alpha_outside_the_unit_interval_is_refused():
+    with pytest.raises(ValueError, match="alpha"):
+        versus([], alpha=1.5)
+
+
+log_ratios = st.lists(st.floats(-2.0, 2.0, allow_nan=False), min_size=3, max_size=25)
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.lists(log_ratios, min_size=1, max_size=2),
+       st.sampled_from([0.01, 0.05, 0.1]))
+def test_simultaneous_intervals_agree_with_holm(draws, alpha):
+    """Whatever the data: Holm's p is never below the raw p, an interval that excludes 1 comes
+    with a verdict (Holm rejects all Bonferroni does), the verdict follows the geometric mean's
+    side of 1, and the interval holds the geometric mean."""
+    rows = ["sum-t10-r1", "svd-t10-r500"][:len(draws)]
+    n = min(len(x) for x in draws)
+    base = np.linspace(10.0, 100.0, n)
+    costs = {"baseline": base}
+    for row, x in zip(rows, draws, strict=True):
+        costs[row] = base * np.exp(np.asarray(x[:n]))
+    out = versus(records(costs), references=("baseline",), alpha=alpha)
+    for pair in out["pairs"].values():
+        if pair["p"] is None:
+            assert pair["verdict"] == "no difference shown"
+            continue
+        assert pair["p_holm"] >= pair["p"] - 1e-15
+        lo, hi = pair["ratio_ci_simultaneous"]
+        assert lo * (1 - 1e-12) <= pair["ratio_geomean"] <= hi * (1 + 1e-12)
+        if hi < 1.0 or lo > 1.0:
+            assert pair["verdict"] != "no difference shown"
+        if pair["verdict"] == "cheaper":
+            assert pair["ratio_geomean"] < 1.0
+        if pair["verdict"] == "dearer":
+            assert pair["ratio_geomean"] > 1.0
