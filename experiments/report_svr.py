@@ -175,10 +175,12 @@ def paper_table1(results: list[Result]) -> tuple[Result | None, dict]:
     return (refs[-1], refs[-1].data["published"]) if refs else (None, {})
 
 
-def paper_preset_table1(results: list[Result], task: str) -> Result | None:
-    """The Table 1 file of ``task`` run under the authors' protocol (not quick), if any: on
-    the authors' problems (preset ``authors``) where there is one, else on ours (``paper``)."""
-    for preset in ("authors", "paper"):
+def paper_preset_table1(results: list[Result], task: str,
+                        presets: tuple[str, ...] = ("authors", "paper")) -> Result | None:
+    """The Table 1 file of ``task`` run under the authors' protocol (not quick), if any: the
+    newest of the first of ``presets`` that has one (by default on the authors' problems,
+    preset ``authors``, where there is one, else on ours, ``paper``)."""
+    for preset in presets:
         chosen = [r for r in results if r.kind == "table1" and r.data.get("task") == task
                   and r.data.get("preset") == preset and not r.quick
                   and not r.data.get("derivatives_effect")]

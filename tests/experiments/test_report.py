@@ -391,6 +391,23 @@ def test_table1_of_the_paper_protocol_is_shown_beside_the_published_table(site):
     assert "Cheapest first, paper: sum-t10-r1, rand-t5, baseline; ours: sum-t10-r1, rand-t5, " \
            "baseline." in md
     assert "Kendall tau 1.00 over 3 rows; 0 of 3 pairs in the opposite order" in headlines(site)
+    # the same run on the authors' problems, with its Holm verdicts, is the one shown beside
+    # the paper and in the README's map; the run on our problems keeps its own map row
+    versus = {"alpha": 0.05, "family_size": 2, "references": ["baseline", "rand-t5"],
+              "pairs": {f"sum-t10-r1 vs {ref}": {
+                  "row": "sum-t10-r1", "reference": ref, "ratio_geomean": g,
+                  "ratio_ci_simultaneous": [g - 0.05, g + 0.05], "p": 1e-4, "p_holm": 2e-4,
+                  "better": 9, "pairs": 10, "verdict": verdict}
+                  for ref, g, verdict in (("baseline", 0.7, "cheaper"), ("rand-t5", 0.9,
+                                                                         "cheaper"))}}
+    write(site["results"], "table1-clutter-authors.json",
+          {**data, "preset": "authors", "problem": "authors", "versus": versus})
+    assert run(site) == 0
+    assert "### clutter: `table1-clutter-authors.json` beside the paper" in site["md"].read_text()
+    readme = block(site["readme"])
+    assert "SVR rows cheaper than baseline / rand (Holm): clutter 1/1 / 1/1; order vs the " \
+           "paper's: Kendall tau 1.00" in readme
+    assert "Table 1 on dopt's own push tasks" in readme
 
 
 def test_panda_execution_renders_its_goals(site):
