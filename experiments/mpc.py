@@ -173,6 +173,9 @@ def add_run_arguments(ap: argparse.ArgumentParser) -> None:
     ap.add_argument("--clock", default=None, choices=list(CLOCKS),
                     help="real (wall time), virtual (CPU time / --nominal-threads) or model "
                          "(ms = a + b |C|, deterministic)")
+    ap.add_argument("--clock-ms", type=positive_float, default=None, metavar="MS",
+                    help="every optimisation lasts MS on the model clock (sets --clock model): "
+                         "every row lags alike, so rows differ only in the DoFs they choose")
     ap.add_argument("--nominal-threads", type=positive_float, default=2.0,
                     help="threads a virtual duration divides the CPU time by (default "
                          "%(default)s, this machine)")
@@ -231,6 +234,9 @@ def parse_args(argv=None, ap: argparse.ArgumentParser | None = None,
         ap.error(f"--feedback both is for experiments/mpc.py; give on or off to {ap.prog}")
     if args.ray is not None and importlib.util.find_spec("ray") is None:
         ap.error("--ray needs the ray package (pip install 'dopt[cluster]')")
+    if args.clock_ms is not None and args.clock not in (None, "model"):
+        ap.error(f"--clock-ms sets the model clock's duration; it cannot go with --clock "
+                 f"{args.clock}")
     if args.quick:
         args.trials, args.timeout = 1, args.timeout or 100
     if args.threads is None:
@@ -254,7 +260,10 @@ def settings_of(args, row: Row, feedback: bool) -> SVRMPCSettings:
         preset = replace(preset, islands=False)
     if args.push_tail == "off":
         preset = replace(preset, push_tail=False)
-    over = {"cost": args.cost, "control_noise": args.control_noise, "clock": args.clock}
+    over = {"cost": args.cost, "control_noise": args.control_noise, "clock": args.clock,
+            "clock_ms": args.clock_ms}
+    if args.clock_ms is not None:
+        over["clock"] = "model"
     over = {k: v for k, v in over.items() if v is not None}
     if args.warm_start is not None:
         over["warm_start"] = args.warm_start == "on"
@@ -316,7 +325,8 @@ def protocol(args, params: dict) -> dict:
             "keypoints": params["keypoints"], "fd_skip": params["fd_skip"],
             "box_qp": params["box_qp"], "slowdown": params["slowdown"],
             "problem": params["problem"], "layouts": params["layouts"],
-            "islands": params["islands"], "push_tail": params["push_tail"]}
+            "islands": params["islands"], "push_tail": params["push_tail"],
+            **({"clock_ms": params["clock_ms"]} if params.get("clock_ms") is not None else {})}
 
 
 def run(args, trials, fn=None, out: Path | None = None, workers: int | None = None,

@@ -50,6 +50,7 @@ SVR_PRESET_FIELDS = ("cost", "warm_start", "control_noise", "clock", "nominal_th
                      "keypoints", "fd_skip", "box_qp")
 #: experiments/mpc.py's flags -> the SVRMPCSettings fields they set
 SVR_FLAGS = {"--cost": ("cost",), "--control-noise": ("control_noise",), "--clock": ("clock",),
+             "--clock-ms": ("clock", "clock_ms"),
              "--warm-start": ("warm_start",), "--nominal-threads": ("nominal_threads",),
              "--fd": ("fd_centered", "fd_eps"), "--fd-skip": ("keypoints", "fd_skip"),
              "--keypoints": ("keypoints", "fd_skip"), "--box-qp": ("box_qp",),

@@ -141,6 +141,8 @@ def protocol_line(d: dict) -> str:
             + f", {d.get('clock')} clock"
             + (f" ({d.get('nominal_threads'):g} nominal threads)"
                if d.get("clock") == "virtual" else "")
+            + (f" (every optimisation {d['clock_ms']:g} ms: every row lags alike)"
+               if d.get("clock_ms") is not None else "")
             + f", control noise {d.get('control_noise')}, {d.get('fd')} differences, "
               f"slowdown {d.get('slowdown')}.")
 

@@ -242,14 +242,15 @@ def run_svr_mpc(settings: SVRMPCSettings = SVRMPCSettings(), seed: int = 0,
 
 def mpc_config(settings: SVRMPCSettings, task) -> MPCConfig:
     """The MPC loop's config of an episode: the settings' timeout and slowdown (else the
-    task's), clock, noise, feedback and, on the model clock, the task's cost model."""
+    task's), clock, noise, feedback and, on the model clock, the settings' fixed duration or
+    else the task's cost model."""
     return MPCConfig(timeout=int(settings.timeout or task.timeout),
                      slowdown=float(settings.slowdown or task.slowdown),
                      synchronous=settings.synchronous, feedback=settings.feedback,
                      control_noise=float(settings.control_noise), clock=settings.clock,
                      threads=float(settings.nominal_threads),
-                     model_ms=(CLOCK_MODEL_MS[settings.task] if settings.clock == "model"
-                               else None))
+                     model_ms=(None if settings.clock != "model" else CLOCK_MODEL_MS[settings.task]
+                               if settings.clock_ms is None else (settings.clock_ms, 0.0)))
 
 
 def keep_history(ctl, task, name: str) -> None:

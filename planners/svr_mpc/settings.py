@@ -200,6 +200,9 @@ class SVRMPCSettings:
             objects' derivatives are tiny rather than exactly 0.
         push_tail: the first push plan ends moving forward (``WarmStartConfig.moving_tail``);
             False: it ends braking at its end point, and MPC's padding pulls the pusher back.
+        clock_ms: on the model clock, every optimisation lasts this long (ms) instead of the
+            task's fitted a + b |C| (``CLOCK_MODEL_MS``): every row then lags alike, so what
+            is left between rows is their choice of DoFs, not their speed.
     """
 
     task: str = "clutter"
@@ -225,6 +228,7 @@ class SVRMPCSettings:
     layouts: str | None = None
     islands: bool = True
     push_tail: bool = True
+    clock_ms: float | None = None
 
     def __post_init__(self):
         get_task(self.task)                       # ValueError naming the known tasks
@@ -244,12 +248,15 @@ class SVRMPCSettings:
                              f"push_mcl_layouts, one CSV per scene)")
         # rho, control_noise finite >= 0; theta an int >= 0 or None; slowdown finite > 0 or
         # None; timeout an int >= 1 or None; feedback, synchronous bools; threads an int >= 0
-        check_config(self, positive=("slowdown", "nominal_threads", "fd_eps"),
+        check_config(self, positive=("slowdown", "nominal_threads", "fd_eps", "clock_ms"),
                      minimum={"rho": 0.0, "theta": 0, "timeout": 1, "control_noise": 0.0,
                               "threads": 0, "fd_skip": 1})
         _ = self.ilqr                              # ValueError naming a bad keypoint method
         if self.synchronous and self.clock != "real":
             raise ValueError("synchronous runs have no clock: use clock='real' with it")
+        if self.clock_ms is not None and self.clock != "model":
+            raise ValueError(f"clock_ms sets the model clock's duration: use clock='model' "
+                             f"with it, not {self.clock!r}")
 
     @classmethod
     def paper(cls, task: str, row: str = "sum-t10-r1", **overrides) -> SVRMPCSettings:
@@ -357,6 +364,10 @@ def trial_key(p: dict) -> str:
         parts.append("ws")
     if p.get("clock", "real") != "real":
         parts.append(f"clock{p['clock']}{p.get('nominal_threads', 2.0):g}")
+    if p.get("clock_ms") is not None:
+        parts.append(f"ms{p['clock_ms']:g}")
+    if p.get("synchronous"):
+        parts.append("sync")
     if p.get("fd_centered") or p.get("fd_eps", 1e-3) != 1e-3:
         parts.append(f"fd{'c' if p.get('fd_centered') else 'f'}{p.get('fd_eps', 1e-3):g}")
     if p.get("keypoints", "every") != "every":

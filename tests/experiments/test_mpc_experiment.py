@@ -92,6 +92,8 @@ def test_ray_path(tmp_path):
     (["--methods", "baseline,svr"], "unknown method"),
     (["--rows", "baseline,sum-t7"], "sum-t7"),
     (["--clock", "wall"], "argument --clock: invalid choice"),
+    (["--clock", "virtual", "--clock-ms", "150"], "--clock-ms sets the model clock's duration"),
+    (["--clock-ms", "0"], "argument --clock-ms: must be > 0"),
     (["--preset", "theirs"], "argument --preset: invalid choice"),
     (["--preset", "authors"], "problem 'authors' on clutter needs layouts"),
     (["--preset", "authors", "--layouts", "/nonexistent"], "layouts: no folder /nonexistent"),

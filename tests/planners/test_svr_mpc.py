@@ -14,6 +14,8 @@ from planners.svr_mpc import (
     paired,
     row_name,
     run_svr_mpc,
+    trial_key,
+    trial_params,
 )
 from planners.svr_mpc import summarize as aggregate
 
@@ -169,6 +171,23 @@ def test_model_clock_episode_is_deterministic():
     a, b = run_svr_mpc(settings, seed=2), run_svr_mpc(settings, seed=2)
     assert a.mpc_cost == b.mpc_cost and a.lag_steps == b.lag_steps and a.steps == 40
     assert a.active_sets == b.active_sets and a.clock == "model"
+
+
+def test_a_fixed_model_clock_lags_every_row_alike():
+    """clock_ms: every optimisation of every row lasts the same, so every row lags the same
+    number of agent steps (what the fitted a + b |C| model would not give rows of other |C|);
+    the trial key says so, and the duration is refused on another clock."""
+    lags = {}
+    for row in ("baseline", "rand-t5"):
+        s = SVRMPCSettings.paper("clutter", row, clock="model", clock_ms=20.0, timeout=30,
+                                 slowdown=1.0, threads=1)
+        lags[row] = run_svr_mpc(s, seed=1).lag_steps
+    assert len(set(lags["baseline"][1:] + lags["rand-t5"][1:])) == 1
+    assert "ms20" in trial_key(trial_params(s, 1))
+    with pytest.raises(ValueError, match="clock_ms"):
+        SVRMPCSettings.paper("clutter", "baseline", clock_ms=20.0)       # the virtual clock
+    with pytest.raises(ValueError, match="clock_ms"):
+        SVRMPCSettings.paper("clutter", "baseline", clock="model", clock_ms=-1.0)
 
 
 def test_unstable_trials_leave_the_mean_on_either_side_and_are_counted():
