@@ -84,6 +84,9 @@ def _main(args, paper: dict | None, argv) -> int:
     args.rho, args.theta = 1.0, None          # make_trials' defaults; the grid overrides them
     trials = table1.make_trials(args, methods=["baseline"]) + table1.make_trials(
         args, methods=[args.method], rhos=args.rhos, thetas=args.thetas)
+    # scene by scene (the sort is stable): a sweep stopped part way has every point of the
+    # grid, and its baseline, on the same first scenes
+    trials.sort(key=lambda t: t.params["seed"])
     recs, res = table1.run(args, trials)
     failed = res.failed
     base = [r for r in recs if r["params"]["method"] == "baseline"]

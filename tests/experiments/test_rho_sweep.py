@@ -33,3 +33,24 @@ def test_tiny_grid_writes_points_and_the_plot_with_the_authors_curves(tmp_path):
     assert d["settings"]["sum-t0-r1"]["control_noise"] == 0.05
     assert "seed" not in d["settings"]["baseline"]
     assert (out / "rho_sweep.png").stat().st_size > 10_000
+
+
+def test_the_sweep_runs_scene_by_scene(tmp_path, monkeypatch, capsys):
+    """Trials run seed by seed, each seed's baseline with its grid points, so a sweep stopped
+    part way holds every point on the same first scenes."""
+    sys.path.insert(0, str(ROOT / "experiments"))
+    import rho_sweep
+
+    seen = []
+
+    def fake_run(args, trials, *a, **k):
+        seen.extend((t.params["seed"], t.params["method"]) for t in trials)
+        raise RuntimeError("stopped after ordering")
+
+    monkeypatch.setattr(rho_sweep.table1, "run", fake_run)
+    rc = rho_sweep.main(["--preset", "paper", "--rhos", "0,1", "--thetas", "0,5",
+                         "--trials", "3", "--out", str(tmp_path / "rho")])
+    assert rc != 0 and "stopped after ordering" in capsys.readouterr().err
+    seeds = [s for s, _ in seen]
+    assert seeds == sorted(seeds) and len(seen) == 3 * (1 + 4)
+    assert [m for s, m in seen if s == 0] == ["baseline"] + ["svr-sum"] * 4
