@@ -233,7 +233,8 @@ def _fig7(task: str) -> Callable[[Result], bool]:
 
 def _table1(preset: str) -> Callable[[Result], bool]:
     return lambda r: (r.kind == "table1" and r.data.get("preset") == preset and not r.quick
-                      and not r.data.get("derivatives_effect") and r.data.get("cost") != "ee")
+                      and not r.data.get("derivatives_effect") and r.data.get("cost") != "ee"
+                      and r.data.get("clock_ms") is None)
 
 
 ROWS = (

@@ -185,7 +185,7 @@ def paper_preset_table1(results: list[Result], task: str,
     for preset in presets:
         chosen = [r for r in results if r.kind == "table1" and r.data.get("task") == task
                   and r.data.get("preset") == preset and not r.quick
-                  and not r.data.get("derivatives_effect")]
+                  and not r.data.get("derivatives_effect") and r.data.get("clock_ms") is None]
         if chosen:
             return chosen[-1]
     return None
@@ -325,14 +325,44 @@ def table1_vs_paper_section(results: list[Result], page: Path) -> list[str]:
                          f"{num(m.get('n_dofs_mean', m.get('dofs_mean')), 1)}",
                          f"{num(p.get('opt_ms'), 0)} / {num(m.get('opt_ms_mean'), 0)}"])
         o = orderings(*_table1_columns(pub, d))
+        alike = equal_lag_table1(results, task)
         lines += [f"### {task}: `{r.name}` beside the paper", "",
                   *table(["row", "paper MPC cost", "ours mean", "ours median ratio",
                           "ours paired geomean [CI90]", "authors' data median ratio",
                           "DoFs paper / ours", "opt. ms paper / ours"], rows), "",
                   f"Cheapest first, paper: {', '.join(o['paper_order'])}; ours: "
                   f"{', '.join(o['our_order'])}.", "", ordering_sentence(o) + ".", "",
-                  *source_lines([r, ref], page), ""]
+                  *equal_lag_lines(alike, pub),
+                  *source_lines([r, ref] + ([alike] if alike else []), page), ""]
     return lines[:-1]
+
+
+def equal_lag_table1(results: list[Result], task: str) -> Result | None:
+    """The newest Table 1 file of ``task`` on the authors' problems with every row lagging
+    alike (a fixed model clock, ``clock_ms``), if any."""
+    chosen = [r for r in results if r.kind == "table1" and r.data.get("task") == task
+              and r.data.get("preset") == "authors" and not r.quick
+              and r.data.get("clock_ms") is not None]
+    return chosen[-1] if chosen else None
+
+
+def equal_lag_lines(r: Result | None, pub: dict) -> list[str]:
+    """What is left between the rows when every row lags alike: their order, the paper's
+    Kendall tau and the Holm verdicts against baseline and rand (nothing without a file)."""
+    if r is None:
+        return []
+    d = r.data
+    o = orderings(*_table1_columns(pub, d))
+    n = max((m.get("n_trials", m.get("trials")) or 0) for m in d["methods"].values())
+    costs = ", ".join(f"{row} {num(m.get('mpc_cost_normalised_mean'))}"
+                      for row, m in sorted(d["methods"].items(),
+                                           key=lambda kv: kv[1].get("mpc_cost_normalised_mean")
+                                           if _finite(kv[1].get("mpc_cost_normalised_mean"))
+                                           else math.inf))
+    return [f"Every row lagging alike (`{r.name}`: every optimisation {d['clock_ms']:g} ms on "
+            f"the model clock, {n} scenes), cheapest first (mean cost / baseline): {costs}; "
+            f"Kendall tau against the paper's order {num(o['kendall_tau'])}"
+            + versus_headline(d.get("versus")) + ".", ""]
 
 
 # --------------------------------------------------------------------------- fig4 (SVR)
