@@ -127,13 +127,14 @@ def table1_line(results: list[Result], preset: str = "authors") -> str | None:
     many SVR rows Holm finds cheaper than baseline and than rand; and Kendall's tau of our
     order against the paper's printed one."""
     _, published = paper_table1(results)
-    parts, taus, versus = [], [], []
+    parts, taus, tasks, versus = [], [], [], {}
     for task in ("clutter", "soft", "soft_rigid"):
         r = paper_preset_table1(results, task, (preset,))
         if r is None:
             continue
-        if v := versus_counts(r.data.get("versus")):
-            versus.append(f"{task} {v}")
+        tasks.append(task)
+        for ref, count in versus_counts(r.data.get("versus")).items():
+            versus.setdefault(ref, []).append(count)
         rows = {k: m["mpc_cost_normalised_mean"] for k, m in r.data["methods"].items()
                 if k != "baseline" and isinstance(m.get("mpc_cost_normalised_mean"),
                                                   (int, float))}
@@ -144,26 +145,27 @@ def table1_line(results: list[Result], preset: str = "authors") -> str | None:
             taus.append(num(orderings(*_table1_columns(published[task], r.data))["kendall_tau"]))
     if not parts:
         return None
-    if versus:
-        text = "SVR rows cheaper than baseline / rand (Holm): " + ", ".join(versus)
+    if versus and all(len(v) == len(tasks) for v in versus.values()):
+        text = (f"SVR rows cheaper (Holm), {' / '.join(tasks)}: "
+                + "; ".join(f"than {ref} {', '.join(v)}" for ref, v in versus.items()))
     else:
         text = "cheapest reduced row / baseline: " + ", ".join(parts)
     if taus:
-        text += f"; order vs the paper's: Kendall tau {' / '.join(taus)}"
+        text += f"; Kendall tau vs the paper's order {' / '.join(taus)}"
     return text
 
 
-def versus_counts(v: dict | None) -> str:
-    """"a/n / b/n": of a summary's SVR rows, how many Holm finds cheaper than each reference
-    ("" without ``versus``)."""
+def versus_counts(v: dict | None) -> dict[str, str]:
+    """{reference: "a/n"}: of a summary's SVR rows, how many Holm finds cheaper than each
+    reference ({} without ``versus``)."""
     if not v or not v.get("pairs"):
-        return ""
-    counts = []
+        return {}
+    counts = {}
     for ref in v["references"]:
         verdicts = [x["verdict"] for x in v["pairs"].values() if x["reference"] == ref]
         if verdicts:
-            counts.append(f"{verdicts.count('cheaper')}/{len(verdicts)}")
-    return " / ".join(counts)
+            counts[ref] = f"{verdicts.count('cheaper')}/{len(verdicts)}"
+    return counts
 
 
 def fig4_line(results: list[Result]) -> str | None:
