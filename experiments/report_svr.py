@@ -108,12 +108,15 @@ def versus_lines(v: dict | None) -> list[str]:
     return ["", f"Each SVR row against {' and '.join(v['references'])}, paired by seed (MPC "
             f"cost ratio: geometric mean and a simultaneous {(1 - alpha) * 100:g} % interval "
             f"over the family of {v['family_size']}; a t-test on the log ratios, {CORRECTION} "
-            f"over the family at {alpha * 100:g} %; pairs where the SVR row cost less):", "",
+            f"over the family at {alpha * 100:g} %; pairs where the SVR row cost less, "
+            f"and those left out because either trial is an outlier or unstable):", "",
             *table(["row", "versus", "cost ratio", "simultaneous interval", "p", "p (Holm)",
                     "SVR better", "verdict"],
                    [[x["row"], x["reference"], num(x["ratio_geomean"]),
                      span(x["ratio_ci_simultaneous"]), pval(x["p"]), pval(x["p_holm"]),
-                     f"{x['better']}/{x['pairs']}", x["verdict"]]
+                     f"{x['better']}/{x['pairs']}"
+                     + (f" ({x['excluded']} left out)" if x.get("excluded") else ""),
+                     x["verdict"]]
                     for x in v["pairs"].values()])]
 
 

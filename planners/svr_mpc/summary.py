@@ -45,8 +45,7 @@ def summarize(records: list[dict], baseline: str = "baseline", level: float = 0.
     def outlier(v):
         return v["goal_distance_end"] > OUTLIER_DISTANCE
 
-    def excluded(v):
-        return outlier(v) or bool(v.get("unstable", False))
+    excluded = _excluded
 
     base_all = {k: v["mpc_cost"] for k, v in by.get(baseline, {}).items()}
     base = {k: c for k, c in base_all.items() if not excluded(by[baseline][k])}
@@ -112,8 +111,9 @@ def versus(records: list[dict], references: tuple[str, ...] = VERSUS_REFERENCES,
            alpha: float = 0.05) -> dict:
     """Does each SVR row (method ``svr-*``) cost less than each of ``references``, seed by seed?
 
-    One family: every (SVR row, reference) pair present. Per pair, on the seeds both ran (all
-    trials, outliers and unstable ones included, as ``paired``): the per-seed log cost ratios,
+    One family: every (SVR row, reference) pair present. Per pair, on the seeds both ran
+    where neither trial is an outlier or unstable (as ``summarize``'s mean; counted in
+    "excluded"): the per-seed log cost ratios,
     their geometric mean, a two-sided one-sample t-test of mean log ratio 0 (``p``), Holm's
     adjusted p over the family (``p_holm``), and a simultaneous (Bonferroni) interval of the
     ratio at family-wise level 1 - ``alpha`` (``ratio_ci_simultaneous``: each pair's t-interval
@@ -123,19 +123,25 @@ def versus(records: list[dict], references: tuple[str, ...] = VERSUS_REFERENCES,
 
     Returns {"alpha", "family_size", "references", "pairs": {"<row> vs <reference>":
     {"row", "reference", "ratio_geomean", "ratio_ci_simultaneous": [lo, hi] | None, "p",
-    "p_holm", "better", "pairs", "verdict"}}}.
+    "p_holm", "better", "pairs", "excluded", "verdict"}}}.
     """
     if not 0.0 < alpha < 1.0:
         raise ValueError(f"alpha must be in (0, 1), got {alpha}")
     by: dict = {}
+    dropped: dict = {}
     for r in records:
-        by.setdefault(row_label(r["params"]), {})[r["params"]["seed"]] = r["result"]["mpc_cost"]
+        row, seed, res = row_label(r["params"]), r["params"]["seed"], r["result"]
+        by.setdefault(row, {})[seed] = res["mpc_cost"]
+        if _excluded(res):
+            dropped.setdefault(row, set()).add(seed)
     svr_rows = sorted(row for row in by
                       if any(row.startswith(m) for m in ("sum-", "svd-")))
-    logs = {}
+    logs, excluded = {}, {}
     for row in svr_rows:
         for ref in references:
-            seeds = sorted(set(by[row]) & set(by.get(ref, {})))
+            both = set(by[row]) & set(by.get(ref, {}))
+            seeds = sorted(both - dropped.get(row, set()) - dropped.get(ref, set()))
+            excluded[row, ref] = len(both) - len(seeds)
             if seeds:
                 logs[row, ref] = np.log([by[row][k] / by[ref][k] for k in seeds])
     m = len(logs)
@@ -156,8 +162,15 @@ def versus(records: list[dict], references: tuple[str, ...] = VERSUS_REFERENCES,
         pairs[f"{row} vs {ref}"] = {
             "row": row, "reference": ref, "ratio_geomean": float(np.exp(mean)),
             "ratio_ci_simultaneous": ci, "p": pvals[(row, ref)], "p_holm": p_holm,
-            "better": int((x < 0).sum()), "pairs": int(x.size), "verdict": verdict}
+            "better": int((x < 0).sum()), "pairs": int(x.size),
+            "excluded": excluded[row, ref], "verdict": verdict}
     return {"alpha": alpha, "family_size": m, "references": list(references), "pairs": pairs}
+
+
+def _excluded(result: dict) -> bool:
+    """A trial left out of the normalised means and of ``versus``: an outlier (goal object
+    farther than ``OUTLIER_DISTANCE`` from the goal) or an unstable episode."""
+    return result["goal_distance_end"] > OUTLIER_DISTANCE or bool(result.get("unstable", False))
 
 
 def _t_test_p(x: np.ndarray) -> float | None:

@@ -185,7 +185,8 @@ def test_table1_says_whether_each_svr_row_beats_rand_and_baseline(site):
     from planners.svr_mpc import versus
 
     records = [{"params": {"method": m, "theta": t, "rho": 1.0, "seed": k},
-                "result": {"mpc_cost": c * (1 + 0.01 * ((k * i) % 5))}}
+                "result": {"mpc_cost": c * (1 + 0.01 * ((k * i) % 5)),
+                           "goal_distance_end": 0.01}}
                for k in range(8) for i, (m, t, c) in enumerate(
                    (("baseline", 0, 100.0), ("rand", 5, 60.0), ("svr-sum", 10, 80.0)))]
     write(site["results"], "table1_clutter.json", {**table1(), "versus": versus(records)})

@@ -20,7 +20,8 @@ def records(costs: dict) -> list[dict]:
     for row, values in costs.items():
         method, theta, rho = ROWS[row]
         out += [{"params": {"method": method, "theta": theta, "rho": rho, "seed": seed},
-                 "result": {"mpc_cost": float(c)}} for seed, c in enumerate(values)]
+                 "result": {"mpc_cost": float(c), "goal_distance_end": 0.01}}
+                for seed, c in enumerate(values)]
     return out
 
 
@@ -67,6 +68,18 @@ def test_missing_references_and_unpaired_seeds_are_left_out():
     # three identical ratios: no spread, no test, no interval, no verdict
     assert out["pairs"]["sum-t10-r1 vs baseline"]["p"] is None
     assert out["pairs"]["sum-t10-r1 vs baseline"]["verdict"] == "no difference shown"
+
+
+def test_outliers_and_unstable_trials_leave_their_pairs_and_are_counted():
+    """As in Table 1's means: a pair where either trial is an outlier or unstable is left out."""
+    recs = records({"baseline": [1.0, 2.0, 3.0, 4.0, 5.0],
+                    "sum-t10-r1": [0.5, 1.1, 1.4, 1.9, 2.6]})
+    recs[0]["result"]["unstable"] = True                     # baseline seed 0
+    recs[6]["result"]["goal_distance_end"] = 2.0             # SVR seed 1 rolled away
+    pair = versus(recs)["pairs"]["sum-t10-r1 vs baseline"]
+    assert pair["pairs"] == 3 and pair["excluded"] == 2
+    expected = stats.ttest_1samp(np.log([1.4 / 3.0, 1.9 / 4.0, 2.6 / 5.0]), 0.0).pvalue
+    assert pair["p"] == pytest.approx(expected, rel=1e-9)
 
 
 def test_alpha_outside_the_unit_interval_is_refused():
