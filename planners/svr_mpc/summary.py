@@ -121,6 +121,8 @@ def versus(records: list[dict], references: tuple[str, ...] = VERSUS_REFERENCES,
     "dearer" where Holm rejects at ``alpha`` (by the sign of the mean log ratio), else "no
     difference shown" (also with fewer than 3 pairs or no spread).
 
+    Raises ValueError for ``alpha`` outside (0, 1) or a cost that is not positive and finite.
+
     Returns {"alpha", "family_size", "references", "pairs": {"<row> vs <reference>":
     {"row", "reference", "ratio_geomean", "ratio_ci_simultaneous": [lo, hi] | None, "p",
     "p_holm", "better", "pairs", "excluded", "verdict"}}}.
@@ -131,6 +133,9 @@ def versus(records: list[dict], references: tuple[str, ...] = VERSUS_REFERENCES,
     dropped: dict = {}
     for r in records:
         row, seed, res = row_label(r["params"]), r["params"]["seed"], r["result"]
+        if not (np.isfinite(res["mpc_cost"]) and res["mpc_cost"] > 0):
+            raise ValueError(f"versus compares cost ratios: the MPC cost of {row} on seed "
+                             f"{seed} is {res['mpc_cost']!r}, not a positive number")
         by.setdefault(row, {})[seed] = res["mpc_cost"]
         if _excluded(res):
             dropped.setdefault(row, set()).add(seed)

@@ -87,6 +87,12 @@ def test_alpha_outside_the_unit_interval_is_refused():
         versus([], alpha=1.5)
 
 
+@pytest.mark.parametrize("cost", [0.0, -1.0, float("nan"), float("inf")])
+def test_a_cost_a_ratio_cannot_take_is_named(cost):
+    with pytest.raises(ValueError, match=r"MPC cost of sum-t10-r1 on seed 1 is .*not a positive"):
+        versus(records({"baseline": [1.0, 2.0], "sum-t10-r1": [1.0, cost]}))
+
+
 log_ratios = st.lists(st.floats(-2.0, 2.0, allow_nan=False), min_size=3, max_size=25)
 
 
