@@ -113,13 +113,13 @@ def versus(records: list[dict], references: tuple[str, ...] = VERSUS_REFERENCES,
 
     One family: every (SVR row, reference) pair present. Per pair, on the seeds both ran
     where neither trial is an outlier or unstable (as ``summarize``'s mean; counted in
-    "excluded"): the per-seed log cost ratios,
-    their geometric mean, a two-sided one-sample t-test of mean log ratio 0 (``p``), Holm's
-    adjusted p over the family (``p_holm``), and a simultaneous (Bonferroni) interval of the
-    ratio at family-wise level 1 - ``alpha`` (``ratio_ci_simultaneous``: each pair's t-interval
-    at 1 - alpha / m; it excludes 1 only where Holm also rejects). ``verdict``: "cheaper" or
-    "dearer" where Holm rejects at ``alpha`` (by the sign of the mean log ratio), else "no
-    difference shown" (also with fewer than 3 pairs or no spread).
+    "excluded"): the per-seed log cost ratios, their geometric mean, a two-sided one-sample
+    t-test of mean log ratio 0 (``p``), Holm's adjusted p over the family (``p_holm``), and a
+    simultaneous (Bonferroni) interval of the ratio at family-wise level 1 - ``alpha``
+    (``ratio_ci_simultaneous``: each pair's t-interval at 1 - alpha / m; it excludes 1 only
+    where Holm also rejects). ``verdict``: "cheaper" or "dearer" where Holm rejects at
+    ``alpha`` (by the sign of the mean log ratio), else "no difference shown". With fewer than
+    3 pairs or no spread a pair has no test, no interval and no verdict.
 
     Raises ValueError for ``alpha`` outside (0, 1) or a cost that is not positive and finite.
 
@@ -158,7 +158,7 @@ def versus(records: list[dict], references: tuple[str, ...] = VERSUS_REFERENCES,
         p_holm = adjusted.get((row, ref))
         mean = float(x.mean())
         ci = None
-        if x.size >= 2 and x.std(ddof=1) > 0:
+        if pvals[(row, ref)] is not None:              # 3 pairs or more, with spread
             half = float(stats.t.ppf(1 - alpha / (2 * m), x.size - 1)
                          * x.std(ddof=1) / np.sqrt(x.size))
             ci = [float(np.exp(mean - half)), float(np.exp(mean + half))]

@@ -68,6 +68,9 @@ def test_missing_references_and_unpaired_seeds_are_left_out():
     # three identical ratios: no spread, no test, no interval, no verdict
     assert out["pairs"]["sum-t10-r1 vs baseline"]["p"] is None
     assert out["pairs"]["sum-t10-r1 vs baseline"]["verdict"] == "no difference shown"
+    # two pairs: no test, and no interval that could exclude 1 without a verdict
+    two = versus(records({"baseline": [1.0, 2.0], "sum-t10-r1": [0.5, 1.01]}))
+    assert two["pairs"]["sum-t10-r1 vs baseline"]["ratio_ci_simultaneous"] is None
 
 
 def test_outliers_and_unstable_trials_leave_their_pairs_and_are_counted():
