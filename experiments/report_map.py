@@ -17,7 +17,13 @@ from pathlib import Path
 
 from report_base import KP, REGENERATE, SVR, Result, _label, cell, mm, num, table
 from report_fig7 import CLOTH_DIFFICULTY, _departs, fig7_claims
-from report_svr import _table1_columns, orderings, paper_preset_table1, paper_table1
+from report_svr import (
+    _table1_columns,
+    orderings,
+    paper_preset_table1,
+    paper_table1,
+    verdict_counts,
+)
 
 #: the longest cell the map may have (characters, Markdown included)
 MAX_CELL = 160
@@ -158,14 +164,7 @@ def table1_line(results: list[Result], preset: str = "authors") -> str | None:
 def versus_counts(v: dict | None) -> dict[str, str]:
     """{reference: "a/n"}: of a summary's SVR rows, how many Holm finds cheaper than each
     reference ({} without ``versus``)."""
-    if not v or not v.get("pairs"):
-        return {}
-    counts = {}
-    for ref in v["references"]:
-        verdicts = [x["verdict"] for x in v["pairs"].values() if x["reference"] == ref]
-        if verdicts:
-            counts[ref] = f"{verdicts.count('cheaper')}/{len(verdicts)}"
-    return counts
+    return {ref: f"{c['cheaper']}/{c['n']}" for ref, c in verdict_counts(v).items()}
 
 
 def fig4_line(results: list[Result]) -> str | None:

@@ -120,16 +120,22 @@ def versus_lines(v: dict | None) -> list[str]:
                     for x in v["pairs"].values()])]
 
 
+def verdict_counts(v: dict | None) -> dict[str, dict[str, int]]:
+    """{reference: {"cheaper", "dearer", "n"}}: of a summary's SVR rows, how many Holm finds
+    cheaper and dearer than each reference, out of n ({} without ``versus``)."""
+    counts: dict = {}
+    for x in ((v or {}).get("pairs") or {}).values():
+        c = counts.setdefault(x["reference"], {"cheaper": 0, "dearer": 0, "n": 0})
+        c["n"] += 1
+        if x["verdict"] in ("cheaper", "dearer"):
+            c[x["verdict"]] += 1
+    return {ref: counts[ref] for ref in (v or {}).get("references", []) if ref in counts}
+
+
 def versus_headline(v: dict | None) -> str:
     """One clause: how many SVR rows are cheaper / dearer than each reference under Holm."""
-    if not v or not v.get("pairs"):
-        return ""
-    parts = []
-    for ref in v["references"]:
-        verdicts = [x["verdict"] for x in v["pairs"].values() if x["reference"] == ref]
-        if verdicts:
-            parts.append(f"against {ref}, {verdicts.count('cheaper')} of {len(verdicts)} SVR "
-                         f"rows cheaper and {verdicts.count('dearer')} dearer")
+    parts = [f"against {ref}, {c['cheaper']} of {c['n']} SVR rows cheaper and {c['dearer']} "
+             f"dearer" for ref, c in verdict_counts(v).items()]
     return f"; {CORRECTION} at {v['alpha'] * 100:g} %: " + ", ".join(parts) if parts else ""
 
 

@@ -45,16 +45,14 @@ def summarize(records: list[dict], baseline: str = "baseline", level: float = 0.
     def outlier(v):
         return v["goal_distance_end"] > OUTLIER_DISTANCE
 
-    excluded = _excluded
-
     base_all = {k: v["mpc_cost"] for k, v in by.get(baseline, {}).items()}
-    base = {k: c for k, c in base_all.items() if not excluded(by[baseline][k])}
+    base = {k: c for k, c in base_all.items() if not _excluded(by[baseline][k])}
     out = {}
     for row, trials in by.items():
         res = list(trials.values())
         norm_all = [v["mpc_cost"] / base_all[k] for k, v in trials.items() if k in base_all]
         norm = [v["mpc_cost"] / base[k] for k, v in trials.items()
-                if k in base and not excluded(v)]
+                if k in base and not _excluded(v)]
         mean, ci = mean_ci(norm, level) if norm else (float("nan"), float("nan"))
         costs = [v["mpc_cost"] for v in res]
         out[row] = {
