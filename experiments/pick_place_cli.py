@@ -127,6 +127,10 @@ def parser(task: str, doc: str, help_: dict) -> argparse.ArgumentParser:
                     help="the picker's average speed on the longest move (default: the "
                          "protocol's, 0.5 m/s); an action's steps, and so a rollout's cost, "
                          "go with its inverse")
+    ap.add_argument("--rest-speed", type=positive_float, default=None, metavar="M_PER_S",
+                    help="settle CEM's sampled rollouts until the particles' RMS speed is below "
+                         "this (default: every sample settles the picker's full time; "
+                         "executed plans always do)")
     ap.add_argument("--threads", type=nonneg_int, default=0,
                     help="simulation threads per trial (0, the default: one per core, or one "
                          "with --workers above 1)")
@@ -157,7 +161,8 @@ def parse(ap: argparse.ArgumentParser, task: str, argv) -> tuple[argparse.Namesp
                     physics=args.physics or s.physics,
                     planning_physics=args.planning_physics or s.planning_physics,
                     max_stretch=args.max_stretch,
-                    picker_speed=args.picker_speed or s.picker_speed)
+                    picker_speed=args.picker_speed or s.picker_speed,
+                    rest_speed=args.rest_speed)
         if args.seeds is None:
             args.seeds = PROTOCOL_SEEDS[args.preset] if named else FIRST_SEEDS
     except (ValueError, TypeError) as e:

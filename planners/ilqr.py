@@ -74,7 +74,9 @@ class ILQRStep:
     accepted step (0 if rejected); mu: the regularisation used; seconds: wall time of
     'derivatives', 'backward', 'forward'; n_unstable: line-search rollouts the stability
     verdict flagged (scored +inf, never accepted); fd_steps: the timesteps the finite
-    differences covered (T unless key points are chosen)."""
+    differences covered (T unless key points are chosen); nominal_unstable: the old nominal's
+    rollout broke a stability bound, so its cost was no bar (any stable alpha was accepted:
+    ``ILQR.iterate``)."""
 
     controls: np.ndarray
     states: np.ndarray
@@ -88,6 +90,7 @@ class ILQRStep:
     seconds: dict
     n_unstable: int = 0
     fd_steps: int = 0
+    nominal_unstable: bool = False
 
     @property
     def accepted(self) -> bool:
@@ -131,7 +134,10 @@ class ILQR:
                 nominal: np.ndarray | None = None) -> ILQRStep:
         """One iteration from state x0 (ns,) and controls (T, nu) on the DoF set ``dofs``
         (None: all). ``nominal`` (T+1, ns) may pass the trajectory of these controls if the
-        caller has it; otherwise it is rolled out.
+        caller has it; otherwise it is rolled out, and judged: a nominal whose rollout breaks
+        a stability bound (``dopt.stability``) has no valid cost past that step, so the line
+        search accepts the cheapest stable alpha whatever its cost (a plan the simulation can
+        be trusted on beats one it cannot), instead of comparing with an invalid J.
 
         Raises:
             TypeError / ValueError: controls that are not a finite (T, nu) float array with
@@ -141,12 +147,15 @@ class ILQR:
         svc, scene = self.service, self.service.scene
         C = scene.dofs() if dofs is None else scene.as_dofs(dofs)
         U = _controls(controls, scene.nu)
+        unstable = False
         if nominal is None:
             traj = svc.trajectory(x0, U)
             X = traj.states
-            if traj.stability.n_unstable:
-                log.warning("iLQR: the nominal rollout is unstable (step %d: %s)",
-                            traj.stability.step[0], traj.stability.reason[0])
+            unstable = bool(traj.stability.n_unstable)
+            if unstable:
+                log.warning("iLQR: the nominal rollout is unstable (step %d: %s); any stable "
+                            "line-search step replaces it", traj.stability.step[0],
+                            traj.stability.reason[0])
         else:
             X = float_array(nominal, "nominal", (len(U) + 1, None))
         J0 = float(self.cost.total(X, U))
@@ -173,7 +182,7 @@ class ILQR:
             return ILQRStep(U, X, torch.zeros(len(U), scene.nu, 2 * len(C)),
                             torch.zeros(len(U), scene.nu), C, J0, J0, 0.0, self.mu,
                             {"derivatives": t1 - t0, "backward": t2 - t1, "forward": 0.0},
-                            0, len(keys))
+                            0, len(keys), unstable)
         K, k = gains
         ff = U[None] + self._alphas[:, None, None] * k.numpy()[None]     # (A, T, nu)
         trial = svc.rollout_feedback(x0, ff, X[:-1], K.numpy(), C)
@@ -186,14 +195,14 @@ class ILQR:
         t3 = time.perf_counter()
         best = int(np.argmin(costs))
         seconds = {"derivatives": t1 - t0, "backward": t2 - t1, "forward": t3 - t2}
-        if costs[best] < J0:
+        if costs[best] < (np.inf if unstable else J0):
             self.mu = max(self.mu / self.config.mu_factor, self.config.mu_min)
             return ILQRStep(trial.controls[best], trial.states[best], K, k, C, J0,
                             float(costs[best]), float(self._alphas[best]), self.mu, seconds,
-                            int(flagged.sum()), len(keys))
+                            int(flagged.sum()), len(keys), unstable)
         self.mu = min(self.mu * self.config.mu_factor, self.config.mu_max)
         return ILQRStep(U, X, K, k, C, J0, J0, 0.0, self.mu, seconds, int(flagged.sum()),
-                        len(keys))
+                        len(keys), unstable)
 
     def solve(self, x0: np.ndarray, controls: np.ndarray, dofs=None, max_iterations: int = 50,
               rtol: float = 1e-6) -> ILQRResult:
@@ -210,8 +219,10 @@ class ILQR:
                 costs.append(step.cost_before)
             costs.append(step.cost_after)
             U, X = step.controls, step.states
+            if step.nominal_unstable and not step.accepted:
+                X = None                 # judge it again next time (an accepted step is stable)
             gain = (step.cost_before - step.cost_after) / max(abs(step.cost_before), 1e-300)
-            if step.accepted and gain < rtol:
+            if step.accepted and not step.nominal_unstable and gain < rtol:
                 break
             if not step.accepted and self.mu >= self.config.mu_max:
                 break

@@ -20,6 +20,7 @@ import planners.bench.cem
 import planners.bench.clock
 import planners.bench.ilqr
 import planners.bench.physics
+import planners.bench.settle
 
 ROOT = Path(__file__).resolve().parents[2]
 MAINS = {"dopt": dopt_bench.main, "planners": planners_bench.main,
@@ -40,6 +41,7 @@ def no_run(monkeypatch):
                          (planners.bench.cem, "bench_cem"),
                          (planners.bench.cem, "bench_cem_limit"),
                          (planners.bench.physics, "bench_physics"),
+                         (planners.bench.settle, "bench_settle"),
                          (deformables_bench, "bench"), (deformables_bench, "paper_scale"),
                          (deformables_bench, "compare")]:
         monkeypatch.setattr(module, name, stop)
@@ -66,6 +68,9 @@ BAD = [
     ("planners", ["cem-limit", "--sizes", "10,2"], "argument --sizes: particles per side must "
                                                    "be finite and >= 3, got 2 in '10,2'"),
     ("planners", ["cem-limit", "--iterations", "0"], "argument --iterations: must be >= 1"),
+    ("planners", ["settle", "--speeds", "0.01,0"], "argument --speeds: rest speeds must be "
+                                                    "finite and > 0, got 0 in '0.01,0'"),
+    ("planners", ["settle", "--samples", "1"], "argument --samples: must be >= 2, got 1"),
     ("planners", ["cloth", "--sizes", "12,abc"], "argument --sizes: 'abc' in '12,abc' is not "
                                                  "an integer"),
     ("planners", ["rope", "--picker-speeds", "0.5,0"], "argument --picker-speeds: picker "

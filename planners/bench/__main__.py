@@ -1,5 +1,6 @@
-"""python -m planners.bench {ilqr,clock,cem,cem-limit,cloth,rope} [options]: print timings as
-JSON (cem-limit: a table, one line per cloth size; --record writes its rows as JSON)."""
+"""python -m planners.bench {ilqr,clock,cem,cem-limit,settle,cloth,rope} [options]: print
+timings as JSON (cem-limit: a table, one line per cloth size; --record writes its rows as
+JSON)."""
 
 from __future__ import annotations
 
@@ -90,6 +91,24 @@ def _add_cem_limit(sub) -> None:
     add_record_arg(p, "cem_limit", "as each size finishes")
 
 
+def _add_settle(sub) -> None:
+    """The ``settle`` subcommand's flags."""
+    p = sub.add_parser("settle", help="what settling CEM's sampled rollouts until at rest cuts "
+                                      "and changes, per cloth size and rest speed (the paper "
+                                      "protocol's diagonal fold)")
+    p.add_argument("--sizes", type=number_list(int, 3, "particles per side"), default=[10, 20],
+                   help="comma-separated cloth particles per side (default 10,20)")
+    p.add_argument("--speeds", type=number_list(float, 0.0, "rest speeds", strict=True),
+                   default=None, help="comma-separated rest speeds, m/s (default "
+                                      "0.002,0.005,0.01,0.02)")
+    p.add_argument("--samples", type=int_at_least(2), default=32,
+                   help="random action sequences per size (default %(default)s)")
+    p.add_argument("--threads", type=nonneg_int, default=0,
+                   help="simulation threads (0: all cores)")
+    p.add_argument("--seed", type=nonneg_int, default=0, help="seed of the actions")
+    add_record_arg(p, "settle_rest", "as each size finishes")
+
+
 def _add_physics(sub) -> None:
     """The ``cloth`` and ``rope`` subcommands' flags."""
     for task in ("cloth", "rope"):
@@ -118,7 +137,7 @@ def parser() -> argparse.ArgumentParser:
                                  epilog=EPILOG)
     sub = ap.add_subparsers(dest="bench", required=True)
 
-    for add in (_add_ilqr, _add_clock, _add_cem, _add_cem_limit, _add_physics):
+    for add in (_add_ilqr, _add_clock, _add_cem, _add_cem_limit, _add_settle, _add_physics):
         add(sub)
     return ap
 
@@ -153,6 +172,16 @@ def run(args) -> int:
         bench_cem_limit(args.sizes, args.threads, args.iterations, args.seed, args.candidates,
                         args.step_samples, on_row=on_row)
         return 0
+    elif args.bench == "settle":
+        from planners.bench.settle import SPEEDS, bench_settle
+
+        def on_size(out: dict) -> None:
+            if args.record:
+                write_record(args.record, "settle_rest", out["rows"],
+                             **{k: v for k, v in out.items() if k != "rows"})
+
+        out = bench_settle(args.sizes, args.speeds or SPEEDS, args.samples, args.threads,
+                           args.seed, on_row=on_size)["rows"]
     elif args.bench in ("cloth", "rope"):
         from planners.bench.physics import bench_physics
         out = bench_physics(args.bench, args.sizes,

@@ -40,8 +40,10 @@ class StagePlan:
     (one entry for the scripted policy), the candidates planned over, the seconds of
     each CEM iteration (empty for the scripted policy), the rollouts simulated while planning,
     how many of them the stability verdict flagged and how many broke the stretch limit of
-    C(a_t), whether the executed plan was unstable (with the reason), and the blow-up
-    captures of it (``run_problem``'s ``blowup_out``; folders relative to it)."""
+    C(a_t), whether the executed plan was unstable (with the reason), the blow-up
+    captures of it (``run_problem``'s ``blowup_out``; folders relative to it), and the steps
+    the sampled rollouts simulated against those of a full settle each
+    (``PickPlaceSettings.rest_speed``; equal without it)."""
 
     particles: np.ndarray
     displacements: np.ndarray
@@ -56,6 +58,8 @@ class StagePlan:
     unstable_reason: str = ""
     n_infeasible_rollouts: int = 0
     blowups: list = field(default_factory=list)
+    n_steps: int = 0
+    n_full_steps: int = 0
 
     def to_dict(self) -> dict:
         """JSON-able form (arrays as lists; float64 round-trips exactly)."""
@@ -131,7 +135,7 @@ class CEMPlanner:
         ``resume``: a dict ``on_progress`` gave while planning this stage from the same rng
         state (candidates, CEM progress, the task's rollout counters), to go on from."""
         cand = self.candidate_particles(keys, task.n_particles)
-        counters = ("n_evaluated", "n_unstable", "n_infeasible")
+        counters = ("n_evaluated", "n_unstable", "n_infeasible", "n_steps", "n_full_steps")
         cem_resume = None
         if resume is not None:
             if np.asarray(resume["candidates"]).tolist() != cand.tolist():
@@ -139,7 +143,7 @@ class CEMPlanner:
                                  "planner draws: not a progress of this stage and seed")
             cem_resume = CEMProgress.from_dict(resume["cem"])
             for name in counters:
-                setattr(task, name, int(resume["task"][name]))
+                setattr(task, name, int(resume["task"].get(name, 0)))
 
         def progress(p: CEMProgress) -> None:
             on_progress({"candidates": cand.tolist(), "cem": p.to_dict(),
@@ -155,7 +159,8 @@ class CEMPlanner:
                          res.cost_history.tolist(), len(cand),
                          res.seconds_per_iteration.tolist(), res.n_evaluated + 1,
                          res.n_nonfinite - task.n_infeasible + int(done.unstable),
-                         done.unstable, done.reason, task.n_infeasible)
+                         done.unstable, done.reason, task.n_infeasible,
+                         n_steps=task.n_steps, n_full_steps=task.n_full_steps)
 
 
 class ScriptedPlanner:

@@ -198,7 +198,8 @@ def run_problem(problem: Problem, planner: PickPlanner, *, method: str = "", see
         state = progress.done[-1].final_state if progress.done else problem.start_state
         for stage in problem.stages[len(progress.done):]:
             task = PickPlaceTask(problem.scene, stage.goal, state, svc,
-                                 problem.planning_scene, plan_svc, **captures.task_kwargs(stage))
+                                 problem.planning_scene, plan_svc,
+                                 rest=problem.settings.rest(), **captures.task_kwargs(stage))
             plan = planner.plan(task, stage.keys, on_iteration, **progress.plan_kwargs(planner))
             plan = captures.record(plan, task)
             progress.partial = None

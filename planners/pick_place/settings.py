@@ -22,6 +22,7 @@ from dopt.tasks.pick.cloth_scene import PHYSICS_PRESETS
 from dopt.tasks.pick.constraints import ActionConstraint
 from dopt.tasks.pick.picker import PickerConfig
 from dopt.tasks.pick.scene import PICK_BOUNDS
+from dopt.tasks.pick.settle import RestTest
 from dopt.validation import check_config, check_int
 from planners.cem import CEMConfig
 from planners.pick_place.presets import PROTOCOLS, quick_preset
@@ -30,7 +31,7 @@ from planners.scripted import ScriptedConfig
 
 #: optional settings ``PickPlaceSettings.identity`` leaves out at None: options whose unset
 #: value is what every trial ran before they existed, so those trials stay valid
-UNSET_SETTINGS = ("planning_physics", "max_stretch", "picker_speed")
+UNSET_SETTINGS = ("planning_physics", "max_stretch", "picker_speed", "rest_speed")
 #: scene-config fields a trial's identity leaves out at these values, for the same reason
 UNSET_SCENE_FIELDS = {"passive": False}
 
@@ -59,6 +60,10 @@ class PickPlaceSettings:
         picker_speed: the picker's average speed on the longest move (m/s,
             ``PickerConfig.speed``); it sets the steps of every action, so it sets the cost of
             a rollout. None: ``PickerConfig``'s default.
+        rest_speed: settle CEM's sampled rollouts until at rest (m/s, the particles'
+            root-mean-square speed, ``dopt.tasks.pick.settle.RestTest``): a sample's settle
+            ends once slower; executed plans keep the full settle. None: every sample
+            simulates every step.
     """
 
     task: str
@@ -75,6 +80,7 @@ class PickPlaceSettings:
     planning_physics: str | None = None
     max_stretch: float | None = None
     picker_speed: float | None = None
+    rest_speed: float | None = None
 
     def __post_init__(self):
         pick_task(self.task).goal(self.goal)      # ValueError naming an unknown task or goal
@@ -85,7 +91,8 @@ class PickPlaceSettings:
                             f"{self.scripted!r}")
         # n an int >= 3, bound / side / length finite > 0 (m), threads an int >= 0 (0: one
         # per core), selfcollide a bool; TypeError or ValueError naming the field
-        check_config(self, positive=("bound", "side", "length", "max_stretch", "picker_speed"),
+        check_config(self, positive=("bound", "side", "length", "max_stretch", "picker_speed",
+                               "rest_speed"),
                      minimum={"n": 3, "threads": 0},
                      choices={"physics": tuple(PHYSICS_PRESETS)})
         if self.planning_physics is not None and self.planning_physics not in PHYSICS_PRESETS:
@@ -136,6 +143,10 @@ class PickPlaceSettings:
         """The picker of the task's scenes: the bound per axis, limited to ``constraint()``."""
         speed = {} if self.picker_speed is None else {"speed": float(self.picker_speed)}
         return PickerConfig(bound=(self.bound,) * 3, workspace=self.constraint(), **speed)
+
+    def rest(self) -> RestTest | None:
+        """The rest test of CEM's sampled rollouts (``rest_speed``), or None."""
+        return None if self.rest_speed is None else RestTest(speed=float(self.rest_speed))
 
     def scene_config(self, physics: str | None = None, overrides: dict | None = None):
         """The task's scene config (``ClothSceneConfig`` / ``RopeSceneConfig``) of the preset

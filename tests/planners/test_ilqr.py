@@ -1,6 +1,8 @@
 """Reduced iLQR against independent references: cvxpy on an LQ problem, and a plain numpy
 iLQR iteration built on mujoco.mjd_transitionFD."""
 
+from dataclasses import replace
+
 import cvxpy as cp
 import mujoco
 import numpy as np
@@ -172,6 +174,62 @@ def test_line_search_scores_an_alpha_mujoco_raises_on_as_unstable(c_kernels):
     assert all(r.startswith("MuJoCo error") for r in trial.stability.reason[:3])
     assert not trial.stability.unstable[3]
     np.testing.assert_array_equal(trial.states[3], step.states)
+
+
+class _FlaggedNominal:
+    """A rollout service whose nominal trajectories (``trajectory``) the verdict flags, as a
+    nominal that broke a stability bound in its last step is; every other call is the real
+    service's."""
+
+    def __init__(self, svc):
+        self._svc, self.scene = svc, svc.scene
+
+    def __getattr__(self, name):
+        return getattr(self._svc, name)
+
+    def trajectory(self, x0, U):
+        t = self._svc.trajectory(x0, U)
+        flagged = replace(t.stability, unstable=np.array([True]), step=np.array([len(U) - 1]),
+                          reason=("flagged by the test",))
+        return replace(t, stability=flagged)
+
+
+class _CheapNominal(QuadraticCost):
+    """The LINEAR problem's cost, except that the first trajectory scored (the nominal) reads
+    1e3 lower, as the cost of a simulation that broke down can (a blown-up state may sit on
+    the goal)."""
+
+    calls = 0
+
+    def total(self, X, U):
+        out = super().total(X, U)
+        self.calls += 1
+        return out - 1e3 if self.calls == 1 else out
+
+
+@pytest.mark.parametrize("flagged", [False, True])
+def test_a_nominal_the_verdict_flags_sets_no_bar_for_the_line_search(flagged):
+    """From the same nominal, scored below every candidate: judged sound, no alpha beats it and
+    the step is rejected; flagged, its cost is no bar and the cheapest stable alpha is taken
+    (the one plain iLQR takes when the nominal reads its true cost)."""
+    scene = Scene.from_xml(LINEAR)
+    m = scene.model
+    x0, T = scene.state_of(mujoco.MjData(m)), 20
+    w = np.array([1.0, 0.5, 2.0, 0.1, 0.1, 0.1])
+    args = (scene, np.array([0.5, -0.2, 0.3]), w, 20 * w, np.array([1e-2, 5e-3]))
+    svc = RolloutService(scene)
+    U = np.zeros((T, m.nu))
+    true = ILQR(svc, QuadraticCost(*args)).iterate(x0, U)
+    step = ILQR(_FlaggedNominal(svc) if flagged else svc, _CheapNominal(*args)).iterate(x0, U)
+    assert step.nominal_unstable is flagged
+    assert true.accepted and not true.nominal_unstable
+    if flagged:
+        assert step.accepted and step.alpha == true.alpha
+        assert step.cost_after == true.cost_after > step.cost_before
+        np.testing.assert_array_equal(step.controls, true.controls)
+    else:
+        assert not step.accepted and step.cost_after == step.cost_before
+        np.testing.assert_array_equal(step.controls, U)
 
 
 def test_bad_config():

@@ -6,6 +6,8 @@
                     mean_distance, end_to_end, matching_distance (the paper's metrics)
     cloth_scene.py  ClothSceneConfig, make_cloth; rope_scene.py: RopeSceneConfig, make_rope
     fold_goals.py   cloth goals folded on the MuJoCo sheet by a line grasp (fold_goal, folds)
+    settle.py       sampled rollouts action by action, each settle ended once the object is at
+                    rest (RestTest, rollout_until_rest; PickPlaceTask(rest=...))
     replay.py       a recorded plan re-executed with mj_step, its frames kept (replay, Replay)
     panda_gripper.py  a Panda with a two-finger hand executes picker plans (the arm is
                     the neutral dopt.tasks.panda, shared with the push wing)

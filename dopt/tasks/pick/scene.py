@@ -31,6 +31,7 @@ from dopt.stability import StabilityBounds
 from dopt.state import check_model, check_states
 from dopt.tasks.pick.constraints import ActionConstraint
 from dopt.tasks.pick.picker import CONTROL_SPEC, Picker, PickerConfig, fix_grasp_anchors
+from dopt.tasks.pick.settle import RestTest, rollout_until_rest
 from dopt.validation import check_real, float_array, index_array, is_int
 from dopt.view.blowup import capture_blowup, capture_dir
 
@@ -164,6 +165,9 @@ class DeformableScene:
         self._qpos = np.stack([self.scene.qpos_indices(f"vertex:{model.flex_vertadr[f] + i}")
                                for i in range(self.n_particles)])                     # (N, 3)
         self._origin = model.body_pos[bodies] - model.qpos0[self._qpos]               # (N, 3)
+        #: (N, 3) qvel indices of the particles' linear velocities
+        self.velocity_dofs = np.stack([self.scene.dofs(f"vertex:{model.flex_vertadr[f] + i}")
+                                       for i in range(self.n_particles)])
         self.picker = Picker(model, self.n_particles, picker)
         self.xml = xml
         state = self.scene.state_of(mujoco.MjData(model))
@@ -257,6 +261,11 @@ class PickPlaceTask:
             blow-up capture to ``blowup_out/blowups/<blowup_label>`` (``-2``, ... where one
             exists; the module docstring), listed in ``blowups``. None (default): no capture.
         blowup_label: the captures' name (in the folder, the console and the viewer).
+        rest: settle until at rest in ``evaluate`` (``dopt.tasks.pick.settle``): a sampled
+            rollout's settle ends once its object is at rest; ``execute`` and ``step`` keep
+            the picker's full settle, so an executed plan replays unchanged. None: every
+            sample simulates every step. ``n_steps`` and ``n_full_steps`` count the steps
+            ``evaluate`` simulated and those a full settle would have.
     """
 
     def __init__(self, scene: DeformableScene, goal: np.ndarray,
@@ -264,7 +273,8 @@ class PickPlaceTask:
                  rollout: RolloutService | None = None,
                  planning_scene: DeformableScene | None = None,
                  planning_rollout: RolloutService | None = None,
-                 blowup_out: str | os.PathLike | None = None, blowup_label: str = "pick"):
+                 blowup_out: str | os.PathLike | None = None, blowup_label: str = "pick",
+                 rest: RestTest | None = None):
         if not isinstance(scene, DeformableScene):
             raise TypeError(f"scene must be a DeformableScene, got {type(scene).__name__}")
         if rollout is not None and not callable(getattr(rollout, "rollout", None)):
@@ -275,7 +285,11 @@ class PickPlaceTask:
                             f"{type(blowup_out).__name__}")
         if not isinstance(blowup_label, str):
             raise TypeError(f"blowup_label must be a string, got {type(blowup_label).__name__}")
+        if rest is not None and not isinstance(rest, RestTest):
+            raise TypeError(f"rest must be a RestTest or None, got {type(rest).__name__}")
         self.blowup_out, self.blowup_label, self.blowups = blowup_out, blowup_label, []
+        self.rest = rest
+        self.n_steps = self.n_full_steps = 0
         self.scene = scene
         self.goal = float_array(goal, "goal", (scene.n_particles, 3))
         state = scene.initial_state if start_state is None else start_state
@@ -338,7 +352,18 @@ class PickPlaceTask:
         ``n_evaluated``, ``n_unstable`` and ``n_infeasible`` count them over the task's life.
         With a planning scene, the population is simulated there."""
         model = self.planning or self
-        res = model.rollout(particles, displacements)
+        if self.rest is None:
+            res = model.rollout(particles, displacements)
+            steps = full = res.final_states.shape[0] * self.picker.steps_per_action \
+                * np.shape(particles)[-1]
+        else:
+            rested = rollout_until_rest(model.service, model.picker,
+                                        model.scene.velocity_dofs, model.start_state,
+                                        _numpy(particles), _numpy(displacements), self.rest)
+            res = rested.result
+            steps, full = int(rested.steps.sum()), rested.full_steps * len(rested.steps)
+        self.n_steps += int(steps)
+        self.n_full_steps += int(full)
         st = res.stability
         stretched = (self.constraint.stretched(st.max_strain) if self.constraint is not None
                      else np.zeros(len(st.unstable), bool)) & ~st.unstable

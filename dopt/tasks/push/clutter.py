@@ -20,7 +20,7 @@ import mujoco
 import numpy as np
 
 from dopt.tasks.panda import TOOL_RADIUS, ik_pointing_down, rest_state, table_scene_spec
-from dopt.tasks.push.task_model import TaskModel, require_generator
+from dopt.tasks.push.task_model import EE_HEIGHT, TaskModel, require_generator
 
 log = logging.getLogger(__name__)
 
@@ -37,7 +37,6 @@ DISTRACTORS = tuple(f"distractor_{i}" for i in range(7))
 GOAL_RGBA = (0.2, 0.8, 0.2, 1.0)
 DISTRACTOR_RGBA = (0.85, 0.85, 0.9, 1.0)
 
-EE_HEIGHT = 0.04  # start height of the pusher tip's centre above the table (m)
 STANDOFF = 0.03  # start gap between the pusher tip and the object it faces (m)
 MIN_GAP = 0.02  # least clearance between objects (and the tip) in a layout (m)
 SETTLE_STEPS = 50  # steps of zero control before the initial state is taken

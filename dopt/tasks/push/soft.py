@@ -186,9 +186,11 @@ def _half_depth(points: np.ndarray, radius: float = VERTEX_RADIUS) -> float:
 
 def _finish(name: str, spec: mujoco.MjSpec, block: _Block, goal: np.ndarray, goal_object: str,
             horizon: int, slowdown: int, settle_steps: int = SETTLE_STEPS,
-            stability: StabilityBounds = StabilityBounds()) -> TaskModel:
+            stability: StabilityBounds = StabilityBounds(),
+            push_height: float = EE_HEIGHT) -> TaskModel:
     """Compile the scene, settle it with the pusher tip at ``block.tip`` (``settle_steps`` of
-    zero control), and describe the task (``stability``: its rollouts' bounds)."""
+    zero control), and describe the task (``stability``: its rollouts' bounds;
+    ``push_height``: the initial plans' tip height, m)."""
     model = spec.compile()
     state = rest_state(model, ik_pointing_down(np.array([*block.tip, EE_HEIGHT])), settle_steps)
     log.debug("%s: block at %s, heading %.3f, goal %s", name, block.centre, block.heading, goal)
@@ -206,6 +208,7 @@ def _finish(name: str, spec: mujoco.MjSpec, block: _Block, goal: np.ndarray, goa
         slowdown=slowdown,
         pushed_object_name=SOFT_BODY,
         stability=stability,
+        push_height=push_height,
     )
 
 

@@ -11,6 +11,10 @@ import numpy as np
 from dopt.stability import StabilityBounds
 from dopt.tasks.panda import BODY_NAMES, EE_SITE, JOINT_NAMES
 
+#: start height of the pusher tip's centre above the table (m), and the height the initial
+#: plans push at unless a task sets its own (``TaskModel.push_height``)
+EE_HEIGHT = 0.04
+
 
 @dataclass(frozen=True, eq=False)
 class TaskModel:
@@ -43,6 +47,9 @@ class TaskModel:
         ee_site: the end-effector site (the centre of the pusher's round tip).
         stability: the bounds a rollout of this task must keep (``dopt.stability``); the
             default except where a material needs others (the authors' soft blocks).
+        push_height: the tool tip's centre above the table (m) on the initial plans
+            (``dopt.tasks.push.warm_start``): ``EE_HEIGHT`` except where an object needs
+            another (the authors' soft_rigid block).
     """
 
     name: str
@@ -61,6 +68,7 @@ class TaskModel:
     robot_bodies: tuple[str, ...] = BODY_NAMES
     ee_site: str = EE_SITE
     stability: StabilityBounds = StabilityBounds()
+    push_height: float = EE_HEIGHT
 
     @property
     def pushed_object(self) -> str:

@@ -49,7 +49,6 @@ import numpy as np
 
 from dopt.state import INTEGRATION
 from dopt.tasks.panda import TOOL_RADIUS
-from dopt.tasks.push.clutter import EE_HEIGHT
 from dopt.tasks.push.task_model import TaskModel
 from dopt.validation import check_config, check_int, float_array
 
@@ -59,7 +58,8 @@ _DOWN = np.array([0.0, 0.0, -1.0])
 @dataclass(frozen=True)
 class WarmStartConfig:
     """gap: tool surface to the pushed object's back face at the set-up point (m).
-    height: the tool tip's centre above the table (m; the tasks' start height).
+    height: the tool tip's centre above the table (m); None: the task's
+        (``TaskModel.push_height``).
     setup_steps, hold_steps: steps to reach the set-up point and to hold it.
     speed, fraction: the push moves the object's centre toward the goal by at most
     ``speed * fraction * T * dt`` over a horizon of T steps (m/s; the authors' 0.1 and 5/6).
@@ -72,7 +72,7 @@ class WarmStartConfig:
     kp, kv, kr, kw, kq: tracking gains (N/m, N s/m, N m/rad, N m s/rad, N m s/rad)."""
 
     gap: float = 0.01
-    height: float = EE_HEIGHT
+    height: float | None = None
     setup_steps: int = 300
     hold_steps: int = 100
     speed: float = 0.1
@@ -125,10 +125,10 @@ def push_line(task: TaskModel, state: np.ndarray) -> tuple[np.ndarray, np.ndarra
 def setup_point(task: TaskModel, state: np.ndarray,
                 config: WarmStartConfig = WarmStartConfig()) -> np.ndarray:
     """(3,) where ``setup`` brings the end effector: ``config.gap`` behind the pushed object
-    on the line from the goal through its centre, at ``config.height``."""
+    on the line from the goal through its centre, at ``config.height`` (None: the task's)."""
     centre, along, back = push_line(task, state)
     xy = centre - (back + TOOL_RADIUS + config.gap) * along
-    return np.array([xy[0], xy[1], config.height])
+    return np.array([xy[0], xy[1], _height(task, config)])
 
 
 def setup(task: TaskModel, state: np.ndarray | None = None,
@@ -182,7 +182,7 @@ def push_end(task: TaskModel, state: np.ndarray, horizon: int,
         if np.linalg.norm(delta) > reach:
             delta *= reach / np.linalg.norm(delta)
         end_xy = start[:2] + delta
-    return np.array([end_xy[0], end_xy[1], config.height])
+    return np.array([end_xy[0], end_xy[1], _height(task, config)])
 
 
 def track(task: TaskModel, state: np.ndarray, path, config: WarmStartConfig = WarmStartConfig()
@@ -227,6 +227,11 @@ def track(task: TaskModel, state: np.ndarray, path, config: WarmStartConfig = Wa
 
 
 # ---------------------------------------------------------------------------- internals
+def _height(task: TaskModel, config: WarmStartConfig) -> float:
+    """The push height (m): the config's, else the task's."""
+    return float(task.push_height if config.height is None else config.height)
+
+
 def _state(task: TaskModel, state) -> np.ndarray:
     if state is None:
         return np.asarray(task.initial_state, dtype=float)

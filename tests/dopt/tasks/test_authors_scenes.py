@@ -404,3 +404,34 @@ def test_the_authors_soft_blocks_carry_their_strain_bound_into_the_controller():
         assert ctl.scene.monitor.bounds.max_strain == SOFT_STRAIN_BOUND
     finally:
         ctl.service.close()
+
+
+def _strain_after_first_plan(task, height: float, steps: int) -> tuple[float, bool]:
+    """The largest flex-edge strain while ``task`` runs its first plan pushed at ``height``
+    and then ``steps`` more of its last control (what MPC executes while no optimisation
+    lands), with the verdict's own judge: (strain, whether the task's bounds flag it)."""
+    from dopt.tasks.push import warm_start
+
+    config = warm_start.WarmStartConfig(height=height)
+    start = warm_start.setup(task, config=config).final_state
+    plan = warm_start.push(task, start, task.horizon, config).controls
+    U = np.concatenate([plan, np.repeat(plan[-1:], steps, axis=0)])
+    with RolloutService(Scene(task.model, stability=task.stability),
+                        RolloutConfig(threads=1)) as svc:
+        res = svc.rollout(start, U)
+    return float(res.stability.max_strain[0]), bool(res.stability.unstable[0])
+
+
+def test_soft_rigid_pushes_one_spacing_up_where_the_block_does_not_fold():
+    """Seed 2 (module docstring of dopt.tasks.push.authors): pushed at EE_HEIGHT the block's
+    bottom layer, squeezed against the cylinder, breaks the strain bound within 200 steps of
+    the plan's last control; at the task's push height it stays under it."""
+    from dopt.tasks.push.clutter import EE_HEIGHT
+
+    task = build_push_task("soft_rigid", "authors", 2)
+    assert task.push_height == authors.SOFT_RIGID_PUSH_HEIGHT > EE_HEIGHT
+    assert build_push_task("soft", "authors", 2).push_height == EE_HEIGHT
+    low, low_flagged = _strain_after_first_plan(task, EE_HEIGHT, 200)
+    high, high_flagged = _strain_after_first_plan(task, task.push_height, 200)
+    assert low_flagged and low > authors.SOFT_STRAIN_BOUND
+    assert not high_flagged and high < authors.SOFT_STRAIN_BOUND

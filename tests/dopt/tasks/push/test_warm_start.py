@@ -70,7 +70,7 @@ def test_setup_puts_the_pusher_behind_the_pushed_object(task, offset):
     back = np.max((centre - pts) @ along)                   # vertex centres' back face
     assert rel @ along < -(back + TOOL_RADIUS)               # behind the object
     assert abs(rel @ np.array([-along[1], along[0]])) < 0.02  # on the pushing line
-    assert abs(ee[2] - ws.WarmStartConfig().height) < 0.02
+    assert abs(ee[2] - task.push_height) < 0.02              # the task's push height
     moved = np.abs(object_xy(task, end) - object_xy(task, start)).max()
     assert moved < 0.005
     assert plan.controls.shape == (ws.WarmStartConfig().setup_steps
