@@ -94,6 +94,7 @@ from report_kp import (
     physics_section,
     random_reach_section,
     scaling_section,
+    settle_rest_section,
 )
 from report_map import HEADLINES_TITLE, map_block
 from report_stale import (
@@ -226,6 +227,7 @@ SECTIONS = {"key_particles": kp_section, "kp_compare": kp_compare_section,
             "ilqr_bench": ilqr_bench_section, "clock_check": clock_check_section,
             "paper_svr": paper_svr_section, "panda_execute": panda_section,
             "cloth_steps": cloth_steps_section, "cem_limit": cem_limit_section,
+            "settle_rest": settle_rest_section,
             "cloth_warp": cloth_warp_section,
             "random_reach": random_reach_section, "fig7_scaling": scaling_section}
 HEADLINES = {"key_particles": kp_headline, "fig7": fig7_headline, "table1": table1_headline,

@@ -149,6 +149,34 @@ def cem_limit_section(results: list[Result], page: Path) -> list[str]:
                    "and refit, and the rest.", results, page, body)
 
 
+# ------------------------------------------------ settle until at rest (KP, the bench)
+def settle_rest_section(results: list[Result], page: Path) -> list[str]:
+    def body(r: Result) -> list[str]:
+        d = r.data
+        rows = [[f"{row['n']} x {row['n']}", num(row["speed"], 3), num(row["settle_share"], 1, 100),
+                 num(row["steps_saved"], 1, 100), num(row["wall_ratio"], 2),
+                 *(num(row["cost_change_mm"][k], 2) for k in ("p50", "p90", "max")),
+                 "yes" if row["same_elites"] else "no", f"{row['stable']} / {row['samples']}",
+                 *(num(row["rms_speed_at_settle_end"][k], 3) for k in ("p10", "p50", "p90"))]
+                for row in d["rows"]]
+        return [f"### `{r.name}`: {d.get('task')} {d.get('goal')}, protocol "
+                f"{d.get('protocol')}, {d.get('samples')} random sequences per size", "",
+                *table(["cloth", "rest speed (m/s)", "settle % of steps", "steps saved %",
+                        "wall / plain", "cost change p50 (mm)", "p90", "max", "same elites",
+                        "stable", "RMS speed at settle end p10 (m/s)", "p50", "p90"], rows)]
+
+    return section("Key particles: settling sampled rollouts until at rest",
+                   "`python -m planners.bench settle`: per cloth size, random action sequences "
+                   "of the paper protocol's diagonal fold simulated plainly (every sample every "
+                   "step) and with the rest test of `dopt.tasks.pick.settle` at each speed (a "
+                   "sample's settle ends once its particles' root-mean-square speed is below "
+                   "it); the share of an action's steps that are its settle (all a rest test "
+                   "can cut), the steps saved, the wall time against the plain rollout's in "
+                   "the same run, the change in Eq. 2 over the samples stable in both, whether "
+                   "CEM's elites are the same samples, and how fast the particles still move "
+                   "when the plain settle ends.", results, page, body)
+
+
 # ------------------------------------------------------ cloth step on MuJoCo Warp (KP)
 def cloth_warp_section(results: list[Result], page: Path) -> list[str]:
     def warned(row: dict) -> str:

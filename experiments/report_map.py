@@ -152,12 +152,13 @@ def table1_line(results: list[Result], preset: str = "authors") -> str | None:
     if not parts:
         return None
     if versus and all(len(v) == len(tasks) for v in versus.values()):
-        text = (f"SVR rows cheaper (Holm), {' / '.join(tasks)}: "
-                + "; ".join(f"than {ref} {', '.join(v)}" for ref, v in versus.items()))
+        text = (f"SVR rows cheaper than {' / '.join(versus)} (Holm): "
+                + "; ".join(f"{task} {', '.join(v[i] for v in versus.values())}"
+                            for i, task in enumerate(tasks)))
     else:
         text = "cheapest reduced row / baseline: " + ", ".join(parts)
     if taus:
-        text += f"; Kendall tau vs the paper's order {' / '.join(taus)}"
+        text += f"; Kendall tau vs the paper {' / '.join(taus)}"
     return text
 
 

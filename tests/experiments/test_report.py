@@ -406,8 +406,8 @@ def test_table1_of_the_paper_protocol_is_shown_beside_the_published_table(site):
     assert run(site) == 0
     assert "### clutter: `table1-clutter-authors.json` beside the paper" in site["md"].read_text()
     readme = block(site["readme"])
-    assert ("SVR rows cheaper (Holm), clutter: than baseline 1/1; than rand-t5 1/1; Kendall "
-            "tau vs the paper's order 1.00") in readme
+    assert ("SVR rows cheaper than baseline / rand-t5 (Holm): clutter 1/1, 1/1; Kendall tau "
+            "vs the paper 1.00") in readme
     assert "Table 1 on dopt's own push tasks" in readme
     # the same rows lagging alike explain the order; they are not the Table 1 beside the paper
     write(site["results"], "table1-clutter-authors-ms150.json",
@@ -642,6 +642,22 @@ def test_cem_limit_bench_renders_the_ratio_per_size(site):
     assert "## Key particles: a CEM iteration against its physical limit" in md
     assert ("| 10 x 10 | 4 | 17344 | 0.500 | 2 | 4.34 | 6.50 | 1.50 | 1.35 | 1.10 | 90.0 | 2.0 "
             "| 5.0 | 1.0 | 0.0 | 1.0 | 1.0 |") in md
+
+
+def test_settle_bench_renders_a_row_per_size_and_speed(site):
+    row = {"n": 20, "speed": 0.005, "settle_share": 0.1845, "steps_saved": 0.0213,
+           "wall_ratio": 1.07, "cost_change_mm": {"p50": 0.0, "p90": 0.31, "max": 1.2},
+           "same_elites": True, "stable": 31, "samples": 32,
+           "rms_speed_at_settle_end": {"p10": 0.0007, "p50": 0.0041, "p90": 0.2118}}
+    write(site["results"], "settle-rest.json",
+          {"experiment": "settle_rest", "task": "cloth", "goal": "diagonal",
+           "protocol": "paper", "samples": 32, "rows": [row],
+           "provenance": provenance("python -m planners.bench settle")})
+    assert run(site) == 0
+    md = site["md"].read_text()
+    assert "## Key particles: settling sampled rollouts until at rest" in md
+    assert ("| 20 x 20 | 0.005 | 18.4 | 2.1 | 1.07 | 0.00 | 0.31 | 1.20 | yes | 31 / 32 | "
+            "0.001 | 0.004 | 0.212 |") in md
 
 
 def test_clock_check_headline_gives_the_lag_ratios(site):
