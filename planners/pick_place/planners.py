@@ -135,7 +135,8 @@ class CEMPlanner:
         ``resume``: a dict ``on_progress`` gave while planning this stage from the same rng
         state (candidates, CEM progress, the task's rollout counters), to go on from."""
         cand = self.candidate_particles(keys, task.n_particles)
-        counters = ("n_evaluated", "n_unstable", "n_infeasible", "n_steps", "n_full_steps")
+        counters = ("n_evaluated", "n_unstable", "n_infeasible")
+        steps = ("n_steps", "n_full_steps")        # absent from progress saved before them
         cem_resume = None
         if resume is not None:
             if np.asarray(resume["candidates"]).tolist() != cand.tolist():
@@ -143,11 +144,13 @@ class CEMPlanner:
                                  "planner draws: not a progress of this stage and seed")
             cem_resume = CEMProgress.from_dict(resume["cem"])
             for name in counters:
+                setattr(task, name, int(resume["task"][name]))
+            for name in steps:
                 setattr(task, name, int(resume["task"].get(name, 0)))
 
         def progress(p: CEMProgress) -> None:
             on_progress({"candidates": cand.tolist(), "cem": p.to_dict(),
-                         "task": {name: getattr(task, name) for name in counters}})
+                         "task": {name: getattr(task, name) for name in counters + steps}})
 
         res = self.cem.plan(task, cand, self.generator, on_iteration, resume=cem_resume,
                             on_progress=progress if on_progress is not None else None)

@@ -162,12 +162,11 @@ class DeformableScene:
         self.elements = model.flex_elem[start:start + corners * int(model.flex_elemnum[f])] \
             .reshape(-1, corners).astype(np.int64)
         bodies = model.flex_vertbodyid[model.flex_vertadr[f]:][:self.n_particles]
-        self._qpos = np.stack([self.scene.qpos_indices(f"vertex:{model.flex_vertadr[f] + i}")
-                               for i in range(self.n_particles)])                     # (N, 3)
+        vertices = [f"vertex:{model.flex_vertadr[f] + i}" for i in range(self.n_particles)]
+        self._qpos = np.stack([self.scene.qpos_indices(v) for v in vertices])          # (N, 3)
         self._origin = model.body_pos[bodies] - model.qpos0[self._qpos]               # (N, 3)
         #: (N, 3) qvel indices of the particles' linear velocities
-        self.velocity_dofs = np.stack([self.scene.dofs(f"vertex:{model.flex_vertadr[f] + i}")
-                                       for i in range(self.n_particles)])
+        self.velocity_dofs = np.stack([self.scene.dofs(v) for v in vertices])
         self.picker = Picker(model, self.n_particles, picker)
         self.xml = xml
         state = self.scene.state_of(mujoco.MjData(model))
