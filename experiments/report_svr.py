@@ -416,13 +416,17 @@ def svr_explain_section(results: list[Result], page: Path) -> list[str]:
         fine = any("lt_0.1" in (row.get("importance_share") or {}) for row in d["rows"].values())
         shares = ("zero", "lt_0.1", "0.1_to_1", "1_to_500", "ge_500") if fine else \
             ("zero", "lt_1", "1_to_500", "ge_500")
+        goal = any("goal_importance" in row for row in d["rows"].values())
         for name, row in d["rows"].items():
             share = row.get("importance_share") or {}
             n_dofs = [v for v in row["n_dofs"] if v is not None]
+            g = row.get("goal_importance") or {}
             rows.append([name, str(row["n_trials"]), num(sum(n_dofs) / len(n_dofs) if n_dofs
                                                          else None, 1),
                          num(row["goal_share_mean"]), *(num(share.get(k)) for k in shares),
-                         str(row["importance"]["n"])])
+                         str(row["importance"]["n"]),
+                         *([f"{sci(g.get('first_median'))} / {sci(g.get('later_median'))}"]
+                           if goal else [])])
             if m := row.get("mechanism"):
                 mech.append([name, sci(m.get("rel_improvement_median_away")),
                              num(m.get("accepted_share")), num(m.get("contact_share")),
@@ -433,7 +437,12 @@ def svr_explain_section(results: list[Result], page: Path) -> list[str]:
                   "1_to_500": "[1, 500)", "ge_500": ">= 500"}
         out = [f"### {d.get('task')}: `{r.name}`", "", protocol_line(d), "",
                *table(["row", "trials", "mean size of C", "goal DoFs in C",
-                       *(f"importance {labels[k]}" for k in shares), "values"], rows)]
+                       *(f"importance {labels[k]}" for k in shares), "values",
+                       *(["goal importance, first / later"] if goal else [])], rows)]
+        if goal:
+            out += ["", "Goal importance: the least importance of the goal object's x, y DoFs "
+                    "(the first that rho cuts), median over episodes at the first optimisation "
+                    "(every DoF in C) and over the later optimisations that held both."]
         if mech:
             out += ["", "Whether the optimiser engages (dJ/J: the median relative improvement "
                     "of an optimisation while the goal object is more than 5 cm from the goal; "

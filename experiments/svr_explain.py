@@ -45,7 +45,8 @@ DECADES = tuple(range(-6, 7))
 RHO_CUTS = (1.0, 500.0)
 #: what a stored trial must hold to be reused: the fields ``summarize_rows`` and
 #: ``mechanism`` read (a record of an older explain_trial lacks some: it is recomputed)
-SCHEMA = Schema(result=("steps", "opt_step", "n_dofs", "goal_share", "importance",
+SCHEMA = Schema(result=("steps", "opt_step", "n_dofs", "goal_share", "goal_importance",
+                        "importance",
                         "rel_improvement", "goal_distance_at_opt", "alpha", "contact_steps",
                         "mu", "travel", "goal_distance_end", "lag_steps_mean", "horizon"))
 
@@ -88,6 +89,7 @@ def explain_trial(params: dict, report=None) -> dict:
             "lag_steps_mean": result.lag_steps_mean, "horizon": task.horizon,
             "opt_step": result.opt_step, "n_dofs": result.n_dofs,
             "goal_share": [round(float(np.isin(goal, h["dofs"]).mean()), 4) for h in history],
+            "goal_importance": [goal_importances(h, goal) for h in history],
             "alpha": [h["alpha"] for h in history],
             "rel_improvement": [(h["cost_before"] - h["cost_after"]) / abs(h["cost_before"])
                                 if h["cost_before"] else 0.0 for h in history],
@@ -97,6 +99,43 @@ def explain_trial(params: dict, report=None) -> dict:
             "n_unstable_rollouts": result.n_unstable_rollouts, "unstable": result.unstable,
             "unstable_reason": result.unstable_reason,
             "importance": importance_counts(values)}
+
+
+def goal_importances(h: dict, goal) -> list[float] | None:
+    """The importances (before the cut) of the goal object's planar DoFs that one optimisation
+    ``h`` held in C, in ``goal``'s order ([] when it held none); None for an optimisation
+    without importances (not SVR)."""
+    if h["importance"] is None:
+        return None
+    of = dict(zip(h["dofs"], h["importance"], strict=True))
+    return [float(of[d]) for d in goal if d in of]
+
+
+def goal_importance_summary(results: list[dict]) -> dict | None:
+    """Per row, from each optimisation that held all the goal object's planar DoFs (as many as
+    its episode's most: SVR's first optimisation holds every DoF): the least of their
+    importances (the first that rho cuts), at each episode's first optimisation and at the
+    later ones; and the share of later optimisations that held them all. None without
+    importances (not SVR, or trials recorded before the field)."""
+    lists = [r.get("goal_importance") for r in results]
+    lists = [v for v in lists if v and any(x is not None for x in v)]
+    if not lists:
+        return None
+    first, later, n_later = [], [], 0
+    for v in lists:
+        n_goal = max(len(x) for x in v if x is not None)
+        held = [min(x) if x is not None and n_goal and len(x) == n_goal else None for x in v]
+        if held[0] is not None:
+            first.append(held[0])
+        n_later += len(v) - 1
+        later += [x for x in held[1:] if x is not None]
+
+    def median(values):
+        return float(np.median(values)) if values else None
+
+    return {"first_median": median(first), "first_min": min(first, default=None),
+            "first_max": max(first, default=None), "later_median": median(later),
+            "later_held_share": len(later) / n_later if n_later else None}
 
 
 def goal_travel(task, final_state) -> float:
@@ -205,6 +244,8 @@ def summarize_rows(records: list[dict], bins: int) -> dict:
                     "importance": imp,
                     "importance_share": ({k: v / n for k, v in imp["bins"].items()}
                                          if imp["n"] else None)}
+        if (goal_imp := goal_importance_summary(results)) is not None:
+            out[row]["goal_importance"] = goal_imp
     return out
 
 

@@ -50,6 +50,25 @@ def test_timelines_average_over_seeds_per_bin():
     assert mech["travel_median"] == pytest.approx(0.6) and mech["horizon"] == 80
 
 
+def test_goal_importance_is_the_least_of_the_goal_dofs_held_whole():
+    # an optimisation's record: its active set and each DoF's importance (None: not SVR)
+    h = {"dofs": [0, 1, 7, 8, 9], "importance": [5.0, 6.0, 30.0, 0.2, 4.0]}
+    assert svr_explain.goal_importances(h, np.array([8, 7])) == [0.2, 30.0]
+    assert svr_explain.goal_importances(h, np.array([12, 13])) == []
+    assert svr_explain.goal_importances({"dofs": [0, 7], "importance": None}, [7]) is None
+    # episode 1 holds both goal DoFs first (least 3), then one of them (skipped), then both
+    # (least 40); episode 2 both first (least 9), then none; a rand episode has no importances
+    ep1 = [[3.0, 700.0], [50.0], [40.0, 41.0]]
+    ep2 = [[9.0, 10.0], []]
+    s = svr_explain.goal_importance_summary(
+        [{"goal_importance": ep1}, {"goal_importance": ep2}, {"goal_importance": [None]}])
+    assert s["first_median"] == 6.0 and (s["first_min"], s["first_max"]) == (3.0, 9.0)
+    assert s["later_median"] == 40.0 and s["later_held_share"] == pytest.approx(1 / 3)
+    # rows without importances, or trials recorded before the field, have no summary
+    assert svr_explain.goal_importance_summary([{"goal_importance": [None, None]}]) is None
+    assert svr_explain.goal_importance_summary([{}]) is None
+
+
 def test_short_run_writes_summary_and_plot(tmp_path):
     out = tmp_path / "ex"
     env = dict(os.environ, PYTHONPATH=str(ROOT))
@@ -67,4 +86,7 @@ def test_short_run_writes_summary_and_plot(tmp_path):
     assert set(svr["importance_share"]) == set(svr_explain.SHARE_BINS)
     mech = svr["mechanism"]
     assert 0 <= mech["contact_share"] <= 1 and mech["travel_median"] >= 0
+    # the first optimisation holds every DoF, so the goal's importance there is recorded
+    assert svr["goal_importance"]["first_median"] >= 0
+    assert "goal_importance" not in d["rows"]["rand-t5"]
     assert (out / "svr_explain.png").stat().st_size > 10_000
