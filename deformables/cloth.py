@@ -50,7 +50,7 @@ from scipy.spatial import ConvexHull, cKDTree
 from dopt.validation import check_config, check_real
 
 from .decimation import BACKENDS, EmptyDecimationError, decimate
-from .distance import SurfaceDistance, hausdorff, sample_surface
+from .distance import SurfaceDistance, hausdorff, surface_to_surface
 from .frame import Frame, check_coordinates, check_range
 from .layers import estimate_layer_gap, stacking_axis
 from .mesh import canonical_triangulation, edges
@@ -505,7 +505,7 @@ def _decimate_below(scaled: np.ndarray, tri: np.ndarray, spacing: float, thr: fl
 
     def distance(v: np.ndarray, f: np.ndarray, limit: float) -> float:
         if config.error == "one-sided":
-            return original.max_distance(sample_surface(v, f, step), limit=limit)
+            return surface_to_surface(original, v, f, step, limit)[0]
         return float(np.nanmax(hausdorff(original, scaled, v, f, step, limit=limit)))
 
     limit = np.inf if config.exact_errors else thr

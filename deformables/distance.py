@@ -16,9 +16,12 @@ bound exceeds every other point's lower bound can hold the maximum. Where the ma
 exact (a model under the threshold), the distance to each point's nearest triangles is a far
 tighter upper bound than ``u``.
 
-The pieces, the tightened bounds and the copies dropped from the cover change the time, not
-the values: distances, maxima and the lower bounds returned at a limit are those of the plain
-search (docs/DESIGN-NOTES.md, "Key particles at the paper's size").
+The pieces, the tightened bounds, the copies dropped from the cover, the shape of the k-d
+trees, the probe sampled and resolved on its own (only its maximum, from the largest guess
+down) change the time, not the values: distances, maxima and the lower bounds returned at a
+limit are those of the plain search (docs/DESIGN-NOTES.md, "Key particles at the paper's
+size"; tests/deformables/test_distance_properties.py checks them against a brute-force
+reference of that search).
 """
 from __future__ import annotations
 
@@ -32,14 +35,29 @@ _NEIGHBOURS = 16
 _FIRST_GUESS = 2
 #: every this many points form the probe that gives max_distance its first exact value
 _PROBE_STRIDE = 16
-#: probe points (largest upper bounds first) resolved exactly for that first value
+#: probe points (largest upper bounds first) whose largest distance is that first value
 _PROBE_EXACT = 32
+#: of those, resolved exactly at a time, from the largest guess down
+_PROBE_CHUNK = 4
+#: points nearer than the probe's value to a cover sample cannot hold the maximum; they are
+#: dropped first (one query) only when that value is at least this many covering radii
+#: (below, they are too few to pay for the query: a model that fits, value ~1e-16)
+_CUT_RADII = 0.1
 #: a triangle is cut into pieces whose radius is at most this many times the median
 #: triangle radius, or this many cover steps if that is less
 _PIECE_SCALE = 2.0
 #: pieces per triangle on average at most (beyond a few thousand): a mesh of a few huge
 #: triangles among small ones gets larger pieces (looser bounds, the same distances)
 _PIECE_BUDGET = 16
+
+
+def _tree(points: np.ndarray) -> cKDTree:
+    """k-d tree of ``points`` ``(Q, 3)`` for the searches here. Cells split at the midpoint of
+    the points' extent and not shrunk to them: a sampled surface lies in thin sheets, and
+    shrunk cells or median splits made the nearest-sample queries of points far from the
+    sheets about twice as slow (a 100 x 100 fold). The tree's shape changes the time only, not
+    which points are found nor their distances."""
+    return cKDTree(points, leafsize=32, compact_nodes=False, balanced_tree=False)
 
 
 def _grid(m: int) -> np.ndarray:
@@ -118,12 +136,12 @@ class SurfaceDistance:
         scale = max(_PIECE_SCALE * min(median, cover_step), 1e-300)
         self.centres, self.radii, self.parents = triangle_pieces(self.triangles, scale)
         self.max_radius = float(self.radii.max())
-        self.tree = cKDTree(self.centres, leafsize=32)
+        self.tree = _tree(self.centres)
         if cover is None:
             cover = sample_surface(vertices, faces, cover_step)
         # the grids of neighbouring triangles share their corners: without the copies the
         # tree is smaller and its nearest-sample distances the same
-        self.cover_tree = cKDTree(unique_points(cover), leafsize=32)
+        self.cover_tree = _tree(unique_points(cover))
         #: every surface point lies within this distance of a point of ``cover``
         self.cover_radius = cover_step / np.sqrt(3.0)
 
@@ -170,62 +188,74 @@ class SurfaceDistance:
 
     def _pair_distance(self, points: np.ndarray, rows: np.ndarray, tris: np.ndarray) -> np.ndarray:
         """Distances ``(P,)`` from ``points[rows]`` to ``triangles[tris]``."""
-        closest = trimesh.triangles.closest_point(self.triangles[tris], points[rows])
-        return np.linalg.norm(closest - points[rows], axis=1)
+        points = points[rows]
+        closest = trimesh.triangles.closest_point(self.triangles[tris], points)
+        return np.linalg.norm(closest - points, axis=1)
 
-    def max_distance(self, points: np.ndarray, chunk: int = 256,
-                     limit: float = np.inf) -> float:
+    def probe_distance(self, probe: np.ndarray) -> float:
+        """The first exact value of :meth:`max_distance`: the largest distance of the
+        ``_PROBE_EXACT`` points of ``probe`` ``(Q, 3)`` (its ``points[::_PROBE_STRIDE]``) with
+        the largest distances to the nearest cover sample. Only the maximum is exact: the
+        points are resolved from the largest :meth:`_guess` down, ``_PROBE_CHUNK`` at a time,
+        while a guess exceeds it (far from the surface, where the exact search is costly,
+        the guess is nearly exact, so a first few points settle it)."""
+        upper = self.cover_tree.query(probe)[0]
+        top = probe[np.argsort(-upper)[:_PROBE_EXACT]]
+        guess, near = self._guess(top)
+        return _max_from_top(guess, -np.inf, _PROBE_CHUNK,
+                             lambda batch: self._refine(top[batch], guess[batch], near[batch]))
+
+    def max_distance(self, points: np.ndarray, chunk: int = 256, limit: float = np.inf,
+                     probe: float | None = None) -> float:
         """``max_q dist(points[q], surface)`` for ``points`` ``(Q, 3)``, exact below ``limit``.
 
         Each point's distance lies in ``[u - rho, u]`` (``u``: distance to the nearest cover
         sample, ``rho``: the covering radius). A first exact value ``best`` comes from the
-        points of a coarse probe with the largest ``u``; the nearest-sample query of all points
-        is then cut off at ``best`` (points nearer than that cannot beat it). The remaining
-        points are resolved exactly from the largest ``u`` down, in chunks, until no remaining
-        ``u`` exceeds the largest value known to be reached: the best exact distance, or the
-        best lower bound ``L`` (if the maximum hides among the skipped points it is at most
-        ``L`` and at least ``L``, so it equals ``L``).
+        points of a coarse probe with the largest ``u`` (:meth:`probe_distance`; ``probe``
+        passes it when already known); the nearest-sample query of all points is then cut off
+        at ``best`` (points nearer than that cannot beat it; not done when ``best`` is far
+        below the covering radius, ``_CUT_RADII``: hardly a point would go). Each remaining
+        point's distance to its nearest triangles (:meth:`_guess`, nearly exact on a close
+        model) is a second upper bound. If none reaches ``limit`` (always without one),
+        nothing can stop the search early and the maximum is wanted exactly: the points are
+        resolved from the largest bound down, in chunks, until no remaining bound exceeds the
+        best exact distance, which on a model that fits the surface leaves a handful of points
+        to resolve.
 
-        With a finite ``limit`` the search stops as soon as some point is known to be at least
-        ``limit`` away and returns that point's distance (or the lower bound ``L``): a value
-        ``>= limit`` is then a lower bound of the maximum, which is all a threshold test needs.
-        When no ``u`` reaches ``limit`` (always without one) nothing can stop the search early
-        and the maximum is wanted exactly: the bounds are then first tightened by each point's
-        nearest triangles (:meth:`_max_below`), which on a model that fits the surface leaves
-        a handful of points to resolve instead of all of them. Either way the value is the
-        same.
+        Otherwise the remaining points are resolved from the largest ``u`` down until no
+        remaining ``u`` exceeds the largest value known to be reached: the best exact distance,
+        or the best lower bound ``L`` (if the maximum hides among the skipped points it is at
+        most ``L`` and at least ``L``, so it equals ``L``), stopping as soon as some point is
+        known to be at least ``limit`` away and returning that point's distance (or ``L``): a
+        value ``>= limit`` is then a lower bound of the maximum, which is all a threshold test
+        needs. Below ``limit`` every route gives the exact maximum; at or above it, the value
+        is that of the order by ``u`` (the triangle bounds only prove that no point reaches
+        ``limit``, they never reorder the search).
         """
         points = np.asarray(points, dtype=float)
-        probe = points[::_PROBE_STRIDE]
-        upper = self.cover_tree.query(probe)[0]
-        best = float(self.distances(probe[np.argsort(-upper)[:_PROBE_EXACT]]).max())
+        best = self.probe_distance(points[::_PROBE_STRIDE]) if probe is None else probe
         if best >= limit:
             return best
-        cut = self.cover_tree.query(points, distance_upper_bound=best)[0]
-        candidates = points[~(cut <= best)]                 # cut is inf beyond the bound
-        if len(candidates) == 0:
-            return best
+        candidates = points
+        if best >= _CUT_RADII * self.cover_radius:     # else few points are that near a sample
+            cut = self.cover_tree.query(points, distance_upper_bound=best)[0]
+            candidates = points[~(cut <= best)]             # cut is inf beyond the bound
+            if len(candidates) == 0:
+                return best
+        guess, near = self._guess(candidates)
+
+        def exact(batch: np.ndarray) -> np.ndarray:
+            return self._refine(candidates[batch], guess[batch], near[batch])
+
+        if float(guess.max()) < limit:         # no early stop: the exact maximum is wanted
+            return _max_from_top(guess, best, chunk, exact)
         upper = self.cover_tree.query(candidates)[0]
         best = max(best, float(upper.max()) - self.cover_radius)
         if best >= limit:
             return best
-        if float(upper.max()) < limit:         # no early stop: the exact maximum is wanted
-            return self._max_below(candidates, upper, best, chunk)
-        return _max_from_top(upper, best, chunk,
-                             lambda batch: self.distances(candidates[batch]), limit)
-
-    def _max_below(self, points: np.ndarray, upper: np.ndarray, best: float,
-                   chunk: int) -> float:
-        """``max(best, max_q dist(points[q], surface))`` for ``points`` ``(Q, 3)`` with upper
-        bounds ``upper`` ``(Q,)``, all below the limit of :meth:`max_distance`: the bounds are
-        first tightened by the nearest triangles (:meth:`_guess`, nearly exact on a close
-        model), then points are resolved from the largest bound down while it exceeds
-        ``best``."""
-        guess, near = self._guess(points)
-        upper = np.minimum(upper, guess)
-        return _max_from_top(
-            upper, best, chunk,
-            lambda batch: self._refine(points[batch], guess[batch], near[batch]))
+        if float(upper.max()) < limit:
+            return _max_from_top(np.minimum(upper, guess), best, chunk, exact)
+        return _max_from_top(upper, best, chunk, exact, limit)
 
 
 def _max_from_top(upper: np.ndarray, best: float, chunk: int, distances,
@@ -254,23 +284,47 @@ def unique_points(points: np.ndarray) -> np.ndarray:
     return ordered[keep]
 
 
-def sample_surface(vertices: np.ndarray, faces: np.ndarray, step: float) -> np.ndarray:
+def sample_surface(vertices: np.ndarray, faces: np.ndarray, step: float,
+                   stride: int = 1) -> np.ndarray:
     """Deterministic samples ``(Q, 3)`` of a mesh: on each triangle a barycentric grid whose
-    spacing along the longest edge is at most ``step`` (vertices and edges included).
+    spacing along the longest edge is at most ``step`` (vertices and edges included); with a
+    ``stride``, only the rows ``[::stride]`` of that sample, bit for bit, computed alone.
 
     The grid splits each triangle into copies of itself scaled by ``1 / m`` with longest edge
     at most ``step``, so every surface point lies within ``step / sqrt(3)`` of a sample."""
     triangles = np.asarray(vertices, dtype=float)[np.asarray(faces)]                 # (F, 3, 3)
     longest = np.linalg.norm(triangles - np.roll(triangles, 1, axis=1), axis=2).max(axis=1)
     splits = np.maximum(1, np.ceil(longest / step)).astype(np.int64)
-    samples = []
+    samples, offset = [], 0
     for m in np.unique(splits):
         i, j = np.meshgrid(np.arange(m + 1), np.arange(m + 1), indexing="ij")
         inside = i + j <= m
         u, v = i[inside] / m, j[inside] / m                                             # (G,)
-        a, b, c = (triangles[splits == m, k][:, None] for k in range(3))                # (T, 1, 3)
-        samples.append((a + u[:, None] * (b - a) + v[:, None] * (c - a)).reshape(-1, 3))
+        ids = np.flatnonzero(splits == m)                                               # (T,)
+        block = len(ids) * len(u)                     # the block's rows: (T, G) flattened
+        if stride == 1:
+            a, b, c = (triangles[ids, k][:, None] for k in range(3))                    # (T, 1, 3)
+            u, v = u[:, None], v[:, None]                                               # (G, 1)
+        else:                                         # its rows among the sample's [::stride]
+            t, g = np.divmod(np.arange(-offset % stride, block, stride), len(u))        # (R,)
+            a, b, c = (triangles[ids[t], k] for k in range(3))                          # (R, 3)
+            u, v = u[g, None], v[g, None]                                               # (R, 1)
+        offset += block
+        samples.append((a + u * (b - a) + v * (c - a)).reshape(-1, 3))
     return np.concatenate(samples, axis=0)
+
+
+def surface_to_surface(original: SurfaceDistance, vertices: np.ndarray, faces: np.ndarray,
+                       step: float, limit: float = np.inf) -> tuple[float, np.ndarray | None]:
+    """The largest distance from the surface ``(V, 3)``, ``(F, 3)`` sampled at ``step`` to
+    ``original`` (:meth:`SurfaceDistance.max_distance` of the sample, limit ``limit``), and the
+    sample ``(Q, 3)``. The probe's rows are sampled first: when they alone reach ``limit``
+    (a model far from the original) the full sample is never made and comes back as None."""
+    best = original.probe_distance(sample_surface(vertices, faces, step, _PROBE_STRIDE))
+    if best >= limit:
+        return best, None
+    samples = sample_surface(vertices, faces, step)
+    return original.max_distance(samples, limit=limit, probe=best), samples
 
 
 def hausdorff(original: SurfaceDistance, original_points: np.ndarray, vertices: np.ndarray,
@@ -291,8 +345,7 @@ def hausdorff(original: SurfaceDistance, original_points: np.ndarray, vertices: 
         ``limit``. A value ``>= limit`` is a lower bound; once the first one reaches ``limit``
         the second is not computed and returned as ``nan``.
     """
-    samples = sample_surface(vertices, faces, step)
-    to_original = original.max_distance(samples, limit=limit)
+    to_original, samples = surface_to_surface(original, vertices, faces, step, limit)
     if to_original >= limit:
         return to_original, float("nan")
     simplified = SurfaceDistance(vertices, faces, cover_step=step, cover=samples)
