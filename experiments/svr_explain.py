@@ -111,6 +111,11 @@ def goal_importances(h: dict, goal) -> list[float] | None:
     return [float(of[d]) for d in goal if d in of]
 
 
+def _median(values) -> float | None:
+    """The median of ``values``, None when there are none."""
+    return float(np.median(values)) if len(values) else None
+
+
 def goal_importance_summary(results: list[dict]) -> dict | None:
     """Per row, from each optimisation that held all the goal object's planar DoFs (as many as
     its episode's most: SVR's first optimisation holds every DoF): the least of their
@@ -130,11 +135,8 @@ def goal_importance_summary(results: list[dict]) -> dict | None:
         n_later += len(v) - 1
         later += [x for x in held[1:] if x is not None]
 
-    def median(values):
-        return float(np.median(values)) if values else None
-
-    return {"first_median": median(first), "first_min": min(first, default=None),
-            "first_max": max(first, default=None), "later_median": median(later),
+    return {"first_median": _median(first), "first_min": min(first, default=None),
+            "first_max": max(first, default=None), "later_median": _median(later),
             "later_held_share": len(later) / n_later if n_later else None}
 
 
@@ -198,16 +200,13 @@ def mechanism(results: list[dict]) -> dict:
     contact = [c > 0 for res in results for c in res["contact_steps"]]
     mus = [m for res in results for m in res["mu"]]
 
-    def median(values):
-        return float(np.median(values)) if len(values) else None
-
-    return {"rel_improvement_median_away": median(away), "n_optimisations_away": len(away),
+    return {"rel_improvement_median_away": _median(away), "n_optimisations_away": len(away),
             "accepted_share": float(np.mean([a > 0 for a in alphas])) if alphas else None,
             "contact_share": float(np.mean(contact)) if contact else None,
-            "mu_median": median(mus),
-            "travel_median": median([res["travel"] for res in results]),
-            "goal_distance_end_median": median([res["goal_distance_end"] for res in results]),
-            "lag_steps_median": median([res["lag_steps_mean"] for res in results]),
+            "mu_median": _median(mus),
+            "travel_median": _median([res["travel"] for res in results]),
+            "goal_distance_end_median": _median([res["goal_distance_end"] for res in results]),
+            "lag_steps_median": _median([res["lag_steps_mean"] for res in results]),
             "n_dofs_mean": float(np.mean([np.mean(res["n_dofs"]) for res in results
                                           if len(res["n_dofs"])])),
             "n_unstable_rollouts": int(sum(res.get("n_unstable_rollouts", 0) for res in results)),
