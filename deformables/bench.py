@@ -13,11 +13,13 @@ Modes (JSON on stdout, one object per line; ``--out FILE`` also writes the whole
   (N = 10,000), each without noise and with ``--noise`` (1 mm), timed over ``--repeats`` runs
   after one warm-up reduction of a small goal; the mean over the folds per noise level against
   the paper's 0.73 s.
-* ``compare``: the default pipeline (``ClothConfig()``) and the paper's
-  (``ClothConfig.paper()``) on the same goals: the four folds x ``--resolutions`` x the four
-  triangulations x (no noise, ``--noise``), goal seed 0. Per goal: faces, keys, error,
-  threshold, whether it was reached and seconds; per pipeline and fold: the face and key
-  counts and how many goals hold the reference key count.
+* ``compare``: the pipelines of ``PIPELINES`` on the same goals: the default
+  (``ClothConfig()``), the paper's (``ClothConfig.paper()``) and the default with every
+  restart decimating from the goal itself (``shared_faces=None``); the four folds x
+  ``--resolutions`` x the four triangulations x (no noise, ``--noise``), goal seed 0. Per
+  goal: faces, keys, error, threshold, whether it was reached and seconds; per pipeline and
+  fold: the face and key counts, how many goals hold the reference key count and how many
+  the default's face and key counts.
 
 Library functions return dicts; only :func:`main` prints.
 """
@@ -52,6 +54,9 @@ TASKS = ("rope_straighten", "rope_fold", "rope_fold_unequal", "cloth_diagonal", 
          "cloth_reflective", "cloth_underneath")
 CLOTH_TASKS = TASKS[3:]
 MODES = ("tasks", "paper-scale", "compare")
+#: the pipelines ``compare`` runs on every goal
+PIPELINES = {"default": ClothConfig(), "paper": ClothConfig.paper(),
+             "separate-restarts": ClothConfig(shared_faces=None)}
 
 
 def _run(task: str, cloth_n: int, noise: float, config: ClothConfig | None = None,
@@ -132,7 +137,7 @@ def compare(resolutions: tuple[int, ...] = (16, 25, 40), noise: float = 1e-3,
             triangulations: tuple[str, ...] = TRIANGULATIONS) -> dict:
     """The default and the paper's pipelines on the same cloth goals (``compare`` mode, see the
     module docstring)."""
-    pipelines = {"default": ClothConfig(), "paper": ClothConfig.paper()}
+    pipelines = PIPELINES
     warm, _, _ = _run("cloth_side", 12, 0.0)
     warm()
     rows = []
@@ -160,7 +165,8 @@ def compare(resolutions: tuple[int, ...] = (16, 25, 40), noise: float = 1e-3,
 
 def summarize_comparison(rows: list[dict], pipelines: list[str]) -> dict:
     """Per pipeline, noise level and fold: how many goals hold the reference key count, reach
-    the threshold, the face and key counts seen ({count: goals}) and the median seconds."""
+    the threshold, hold the first pipeline's face and key counts, the face and key counts seen
+    ({count: goals}) and the median seconds."""
     summary: dict = {}
     for name in pipelines:
         for sigma in sorted({r["noise_m"] for r in rows}):
@@ -173,6 +179,10 @@ def summarize_comparison(rows: list[dict], pipelines: list[str]) -> dict:
                     "goals": len(mine),
                     "keys_held": sum(r[name]["n_keys"] == r["reference_keys"] for r in mine),
                     "reached_threshold": sum(x["reached_threshold"] for x in results),
+                    "counts_as_first": sum(
+                        (r[name]["n_keys"], r[name]["n_elements"])
+                        == (r[pipelines[0]]["n_keys"], r[pipelines[0]]["n_elements"])
+                        for r in mine),
                     "faces": _histogram(x["n_elements"] for x in results),
                     "keys": _histogram(x["n_keys"] for x in results),
                     "median_seconds": round(statistics.median(x["seconds"] for x in results), 4)}

@@ -40,7 +40,7 @@ from __future__ import annotations
 
 import logging
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from scipy.sparse import coo_matrix
@@ -147,6 +147,14 @@ class ClothConfig:
             the threshold; measured on the same 112 goals, the counts are those of decimating
             from the goal every time. Must exceed ``max_faces``; ``None`` decimates from the
             goal at every size (the paper's loop).
+        shared_faces: a goal of more faces is first decimated once, under its own numbering,
+            to this many, and the restarts renumber that mesh: the first collapses, inside
+            flat panels and most of QECD's work at the paper's 100 x 100, are done once
+            instead of once per restart, and enough faces are left for the numberings to
+            break the later ties differently. Must exceed ``coarse_faces`` (or ``max_faces``
+            without it); ``None``: every restart starts from the goal (the separate-restarts
+            pipeline of ``python -m deformables.bench compare``, which measures the
+            difference).
         exact_errors: compute every size's error in full. By default the Hausdorff distance
             stops as soon as it reaches the threshold, so the errors recorded for rejected
             sizes are lower bounds (at least the threshold); the accepted model and its error
@@ -196,6 +204,7 @@ class ClothConfig:
     restarts: int = 4
     restart_seed: int = 0
     coarse_faces: int | None = 200
+    shared_faces: int | None = 2000
     exact_errors: bool = False
     canonical_triangulation: bool = True
     panels: str = "on"
@@ -226,18 +235,23 @@ class ClothConfig:
         if self.coarse_faces is not None and self.coarse_faces <= self.max_faces:
             raise ValueError(f"coarse_faces ({self.coarse_faces}) must exceed max_faces "
                              f"({self.max_faces})")
+        below = ("coarse_faces", self.coarse_faces) if self.coarse_faces is not None else \
+            ("max_faces", self.max_faces)
+        if self.shared_faces is not None and self.shared_faces <= below[1]:
+            raise ValueError(f"shared_faces ({self.shared_faces}) must exceed {below[0]} "
+                             f"({below[1]})")
 
     @classmethod
     def paper(cls, **overrides) -> ClothConfig:
         """The paper's pipeline (Sec. III-C, Alg. 1): the one-sided Hausdorff distance from the
         simplified mesh to the goal (Eq. 4) in plain metres (``z_scale=1``), one QECD per
-        size from the goal itself (no restarts, no coarse mesh), no panel projection and no
-        re-triangulation. The threshold stays ``threshold_gaps`` layer gaps (the paper's is
-        "a parameter set by the user" and not reported), and so do the nearest-particle
-        extraction and the geodesic filter, which the paper describes without their
-        parameters. ``overrides`` replace any field."""
+        size from the goal itself (no restarts, no coarse or shared mesh), no panel
+        projection and no re-triangulation. The threshold stays ``threshold_gaps`` layer
+        gaps (the paper's is "a parameter set by the user" and not reported), and so do the
+        nearest-particle extraction and the geodesic filter, which the paper describes
+        without their parameters. ``overrides`` replace any field."""
         fields = dict(error="one-sided", z_scale=1.0, restarts=1, coarse_faces=None,
-                      panels="off", canonical_triangulation=False)
+                      shared_faces=None, panels="off", canonical_triangulation=False)
         fields.update(overrides)
         return cls(**fields)
 
@@ -494,11 +508,16 @@ def _decimate_below(scaled: np.ndarray, tri: np.ndarray, spacing: float, thr: fl
     """Alg. 1's loop for cloth: decimate the stretched goal ``scaled`` ``(N, 3)``, faces
     ``tri`` ``(F, 3)``, to growing face counts (``grow_until_below``, errors in metres) until
     the surface distance to it is below ``thr`` (units). Each size tries the renumbered
-    restarts (``config.restarts``; decimated first to ``config.coarse_faces`` if set) and keeps
-    the best ``Mesh``, stopping at the first below the threshold."""
+    restarts (``config.restarts``, of the goal decimated to ``config.shared_faces`` if it has
+    more; each decimated first to ``config.coarse_faces`` if set), stopping at the first
+    below the threshold. Returns the ``Reduction`` of the accepted ``Mesh``: the one below the
+    threshold, or, when no size reaches it, the restart and size of least exact error."""
     original = SurfaceDistance(scaled, tri)
     step = config.sample_spacings * spacing
-    meshes = renumberings(scaled, tri, config.restarts, config.restart_seed)
+    vertices, faces = scaled, tri
+    if config.shared_faces is not None and len(tri) > config.shared_faces:
+        vertices, faces = decimate(scaled, tri, config.shared_faces, config.backend)
+    meshes = renumberings(vertices, faces, config.restarts, config.restart_seed)
     if config.coarse_faces is not None:
         meshes = [decimate(vertices, faces, config.coarse_faces, config.backend)
                   for vertices, faces in meshes]
@@ -510,26 +529,35 @@ def _decimate_below(scaled: np.ndarray, tri: np.ndarray, spacing: float, thr: fl
 
     limit = np.inf if config.exact_errors else thr
 
-    def simplify(n_faces: int) -> Mesh:
-        best = Mesh(np.empty((0, 3)), np.empty((0, 3), dtype=np.int64), np.inf)
+    def simplify(n_faces: int) -> tuple[Mesh, ...]:
+        """The restarts' models of this size tried, the least error first (the first restart
+        among equals); the search stops at the first under the threshold."""
+        found = []
         for vertices, faces in meshes:
             try:
                 v, f = decimate(vertices, faces, n_faces, config.backend)
             except EmptyDecimationError:
                 logger.debug("restart decimated to nothing at %d faces", n_faces)
                 continue
-            err = distance(v, f, limit)
-            if err < best.error:
-                best = Mesh(v, f, err)
-            if err < thr:
+            found.append(Mesh(v, f, distance(v, f, limit)))
+            if found[-1].error < thr:
                 break
-        return best
+        empty = Mesh(np.empty((0, 3)), np.empty((0, 3), dtype=np.int64), np.inf)
+        return tuple(sorted(found, key=lambda mesh: mesh.error)) or (empty,)
 
-    def exact(mesh: Mesh) -> float:
-        if not np.isfinite(mesh.error) or config.exact_errors:
-            return mesh.error
-        return distance(mesh.vertices, mesh.faces, np.inf)
+    exact_best: dict[int, Mesh] = {}
 
-    return grow_until_below(simplify, lambda mesh: mesh.error * metres, thr * metres,
-                            config.max_faces, strict=config.strict,
-                            exact_error=lambda mesh: exact(mesh) * metres)
+    def exact(models: tuple[Mesh, ...]) -> float:
+        """The least exact error of a size's restarts (their errors may be lower bounds),
+        its model kept for the choice below."""
+        exact_models = [m if not np.isfinite(m.error) or config.exact_errors else
+                        Mesh(m.vertices, m.faces, distance(m.vertices, m.faces, np.inf))
+                        for m in models]
+        exact_best[id(models)] = min(exact_models, key=lambda mesh: mesh.error)
+        return exact_best[id(models)].error
+
+    reduction = grow_until_below(simplify, lambda models: models[0].error * metres,
+                                 thr * metres, config.max_faces, strict=config.strict,
+                                 exact_error=lambda models: exact(models) * metres)
+    # reached: the model under the threshold; else the restart of least exact error
+    return replace(reduction, model=exact_best.get(id(reduction.model), reduction.model[0]))

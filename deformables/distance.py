@@ -39,6 +39,12 @@ _PROBE_STRIDE = 16
 _PROBE_EXACT = 32
 #: of those, resolved exactly at a time, from the largest guess down
 _PROBE_CHUNK = 4
+#: every this many rows of a simplified surface's sample form the scout that
+#: :func:`surface_to_surface` resolves before its probe under a finite limit: a model that
+#: misses a layer is off over much of its surface, and a few dozen points show it at a
+#: sixteenth of the probe's cost (the probe's k-d tree query of points far from the sheets
+#: is most of a rejected size's time at 100 x 100)
+_SCOUT_STRIDE = 256
 #: points nearer than the probe's value to a cover sample cannot hold the maximum; they are
 #: dropped first (one query) only when that value is at least this many covering radii
 #: (below, they are too few to pay for the query: a model that fits, value ~1e-16)
@@ -318,8 +324,14 @@ def surface_to_surface(original: SurfaceDistance, vertices: np.ndarray, faces: n
                        step: float, limit: float = np.inf) -> tuple[float, np.ndarray | None]:
     """The largest distance from the surface ``(V, 3)``, ``(F, 3)`` sampled at ``step`` to
     ``original`` (:meth:`SurfaceDistance.max_distance` of the sample, limit ``limit``), and the
-    sample ``(Q, 3)``. The probe's rows are sampled first: when they alone reach ``limit``
-    (a model far from the original) the full sample is never made and comes back as None."""
+    sample ``(Q, 3)``. Under a finite limit the scout's rows (``[::_SCOUT_STRIDE]``) are
+    sampled and resolved like a probe first, then the probe's: when either alone reaches
+    ``limit`` (a model far from the original) its value, a lower bound of the maximum, is
+    returned, and the full sample is never made and comes back as None."""
+    if np.isfinite(limit):
+        scout = original.probe_distance(sample_surface(vertices, faces, step, _SCOUT_STRIDE))
+        if scout >= limit:
+            return scout, None
     best = original.probe_distance(sample_surface(vertices, faces, step, _PROBE_STRIDE))
     if best >= limit:
         return best, None

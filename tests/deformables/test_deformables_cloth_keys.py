@@ -201,11 +201,12 @@ def test_key_counts_under_goal_noise(n, seed):
 
 def test_projection_of_a_barely_noisy_goal_restores_its_count():
     """40 x 40 underneath fold, random diagonals, 0.02 mm noise (seed 1): as given, QECD
-    stops at 20 faces and 11 keys; projected on its panels, at the 14 faces and 10 keys of the
-    exact fold."""
+    stops at more faces than the exact fold's (16 with the restarts' shared decimation, 20 and
+    11 keys without it); projected on its panels, at the 14 faces and 10 keys of the exact
+    fold."""
     _, given = _reduce("cloth_underneath", 40, "random", noise=2e-5, seed=1, panels="auto")
     _, projected = _reduce("cloth_underneath", 40, "random", noise=2e-5, seed=1)
-    assert (given.n_elements, given.n_keys) == (20, 11)
+    assert given.n_elements > 14
     assert (projected.n_elements, projected.n_keys) == (14, 10)
 
 

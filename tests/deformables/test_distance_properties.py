@@ -27,10 +27,11 @@ SLOW = settings(deadline=None, derandomize=True, database=None, max_examples=60,
 FOLDS = ["cloth_flat", "cloth_diagonal", "cloth_side", "cloth_reflective", "cloth_underneath"]
 
 
-def reference_probe(cover, points, exact):
-    """The probe's value: the largest exact distance of the 32 points of ``points[::16]``
-    farthest from the cover (the same order as the library's: numpy's argsort)."""
-    probe = points[::16]
+def reference_probe(cover, points, exact, stride=16):
+    """The probe's value: the largest exact distance of the 32 points of ``points[::stride]``
+    farthest from the cover (the same order as the library's: numpy's argsort). With stride
+    256, the scout's value."""
+    probe = points[::stride]
     return float(exact(probe[np.argsort(-cKDTree(cover).query(probe)[0])[:32]]).max())
 
 
@@ -125,6 +126,12 @@ def test_the_search_gives_the_reference_value_both_ways(case, place):
     goal_cover = dist.sample_surface(goal, faces, goal_step)
     limit, expected = _check(goal, faces, goal_cover, goal_step / np.sqrt(3), original,
                              samples, place)
+    # under a finite limit the scout (rows [::256]) goes first and may stop the search
+    scout = (reference_probe(goal_cover, samples, lambda q: brute_force(goal, faces, q), 256)
+             if np.isfinite(limit) else -np.inf)
+    if scout >= limit:
+        assert scout <= float(brute_force(goal, faces, samples).max())
+        expected = scout
     assert dist.surface_to_surface(original, v, f, step, limit)[0] == expected
 
     model = dist.SurfaceDistance(v, f, cover_step=step, cover=samples)
@@ -150,11 +157,18 @@ def test_strided_samples_are_the_rows_of_the_full_sample(case, stride):
 
 
 @pytest.mark.parametrize("fold", FOLDS[1:])
-def test_a_far_model_is_rejected_by_its_probe_without_the_full_sample(fold):
-    goal, faces, v, f, step = _case(fold, 12, 10.0, 0.0, 2, 0.0, 1.0, 0)
+def test_a_far_model_is_rejected_by_its_scout_or_probe_without_the_full_sample(fold):
+    # 24 per side: a sample of a few hundred rows, so the scout has a few points
+    goal, faces, v, f, step = _case(fold, 24, 10.0, 0.0, 2, 0.0, 1.0, 0)
     original = dist.SurfaceDistance(goal, faces)
+    scout = original.probe_distance(dist.sample_surface(v, f, step, 256))
     probe = original.probe_distance(dist.sample_surface(v, f, step, 16))
-    value, samples = dist.surface_to_surface(original, v, f, step, limit=probe)
-    assert value == probe and samples is None
-    value, samples = dist.surface_to_surface(original, v, f, step, limit=probe * 1.5)
+    assert scout > 0.0
+    value, samples = dist.surface_to_surface(original, v, f, step, limit=scout)
+    assert value == scout and samples is None
+    if probe > scout:                       # the scout falls short, the probe stops it
+        value, samples = dist.surface_to_surface(original, v, f, step, limit=probe)
+        assert value == probe and samples is None
+    value, samples = dist.surface_to_surface(original, v, f, step,
+                                             limit=max(scout, probe) * 1.5)
     np.testing.assert_array_equal(samples, dist.sample_surface(v, f, step))

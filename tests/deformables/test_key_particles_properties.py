@@ -268,8 +268,9 @@ def test_the_reported_diagonal_fold(n, triangulation):
 
 def test_the_paper_pipeline_switch():
     paper = ClothConfig.paper()
-    assert (paper.error, paper.z_scale, paper.restarts, paper.coarse_faces, paper.panels,
-            paper.canonical_triangulation) == ("one-sided", 1.0, 1, None, "off", False)
+    assert (paper.error, paper.z_scale, paper.restarts, paper.coarse_faces,
+            paper.shared_faces, paper.panels, paper.canonical_triangulation) == (
+        "one-sided", 1.0, 1, None, None, "off", False)
     assert ClothConfig.paper(max_faces=20).max_faces == 20
 
 

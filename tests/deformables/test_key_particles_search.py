@@ -1,11 +1,14 @@
 """The fast distance search gives the plain search's values, and the key particles of the
-bench's goals stay those recorded before it (issue #60, key particles at the paper's size)."""
+bench's goals stay those recorded before it (issue #60, key particles at the paper's size):
+exactly with every restart decimating the goal itself, within a grid step with the restarts'
+shared decimation (``ClothConfig.shared_faces``)."""
 import numpy as np
 import pytest
 import trimesh
 
 from deformables import bench, goals
 from deformables import distance as dist
+from deformables.cloth import ClothConfig
 from deformables.decimation import decimate
 from deformables.goals import CLOTH_REFERENCE_KEYS
 from deformables.mesh import unique_rows
@@ -104,24 +107,49 @@ def test_unique_rows_is_numpys_unique_over_rows():
     np.testing.assert_array_equal(unique_rows(negative), np.unique(negative, axis=0))
 
 
-def _keys(task, n, noise):
-    call, _, reference = bench._run(task, n, noise)
+SEPARATE = ClothConfig(shared_faces=None)
+
+
+def _keys(task, n, noise, config=None):
+    call, _, reference = bench._run(task, n, noise, config)
     result = call()
     assert result.n_keys == reference == CLOTH_REFERENCE_KEYS[task]
     return result
 
 
+def _grid_steps(n, keys, recorded):
+    """The largest grid distance (rows or columns, on the n x n rest sheet) from a key to
+    its nearest recorded key."""
+    a, b = np.divmod(np.asarray(keys), n), np.divmod(np.asarray(recorded), n)
+    steps = np.maximum(np.abs(a[0][:, None] - b[0][None]), np.abs(a[1][:, None] - b[1][None]))
+    return int(steps.min(axis=1).max())
+
+
 @pytest.mark.parametrize("task, n, noise", [key for key in RECORDED if key[1] == 40])
 def test_key_particles_of_the_bench_goals_are_the_recorded_ones(task, n, noise):
-    result = _keys(task, n, noise)
+    result = _keys(task, n, noise, SEPARATE)
     assert result.indices.tolist() == RECORDED[task, n, noise]
     assert result.n_elements == FACES[task] and result.reached_threshold
+
+
+@pytest.mark.parametrize("task, n, noise", [key for key in RECORDED if key[1] == 40])
+def test_the_shared_decimation_keeps_the_counts_and_moves_a_key_a_grid_step_at_most(
+        task, n, noise):
+    """The two layers' particles at a crease end lie a grid step apart: either is the key."""
+    result = _keys(task, n, noise)
+    assert result.n_elements == FACES[task] and result.reached_threshold
+    assert _grid_steps(n, result.indices, RECORDED[task, n, noise]) <= 1
+    assert _grid_steps(n, RECORDED[task, n, noise], result.indices) <= 1
 
 
 @pytest.mark.slow
 @pytest.mark.parametrize("task, n, noise", [key for key in RECORDED if key[1] == 100])
 def test_key_particles_at_the_papers_size_are_the_recorded_ones(task, n, noise):
-    result = _keys(task, n, noise)
+    result = _keys(task, n, noise, SEPARATE)
     assert result.indices.tolist() == RECORDED[task, n, noise]
     assert result.reached_threshold
+    shared = _keys(task, n, noise)
+    assert shared.reached_threshold
+    assert _grid_steps(n, shared.indices, RECORDED[task, n, noise]) <= 1
+    assert _grid_steps(n, RECORDED[task, n, noise], shared.indices) <= 1
 

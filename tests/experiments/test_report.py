@@ -294,7 +294,9 @@ def test_key_particle_benches_and_simulated_goals(site):
     write(site["results"], "kp-compare.json",
           {"bench": "key-particles-compare", "mode": "compare", "resolutions": [16, 25],
            "noise_m": 0.001, "triangulations": ["mujoco", "anti"], "goals": [],
-           "summary": {"paper": {"noise_0": {"cloth_diagonal": cell}}},
+           "summary": {"paper": {"noise_0": {"cloth_diagonal": cell}},
+                       "separate-restarts": {"noise_0": {"cloth_diagonal": {
+                           **cell, "counts_as_first": 11}}}},
            "provenance": provenance("python -m deformables.bench compare")})
     goal = {"task": "cloth_side", "particles": 10000, "noise_m": 0.001, "n_elements": 6,
             "n_keys": 6, "reference_keys": 6, "reached_threshold": True, "seconds": 3.456}
@@ -320,7 +322,9 @@ def test_key_particle_benches_and_simulated_goals(site):
            "provenance": provenance("python experiments/key_particles.py --task all")})
     assert run(site) == 0
     md = site["md"].read_text()
-    assert "| paper | cloth diagonal | 0 | 4 / 12 | 3 / 12 | 2 (1), 37 (11) | 4 (4), 9 (8) " \
+    assert "| separate-restarts | cloth diagonal | 0 | 4 / 12 | 3 / 12 | 11 / 12 | 2 (1), " \
+        in md
+    assert "| paper | cloth diagonal | 0 | 4 / 12 | 3 / 12 | - | 2 (1), 37 (11) | 4 (4), 9 (8) " \
            "| 0.60 |" in md
     assert "| cloth side | 10000 | 1 | 6 (6) | 6 | yes | 3.46 |" in md
     assert "| 1 | 3.46 | 0.73 | 4.73 | 1 / 4 |" in md
