@@ -135,8 +135,8 @@ def paper_scale(cloth_n: int = 100, noise: float = 1e-3, repeats: int = 1) -> di
 
 def compare(resolutions: tuple[int, ...] = (16, 25, 40), noise: float = 1e-3,
             triangulations: tuple[str, ...] = TRIANGULATIONS) -> dict:
-    """The default and the paper's pipelines on the same cloth goals (``compare`` mode, see the
-    module docstring)."""
+    """The pipelines of ``PIPELINES`` on the same cloth goals (``compare`` mode, see the module
+    docstring)."""
     pipelines = PIPELINES
     warm, _, _ = _run("cloth_side", 12, 0.0)
     warm()

@@ -19,9 +19,10 @@ tighter upper bound than ``u``.
 The pieces, the tightened bounds, the copies dropped from the cover, the shape of the k-d
 trees, the probe sampled and resolved on its own (only its maximum, from the largest guess
 down) change the time, not the values: distances, maxima and the lower bounds returned at a
-limit are those of the plain search (docs/DESIGN-NOTES.md, "Key particles at the paper's
-size"; tests/deformables/test_distance_properties.py checks them against a brute-force
-reference of that search).
+limit are those of the plain search, whose order is documented (:func:`surface_to_surface`'s
+scout, then the probe, then the points by their nearest cover sample; docs/DESIGN-NOTES.md,
+"Key particles at the paper's size"; tests/deformables/test_distance_properties.py checks
+them against a brute-force reference of that search).
 """
 from __future__ import annotations
 
