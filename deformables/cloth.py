@@ -545,19 +545,15 @@ def _decimate_below(scaled: np.ndarray, tri: np.ndarray, spacing: float, thr: fl
         empty = Mesh(np.empty((0, 3)), np.empty((0, 3), dtype=np.int64), np.inf)
         return tuple(sorted(found, key=lambda mesh: mesh.error)) or (empty,)
 
-    exact_best: dict[int, Mesh] = {}
-
-    def exact(models: tuple[Mesh, ...]) -> float:
-        """The least exact error of a size's restarts (their errors may be lower bounds),
-        its model kept for the choice below."""
-        exact_models = [m if not np.isfinite(m.error) or config.exact_errors else
-                        Mesh(m.vertices, m.faces, distance(m.vertices, m.faces, np.inf))
-                        for m in models]
-        exact_best[id(models)] = min(exact_models, key=lambda mesh: mesh.error)
-        return exact_best[id(models)].error
+    def exact(models: tuple[Mesh, ...]) -> tuple[Mesh]:
+        """The restart of least exact error among a size's (their errors may be lower
+        bounds)."""
+        return (min((m if not np.isfinite(m.error) or config.exact_errors else
+                     Mesh(m.vertices, m.faces, distance(m.vertices, m.faces, np.inf))
+                     for m in models), key=lambda mesh: mesh.error),)
 
     reduction = grow_until_below(simplify, lambda models: models[0].error * metres,
                                  thr * metres, config.max_faces, strict=config.strict,
-                                 exact_error=lambda models: exact(models) * metres)
+                                 exact=exact)
     # reached: the model under the threshold; else the restart of least exact error
-    return replace(reduction, model=exact_best.get(id(reduction.model), reduction.model[0]))
+    return replace(reduction, model=reduction.model[0])

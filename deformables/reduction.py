@@ -42,7 +42,7 @@ class Reduction(Generic[Model]):
 def grow_until_below(simplify: Callable[[int], Model], error: Callable[[Model], float],
                      threshold: float, max_size: int, min_size: int = 2, *,
                      strict: bool = True,
-                     exact_error: Callable[[Model], float] | None = None) -> Reduction[Model]:
+                     exact: Callable[[Model], Model] | None = None) -> Reduction[Model]:
     """Alg. 1, lines 1-6: simplify to size ``min_size, min_size + 1, ...`` until the error of the
     simplified model is below ``threshold``.
 
@@ -53,9 +53,9 @@ def grow_until_below(simplify: Callable[[int], Model], error: Callable[[Model], 
         max_size: the largest size tried.
         strict: when no size up to ``max_size`` reaches the threshold, raise (True) or return
             the model with the least error, ``reached=False``, with a logged warning (False).
-        exact_error: when no size reaches the threshold, the models are ranked by this error
-            instead of ``error`` (for an ``error`` that stops early and then gives only a lower
-            bound); its value becomes the accepted model's ``error``.
+        exact: when no size reaches the threshold, each model is replaced by ``exact(model)``,
+            whose ``error`` is exact, and ranked by that (for an ``error`` that stops early and
+            then gives only a lower bound); the accepted model is the exact one.
 
     Raises:
         ValueError: ``max_size < min_size``, or, with ``strict``, no size up to ``max_size``
@@ -81,7 +81,9 @@ def grow_until_below(simplify: Callable[[int], Model], error: Callable[[Model], 
         logger.debug("size %d: error %.6g (threshold %.6g)", size, err, threshold)
         if err < threshold:
             return Reduction(size, model, frozen(sizes, np.int64), frozen(errors), True, err)
-    ranking = errors if exact_error is None else [float(exact_error(m)) for m in models]
+    if exact is not None:
+        models = [exact(m) for m in models]
+    ranking = errors if exact is None else [float(error(m)) for m in models]
     ranking = np.where(np.isfinite(ranking), ranking, np.inf)
     best = int(np.argmin(ranking))
     message = (f"the error never fell below the threshold {threshold:.6g} for model sizes "
