@@ -1,7 +1,8 @@
 """The fast distance search gives the plain search's values, and the key particles of the
 bench's goals stay those recorded before it (issue #60, key particles at the paper's size):
-exactly with every restart decimating the goal itself, within a grid step with the restarts'
-shared decimation (``ClothConfig.shared_faces``)."""
+on exact goals exactly with every restart decimating the goal itself and within a grid step
+with the restarts' shared decimation (``ClothConfig.shared_faces``); on noisy goals the key
+counts exactly and the keys within the ties of ``TIE_STEPS``."""
 import numpy as np
 import pytest
 import trimesh
@@ -31,6 +32,13 @@ RECORDED = {
     ("cloth_reflective", 100, 1e-3): [0, 99, 5000, 5199, 7800, 7999, 9900, 9999],
     ("cloth_underneath", 100, 1e-3): [0, 99, 2300, 2499, 5099, 5100, 7899, 7900, 9900, 9999],
 }
+#: how far (grid steps, rows or columns) a key of a noisy goal moves when the goal moves by
+#: 1e-12 m: a crease end's two layers' particles, and at 100 x 100 the diagonal fold's corner
+#: and the particle two along its edge, are ties that the last bits of LAPACK and pymeshlab
+#: break, and those bits differ by CPU. Measured on every noisy goal above, both pipelines, the
+#: goal and 5 copies moved by Gaussian noise of 1e-12 m (1e-13 m at 40 x 40 moves them as
+#: well): at most 1 step at 40 x 40, 2 at 100 x 100; the key counts never moved.
+TIE_STEPS = {40: 1, 100: 2}
 FACES = {"cloth_diagonal": 4, "cloth_side": 6, "cloth_reflective": 10, "cloth_underneath": 14}
 
 
@@ -125,10 +133,22 @@ def _grid_steps(n, keys, recorded):
     return int(steps.min(axis=1).max())
 
 
+def _recorded_keys_hold(result, task, n, noise, exact):
+    """``exact``: the recorded keys themselves; else each key within ``TIE_STEPS[n]`` grid
+    steps of a recorded one and the other way round (one step on an exact goal)."""
+    recorded = RECORDED[task, n, noise]
+    if exact and noise == 0.0:
+        assert result.indices.tolist() == recorded
+        return
+    steps = 1 if noise == 0.0 else TIE_STEPS[n]
+    assert _grid_steps(n, result.indices, recorded) <= steps
+    assert _grid_steps(n, recorded, result.indices) <= steps
+
+
 @pytest.mark.parametrize("task, n, noise", [key for key in RECORDED if key[1] == 40])
 def test_key_particles_of_the_bench_goals_are_the_recorded_ones(task, n, noise):
     result = _keys(task, n, noise, SEPARATE)
-    assert result.indices.tolist() == RECORDED[task, n, noise]
+    _recorded_keys_hold(result, task, n, noise, exact=True)
     assert result.n_elements == FACES[task] and result.reached_threshold
 
 
@@ -138,18 +158,13 @@ def test_the_shared_decimation_keeps_the_counts_and_moves_a_key_a_grid_step_at_m
     """The two layers' particles at a crease end lie a grid step apart: either is the key."""
     result = _keys(task, n, noise)
     assert result.n_elements == FACES[task] and result.reached_threshold
-    assert _grid_steps(n, result.indices, RECORDED[task, n, noise]) <= 1
-    assert _grid_steps(n, RECORDED[task, n, noise], result.indices) <= 1
+    _recorded_keys_hold(result, task, n, noise, exact=False)
 
 
 @pytest.mark.slow
 @pytest.mark.parametrize("task, n, noise", [key for key in RECORDED if key[1] == 100])
 def test_key_particles_at_the_papers_size_are_the_recorded_ones(task, n, noise):
-    result = _keys(task, n, noise, SEPARATE)
-    assert result.indices.tolist() == RECORDED[task, n, noise]
-    assert result.reached_threshold
-    shared = _keys(task, n, noise)
-    assert shared.reached_threshold
-    assert _grid_steps(n, shared.indices, RECORDED[task, n, noise]) <= 1
-    assert _grid_steps(n, RECORDED[task, n, noise], shared.indices) <= 1
-
+    for config in (SEPARATE, None):
+        result = _keys(task, n, noise, config)
+        assert result.reached_threshold
+        _recorded_keys_hold(result, task, n, noise, exact=config is SEPARATE)

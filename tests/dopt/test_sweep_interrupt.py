@@ -68,6 +68,17 @@ def wait_for(condition, seconds: float) -> None:
         time.sleep(0.05)
 
 
+def checkpoint_steps(out: Path) -> list[int]:
+    """The step each checkpoint under OUT holds (a file being replaced is skipped)."""
+    steps = []
+    for path in (out / "trials" / "checkpoints").glob("w*.json"):
+        try:
+            steps.append(json.loads(path.read_text())["progress"]["i"])
+        except (OSError, ValueError, KeyError):
+            continue
+    return steps
+
+
 def results(out: Path) -> dict:
     """{key: the result's JSON text} of every trial file under OUT."""
     return {p.stem: json.dumps(json.loads(p.read_text())["result"], sort_keys=True)
@@ -95,9 +106,10 @@ def interrupt_and_resume(tmp_path, uninterrupted, sig, workers=2, ray=False, gro
     out = tmp_path / "out"
     proc = child(out, workers, ray)
     try:
-        # a trial finished and others part-way: their checkpoints hold a few steps
+        # a trial finished and another early in its walk (at most a quarter of its 40 steps
+        # of 0.05 s): it is still running when the signal lands, however loaded the machine
         wait_for(lambda: len(list((out / "trials").glob("w*.json"))) >= 1
-                 and any((out / "trials" / "checkpoints").glob("w*.json")), 240)
+                 and any(step <= 10 for step in checkpoint_steps(out)), 240)
         time.sleep(0.3)
         sent = time.monotonic()
         if group:
