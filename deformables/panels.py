@@ -124,14 +124,16 @@ def rigid_fit(rest: np.ndarray, goal: np.ndarray,
     w = w / w.sum(axis=1, keepdims=True)
     rest_c = np.einsum("bk,bki->bi", w, rest)
     goal_c = np.einsum("bk,bki->bi", w, goal)
-    cov = np.einsum("bk,bki,bkj->bij", w, rest - rest_c[:, None], goal - goal_c[:, None])
+    # batched matmuls: three-operand einsums do not reach BLAS and were most of this function
+    cov = np.matmul(((rest - rest_c[:, None]) * w[..., None]).transpose(0, 2, 1),
+                    goal - goal_c[:, None])                                   # (B, 3, 3)
     u, _, vt = np.linalg.svd(cov)
-    det = np.linalg.det(np.einsum("bji,bkj->bik", vt, u))        # det(V U^T)
+    det = np.linalg.det(u) * np.linalg.det(vt)                   # det(V U^T)
     d = np.ones(rest.shape[:1] + (3,))
     d[:, 2] = np.where(det < 0, -1.0, 1.0)                       # no reflections
-    rot = np.einsum("bji,bj,bkj->bik", vt, d, u)                 # V diag(d) U^T
+    rot = np.matmul(vt.transpose(0, 2, 1) * d[:, None, :], u.transpose(0, 2, 1))  # V diag(d) U^T
     shift = goal_c - np.einsum("bij,bj->bi", rot, rest_c)
-    residual = np.einsum("bij,bkj->bki", rot, rest) + shift[:, None] - goal
+    residual = np.matmul(rest, rot.transpose(0, 2, 1)) + shift[:, None] - goal
     return rot, shift, np.sqrt(np.einsum("bk,bk->b", w, (residual ** 2).sum(axis=2)))
 
 
@@ -368,16 +370,16 @@ def _boundary_regression(rest: np.ndarray, labels: np.ndarray, n_panels: int, l2
     plane = centred @ np.linalg.svd(centred, full_matrices=False)[2][:2].T        # (N, 2)
     extent = np.ptp(plane, axis=0).max()
     features = np.c_[plane / extent, np.ones(len(rest))]
-    target = np.eye(n_panels)[labels]
     known, count = features[fit], int(fit.sum())
+    target = np.eye(n_panels)[labels[fit]]                                   # (n_fit, P)
 
     def loss(w: np.ndarray) -> tuple[float, np.ndarray]:
         weights = w.reshape(3, n_panels)
         logits = known @ weights
         logits -= logits.max(axis=1, keepdims=True)
         log_p = logits - np.log(np.exp(logits).sum(axis=1, keepdims=True))
-        value = -(target[fit] * log_p).sum() / count + l2 * (weights[:2] ** 2).sum()
-        grad = known.T @ (np.exp(log_p) - target[fit]) / count
+        value = -(target * log_p).sum() / count + l2 * (weights[:2] ** 2).sum()
+        grad = known.T @ (np.exp(log_p) - target) / count
         grad[:2] += 2.0 * l2 * weights[:2]
         return value, grad.ravel()
 
