@@ -306,7 +306,23 @@ def provenance(argv: list[str] | None = None, root: Path | str | None = None) ->
             "git_commit": git_commit(root),
             "versions": versions(),
             "date": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
-            "machine": {"platform": platform.platform(), "cpus": _cpus()}}
+            "machine": machine()}
+
+
+@functools.cache
+def machine() -> dict:
+    """{"platform", "cpu", "cpus"} of this process: the OS, the processor's model name (from
+    /proc/cpuinfo, else ``platform.processor()``; "" when neither says) and the cores it may
+    use. A sweep's trial records carry it: a CPU-time clock (the virtual clock of the MPC
+    experiments) runs at the speed of the machine a trial ran on."""
+    cpu = ""
+    try:
+        with open("/proc/cpuinfo", encoding="utf-8", errors="replace") as f:
+            cpu = next((line.split(":", 1)[1].strip() for line in f
+                        if line.startswith("model name")), "")
+    except OSError:
+        pass
+    return {"platform": platform.platform(), "cpu": cpu or platform.processor(), "cpus": _cpus()}
 
 
 def command_line(argv: list[str]) -> str:

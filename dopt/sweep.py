@@ -37,7 +37,9 @@ else is recomputed and its old file moved to ``OUT/trials/outdated/`` (never del
 packed record stays in the pack, shadowed by the new file, until ``pack_trials`` moves it
 there): a record of an unknown commit, of no commit ("no git"), of another branch, or marked
 "-dirty" (except in the very tree it was written from, so that a killed run resumes before its
-code is committed). The dopt version is recorded but decides nothing.
+code is committed). The dopt version is recorded but decides nothing. Each record also names
+the machine its trial ran on ("machine": ``dopt.provenance.machine()`` of the worker; absent
+from records written before records carried it): a CPU-time clock runs at its speed.
 ``reuse="any"`` reuses every valid record deliberately: ``SweepResult.reused_across`` (and
 ``take_deliberate_reuse()``, which the experiments' ``write_summary`` puts in the summary) list
 the trials reused across a code change and why they would have been recomputed. No field of a
@@ -442,7 +444,8 @@ def _execute(fn, todo, out_dir, code, checkpoints, records, progress, tick, sche
         out = {"checkpoint": checkpoints[t.key]} if takes_checkpoint(fn) else {}
         return {**out, "report": reports[t.key]} if reports else out
 
-    def finish(trial: Trial, result=None, error: BaseException | None = None):
+    def finish(trial: Trial, result=None, error: BaseException | None = None,
+               machine: dict | None = None):
         if isinstance(error, TrialInterrupted):
             interrupted[trial.key] = str(error)
             log.info("trial %s: %s", trial.key, error)
@@ -451,7 +454,8 @@ def _execute(fn, todo, out_dir, code, checkpoints, records, progress, tick, sche
         if error is None and (problem := schema.result_problem(result)) is not None:
             error = ValueError(f"its result does not fit the experiment's schema: {problem}")
         if error is None:
-            rec = {"key": trial.key, "params": trial.params, "result": result, "code": code}
+            rec = {"key": trial.key, "params": trial.params, "result": result, "code": code,
+                   "machine": machine}
             try:
                 jsonio.write_atomic(trial_path(out_dir, trial.key), rec)
             except (TypeError, ValueError) as e:        # not JSON-able: a failure, not a result

@@ -35,6 +35,7 @@ from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from multiprocessing import get_context
 from pathlib import Path
 
+from dopt.provenance import machine
 from dopt.sweep_store import PROGRESS_DIR, Report
 
 log = logging.getLogger("dopt.sweep")
@@ -116,15 +117,15 @@ def _worker_stop(signum, frame) -> None:
         raise TrialInterrupted(f"stopped by {signal.Signals(signum).name}")
 
 
-def call_trial(fn: Callable, params: dict, kwargs: dict):
-    """Run one trial in a worker (none once its sweep is stopping); its report's last count
-    is written before it returns."""
+def call_trial(fn: Callable, params: dict, kwargs: dict) -> tuple[object, dict]:
+    """Run one trial in a worker (none once its sweep is stopping): ``(its result, the
+    worker's machine())``; its report's last count is written before it returns."""
     global _IN_TRIAL
     if _STOPPING:
         raise TrialInterrupted("not started: the sweep was interrupted", started=False)
     _IN_TRIAL = True
     try:
-        return fn(params, **kwargs)
+        return fn(params, **kwargs), machine()
     finally:
         _IN_TRIAL = False
         if isinstance(kwargs.get("report"), Report):
@@ -186,7 +187,7 @@ def _run_inline(fn, todo, kwargs_of, finish, stop: Stopper) -> None:
         except Exception as e:  # recorded, the sweep goes on
             finish(t, error=e)
         else:
-            finish(t, result)
+            finish(t, result, machine=machine())
 
 
 class _LogRelay(threading.Thread):
@@ -249,7 +250,11 @@ def _finish_future(fut, trial, finish, progress: _Progress) -> None:
         finish(trial, error=TrialInterrupted("not started", started=False))
         return
     err = fut.exception()
-    finish(trial, None if err else fut.result(), err)
+    if err is not None:
+        finish(trial, error=err)
+        return
+    result, where = fut.result()
+    finish(trial, result, machine=where)
 
 
 def _stop_pool(pool, pending: dict, finish, stop: Stopper, progress: _Progress) -> None:
@@ -329,7 +334,7 @@ def _finish_ref(ray, ref, trial, finish, progress: _Progress, stopping: bool) ->
             finish(trial, error=e.cause if isinstance(getattr(e, "cause", None),
                                                       Exception) else e)
     else:
-        finish(trial, result)
+        finish(trial, result[0], machine=result[1])
 
 
 def progress_reports(out_dir: Path | str, keys, tick) -> dict[str, Report]:

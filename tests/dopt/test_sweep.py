@@ -89,6 +89,7 @@ def test_ray_local(tmp_path):
     finally:
         ray.shutdown()
     assert {k: r["result"]["y"] for k, r in res.records.items()} == {"x2": 4, "x3": 9}
+    assert all(r["machine"]["cpus"] >= 1 for r in res.records.values())   # the worker's
 
 
 def test_bad_input(tmp_path):
@@ -119,6 +120,24 @@ def test_records_store_the_code_version(tmp_path, code):
     assert res.commits == {"c0ffee": 2} and res.recomputed == {} and res.corrupt == {}
     rec = json.loads((tmp_path / "trials" / "x1.json").read_text())
     assert rec["code"] == CODE and rec["result"]["y"] == 1
+
+
+@pytest.mark.parametrize("workers", [1, 2])
+def test_records_name_the_machine_their_trial_ran_on(tmp_path, workers):
+    """A CPU-time clock runs at the speed of the trial's machine: its record says which."""
+    import platform
+    import re
+    run_sweep(square, trials([1, 2]), tmp_path, workers=workers)
+    try:
+        found = re.search(r"^model name\s*:\s*(.*)$", Path("/proc/cpuinfo").read_text(),
+                          re.MULTILINE)
+    except OSError:
+        found = None
+    for x in (1, 2):
+        where = json.loads((tmp_path / "trials" / f"x{x}.json").read_text())["machine"]
+        assert where["platform"] == platform.platform()
+        assert where["cpu"] == (found.group(1).strip() if found else platform.processor())
+        assert 1 <= where["cpus"] <= os.cpu_count()
 
 
 def test_real_code_version_names_dopt_and_its_commit():
