@@ -40,6 +40,7 @@ from __future__ import annotations
 
 import logging
 import time
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -512,11 +513,17 @@ def _decimate_below(scaled: np.ndarray, tri: np.ndarray, spacing: float, thr: fl
     more; each decimated first to ``config.coarse_faces`` if set), stopping at the first
     below the threshold. Returns the ``Reduction`` of the accepted ``Mesh``: the one below the
     threshold, or, when no size reaches it, the restart and size of least exact error."""
-    original = SurfaceDistance(scaled, tri)
     step = config.sample_spacings * spacing
     vertices, faces = scaled, tri
     if config.shared_faces is not None and len(tri) > config.shared_faces:
-        vertices, faces = decimate(scaled, tri, config.shared_faces, config.backend)
+        # the shared decimation (pymeshlab, which releases the GIL) runs in a thread beside the
+        # original's distance structure (numpy): the two do not depend on each other
+        with ThreadPoolExecutor(1) as pool:
+            shared = pool.submit(decimate, scaled, tri, config.shared_faces, config.backend)
+            original = SurfaceDistance(scaled, tri)
+            vertices, faces = shared.result()
+    else:
+        original = SurfaceDistance(scaled, tri)
     meshes = renumberings(vertices, faces, config.restarts, config.restart_seed)
     if config.coarse_faces is not None:
         meshes = [decimate(vertices, faces, config.coarse_faces, config.backend)

@@ -15,12 +15,17 @@ Two back-ends behind one function:
 from __future__ import annotations
 
 import logging
+import threading
 
 import numpy as np
 
 logger = logging.getLogger(__name__)
 
 BACKENDS = ("pymeshlab", "trimesh")
+
+#: pymeshlab crashes when two threads decimate at once; it releases the GIL while it works,
+#: so one decimation runs beside other Python threads' numpy work
+_PYMESHLAB_LOCK = threading.Lock()
 
 
 class EmptyDecimationError(ValueError):
@@ -45,12 +50,14 @@ def _compact(vertices: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, np.nd
 def _pymeshlab(vertices: np.ndarray, faces: np.ndarray, n_faces: int):
     import pymeshlab
 
-    meshes = pymeshlab.MeshSet()
-    meshes.add_mesh(pymeshlab.Mesh(vertex_matrix=vertices, face_matrix=faces.astype(np.int32)))
-    meshes.meshing_decimation_quadric_edge_collapse(targetfacenum=int(n_faces),
-                                                    **_QECD_PARAMETERS)
-    mesh = meshes.current_mesh()
-    return mesh.vertex_matrix(), mesh.face_matrix().astype(np.int64)
+    with _PYMESHLAB_LOCK:
+        meshes = pymeshlab.MeshSet()
+        meshes.add_mesh(pymeshlab.Mesh(vertex_matrix=vertices,
+                                       face_matrix=faces.astype(np.int32)))
+        meshes.meshing_decimation_quadric_edge_collapse(targetfacenum=int(n_faces),
+                                                        **_QECD_PARAMETERS)
+        mesh = meshes.current_mesh()
+        return mesh.vertex_matrix(), mesh.face_matrix().astype(np.int64)
 
 
 def _trimesh(vertices: np.ndarray, faces: np.ndarray, n_faces: int):
@@ -69,7 +76,8 @@ _IMPLEMENTATIONS = {"pymeshlab": _pymeshlab, "trimesh": _trimesh}
 
 def decimate(vertices: np.ndarray, faces: np.ndarray, n_faces: int,
              backend: str = "pymeshlab") -> tuple[np.ndarray, np.ndarray]:
-    """Decimate the mesh ``(V, 3)``, ``(F, 3)`` to ``n_faces`` triangles.
+    """Decimate the mesh ``(V, 3)``, ``(F, 3)`` to ``n_faces`` triangles. Thread-safe: pymeshlab
+    decimations of several threads run one at a time.
 
     Returns:
         ``(vertices, faces)`` of the decimated mesh, ``(M, 3)`` and ``(NS, 3)``, without

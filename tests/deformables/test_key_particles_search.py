@@ -168,3 +168,19 @@ def test_key_particles_at_the_papers_size_are_the_recorded_ones(task, n, noise):
         result = _keys(task, n, noise, config)
         assert result.reached_threshold
         _recorded_keys_hold(result, task, n, noise, exact=config is SEPARATE)
+
+
+def test_decimations_from_several_threads_are_the_serial_ones():
+    """pymeshlab crashes when two threads decimate at once; ``decimate`` serialises them, and
+    the cloth reduction decimates in a thread beside its own numpy work."""
+    from concurrent.futures import ThreadPoolExecutor
+    made = (goals.make_goal(task, n=n, rng=np.random.default_rng(0))
+            for task in ("cloth_side", "cloth_diagonal") for n in (20, 30))
+    meshes = [(g.positions, g.faces) for g in made]
+    serial = [decimate(v, f, target) for v, f in meshes for target in (8, 60)]
+    with ThreadPoolExecutor(4) as pool:
+        threaded = list(pool.map(lambda job: decimate(*job),
+                                 [(v, f, target) for v, f in meshes for target in (8, 60)] * 3))
+    for i, (v, f) in enumerate(threaded):
+        np.testing.assert_array_equal(v, serial[i % len(serial)][0])
+        np.testing.assert_array_equal(f, serial[i % len(serial)][1])
