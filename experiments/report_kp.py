@@ -443,8 +443,11 @@ def kp_paper_scale_section(results: list[Result], page: Path) -> list[str]:
                  f"{g['n_keys']} ({g['reference_keys']})", str(g["n_elements"]),
                  "yes" if g["reached_threshold"] else "no", num(g["seconds"], 2)]
                 for g in d["goals"]]
+        mach = d["provenance"].get("machine", {})
+        where = ", ".join(filter(None, [mach.get("cpu"), mach.get("cpus") and
+                                        f"{mach['cpus']} cores"])) or "machine not recorded"
         return [f"{d['cloth_n']} x {d['cloth_n']} particles, {d['repeats']} timed run(s) "
-                "per goal.", "",
+                f"per goal, on {where} (the paper's on a Xeon E5-2650).", "",
                 *table(["fold", "particles", "noise (mm)", "keys (reference)", "faces",
                         "threshold reached", "s"], rows), "",
                 *table(["noise (mm)", "mean s over the folds", "paper s", "ratio",
