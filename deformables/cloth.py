@@ -513,15 +513,22 @@ def _decimate_below(scaled: np.ndarray, tri: np.ndarray, spacing: float, thr: fl
     more; each decimated first to ``config.coarse_faces`` if set), stopping at the first
     below the threshold. Returns the ``Reduction`` of the accepted ``Mesh``: the one below the
     threshold, or, when no size reaches it, the restart and size of least exact error."""
+    # decimations (pymeshlab, which releases the GIL) run in a thread beside the numpy work
+    # that does not wait for them: the original's distance index beside the shared decimation,
+    # a size's distances beside the decimations of its later restarts
+    with ThreadPoolExecutor(1) as pool:
+        return _grow_restarts(scaled, tri, spacing, thr, metres, config, pool)
+
+
+def _grow_restarts(scaled: np.ndarray, tri: np.ndarray, spacing: float, thr: float,
+                   metres: float, config: ClothConfig, pool: ThreadPoolExecutor):
+    """``_decimate_below`` with its decimation thread ``pool``."""
     step = config.sample_spacings * spacing
     vertices, faces = scaled, tri
     if config.shared_faces is not None and len(tri) > config.shared_faces:
-        # the shared decimation (pymeshlab, which releases the GIL) runs in a thread beside the
-        # original's distance structure (numpy): the two do not depend on each other
-        with ThreadPoolExecutor(1) as pool:
-            shared = pool.submit(decimate, scaled, tri, config.shared_faces, config.backend)
-            original = SurfaceDistance(scaled, tri)
-            vertices, faces = shared.result()
+        shared = pool.submit(decimate, scaled, tri, config.shared_faces, config.backend)
+        original = SurfaceDistance(scaled, tri)
+        vertices, faces = shared.result()
     else:
         original = SurfaceDistance(scaled, tri)
     meshes = renumberings(vertices, faces, config.restarts, config.restart_seed)
@@ -540,15 +547,18 @@ def _decimate_below(scaled: np.ndarray, tri: np.ndarray, spacing: float, thr: fl
         """The restarts' models of this size tried, the least error first (the first restart
         among equals); the search stops at the first under the threshold."""
         found = []
-        for vertices, faces in meshes:
+        jobs = [pool.submit(decimate, v, f, n_faces, config.backend) for v, f in meshes]
+        for job in jobs:
             try:
-                v, f = decimate(vertices, faces, n_faces, config.backend)
+                v, f = job.result()
             except EmptyDecimationError:
                 logger.debug("restart decimated to nothing at %d faces", n_faces)
                 continue
             found.append(Mesh(v, f, distance(v, f, limit)))
             if found[-1].error < thr:
                 break
+        for job in jobs:                    # the restarts after the first under the threshold
+            job.cancel()
         empty = Mesh(np.empty((0, 3)), np.empty((0, 3), dtype=np.int64), np.inf)
         return tuple(sorted(found, key=lambda mesh: mesh.error)) or (empty,)
 
