@@ -309,12 +309,16 @@ def provenance(argv: list[str] | None = None, root: Path | str | None = None) ->
             "machine": machine()}
 
 
-@functools.cache
 def machine() -> dict:
     """{"platform", "cpu", "cpus"} of this process: the OS, the processor's model name (from
     /proc/cpuinfo, else ``platform.processor()``; "" when neither says) and the cores it may
     use. A sweep's trial records carry it: a CPU-time clock (the virtual clock of the MPC
-    experiments) runs at the speed of the machine a trial ran on."""
+    experiments) runs at the speed of the machine a trial ran on. A new dict each call."""
+    return dict(_machine())
+
+
+@functools.cache
+def _machine() -> dict:
     cpu = ""
     try:
         with open("/proc/cpuinfo", encoding="utf-8", errors="replace") as f:
