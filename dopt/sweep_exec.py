@@ -299,10 +299,7 @@ def run_ray(fn, todo, address: str, kwargs_of, finish, stop: Stopper,
     if getattr(module, "__file__", None) and "site-packages" not in module.__file__:
         # the trial module lives in a script folder, not an installed package: ship it by value
         ray.cloudpickle.register_pickle_by_value(module)
-    # no retries: a worker that dies (a terminal's Ctrl-C reaches Ray's workers too) fails its
-    # trial, whose checkpoint stays to resume, as a pool's does; a retry would rerun it while
-    # the sweep is stopping
-    remote = ray.remote(max_retries=0)(call_trial)
+    remote = ray.remote(call_trial)
     # ray.init may set its own SIGTERM handler: the sweep's are (re)installed after it
     with stop:
         pending = {remote.remote(fn, t.params, kwargs_of(t)): t for t in todo}
