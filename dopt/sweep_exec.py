@@ -4,7 +4,8 @@ stops when asked to.
 **Interrupts.** While trials run, SIGINT (Ctrl-C) and SIGTERM are caught (when the sweep runs
 in the main thread). Queued trials are cancelled; a running trial is interrupted
 (``TrialInterrupted`` raised inside it: at once inline, by a SIGTERM to each pool worker, by
-``ray.cancel`` on Ray); trials that still end within ``GRACE_S`` are written, then the workers
+``ray.cancel`` on Ray, whose local processes are started with SIGINT not ignored so that it
+can); trials that still end within ``GRACE_S`` are written, then the workers
 that have not stopped are killed. A trial saves its checkpoint itself after each step it
 completes (atomically: a write cut short leaves the previous file), so an interrupted trial
 keeps the progress of its last completed step and a rerun resumes it exactly. Pool workers
@@ -22,6 +23,7 @@ to the sweep's ``tick``.
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import logging.handlers
 import os
@@ -291,10 +293,11 @@ def run_ray(fn, todo, address: str, kwargs_of, finish, stop: Stopper,
     """The trials on Ray (``address`` "local": a local instance)."""
     import ray
     if not ray.is_initialized():
-        if address == "local":
-            ray.init(include_dashboard=False, log_to_driver=False)
-        else:
-            ray.init(address=address, log_to_driver=False)
+        with _sigint_not_ignored():
+            if address == "local":
+                ray.init(include_dashboard=False, log_to_driver=False)
+            else:
+                ray.init(address=address, log_to_driver=False)
     module = sys.modules[fn.__module__]
     if getattr(module, "__file__", None) and "site-packages" not in module.__file__:
         # the trial module lives in a script folder, not an installed package: ship it by value
@@ -306,7 +309,8 @@ def run_ray(fn, todo, address: str, kwargs_of, finish, stop: Stopper,
         while pending and stop.signum is None:
             ready, _ = ray.wait(list(pending), num_returns=1, timeout=POLL_S)
             for ref in ready:
-                _finish_ref(ray, ref, pending.pop(ref), finish, progress, stopping=False)
+                trial = pending.pop(ref)
+                _finish_ref(ray, ref, trial, finish, progress, False, kwargs_of(trial))
             progress.poll([t.key for t in pending.values()])
         if not pending:
             return
@@ -316,20 +320,52 @@ def run_ray(fn, todo, address: str, kwargs_of, finish, stop: Stopper,
         while pending and time.monotonic() < deadline and not stop.hurry:
             ready, _ = ray.wait(list(pending), num_returns=1, timeout=0.05)
             for ref in ready:
-                _finish_ref(ray, ref, pending.pop(ref), finish, progress, stopping=True)
+                trial = pending.pop(ref)
+                _finish_ref(ray, ref, trial, finish, progress, True, kwargs_of(trial))
         for ref, trial in pending.items():
             ray.cancel(ref, force=True)
             progress.end(trial.key)
-            finish(trial, error=TrialInterrupted("stopped: its Ray task was killed"))
+            finish(trial, error=_ray_stopped(trial, kwargs_of(trial), "its Ray task was killed"))
 
 
-def _finish_ref(ray, ref, trial, finish, progress: _Progress, stopping: bool) -> None:
+@contextlib.contextmanager
+def _sigint_not_ignored():
+    """SIGINT not ignored while Ray starts its processes. They inherit an ignored SIGINT (a
+    script's background job, ``cmd &``, runs with SIGINT ignored), and in a Ray worker that
+    ignores it ``ray.cancel`` cannot stop a running task: it raises KeyboardInterrupt there by
+    simulating SIGINT, which Python does nothing for when the signal is ignored (measured: the
+    trials of an interrupted sweep ran on to their end)."""
+    ignored = (threading.current_thread() is threading.main_thread()
+               and signal.getsignal(signal.SIGINT) == signal.SIG_IGN)
+    if ignored:
+        signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        yield
+    finally:
+        if ignored:
+            signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+def _ray_stopped(trial, kwargs: dict, why: str) -> TrialInterrupted:
+    """What stopped a Ray trial (cancelled or killed) became: Ray does not say whether a task
+    had begun, so a trial that left no progress (no checkpoint, no step reported) counts as
+    not started (a rerun runs it from its start either way)."""
+    checkpoint, report = kwargs.get("checkpoint"), kwargs.get("report")
+    began = ((checkpoint is not None and checkpoint.path.is_file())
+             or (isinstance(report, Report) and report.read() > 0))
+    if began:
+        return TrialInterrupted(f"stopped: {why}")
+    return TrialInterrupted(f"not started (no step completed): {why}", started=False)
+
+
+def _finish_ref(ray, ref, trial, finish, progress: _Progress, stopping: bool,
+                kwargs: dict) -> None:
     progress.end(trial.key)
     try:
         result = ray.get(ref)
     except Exception as e:
         if stopping or isinstance(e, ray.exceptions.TaskCancelledError):
-            finish(trial, error=TrialInterrupted(f"stopped ({type(e).__name__})"))
+            finish(trial, error=_ray_stopped(trial, kwargs, type(e).__name__))
         else:
             finish(trial, error=e.cause if isinstance(getattr(e, "cause", None),
                                                       Exception) else e)
