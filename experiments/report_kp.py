@@ -177,6 +177,12 @@ def settle_rest_section(results: list[Result], page: Path) -> list[str]:
                    "when the plain settle ends.", results, page, body)
 
 
+def _machine_words(mach: dict) -> str:
+    """A recorded machine (``dopt.provenance.machine()``) in words: its CPU model and cores."""
+    return ", ".join(filter(None, [mach.get("cpu"), mach.get("cpus") and
+                                   f"{mach['cpus']} cores"])) or "machine not recorded"
+
+
 # ------------------------------------------------------ cloth step on MuJoCo Warp (KP)
 def cloth_warp_section(results: list[Result], page: Path) -> list[str]:
     def warned(row: dict) -> str:
@@ -188,7 +194,7 @@ def cloth_warp_section(results: list[Result], page: Path) -> list[str]:
         rows, machines = [], {}
         for row in r.data["rows"]:
             mach = row["machine"]
-            machines[f"{mach.get('warp_device')}, CPU {mach.get('cpu')}"] = mach
+            machines[f"{mach.get('warp_device')}, CPU {_machine_words(mach)}"] = mach
             cpu_ms = row["cpu"]["ms_per_step"]["step"]
             cpu_warned = warned(row)
             for w in row["warp"]:
@@ -443,9 +449,7 @@ def kp_paper_scale_section(results: list[Result], page: Path) -> list[str]:
                  f"{g['n_keys']} ({g['reference_keys']})", str(g["n_elements"]),
                  "yes" if g["reached_threshold"] else "no", num(g["seconds"], 2)]
                 for g in d["goals"]]
-        mach = d["provenance"].get("machine", {})
-        where = ", ".join(filter(None, [mach.get("cpu"), mach.get("cpus") and
-                                        f"{mach['cpus']} cores"])) or "machine not recorded"
+        where = _machine_words(d["provenance"].get("machine", {}))
         return [f"{d['cloth_n']} x {d['cloth_n']} particles, {d['repeats']} timed run(s) "
                 f"per goal, on {where} (the paper's on a Xeon E5-2650).", "",
                 *table(["fold", "particles", "noise (mm)", "keys (reference)", "faces",
