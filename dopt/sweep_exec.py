@@ -324,8 +324,9 @@ def run_ray(fn, todo, address: str, kwargs_of, finish, stop: Stopper,
                 _finish_ref(ray, ref, trial, finish, progress, True, kwargs_of(trial))
         for ref, trial in pending.items():
             ray.cancel(ref, force=True)
-            progress.end(trial.key)
-            finish(trial, error=_ray_stopped(trial, kwargs_of(trial), "its Ray task was killed"))
+            stopped = _ray_stopped(kwargs_of(trial), "its Ray task was killed")
+            progress.end(trial.key)                 # (this removes its progress file)
+            finish(trial, error=stopped)
 
 
 @contextlib.contextmanager
@@ -346,10 +347,11 @@ def _sigint_not_ignored():
             signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
-def _ray_stopped(trial, kwargs: dict, why: str) -> TrialInterrupted:
-    """What stopped a Ray trial (cancelled or killed) became: Ray does not say whether a task
-    had begun, so a trial that left no progress (no checkpoint, no step reported) counts as
-    not started (a rerun runs it from its start either way)."""
+def _ray_stopped(kwargs: dict, why: str) -> TrialInterrupted:
+    """What a Ray trial stopped by the sweep (cancelled or killed; ``kwargs``: its trial
+    function's) became: Ray does not say whether a task had begun, so a trial that left no
+    progress (no checkpoint, no step reported; read before its progress file is removed)
+    counts as not started (a rerun runs it from its start either way)."""
     checkpoint, report = kwargs.get("checkpoint"), kwargs.get("report")
     began = ((checkpoint is not None and checkpoint.path.is_file())
              or (isinstance(report, Report) and report.read() > 0))
@@ -360,16 +362,17 @@ def _ray_stopped(trial, kwargs: dict, why: str) -> TrialInterrupted:
 
 def _finish_ref(ray, ref, trial, finish, progress: _Progress, stopping: bool,
                 kwargs: dict) -> None:
-    progress.end(trial.key)
     try:
         result = ray.get(ref)
     except Exception as e:
         if stopping or isinstance(e, ray.exceptions.TaskCancelledError):
-            finish(trial, error=_ray_stopped(trial, kwargs, type(e).__name__))
+            error = _ray_stopped(kwargs, type(e).__name__)
         else:
-            finish(trial, error=e.cause if isinstance(getattr(e, "cause", None),
-                                                      Exception) else e)
+            error = e.cause if isinstance(getattr(e, "cause", None), Exception) else e
+        progress.end(trial.key)
+        finish(trial, error=error)
     else:
+        progress.end(trial.key)
         finish(trial, result[0], machine=result[1])
 
 

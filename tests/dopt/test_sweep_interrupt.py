@@ -13,6 +13,7 @@ import subprocess
 import sys
 import textwrap
 import time
+import types
 from pathlib import Path
 
 import pytest
@@ -26,6 +27,7 @@ from dopt.sweep import (
     Trial,
     run_sweep,
 )
+from dopt.sweep_store import Report
 from tests.dopt.sweep_trials import walk, warn
 
 HERE = Path(__file__).parent
@@ -169,6 +171,33 @@ def test_an_inline_sweep_stops_and_resumes_exactly(tmp_path, uninterrupted):
 def test_a_ray_sweep_stops_within_seconds_and_resumes_exactly(tmp_path, uninterrupted):
     pytest.importorskip("ray")
     interrupt_and_resume(tmp_path, uninterrupted, signal.SIGINT, ray=True, group=True)
+
+
+def test_a_stopped_ray_trial_counts_as_begun_by_its_progress_read_before_it_is_removed(
+        tmp_path):
+    """A Ray task's cancellation does not say whether it had begun: a trial that reported a
+    step or saved a checkpoint stopped part-way, one that did neither did not start. The
+    count is read before the sweep removes the trial's progress file."""
+    from dopt.sweep_exec import _finish_ref, _Progress
+
+    class Cancelled(Exception):
+        pass
+
+    def cancelled(ref):
+        raise Cancelled
+
+    ray = types.SimpleNamespace(get=cancelled,
+                                exceptions=types.SimpleNamespace(TaskCancelledError=Cancelled))
+    ends = {}
+    for key, steps in (("ran", 3), ("queued", 0)):
+        report = Report(tmp_path, key, interval=0.0)
+        (tmp_path / "trials" / ".progress").mkdir(parents=True, exist_ok=True)
+        report(steps)                             # a worker's report: written to its file
+        progress = _Progress({key: report}, tick=lambda k, n: None)
+        _finish_ref(ray, None, Trial(key, {}), lambda t, error: ends.update({t.key: error}),
+                    progress, True, {"report": report})
+        assert not report.path.exists()           # removed once the trial ended
+    assert ends["ran"].started and not ends["queued"].started
 
 
 # --------------------------------------------------------------- progress and logs of workers
