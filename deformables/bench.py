@@ -13,6 +13,12 @@ Modes (JSON on stdout, one object per line; ``--out FILE`` also writes the whole
   (N = 10,000), each without noise and with ``--noise`` (1 mm), timed over ``--repeats`` runs
   after one warm-up reduction of a small goal; the mean over the folds per noise level against
   the paper's 0.73 s.
+* ``authors``: the authors' own goals (``--external``, their ``ac_softagent`` folder: the
+  diagonal fold at 90 x 90, the side fold at 100 x 100; :mod:`deformables.authors`) in each
+  triangulation of ``TRIANGULATIONS``, the default pipeline: faces against the paper's, keys
+  against the reference count and the authors' own keys (within their 0.05 m filter, both
+  ways), seconds (median of ``--repeats``, 1, after one warm-up reduction of a small goal),
+  and the mean seconds per fold against the paper's 0.73 s.
 * ``compare``: the pipelines of ``PIPELINES`` on the same goals: the default
   (``ClothConfig()``), the paper's (``ClothConfig.paper()``) and the default with every
   restart decimating from the goal itself (``shared_faces=None``); the four folds x
@@ -36,6 +42,7 @@ import numpy as np
 
 from dopt.cli import (
     EPILOG,
+    existing_dir,
     guarded,
     int_at_least,
     nonneg_float,
@@ -45,15 +52,16 @@ from dopt.cli import (
 )
 from dopt.provenance import provenance
 
+from .authors import AUTHORS_CLOTH, keys_agree, load_authors_cloth
 from .cloth import ClothConfig, cloth_key_particles
-from .goals import CLOTH_REFERENCE_KEYS, TRIANGULATIONS, make_goal
+from .goals import CLOTH_REFERENCE_KEYS, TRIANGULATIONS, grid_faces, make_goal
 from .rope import rope_key_particles
 
 PAPER_SECONDS = {"rope": 0.125, "cloth": 0.73}
 TASKS = ("rope_straighten", "rope_fold", "rope_fold_unequal", "cloth_diagonal", "cloth_side",
          "cloth_reflective", "cloth_underneath")
 CLOTH_TASKS = TASKS[3:]
-MODES = ("tasks", "paper-scale", "compare")
+MODES = ("tasks", "paper-scale", "authors", "compare")
 #: the pipelines ``compare`` runs on every goal
 PIPELINES = {"default": ClothConfig(), "paper": ClothConfig.paper(),
              "separate-restarts": ClothConfig(shared_faces=None)}
@@ -133,6 +141,39 @@ def paper_scale(cloth_n: int = 100, noise: float = 1e-3, repeats: int = 1) -> di
             "summary": summary, "provenance": provenance()}
 
 
+def authors(external, repeats: int = 1) -> dict:
+    """The authors' goals in every triangulation (``authors`` mode, see the module
+    docstring)."""
+    goals = [load_authors_cloth(external, task) for task in sorted(AUTHORS_CLOTH)]
+    _run("cloth_side", 12, 0.0)[0]()                         # loads the decimation back-end
+    rows = []
+    for goal in goals:
+        for triangulation in TRIANGULATIONS:
+            faces = grid_faces(goal.n, triangulation, rng=np.random.default_rng(0))
+            times, result = [], None
+            for _ in range(repeats):
+                start = time.perf_counter()
+                result = cloth_key_particles(goal.goal, faces, rest_positions=goal.rest)
+                times.append(time.perf_counter() - start)
+            rows.append({"task": goal.task, "particles": goal.n ** 2,
+                         "triangulation": triangulation, "n_elements": result.n_elements,
+                         "paper_elements": goal.paper_faces, "n_keys": result.n_keys,
+                         "reference_keys": CLOTH_REFERENCE_KEYS[goal.task],
+                         "keys": result.indices.tolist(), "authors_keys": goal.keys.tolist(),
+                         "keys_agree": keys_agree(goal.rest, result.indices, goal.keys),
+                         "reached_threshold": result.reached_threshold,
+                         "seconds": round(statistics.median(times), 4)})
+    mean = statistics.fmean(r["seconds"] for r in rows)
+    summary = {"goals": len(rows), "mean_seconds": round(mean, 4),
+               "paper_seconds": PAPER_SECONDS["cloth"],
+               "ratio_to_paper": round(mean / PAPER_SECONDS["cloth"], 3),
+               "paper_elements_held": sum(r["n_elements"] == r["paper_elements"] for r in rows),
+               "keys_held": sum(r["n_keys"] == r["reference_keys"] for r in rows),
+               "keys_agree": sum(r["keys_agree"] for r in rows)}
+    return {"bench": "key-particles-authors", "mode": "authors", "repeats": repeats,
+            "goals": rows, "summary": summary, "provenance": provenance()}
+
+
 def compare(resolutions: tuple[int, ...] = (16, 25, 40), noise: float = 1e-3,
             triangulations: tuple[str, ...] = TRIANGULATIONS) -> dict:
     """The pipelines of ``PIPELINES`` on the same cloth goals (``compare`` mode, see the module
@@ -198,10 +239,11 @@ def main(argv=None) -> int:
     parser = argparse.ArgumentParser(prog="python -m deformables.bench",
                                      description=__doc__.splitlines()[0], epilog=EPILOG)
     parser.add_argument("mode", nargs="?", choices=MODES, default="tasks",
-                        help="tasks (default), paper-scale or compare (see the module doc)")
+                        help="tasks (default), paper-scale, authors or compare (see the module "
+                             "doc)")
     parser.add_argument("--repeats", type=positive_int, default=None,
                         help="timed runs per goal (median reported); tasks: 5 after one "
-                             "warm-up run, paper-scale: 1")
+                             "warm-up run, paper-scale and authors: 1")
     parser.add_argument("--cloth-n", type=int_at_least(2), default=None,
                         help="cloth particles per side (tasks: 40, paper-scale: 100)")
     parser.add_argument("--task", choices=TASKS, action="append",
@@ -213,6 +255,9 @@ def main(argv=None) -> int:
                         default="16,25,40",
                         help="compare mode: comma list of particles per side "
                              "(default %(default)s)")
+    parser.add_argument("--external", type=existing_dir, default=None,
+                        help="authors mode: the authors' ac_softagent folder "
+                             "(../shared/external/ac_softagent)")
     parser.add_argument("--out", type=output_file, default=None,
                         help="also write the whole record as one JSON file here")
     args = parser.parse_args(argv)
@@ -226,6 +271,10 @@ def main(argv=None) -> int:
         noise = 1e-3 if args.noise is None else args.noise
         if args.mode == "paper-scale":
             record = paper_scale(args.cloth_n or 100, noise, args.repeats or 1)
+        elif args.mode == "authors":
+            if args.external is None:
+                parser.error("authors mode needs --external (the authors' ac_softagent folder)")
+            record = authors(args.external, args.repeats or 1)
         else:
             record = compare(args.resolutions, noise)
         for row in record["goals"]:

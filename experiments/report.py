@@ -85,6 +85,7 @@ from report_kp import (
     cem_limit_section,
     cloth_steps_section,
     cloth_warp_section,
+    kp_authors_section,
     kp_compare_section,
     kp_headline,
     kp_paper_scale_section,
@@ -221,7 +222,8 @@ CATALOGUE = (
 
 # ----------------------------------------------------------------------------- pages
 SECTIONS = {"key_particles": kp_section, "kp_compare": kp_compare_section,
-            "kp_paper_scale": kp_paper_scale_section, "fig7": fig7_section,
+            "kp_paper_scale": kp_paper_scale_section, "kp_authors": kp_authors_section,
+            "fig7": fig7_section,
             "table1": table1_section, "fig4": fig4_section, "physics": physics_section,
             "clock_model": clock_model_section, "svr_explain": svr_explain_section,
             "ilqr_bench": ilqr_bench_section, "clock_check": clock_check_section,

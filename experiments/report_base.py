@@ -38,7 +38,8 @@ SVR = "state-vector reduction"
 #: result files of the benchmarks (field "bench") -> the section that renders them
 BENCH_KINDS = {"cloth": "physics", "rope": "physics",          # python -m planners.bench
                "key-particles-compare": "kp_compare",          # python -m deformables.bench
-               "key-particles-paper-scale": "kp_paper_scale"}
+               "key-particles-paper-scale": "kp_paper_scale",
+               "key-particles-authors": "kp_authors"}
 
 
 # ------------------------------------------------------------------------------ loading

@@ -470,6 +470,35 @@ def kp_paper_scale_section(results: list[Result], page: Path) -> list[str]:
 
 
 
+def kp_authors_section(results: list[Result], page: Path) -> list[str]:
+    def body(r: Result) -> list[str]:
+        d, s = r.data, r.data["summary"]
+        rows = [[_short_task(g["task"]), str(g["particles"]), g["triangulation"],
+                 f"{g['n_elements']} ({g['paper_elements']})",
+                 f"{g['n_keys']} ({g['reference_keys']})", ", ".join(map(str, g["keys"])),
+                 ", ".join(map(str, g["authors_keys"])), "yes" if g["keys_agree"] else "no",
+                 "yes" if g["reached_threshold"] else "no", num(g["seconds"], 2)]
+                for g in d["goals"]]
+        where = _machine_words(d["provenance"].get("machine", {}))
+        return [f"{s['goals']} goals, {d['repeats']} timed run(s) each, on {where}: the paper's "
+                f"triangle count on {s['paper_elements_held']}, its key count on "
+                f"{s['keys_held']}, keys within 0.05 m of the authors' (both ways) on "
+                f"{s['keys_agree']}; mean {num(s['mean_seconds'], 2)} s per reduction against "
+                f"the paper's {num(s['paper_seconds'], 2)} s on a Xeon E5-2650 (ratio "
+                f"{num(s['ratio_to_paper'], 2)}).", "",
+                *table(["fold", "particles", "triangulation", "faces (paper)",
+                        "keys (reference)", "our keys", "the authors' keys (before their filter)",
+                        "keys agree", "threshold reached", "s"], rows)]
+
+    return section("Key particles on the authors' own goals",
+                   "`python -m deformables.bench authors`: the key-particle paper's authors' "
+                   "diagonal and side folds (their SoftGym / FleX goals, float32, from their "
+                   "repository; not part of this project) in each triangulation of their grid, "
+                   "the default pipeline; keys agree when each of ours lies within the authors' "
+                   "0.05 m filter radius of one of theirs on the flat sheet and each of theirs "
+                   "within it of one of ours.", results, page, body)
+
+
 # ------------------------------------------------------------ CEM(Random)'s candidate sets
 def random_reach_section(results: list[Result], page: Path) -> list[str]:
     def body(r: Result) -> list[str]:

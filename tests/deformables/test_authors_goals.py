@@ -10,51 +10,52 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from deformables.authors import AUTHORS_CLOTH, keys_agree, load_authors_cloth
 from deformables.cloth import cloth_key_particles
 from deformables.goals import CLOTH_REFERENCE_KEYS, TRIANGULATIONS, grid_faces
 from deformables.rope import rope_key_particles
 
 EXTERNAL = Path(__file__).resolve().parents[2] / ".." / "shared" / "external" / "ac_softagent"
-pytestmark = pytest.mark.skipif(not EXTERNAL.is_dir(), reason=(
+needs_files = pytest.mark.skipif(not EXTERNAL.is_dir(), reason=(
     "the authors' files (../shared/external/ac_softagent) are not beside the project"))
 
-#: task: (the authors' folder, particles per side, the paper's triangle count; external README)
-FOLDS = {"cloth_diagonal": ("cloth_diagonal_folding", 90, 4),
-         "cloth_side": ("cloth_side_folding", 100, 6)}
-#: the authors' filter radius between key points (metres; external README)
-AUTHORS_FILTER_M = 0.05
 
-
-def _within(points: np.ndarray, others: np.ndarray, radius: float) -> bool:
-    """Whether every point of ``points`` ``(P, 3)`` lies within ``radius`` of one of
-    ``others`` ``(Q, 3)``."""
-    gaps = np.linalg.norm(points[:, None] - others[None], axis=2).min(axis=1)
-    return bool((gaps <= radius).all())
-
-
+@needs_files
 @pytest.mark.parametrize("triangulation", TRIANGULATIONS)
-@pytest.mark.parametrize("task", sorted(FOLDS))
+@pytest.mark.parametrize("task", sorted(AUTHORS_CLOTH))
 def test_the_authors_cloth_goals_reduce_to_the_papers_counts(task, triangulation):
-    folder, n, paper_faces = FOLDS[task]
-    rest = np.load(EXTERNAL / folder / "particle_pos_ini.npy")        # float32, as given
-    goal = np.load(EXTERNAL / folder / "particle_pos_final.npy")
-    authors = np.load(EXTERNAL / folder / "key_point_index.npy")
-    faces = grid_faces(n, triangulation, rng=np.random.default_rng(0))
-    kp = cloth_key_particles(goal, faces, rest_positions=rest)
+    goal = load_authors_cloth(EXTERNAL, task)                 # float32, as given
+    faces = grid_faces(goal.n, triangulation, rng=np.random.default_rng(0))
+    kp = cloth_key_particles(goal.goal, faces, rest_positions=goal.rest)
     assert kp.reached_threshold
-    assert (kp.n_elements, kp.n_keys) == (paper_faces, CLOTH_REFERENCE_KEYS[task])
-    # on the flat sheet (distances there are geodesic): each of our keys is where one of the
-    # authors' is, and each of theirs where one of ours is, to their own filter radius
-    ours, theirs = rest[kp.indices].astype(float), rest[authors].astype(float)
-    assert _within(ours, theirs, AUTHORS_FILTER_M) and _within(theirs, ours, AUTHORS_FILTER_M)
+    assert (kp.n_elements, kp.n_keys) == (goal.paper_faces, CLOTH_REFERENCE_KEYS[task])
+    # each of our keys is where one of the authors' is, and each of theirs where one of ours
+    # is, to their own filter radius on the flat sheet
+    assert keys_agree(goal.rest, kp.indices, goal.keys)
 
 
+def test_keys_agree_only_within_the_radius_both_ways():
+    rest = np.array([[0.0, 0, 0], [0.04, 0, 0], [0.2, 0, 0], [0.26, 0, 0]])
+    assert keys_agree(rest, [0, 2], [1, 2])
+    assert not keys_agree(rest, [0, 3], [1, 2])          # 3 is 0.06 m from 2
+    assert not keys_agree(rest, [0], [1, 2])              # their 2 has none of ours near
+
+
+def test_a_bad_authors_folder_is_named(tmp_path):
+    with pytest.raises(ValueError, match="particle_pos_ini.npy is missing"):
+        load_authors_cloth(tmp_path, "cloth_side")
+    with pytest.raises(ValueError, match="no authors' goal for 'cloth_underneath'"):
+        load_authors_cloth(tmp_path, "cloth_underneath")
+
+
+@needs_files
 def test_the_authors_straight_rope_keeps_its_two_ends():
     rope = np.load(EXTERNAL / "rope" / "rope_folding_particles.npy")
     kp = rope_key_particles(rope)
     assert kp.indices.tolist() == [0, len(rope) - 1]
 
 
+@needs_files
 def test_the_authors_crumpled_rope_reduces_below_its_threshold_with_both_ends():
     rope = np.load(EXTERNAL / "rope" / "rope_flatten_particles.npy")
     kp = rope_key_particles(rope)

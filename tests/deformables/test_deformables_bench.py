@@ -2,9 +2,11 @@
 and write what they measured (at a small size here; the timings themselves are not tested)."""
 import json
 
+import numpy as np
 import pytest
 
 from deformables import bench
+from deformables.goals import TRIANGULATIONS, make_goal
 
 
 def test_compare_runs_the_pipelines_on_the_same_goals():
@@ -46,8 +48,38 @@ def test_main_writes_the_record(tmp_path, capsys):
     assert len(lines) == 9 and "summary" in json.loads(lines[-1])
 
 
+def test_authors_mode_reads_goals_in_the_authors_format(tmp_path, monkeypatch):
+    """Our own 12 x 12 folds written as the authors' files (float32 ``n * n`` grids, their
+    key indices): the mode reduces each in every triangulation and compares with them."""
+    from deformables import authors
+
+    layout = {"cloth_diagonal": ("diag", 12, 4), "cloth_side": ("side", 12, 6)}
+    for task, (folder, n, _) in layout.items():
+        goal = make_goal(task, n=n)
+        (tmp_path / folder).mkdir()
+        np.save(tmp_path / folder / "particle_pos_ini.npy", goal.rest_positions.astype(np.float32))
+        np.save(tmp_path / folder / "particle_pos_final.npy", goal.positions.astype(np.float32))
+        corners = [0, n - 1, n * (n - 1), n * n - 1]
+        np.save(tmp_path / folder / "key_point_index.npy", np.array(corners, dtype=np.int64))
+    monkeypatch.setattr(authors, "AUTHORS_CLOTH", layout)
+    monkeypatch.setattr(bench, "AUTHORS_CLOTH", layout)
+    out = tmp_path / "authors.json"
+    bench.main(["authors", "--external", str(tmp_path), "--out", str(out)])
+    record = json.loads(out.read_text())
+    rows = record["goals"]
+    assert [(r["task"], r["triangulation"]) for r in rows] == [
+        (task, t) for task in sorted(layout) for t in TRIANGULATIONS]
+    assert all(r["n_elements"] == r["paper_elements"] and r["n_keys"] == r["reference_keys"]
+               for r in rows)
+    # the diagonal's keys are the four corners; the side fold's six are not
+    assert [r["keys_agree"] for r in rows] == [True] * 4 + [False] * 4
+    assert record["summary"] == {**record["summary"], "goals": 8, "paper_elements_held": 8,
+                                 "keys_held": 8, "keys_agree": 4, "paper_seconds": 0.73}
+
+
 @pytest.mark.parametrize("argv", [["compare", "--resolutions", "1,2"], ["--noise", "-1"],
-                                  ["--cloth-n", "0"], ["sweep"], ["--repeats", "0"]])
+                                  ["--cloth-n", "0"], ["sweep"], ["--repeats", "0"],
+                                  ["authors"], ["authors", "--external", "/no/such/folder"]])
 def test_bad_flags_exit_2(argv):
     with pytest.raises(SystemExit) as exit_:
         bench.main(argv)
