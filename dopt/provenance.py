@@ -330,11 +330,16 @@ def _machine() -> dict:
 
 
 def command_line(argv: list[str]) -> str:
-    """The command a user types to rerun ``argv`` from the checkout's root: a script inside
-    the checkout by its relative path, a package's ``__main__.py`` (``python -m``) by its
-    module name, anything else as given."""
+    """The command a user types to rerun ``argv`` from the checkout's root: a module that
+    ``python -m`` ran (this process's ``__main__``, when ``argv[0]`` is its file) or a
+    package's ``__main__.py`` by its module name, another script inside the checkout by its
+    relative path, anything else as given. (A module inside a package, such as
+    ``deformables/bench.py``, only runs with ``-m``: its relative imports fail as a script.)"""
     if not argv:
         return "python"
+    module = _module_run_as_main(argv[0])
+    if module is not None:
+        return shlex.join(["python", "-m", module, *argv[1:]])
     script = Path(argv[0])
     try:
         rel = script.resolve().relative_to(_ROOT) if script.is_absolute() else None
@@ -345,6 +350,20 @@ def command_line(argv: list[str]) -> str:
             return shlex.join(["python", "-m", ".".join(rel.parts[:-1]), *argv[1:]])
         return shlex.join(["python", rel.as_posix(), *argv[1:]])
     return shlex.join(["python", *argv])
+
+
+def _module_run_as_main(script: str) -> str | None:
+    """The name ``python -m`` ran this process's ``__main__`` under, if ``script`` is that
+    module's file; else None (a script, ``-c``, or another program's ``argv``)."""
+    spec = getattr(sys.modules.get("__main__"), "__spec__", None)
+    name, origin = getattr(spec, "name", None), getattr(spec, "origin", None)
+    if not name or not origin:
+        return None
+    try:
+        same = Path(script).resolve() == Path(origin).resolve()
+    except (OSError, ValueError):
+        return None
+    return name.removesuffix(".__main__") if same else None
 
 
 def _cpus() -> int:

@@ -1,6 +1,7 @@
 """The command line a result records: what a user types from the checkout's root to rerun it."""
 
 import sys
+import types
 
 import pytest
 
@@ -30,6 +31,21 @@ def test_relative_and_outside_paths_are_kept_as_given(root, tmp_path_factory):
     outside = str(tmp_path_factory.mktemp("elsewhere") / "run.py")
     assert provenance.command_line([outside, "-x"]) == f"python {outside} -x"
     assert provenance.command_line([]) == "python"
+
+
+def test_a_module_run_with_dash_m_is_recorded_as_python_dash_m(root, monkeypatch):
+    """``python -m deformables.bench`` (a module inside a package, which only runs with -m)
+    is recorded as such, not as the path of its file; a script of the same path run plainly
+    (no ``__spec__``) stays a path."""
+    (root / "deformables").mkdir()
+    path = str(root / "deformables" / "bench.py")
+    main = types.ModuleType("__main__")
+    main.__spec__ = types.SimpleNamespace(name="deformables.bench", origin=path)
+    monkeypatch.setitem(sys.modules, "__main__", main)
+    assert provenance.command_line([path, "authors", "--repeats", "3"]) == \
+        "python -m deformables.bench authors --repeats 3"
+    main.__spec__ = None
+    assert provenance.command_line([path, "authors"]) == "python deformables/bench.py authors"
 
 
 def test_provenance_records_this_processes_command_line(root, monkeypatch):
