@@ -18,7 +18,7 @@ Modes (JSON on stdout, one object per line; ``--out FILE`` also writes the whole
   triangulation of ``TRIANGULATIONS``, the default pipeline: faces against the paper's, keys
   against the reference count and the authors' own keys (within their 0.05 m filter, both
   ways), seconds (median of ``--repeats``, 1, after one warm-up reduction of a small goal),
-  and the mean seconds per fold against the paper's 0.73 s.
+  and the mean seconds per reduction against the paper's 0.73 s.
 * ``compare``: the pipelines of ``PIPELINES`` on the same goals: the default
   (``ClothConfig()``), the paper's (``ClothConfig.paper()``) and the default with every
   restart decimating from the goal itself (``shared_faces=None``); the four folds x
