@@ -63,6 +63,19 @@ def kp_line(results: list[Result]) -> str | None:
             f"{counts('cloth', 'triangles', paper)})")
 
 
+def kp_authors_line(results: list[Result]) -> str | None:
+    """The authors' own cloth goals: how many reduce to the paper's counts, and with keys where
+    the authors' are."""
+    files = _paper(results, "kp_authors")
+    if not files:
+        return None
+    s = files[-1].data["summary"]
+    return (f"the paper's triangles on {s['paper_elements_held']} of {s['goals']} goals (2 folds "
+            f"x 4 triangulations), its keys on {s['keys_held']}, keys by the authors' on "
+            f"{s['keys_agree']}; {num(s['mean_seconds'], 2)} s each (paper "
+            f"{num(s['paper_seconds'], 2)})")
+
+
 def _closest(r: Result) -> str:
     """Which method ends closest to the goal on a Fig. 7 file, and CEM(Simple)'s distance."""
     ms = {m: e for m, e in r.data["methods"].items()
@@ -244,6 +257,10 @@ ROWS = (
            "python experiments/key_particles.py --task all",
            "Key particles, Fig. 4 and Sec. IV-C.1: key particles of each goal", kp_line,
            lambda r: r.kind == "key_particles" and not r.quick),
+    MapRow(KP, "Sec. IV-C.1 on the authors' own cloth goals",
+           "python -m deformables.bench authors --external DIR",
+           "Key particles on the authors' own goals", kp_authors_line,
+           lambda r: r.kind == "kp_authors"),
     MapRow(KP, "Fig. 7 (a, b): rope straightening, folding",
            "python experiments/rope.py --preset paper --goal straighten",
            "Key particles, Fig. 7: final cost of pick-and-place", rope_line, _fig7("rope")),
