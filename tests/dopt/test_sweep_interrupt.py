@@ -27,7 +27,7 @@ from dopt.sweep import (
     Trial,
     run_sweep,
 )
-from dopt.sweep_store import Report
+from dopt.sweep_store import CHECKPOINT_DIR, Checkpoint, Report
 from tests.dopt.sweep_trials import walk, warn
 
 HERE = Path(__file__).parent
@@ -75,13 +75,13 @@ def wait_for(condition, seconds: float) -> None:
 
 
 def checkpoint_steps(out: Path) -> list[int]:
-    """The step each checkpoint under OUT holds (a file being replaced is skipped)."""
+    """The step each checkpoint under OUT holds, read as a resume would (``peek``: a file
+    being replaced, or one a resume would refuse, is skipped)."""
     steps = []
-    for path in (out / "trials" / "checkpoints").glob("w*.json"):
-        try:
-            steps.append(json.loads(path.read_text())["progress"]["i"])
-        except (OSError, ValueError, KeyError):
-            continue
+    for path in (out / "trials" / CHECKPOINT_DIR).glob("w*.json"):
+        progress = Checkpoint(out, path.stem).peek()
+        if progress is not None:
+            steps.append(progress["i"])
     return steps
 
 
@@ -138,7 +138,7 @@ def interrupt_and_resume(tmp_path, uninterrupted, sig, workers=2, ray=False, gro
                        r"completed step\), (\d+) not started", line)
     part_way, saved, not_started = (int(c) for c in counts.groups())
     finished = set(results(out))
-    stopped = {p.stem for p in (out / "trials" / "checkpoints").glob("w*.json")}
+    stopped = {p.stem for p in (out / "trials" / CHECKPOINT_DIR).glob("w*.json")}
     # what happened, kept beside the run (pytest keeps the last runs' folders): the trials
     # done and the checkpoints' steps when the signal went, and when each trial file came
     seen = {**at_signal, "written_s_after_signal": {
