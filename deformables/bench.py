@@ -31,7 +31,6 @@ Library functions return dicts; only :func:`main` prints.
 """
 from __future__ import annotations
 
-import argparse
 import json
 import statistics
 import sys
@@ -42,6 +41,7 @@ import numpy as np
 
 from dopt.cli import (
     EPILOG,
+    ArgumentParser,
     existing_dir,
     guarded,
     int_at_least,
@@ -236,8 +236,8 @@ def _histogram(values) -> dict:
 
 @guarded("python -m deformables.bench")
 def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m deformables.bench",
-                                     description=__doc__.splitlines()[0], epilog=EPILOG)
+    parser = ArgumentParser(prog="python -m deformables.bench",
+                            description=__doc__.splitlines()[0], epilog=EPILOG)
     parser.add_argument("mode", nargs="?", choices=MODES, default="tasks",
                         help="tasks (default), paper-scale, authors or compare (see the module "
                              "doc)")

@@ -78,7 +78,6 @@ and Ray's workers as well.
 
 from __future__ import annotations
 
-import argparse
 import inspect
 import logging
 import signal
@@ -89,6 +88,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from dopt import jsonio
+from dopt.cli import ArgumentParser
 from dopt.provenance import CodeState, repo_root, reuse_problem
 from dopt.sweep_exec import (
     Stopper,
@@ -491,7 +491,7 @@ def main(argv=None) -> int:
 
     @guarded("python -m dopt.sweep")
     def run(argv) -> int:
-        p = argparse.ArgumentParser(
+        p = ArgumentParser(
             prog="python -m dopt.sweep", epilog=EPILOG,
             description="Tools of the resumable sweeps' folders.")
         sub = p.add_subparsers(dest="command", required=True)

@@ -39,6 +39,7 @@ from pathlib import Path
 from dopt.cli import (  # noqa: F401  (re-exported for the scripts)
     EPILOG,
     TRACEBACK_ENV,
+    ArgumentParser,
     choices_list,
     choices_type,
     existing_dir,

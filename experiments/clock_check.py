@@ -24,7 +24,7 @@ import sys
 
 import mpc as table1
 import numpy as np
-from cli_args import EPILOG, guarded, positive_int, write_summary
+from cli_args import EPILOG, ArgumentParser, guarded, positive_int, write_summary
 
 from dopt.stats import mean_ci
 from dopt.sweep import Trial
@@ -34,8 +34,8 @@ DEFAULT_ROWS = ("baseline", "rand-t5", "sum-t10-r1")
 
 
 def parser() -> argparse.ArgumentParser:
-    ap = argparse.ArgumentParser(prog="clock_check.py", description=__doc__, epilog=EPILOG,
-                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap = ArgumentParser(prog="clock_check.py", description=__doc__, epilog=EPILOG,
+                        formatter_class=argparse.RawDescriptionHelpFormatter)
     table1.add_rows_argument(ap, DEFAULT_ROWS)
     ap.add_argument("--real-threads", type=positive_int, default=2,
                     help="simulation threads of the real-clock trials (default %(default)s)")

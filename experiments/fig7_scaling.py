@@ -32,6 +32,7 @@ from pathlib import Path
 
 from cli_args import (
     EPILOG,
+    ArgumentParser,
     add_reuse_argument,
     choices_type,
     guarded,
@@ -65,8 +66,8 @@ COLOURS = {"simple": "tab:blue", "original": "tab:red", "random": "tab:green"}
 
 def parser() -> argparse.ArgumentParser:
     """The flags of the module docstring."""
-    ap = argparse.ArgumentParser(prog="fig7_scaling.py", description=__doc__, epilog=EPILOG,
-                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap = ArgumentParser(prog="fig7_scaling.py", description=__doc__, epilog=EPILOG,
+                        formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--goal", choices=[g for g in SCALING_GOALS if g in GOALS["cloth"]],
                     required=True, help="the cloth fold")
     ap.add_argument("--sizes", type=number_list(int, 3, "sizes"),

@@ -32,6 +32,7 @@ import numpy as np
 # experiments/ is on the path: it is the script's folder (pytest: pythonpath in pyproject)
 from cli_args import (
     EPILOG,
+    ArgumentParser,
     choices_type,
     guarded,
     int_at_least,
@@ -340,7 +341,7 @@ def noise_table(rows: list[dict]) -> dict:
 
 
 def parser() -> argparse.ArgumentParser:
-    ap = argparse.ArgumentParser(
+    ap = ArgumentParser(
         prog="key_particles.py",
         description="Key particles of the paper's rope and cloth goals (Fig. 4, Sec. IV-C.1).",
         epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)

@@ -47,6 +47,7 @@ os.environ.setdefault("MUJOCO_GL", "egl")   # offscreen renders; read when mujoc
 
 from cli_args import (
     EPILOG,
+    ArgumentParser,
     add_reuse_argument,
     blowup_captures,
     choices_type,
@@ -96,8 +97,8 @@ SCHEMA = Schema(result=("mpc_cost", "success", "steps", "goal_distance_start",
 
 
 def parser() -> argparse.ArgumentParser:
-    ap = argparse.ArgumentParser(prog="mpc.py", description=__doc__, epilog=EPILOG,
-                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap = ArgumentParser(prog="mpc.py", description=__doc__, epilog=EPILOG,
+                        formatter_class=argparse.RawDescriptionHelpFormatter)
     add_rows_argument(ap, None)
     ap.add_argument("--methods", type=choices_type(METHODS, "method(s)"),
                     default=",".join(METHODS),

@@ -35,6 +35,7 @@ os.environ.setdefault("MUJOCO_GL", "egl")   # offscreen renders; read when mujoc
 
 from cli_args import (
     EPILOG,
+    ArgumentParser,
     blowup_captures,
     choices_type,
     guarded,
@@ -55,8 +56,8 @@ GOALS = ("diagonal", "side")
 
 
 def parser() -> argparse.ArgumentParser:
-    ap = argparse.ArgumentParser(prog="panda_execute.py", description=__doc__, epilog=EPILOG,
-                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap = ArgumentParser(prog="panda_execute.py", description=__doc__, epilog=EPILOG,
+                        formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--goals", type=choices_type(GOALS, "goal(s)"), default=",".join(GOALS),
                     help="comma-separated cloth goals (default %(default)s, the paper's)")
     ap.add_argument("--seeds", type=positive_int, default=3,

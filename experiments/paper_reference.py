@@ -37,7 +37,7 @@ import re
 import sys
 from pathlib import Path
 
-from cli_args import EPILOG, existing_dir, guarded, output_file
+from cli_args import EPILOG, ArgumentParser, existing_dir, guarded, output_file
 
 from dopt import jsonio
 from planners.svr_mpc import TABLE1_ROWS, row_name
@@ -49,8 +49,8 @@ TABLE1 = tuple(TABLE1_ROWS)
 
 
 def parser() -> argparse.ArgumentParser:
-    ap = argparse.ArgumentParser(prog="paper_reference.py", description=__doc__, epilog=EPILOG,
-                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap = ArgumentParser(prog="paper_reference.py", description=__doc__, epilog=EPILOG,
+                        formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--tsv", type=Path, required=True, help="the authors' summary table")
     ap.add_argument("--paper", type=Path, default=None,
                     help="the paper's text, for its published Table 1")

@@ -26,6 +26,7 @@ from pathlib import Path
 import numpy as np
 from cli_args import (
     EPILOG,
+    ArgumentParser,
     blowup_captures,
     choices_type,
     folder_problem,
@@ -78,9 +79,9 @@ def parser(task: str, doc: str, help_: dict) -> argparse.ArgumentParser:
     """The flags of an experiment on ``task`` ("cloth" or "rope"); ``help_`` holds the
     task-specific help texts of "seed", "quick", "n", "population", "elites", "iterations",
     "horizon", "bound"."""
-    ap = argparse.ArgumentParser(prog=f"{'cloth_fold' if task == 'cloth' else 'rope'}.py",
-                                 description=doc, epilog=EPILOG,
-                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap = ArgumentParser(prog=f"{'cloth_fold' if task == 'cloth' else 'rope'}.py",
+                        description=doc, epilog=EPILOG,
+                        formatter_class=argparse.RawDescriptionHelpFormatter)
     goals = GOALS[task]
     ap.add_argument("--goal", choices=goals, default=goals[0],
                     help="the task's goal (default %(default)s)")

@@ -37,7 +37,7 @@ import tarfile
 import tempfile
 from pathlib import Path
 
-from cli_args import EPILOG, existing_dir, guarded
+from cli_args import EPILOG, ArgumentParser, existing_dir, guarded
 from report_base import ROOT, load_results
 from report_stale import SNAPSHOT, base_commit, needs_backfill
 
@@ -140,9 +140,9 @@ def text_of(data: dict) -> str:
 
 
 def parser() -> argparse.ArgumentParser:
-    ap = argparse.ArgumentParser(prog="presets_snapshot.py", description=__doc__,
-                                 epilog=EPILOG,
-                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap = ArgumentParser(prog="presets_snapshot.py", description=__doc__,
+                        epilog=EPILOG,
+                        formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--results-dir", type=existing_dir, default=ROOT / "docs" / "results",
                     help="folder of the result files (default docs/results)")
     ap.add_argument("--check", action="store_true",

@@ -16,12 +16,12 @@ same run. Exits 2 on a bad flag, 1 when a folder holds no CEM(Random) trial.
 
 from __future__ import annotations
 
-import argparse
 import sys
 from pathlib import Path
 
 from cli_args import (
     EPILOG,
+    ArgumentParser,
     existing_dir,
     guarded,
     output_dir,
@@ -35,7 +35,7 @@ from planners.pick_place.random_reach import MOVING, random_reach, reach_summary
 
 
 def parse_args(argv):
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0], epilog=EPILOG)
+    ap = ArgumentParser(description=__doc__.split("\n\n")[0], epilog=EPILOG)
     ap.add_argument("runs", nargs="+", type=existing_dir,
                     help="Fig. 7 run folders (each with trials/ of a pick-and-place sweep)")
     ap.add_argument("--moving", type=positive_float, default=MOVING,

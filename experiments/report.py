@@ -52,7 +52,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 # experiments/ is on the path: it is the script's folder (pytest: pythonpath in pyproject)
-from cli_args import EPILOG, existing_dir, file_problem, guarded
+from cli_args import EPILOG, ArgumentParser, existing_dir, file_problem, guarded
 from report_base import (
     BEGIN,
     END,
@@ -406,8 +406,8 @@ def generate(results_dir: Path, results_md_path: Path, readme: Path) -> dict:
 
 
 def parser() -> argparse.ArgumentParser:
-    ap = argparse.ArgumentParser(prog="report.py", description=__doc__, epilog=EPILOG,
-                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap = ArgumentParser(prog="report.py", description=__doc__, epilog=EPILOG,
+                        formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--check", action="store_true",
                     help="write nothing; exit 1 if RESULTS.md or the README block differs "
                          "from what this script would generate")

@@ -43,7 +43,7 @@ import sys
 from collections import Counter
 from pathlib import Path
 
-from cli_args import EPILOG, existing_dir, guarded, output_dir
+from cli_args import EPILOG, ArgumentParser, existing_dir, guarded, output_dir
 from report_base import ROOT, Result, load_results
 from report_trials import TrialInfo, summary_trials, uncommitted
 
@@ -259,8 +259,8 @@ def describe(name: str, found: dict) -> str:
 
 
 def parser() -> argparse.ArgumentParser:
-    ap = argparse.ArgumentParser(prog="resummarize.py", description=__doc__, epilog=EPILOG,
-                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap = ArgumentParser(prog="resummarize.py", description=__doc__, epilog=EPILOG,
+                        formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--results-dir", type=existing_dir, default=ROOT / "docs" / "results",
                     help="folder of the result files (default docs/results)")
     where = ap.add_mutually_exclusive_group()

@@ -24,15 +24,15 @@ from pathlib import Path
 
 import mpc as table1
 import numpy as np
-from cli_args import EPILOG, guarded, number_list, write_summary
+from cli_args import EPILOG, ArgumentParser, guarded, number_list, write_summary
 from sweep_console import out_lock
 
 from planners.svr_mpc import row_label, summarize
 
 
 def parser() -> argparse.ArgumentParser:
-    ap = argparse.ArgumentParser(prog="rho_sweep.py", description=__doc__, epilog=EPILOG,
-                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap = ArgumentParser(prog="rho_sweep.py", description=__doc__, epilog=EPILOG,
+                        formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--rhos", type=number_list(float, 0.0, "rhos"), default="0.1,1,10,100",
                     help="comma-separated rho values, each >= 0 (default %(default)s)")
     ap.add_argument("--thetas", type=number_list(int, 0, "thetas"), default="0,5,10",

@@ -33,7 +33,7 @@ import sys
 
 import mpc as table1
 import numpy as np
-from cli_args import EPILOG, guarded, positive_int, write_summary
+from cli_args import EPILOG, ArgumentParser, guarded, positive_int, write_summary
 from sweep_console import out_lock
 
 from dopt.sweep import Schema
@@ -52,8 +52,8 @@ SCHEMA = Schema(result=("steps", "opt_step", "n_dofs", "goal_share", "goal_impor
 
 
 def parser() -> argparse.ArgumentParser:
-    ap = argparse.ArgumentParser(prog="svr_explain.py", description=__doc__, epilog=EPILOG,
-                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap = ArgumentParser(prog="svr_explain.py", description=__doc__, epilog=EPILOG,
+                        formatter_class=argparse.RawDescriptionHelpFormatter)
     table1.add_rows_argument(ap, DEFAULT_ROWS)
     ap.add_argument("--bins", type=positive_int, default=10,
                     help="bins of the episode's agent steps for the timelines (default "

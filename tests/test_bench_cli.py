@@ -93,6 +93,7 @@ def test_a_bad_flag_is_a_usage_error_naming_it(capsys, no_run, package, argv, me
     assert exc.value.code == 2, err
     assert message in err
     assert "Traceback" not in err
+    assert len(err.strip().splitlines()) == 1, err                 # one line, no usage block
 
 
 @pytest.mark.parametrize("package, argv", [("dopt", ["cloth-steps"]),

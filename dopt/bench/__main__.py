@@ -5,11 +5,10 @@ The planner benches (ilqr, cem) are ``python -m planners.bench``."""
 
 from __future__ import annotations
 
-import argparse
 import sys
 
 from dopt.bench.cli import add_common_args, add_record_arg, print_json, write_record
-from dopt.cli import EPILOG, guarded, nonneg_int, number_list, positive_int
+from dopt.cli import EPILOG, ArgumentParser, guarded, nonneg_int, number_list, positive_int
 
 #: a comma list of particles per side (a cloth needs two per side)
 SIZES = number_list(int, 2, "particles per side")
@@ -17,8 +16,8 @@ SIZES = number_list(int, 2, "particles per side")
 
 @guarded("python -m dopt.bench")
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(prog="python -m dopt.bench", description=__doc__,
-                                 epilog=EPILOG)
+    ap = ArgumentParser(prog="python -m dopt.bench", description=__doc__,
+                        epilog=EPILOG)
     sub = ap.add_subparsers(dest="bench", required=True)
 
     p = sub.add_parser("rollout", help="P open-loop rollouts of T steps in one batched call")

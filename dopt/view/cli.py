@@ -16,13 +16,13 @@ import logging
 import sys
 import time
 
-from dopt.cli import EPILOG, guarded, int_at_least, output_file, positive_int
+from dopt.cli import EPILOG, ArgumentParser, guarded, int_at_least, output_file, positive_int
 
 PROG = "dopt-view"
 
 
 def parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(
+    p = ArgumentParser(
         prog=PROG, epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter,
         description="Replay pick-and-place trials, MPC episodes and blow-up captures in the "
                     "browser (viser, on 127.0.0.1), or write one frame as a PNG.")

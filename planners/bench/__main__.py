@@ -10,6 +10,7 @@ import sys
 from dopt.bench.cli import add_common_args, add_record_arg, print_json, write_record
 from dopt.cli import (
     EPILOG,
+    ArgumentParser,
     guarded,
     int_at_least,
     nonneg_int,
@@ -133,8 +134,8 @@ def _add_physics(sub) -> None:
 
 def parser() -> argparse.ArgumentParser:
     """The command line: one subcommand per bench."""
-    ap = argparse.ArgumentParser(prog="python -m planners.bench", description=__doc__,
-                                 epilog=EPILOG)
+    ap = ArgumentParser(prog="python -m planners.bench", description=__doc__,
+                        epilog=EPILOG)
     sub = ap.add_subparsers(dest="bench", required=True)
 
     for add in (_add_ilqr, _add_clock, _add_cem, _add_cem_limit, _add_settle, _add_physics):

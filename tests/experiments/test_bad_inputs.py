@@ -1,9 +1,9 @@
-"""Every bad input of every experiment script is a usage error (exit 2) naming the flag, before
-anything runs or any folder is created; a failure at run time is one line on stderr and exit 1;
-an experiment with a failed trial exits 1 and lists it in summary.json; bad trial files are
-named, moved aside and recomputed; --help shows every flag. The scripts' main(argv) run
-in-process (their trial functions patched where a run would take long), a subprocess only where
-the exit status of a real process is the point."""
+"""Every bad input of every experiment script is a usage error (one line, exit 2) naming the flag,
+before anything runs or any folder is created; a failure at run time is one line on stderr and
+exit 1; an experiment with a failed trial exits 1 and lists it in summary.json; bad trial files
+are named, moved aside and recomputed; --help shows every flag. The scripts' main(argv) run
+in-process (their trial functions patched where a run would take long), a subprocess only where the
+exit status of a real process is the point."""
 
 import ast
 import json
@@ -57,6 +57,8 @@ def usage_error(capsys, script: str, argv: list) -> str:
     err = capsys.readouterr().err
     assert exc.value.code == 2, err
     assert "Traceback" not in err
+    assert len(err.strip().splitlines()) == 1, err                 # one line, no usage block
+    assert err.rstrip().endswith("--help lists the flags)"), err
     return err
 
 
