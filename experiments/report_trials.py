@@ -33,7 +33,9 @@ from dopt.trialpack import PackError, StoredTrial, stored_trials
 #: a Fig. 7 trial's key (experiments/pick_place_cli.py's ``trial_key``)
 FIG7_KEY = re.compile(r"^(?P<method>[a-z]+)-seed(?P<seed>\d+)-[0-9a-f]{8}$")
 SEED = re.compile(r"-seed(?P<seed>\d+)(-|$)")
-CODE_TAIL = re.compile(r'"code":\s*(\{[^{}]*\})\s*\}\s*$')
+#: a trial record's last keys: its code stamp, then (since 7b3eb64) its machine
+TAIL = re.compile(r'"code":\s*(?P<code>\{[^{}]*\})\s*'
+                  r'(?:,\s*"machine":\s*(?P<machine>null|\{[^{}]*\})\s*)?\}\s*$')
 #: commits that name no code anyone can check out
 NO_COMMIT = ("unknown", "no git", "")
 
@@ -48,12 +50,14 @@ class TrialInfo:
             a packed record, read alike).
         commits: {commit: trials} over ``files``, as recorded.
         recorded: the trials the summary's "trial_commits" counts (None: it has none).
+        machines: {"CPU, N cores": trials} over ``files``, None for those naming none.
     """
 
     folder: str
     files: list = field(default_factory=list)
     commits: Counter = field(default_factory=Counter)
     recorded: int | None = None
+    machines: Counter = field(default_factory=Counter)
 
     @property
     def n(self) -> int:
@@ -98,19 +102,32 @@ def _files(folder: Path, r: Result) -> list[StoredTrial]:
     return files
 
 
-def trial_commit(path: Path | StoredTrial) -> str:
-    """The commit a trial records ("unknown" for none or an unreadable file)."""
+def trial_stamp(path: Path | StoredTrial) -> tuple[str, str | None]:
+    """``(commit, machine)`` a trial records: its code's commit ("unknown" for none or an
+    unreadable file) and its machine as "CPU, N cores" (``dopt.provenance.machine()``; None
+    for a trial that names none: a sweep's records carry it since 7b3eb64)."""
     try:
         text = path.read_text()
     except OSError:
-        return "unknown"
-    m = CODE_TAIL.search(text[-400:])
+        return "unknown", None
+    tail = TAIL.search(text[-800:])
     try:
-        code = json.loads(m.group(1)) if m else (json.loads(text) or {}).get("code")
+        rec = ({"code": json.loads(tail["code"]), "machine": json.loads(tail["machine"] or "null")}
+               if tail else json.loads(text))
     except ValueError:
-        return "unknown"
-    commit = (code or {}).get("commit") if isinstance(code, dict) else None
-    return commit if isinstance(commit, str) and commit else "unknown"
+        return "unknown", None
+    code = rec.get("code") if isinstance(rec, dict) else None
+    commit = code.get("commit") if isinstance(code, dict) else None
+    where = rec.get("machine") if isinstance(rec, dict) else None
+    return (commit if isinstance(commit, str) and commit else "unknown",
+            machine_words(where) if isinstance(where, dict) else None)
+
+
+def machine_words(machine: dict) -> str:
+    """"CPU, N cores" of a ``dopt.provenance.machine()`` record ("unnamed CPU" without one)."""
+    cores = machine.get("cpus")
+    return (f"{machine.get('cpu') or 'unnamed CPU'}"
+            + (f", {cores} cores" if isinstance(cores, int) else ""))
 
 
 def _total(value) -> int:
@@ -130,9 +147,11 @@ def summary_trials(results_dir: Path, r: Result) -> TrialInfo | None:
         files = _files(folder, r)
     except PackError as e:
         raise ReportError(f"{r.path.name}: its trials cannot be read: {e}") from e
+    stamps = [trial_stamp(p) for p in files]
     info = TrialInfo(folder.relative_to(results_dir).as_posix(), files,
-                     Counter(trial_commit(p) for p in files),
-                     _total(r.data["trial_commits"]) if "trial_commits" in r.data else None)
+                     Counter(commit for commit, _ in stamps),
+                     _total(r.data["trial_commits"]) if "trial_commits" in r.data else None,
+                     Counter(where for _, where in stamps))
     return info if files else None
 
 
@@ -175,7 +194,21 @@ def trials_line(r: Result, info: TrialInfo | None) -> str:
         line += f" (its \"trial_commits\" counts {info.recorded})"
     if info.uncommitted:
         line += f"; **{uncommitted_note(info)}**"
-    return line + "."
+    return line + "; " + machines_text(info) + "."
+
+
+def machines_text(info: TrialInfo) -> str:
+    """Where the trials ran, as they record it: their machines with counts, and how many name
+    none (their times, a CPU-time clock's lags included, may then come from several
+    machines: a sweep resumed elsewhere runs at another speed)."""
+    named = sorted(((m, n) for m, n in info.machines.items() if m is not None),
+                   key=lambda kv: -kv[1])
+    unnamed = info.machines.get(None, 0)
+    parts = [f"ran on {', '.join(f'{m} ({n})' for m, n in named)}"] if named else []
+    if unnamed:
+        parts.append(("machine not recorded" if unnamed == info.n else
+                      f"{unnamed} with no machine recorded") + " (times may mix machines)")
+    return "; ".join(parts)
 
 
 def uncommitted_note(info: TrialInfo | None) -> str:

@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import report
+import report_trials
 
 ROOT = Path(__file__).resolve().parents[2]
 SCRIPT = ROOT / "experiments" / "report.py"
@@ -995,7 +996,8 @@ def test_trials_from_uncommitted_code_are_counted_next_to_the_result(site):
     assert run(site) == 0
     md = site["md"].read_text()
     assert ("Trials: 3 committed under `runs/t1/`, written at `aaaaaaaa-dirty` (2), "
-            "`bbbbbbbb` (1); **2 of 3 trials from uncommitted code**.") in md
+            "`bbbbbbbb` (1); **2 of 3 trials from uncommitted code**; machine not recorded "
+            "(times may mix machines).") in md
     assert "; **2 of 3 trials from uncommitted code** |" in headlines(site)
     # a summary whose trials are not committed shows its own trial_commits
     data["provenance"] = provenance("python experiments/mpc.py --task clutter --out results/x")
@@ -1004,6 +1006,36 @@ def test_trials_from_uncommitted_code_are_counted_next_to_the_result(site):
     assert ("Trial commits (the summary's \"trial_commits\"; its trials are not committed): "
             "`aaaaaaaa-dirty` (2), `bbbbbbbb` (1).") in site["md"].read_text()
     assert "uncommitted code" not in headlines(site)
+
+
+def test_the_machines_trials_ran_on_are_counted_as_their_records_name_them(site, monkeypatch):
+    """The trials line counts the machines that ``dopt.sweep`` writes into each record, loose
+    and packed alike, and the records that name none (written before records carried it)."""
+    from dopt.provenance import COMMIT_ENV, machine
+    from dopt.sweep import Trial, pack_trials, run_sweep
+    from dopt.trialpack import stored_trials
+    from tests.dopt.sweep_trials import walk
+
+    monkeypatch.setenv(COMMIT_ENV, "c" * 40)
+    out = site["results"] / "runs" / "t1"
+    run_sweep(walk, [Trial(f"clutter-baseline-seed{i}", {"x0": 0.1 * (i + 1), "n": 2})
+                     for i in range(2)], out)
+    here = machine()
+    words = f"{here['cpu'] or 'unnamed CPU'}, {here['cpus']} cores"
+    assert [report_trials.trial_stamp(p) for p in stored_trials(out / "trials")] == \
+        [("c" * 40, words)] * 2
+    _trial(out / "trials", "clutter-baseline-seed2", {"x": 2}, "b" * 40)      # no machine
+    data = table1()
+    data["provenance"] = provenance("python experiments/mpc.py --task clutter --out "
+                                    "docs/results/runs/t1 --record docs/results/t1.json")
+    write(site["results"], "table1-clutter.json", data)
+    assert run(site) == 0
+    line = f"; ran on {words} (2); 1 with no machine recorded (times may mix machines)."
+    assert line in site["md"].read_text()
+    pack_trials(out)
+    assert not list((out / "trials").glob("*.json"))
+    assert run(site) == 0
+    assert line in site["md"].read_text()
 
 
 def test_packed_trials_are_reported_as_their_files_were(site, capsys):
