@@ -15,7 +15,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
-from report_base import KP, REGENERATE, SVR, Result, _label, cell, mm, num, table
+from report_base import KP, REGENERATE, SVR, Result, _label, cell, mm, num, pm, table
 from report_fig7 import CLOTH_DIFFICULTY, _departs, fig7_claims
 from report_svr import (
     _table1_columns,
@@ -181,8 +181,18 @@ def versus_counts(v: dict | None) -> dict[str, str]:
     return {ref: f"{c['cheaper']}/{c['n']}" for ref, c in verdict_counts(v).items()}
 
 
-def fig4_line(results: list[Result]) -> str | None:
-    files = [r for r in _paper(results, "fig4") if r.data.get("problem", "ours") != "authors"]
+def _fig4_files(results: list[Result], problem: str) -> list[Result]:
+    """The Fig. 4 files (not quick) of ``problem`` ("authors" or "ours"), fewest trials first:
+    a row reads the last, the sweep with the most scenes per point."""
+    files = [r for r in _paper(results, "fig4") if r.data.get("problem", "ours") == problem]
+    return sorted(files, key=lambda r: (sum(p.get("n_trials") or 0
+                                            for p in r.data.get("points") or []), r.name))
+
+
+def fig4_line(results: list[Result], problem: str = "ours") -> str | None:
+    """The lowest MPC cost / baseline of the Fig. 4 sweep on ``problem`` and where it lies;
+    on the authors' clutter also the scenes per point."""
+    files = _fig4_files(results, problem)
     if not files:
         return None
     d = files[-1].data
@@ -192,16 +202,19 @@ def fig4_line(results: list[Result]) -> str | None:
         return None
     best = min(points, key=lambda p: p["mpc_cost_normalised_mean"])
     rhos = sorted({p.get("rho") for p in points})
-    return (f"{d.get('task')}: lowest cost / baseline {num(best['mpc_cost_normalised_mean'])} at "
-            f"rho {_g(best.get('rho'))}, theta {best.get('theta')}; {len(rhos)} rho from "
-            f"{_g(rhos[0])} to {_g(rhos[-1])}")
+    scenes = (f"; {min(p.get('n_trials') or 0 for p in points)} scenes per point"
+              if problem == "authors" else "")
+    cost = pm(num(best["mpc_cost_normalised_mean"]), num(best.get("mpc_cost_normalised_ci90")))
+    return (f"{d.get('task')}: lowest cost / baseline {cost} (90 % CI) at rho "
+            f"{_g(best.get('rho'))}, theta {best.get('theta')}; {len(rhos)} rho from "
+            f"{_g(rhos[0])} to {_g(rhos[-1])}{scenes}")
 
 
 def authors_line(results: list[Result]) -> str | None:
     """The state-vector-reduction mechanism on the authors' problems: |C| at rho 1 and 500
     (theta 10) from their Fig. 4 file, and the contact share of sum-t10-r1 from svr_explain."""
     parts = []
-    fig4 = [r for r in results if r.kind == "fig4" and r.data.get("problem") == "authors"]
+    fig4 = _fig4_files(results, "authors")
     if fig4:
         pts = {(p.get("theta"), p.get("rho")): p for p in fig4[-1].data.get("points") or []}
         a, b = pts.get((10, 1.0)), pts.get((10, 500.0))
@@ -279,7 +292,12 @@ ROWS = (
            "python experiments/mpc.py --task clutter --preset paper",
            "State-vector reduction, Table 1: iLQR-SVR in asynchronous MPC",
            lambda results: table1_line(results, "paper"), _table1("paper")),
-    MapRow(SVR, "Fig. 4: rho and theta",
+    MapRow(SVR, "Fig. 4 on the authors' clutter: rho and theta",
+           "python experiments/rho_sweep.py --task clutter --preset authors --layouts DIR",
+           "State-vector reduction, Fig. 4: importance threshold rho and random DoFs theta",
+           lambda results: fig4_line(results, "authors"),
+           lambda r: (r.kind == "fig4" and not r.quick and r.data.get("problem") == "authors")),
+    MapRow(SVR, "Fig. 4 on dopt's own clutter (a second benchmark)",
            "python experiments/rho_sweep.py --task clutter --preset paper",
            "State-vector reduction, Fig. 4: importance threshold rho and random DoFs theta",
            fig4_line, lambda r: (r.kind == "fig4" and not r.quick

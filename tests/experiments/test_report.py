@@ -1202,6 +1202,35 @@ def test_map_rows_read_the_protocols_files(site):
         "key-particles-fig-7-final-cost-of-pick-and-place"
 
 
+def test_fig4_rows_read_the_authors_sweep_with_the_most_scenes_and_ours_apart(site):
+    """The authors' Fig. 4 row reads the authors' sweep with the most scenes per point (a
+    5-scene sweep beside a 100-scene one), with its interval; dopt's own clutter has its row."""
+    import report_map
+
+    def fig4(problem, trials, cost, command):
+        points = [dict(rho=r, theta=10, n_trials=trials, **mpc_row(c, 0.1, 50.0, 20.0, trials))
+                  for r, c in [(1.0, 1.1), (100.0, cost)]]
+        return {"experiment": "fig4", "task": "clutter", "method": "svr-sum",
+                "problem": problem, "points": points, "failed": {},
+                "provenance": provenance(command)}
+
+    write(site["results"], "fig4-a-full.json",
+          fig4("authors", 100, 0.9, "python experiments/rho_sweep.py --preset authors"))
+    write(site["results"], "fig4-b.json",
+          fig4("authors", 5, 0.7, "python experiments/rho_sweep.py --preset authors"))
+    write(site["results"], "fig4-ours.json",
+          fig4("ours", 20, 0.5, "python experiments/rho_sweep.py --preset paper"))
+    assert run(site) == 0
+    results = report.load_results(site["results"])
+    assert report_map.fig4_line(results, "authors") == (
+        "clutter: lowest cost / baseline 0.90 ± 0.10 (90 % CI) at rho 100, theta 10; 2 rho "
+        "from 1 to 100; 100 scenes per point")
+    assert report_map.fig4_line(results).startswith("clutter: lowest cost / baseline 0.50")
+    readme = block(site["readme"])
+    assert readme.index("| Fig. 4 on the authors' clutter: rho and theta |") < \
+        readme.index("| Fig. 4 on dopt's own clutter (a second benchmark) |")
+
+
 def test_scaling_study_renders_sizes_and_the_trend(site):
     """A fig7_scaling record built by the library's own summary renders its table and the
     verdict of each trend."""
