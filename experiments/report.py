@@ -7,16 +7,16 @@ versions, date, machine). This script reads them all and writes
 - ``docs/RESULTS.md``: the headline of every result file (``headlines_section``: its command
   and numbers, Fig. 7's claims, Table 1 against the paper's), then every table behind the
   papers' figures, each naming its source file, the file's commit and the command that
-  produced it (generated: never edit it by hand), and, for each Fig. 7 sweep whose trials are
-  committed under ``docs/results/runs/`` but whose summary is not recorded yet, its seeds so
-  far and what a trial cost;
+  produced it (generated: never edit it by hand), and, for each sweep whose trials are
+  committed under ``docs/results/runs/`` but whose summary is not recorded yet, what it holds
+  so far (Fig. 7: its seeds and what a trial cost; an MPC sweep: its trials per row and scene);
 - the block between ``<!-- results:begin -->`` and ``<!-- results:end -->`` in README.md:
   the compact map (``report_map``): one row per paper figure or table, its command, one
   headline sentence and a link to its RESULTS.md section (README.md is left alone, with a
   note, when it has no such markers).
 
 Beside each summary, RESULTS.md gives its committed trials (``docs/results/runs/<sweep>/``)
-and the commits they were written at, and the README says "N of M trials from uncommitted code"
+and the commits and machines they were written at, and the README says "N of M trials from uncommitted code"
 where any were (``report_trials``); a result whose named presets no longer resolve to the
 fields it ran with is shown **stale** in both (``report_stale``, against the snapshot that
 ``experiments/presets_snapshot.py`` writes). The families of comparisons behind the papers'
@@ -125,9 +125,7 @@ from report_svr import (
     table1_section,
     table1_vs_paper_section,
 )
-from report_sweeps import (
-    sweeps_in_progress_section,
-)
+from report_sweeps import mpc_sweeps_in_progress_section, sweeps_in_progress_section
 from report_trials import first_params, summary_trials, trials_line, uncommitted_note
 
 
@@ -274,9 +272,10 @@ def results_md(results: list[Result], results_dir: Path, page: Path) -> str:
     beside = table1_vs_paper_section(results, page)
     if beside:
         lines += ["", *beside]
-    in_progress = sweeps_in_progress_section(results_dir, results)
-    if in_progress:
-        lines += ["", *in_progress]
+    for in_progress in (sweeps_in_progress_section(results_dir, results),
+                        mpc_sweeps_in_progress_section(results_dir, results)):
+        if in_progress:
+            lines += ["", *in_progress]
     other = [r for r in results if r.kind not in SECTIONS]
     if other:
         lines += ["", "## Other result files", "",

@@ -1,5 +1,6 @@
-"""Fig. 7 sweeps in progress in experiments/report.py: committed trials that no recorded
-summary holds yet, seed by seed, and the checkpoints of trials stopped part-way.
+"""Sweeps in progress in experiments/report.py: committed trials that no recorded summary holds
+yet: Fig. 7's seed by seed with the checkpoints of trials stopped part-way, the MPC sweeps'
+counted per row and scene.
 
 Standard library only (and ``planners.trial_progress`` and ``dopt.trialpack``, the reader of
 committed trials, standard library themselves).
@@ -8,6 +9,7 @@ committed trials, standard library themselves).
 from __future__ import annotations
 
 import json
+from collections import Counter
 from pathlib import Path
 
 from report_base import (
@@ -21,8 +23,10 @@ from report_base import (
     _panel_rank,
     mm,
     num,
+    short_commit,
     table,
 )
+from report_trials import TrialInfo, machines_text, out_folder, trial_stamp
 
 from dopt.trialpack import PackError, stored_trials
 from planners.trial_progress import iterations_done
@@ -148,3 +152,46 @@ def sweeps_in_progress_section(results_dir: Path, results: list[Result]) -> list
     return lines
 
 
+def mpc_sweeps_in_progress_section(results_dir: Path, results: list[Result]) -> list[str]:
+    """Per MPC sweep folder ``runs/<sweep>`` (Table 1, Fig. 4: not ``fig7-*``) with committed
+    trials that no recorded summary's ``--out`` names: its trials counted per row (method,
+    rho, theta) and scene, their commits and machines. No costs: means, intervals and claims
+    wait for the summary the sweep's command records."""
+    named = {out_folder(results_dir, r.origin_command) for r in results}
+    lines = []
+    for folder in sorted(Path(results_dir).glob("runs/*")):
+        if folder.name.startswith("fig7-") or folder in named or not folder.is_dir():
+            continue
+        try:
+            files = stored_trials(folder / "trials")
+            params = [json.loads(p.read_text()).get("params") or {} for p in files]
+        except (PackError, OSError, ValueError, AttributeError) as e:
+            raise ReportError(f"{folder}: its trials cannot be read: {e}") from e
+        if not files or not all(p.get("method") and "seed" in p for p in params):
+            continue                                  # not an MPC sweep's trials
+        rows: dict[tuple, set] = {}
+        for p in params:
+            rows.setdefault((p["method"], p.get("rho"), p.get("theta")), set()).add(p["seed"])
+        scenes = sorted(len(s) for s in rows.values())
+        seeds = sorted(set().union(*rows.values()))
+        methods = {}
+        for method, _, _ in rows:
+            methods[method] = methods.get(method, 0) + 1
+        stamps = [trial_stamp(p) for p in files]
+        info = TrialInfo(folder.name, files, machines=Counter(m for _, m in stamps))
+        commits = Counter(c for c, _ in stamps)
+        first = params[0]
+        problem = "the authors' problem" if first.get("problem") == "authors" else "our problem"
+        lines += ["", f"### `{folder.name}`: {first.get('task')}, {problem}",
+                  "", f"{len(files)} trials over {len(rows)} rows (method, rho, theta: "
+                  + ", ".join(f"{m} {n}" for m, n in sorted(methods.items()))
+                  + f"), {scenes[0]}" + (f"-{scenes[-1]}" if scenes[-1] != scenes[0] else "")
+                  + f" scenes each (seeds {seeds[0]}-{seeds[-1]}); written at "
+                  + ", ".join(f"`{short_commit(c)}` ({n})" for c, n in commits.most_common())
+                  + f"; {machines_text(info)}."]
+    if not lines:
+        return []
+    return ["## MPC sweeps in progress", "",
+            "Trials committed under `docs/results/runs/<sweep>/trials/` that no recorded "
+            "summary holds yet, counted per row and scene; costs, intervals and claims wait for "
+            "the summary the sweep's command records (the same command resumes it).", *lines]

@@ -1231,6 +1231,34 @@ def test_fig4_rows_read_the_authors_sweep_with_the_most_scenes_and_ours_apart(si
         readme.index("| Fig. 4 on dopt's own clutter (a second benchmark) |")
 
 
+def test_an_mpc_sweep_in_progress_is_counted_until_a_summary_names_it(site):
+    """Committed MPC trials that no summary's --out names are counted per row and scene in
+    "MPC sweeps in progress" (no costs); once a recorded summary names the folder they are
+    its trials and the section is gone."""
+    trials = site["results"] / "runs" / "fig4-x" / "trials"
+    base = {"task": "clutter", "problem": "authors", "theta": 0}
+    for seed in range(3):
+        _trial(trials, f"b{seed}", {**base, "method": "baseline", "rho": 1.0, "seed": seed},
+               "a" * 40)
+        for rho in (1.0, 10.0):
+            if (seed, rho) != (2, 10.0):
+                _trial(trials, f"s{rho:g}-{seed}", {**base, "method": "svr-sum", "rho": rho,
+                                                     "seed": seed}, "b" * 40)
+    write(site["results"], "t1.json", table1())                  # a summary naming no folder
+    assert run(site) == 0
+    md = site["md"].read_text()
+    assert "## MPC sweeps in progress" in md
+    assert ("### `fig4-x`: clutter, the authors' problem\n\n8 trials over 3 rows (method, rho, "
+            "theta: baseline 1, svr-sum 2), 2-3 scenes each (seeds 0-2); written at `bbbbbbbb` "
+            "(5), `aaaaaaaa` (3); machine not recorded (times may mix machines).") in md
+    data = table1()
+    data["provenance"] = provenance("python experiments/rho_sweep.py --out "
+                                    "docs/results/runs/fig4-x --record docs/results/x.json")
+    write(site["results"], "x.json", data)
+    assert run(site) == 0
+    assert "## MPC sweeps in progress" not in site["md"].read_text()
+
+
 def test_scaling_study_renders_sizes_and_the_trend(site):
     """A fig7_scaling record built by the library's own summary renders its table and the
     verdict of each trend."""
