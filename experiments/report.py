@@ -15,14 +15,14 @@ versions, date, machine). This script reads them all and writes
   headline sentence and a link to its RESULTS.md section (README.md is left alone, with a
   note, when it has no such markers).
 
-Beside each summary, RESULTS.md gives its committed trials (``docs/results/runs/<sweep>/``)
-and the commits and machines they were written at, and the README says "N of M trials from uncommitted code"
-where any were (``report_trials``); a result whose named presets no longer resolve to the
-fields it ran with is shown **stale** in both (``report_stale``, against the snapshot that
-``experiments/presets_snapshot.py`` writes). The families of comparisons behind the papers'
-claims (Fig. 7's Simple-vs-Original/Random differences per setup, Table 1's pairwise orderings
-per column) are judged with Holm's correction (``report_stats``, ``dopt.multiple``), and the
-sentences say so.
+Beside each summary, RESULTS.md gives its committed trials (``docs/results/runs/<sweep>/``) and
+the commits and machines they were written at, and the README says "N of M trials from
+uncommitted code" where any were (``report_trials``); a result whose named presets no longer
+resolve to the fields it ran with is shown **stale** in both (``report_stale``, against the
+snapshot that ``experiments/presets_snapshot.py`` writes). The families of comparisons behind
+the papers' claims (Fig. 7's Simple-vs-Original/Random differences per setup, Table 1's pairwise
+orderings per column) are judged with Holm's correction (``report_stats``, ``dopt.multiple``),
+and the sentences say so.
 
 Result kinds (the file's "experiment" field): "fig7" (experiments/cloth_fold.py, rope.py),
 "table1" (experiments/mpc.py), "fig4" (experiments/rho_sweep.py), "svr_explain"
