@@ -174,9 +174,7 @@ def mpc_sweeps_in_progress_section(results_dir: Path, results: list[Result]) -> 
             rows.setdefault((p["method"], p.get("rho"), p.get("theta")), set()).add(p["seed"])
         scenes = sorted(len(s) for s in rows.values())
         seeds = sorted(set().union(*rows.values()))
-        methods = {}
-        for method, _, _ in rows:
-            methods[method] = methods.get(method, 0) + 1
+        methods = Counter(method for method, _, _ in rows)
         stamps = [trial_stamp(p) for p in files]
         info = TrialInfo(folder.name, files, machines=Counter(m for _, m in stamps))
         commits = Counter(c for c, _ in stamps)

@@ -194,7 +194,8 @@ def trials_line(r: Result, info: TrialInfo | None) -> str:
         line += f" (its \"trial_commits\" counts {info.recorded})"
     if info.uncommitted:
         line += f"; **{uncommitted_note(info)}**"
-    return line + "; " + machines_text(info) + "."
+    where = machines_text(info)
+    return line + (f"; {where}" if where else "") + "."
 
 
 def machines_text(info: TrialInfo) -> str:
