@@ -6,8 +6,8 @@ The ``*_int`` / ``*_float``, ``int_at_least``, ``number_list``, ``choices_type``
 ``output_dir``, ``output_file`` and ``existing_dir`` functions are argparse ``type=`` callables:
 a bad value becomes a usage error (exit 2) naming the flag, before anything runs or any
 folder is created; :class:`ArgumentParser`, every CLI's parser, prints it as one line.
-``guarded`` turns a failure of a CLI's main into one line on stderr and
-exit status 1 (the traceback with ``DOPT_TRACEBACK=1``).
+``guarded`` turns a failure of a CLI's main into one line on stderr and exit status 1 (the
+traceback with ``DOPT_TRACEBACK=1``).
 """
 from __future__ import annotations
 
@@ -31,7 +31,8 @@ EPILOG = (f"Exit status: 0 done; 1 a trial or the run failed (one line 'SCRIPT: 
 
 class ArgumentParser(argparse.ArgumentParser):
     """argparse's parser with usage errors on one line: "PROG: error: MESSAGE (PROG --help
-    lists the flags)" on stderr, exit status 2 (argparse prints its usage block first)."""
+    lists the flags)" on stderr, exit status 2, where plain argparse prints its usage block
+    first."""
 
     def error(self, message: str):
         self.exit(2, f"{self.prog}: error: {' '.join(message.split())} "
