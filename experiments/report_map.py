@@ -125,6 +125,25 @@ def cloth_line(results: list[Result]) -> str | None:
     return text
 
 
+def scaling_line(results: list[Result]) -> str | None:
+    """Sec. V's claim per recorded scaling fold: whether the gap CEM(Original) - CEM(Simple)
+    grows with the particle count (the trend test's verdict, its slope per unit of log N with
+    the 95 % interval), over which sizes and seeds."""
+    files = {r.data.get("goal"): r for r in results if r.kind == "fig7_scaling"}
+    parts = []
+    for goal, r in sorted(files.items(), key=lambda kv: str(kv[0])):
+        d = r.data
+        t = d["trend"]["original_minus_simple"]
+        sizes = d["sizes"]
+        seeds = min(e["methods"].get(m, {}).get("n", 0) for e in d["per_size"].values()
+                    for m in ("simple", "original"))
+        slope = (f" ({pm(mm(t['slope']), mm(t.get('slope_ci95')))} mm per log N)"
+                 if t.get("slope") is not None else "")
+        parts.append(f"{goal}, {sizes[0]}-{sizes[-1]} per side, {seeds}+ seeds: the gap to "
+                     f"Original {t['verdict']}{slope}")
+    return "; ".join(parts) or None
+
+
 def panda_line(results: list[Result]) -> str | None:
     """How far the Panda's executions end from the goal against the picker's, per goal."""
     files = _paper(results, "panda_execute")
@@ -280,6 +299,10 @@ ROWS = (
     MapRow(KP, "Fig. 7 (c-f): cloth diagonal, side, reflective, underneath folds",
            "python experiments/cloth_fold.py --preset paper --goal diagonal",
            "Key particles, Fig. 7: final cost of pick-and-place", cloth_line, _fig7("cloth")),
+    MapRow(KP, "Sec. V: the gain against the cloth's size",
+           "python experiments/fig7_scaling.py --goal diagonal",
+           "Key particles: the gain against the cloth's size", scaling_line,
+           lambda r: r.kind == "fig7_scaling" and not r.quick),
     MapRow(KP, "Sec. IV-D: a Panda executes the plans",
            "python experiments/panda_execute.py --seeds 3",
            "Key particles, Sec. IV-D: a Panda executes the plans", panda_line,
@@ -329,7 +352,8 @@ def map_block(results: list[Result], readme: Path, results_md: Path) -> str:
     for row in ROWS:
         headline = row.headline(results)
         files = [r for r in results if row.reads(r)]
-        details = f"[RESULTS.md]({rel}#{anchor(row.section)})" + _notes(files)
+        # a row no file feeds yet has no RESULTS.md section to link to
+        details = (f"[RESULTS.md]({rel}#{anchor(row.section)})" + _notes(files)) if files else "-"
         rows.append([row.paper, row.item, f"`{row.command}`",
                      headline if headline is not None else "not recorded yet", details])
     for r in rows:

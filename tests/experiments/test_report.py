@@ -1167,19 +1167,24 @@ def test_a_table1_result_is_checked_on_its_trials_settings(site):
 # ------------------------------------------------------------------------- README's map
 def test_the_committed_readme_map_is_compact_and_links_to_results_md():
     """README's block is the map: one row per paper figure or table (``report_map.ROWS``), no
-    cell over ``MAX_CELL`` characters, each row's link an anchor of a RESULTS.md heading."""
+    cell over ``MAX_CELL`` characters, each recorded row's link an anchor of a RESULTS.md
+    heading (a row not recorded yet links nowhere)."""
     import report_map
 
     readme, md = (ROOT / "README.md"), (ROOT / "docs" / "RESULTS.md")
     rows = [line for line in block(readme).splitlines() if line.startswith("| ")][1:]
     assert len(rows) == len(report_map.ROWS)
-    for row in rows:
-        cells = [c.strip() for c in row.strip("|").split(" | ")]
-        assert max(map(len, cells)) <= report_map.MAX_CELL, row
     anchors = {report_map.anchor(line.lstrip("#")) for line in md.read_text().splitlines()
                if line.startswith("## ")}
-    for row in report_map.ROWS:
-        assert report_map.anchor(row.section) in anchors, row.section
+    for line, row in zip(rows, report_map.ROWS, strict=True):
+        cells = [c.strip() for c in line.strip("|").split(" | ")]
+        assert max(map(len, cells)) <= report_map.MAX_CELL, line
+        assert cells[1] == row.item
+        if cells[3] == "not recorded yet":
+            assert cells[4] == "-", line
+        else:
+            assert f"#{report_map.anchor(row.section)})" in cells[4], line
+            assert report_map.anchor(row.section) in anchors, row.section
     assert report_map.anchor(report_map.HEADLINES_TITLE) in anchors
 
 
@@ -1285,3 +1290,8 @@ def test_scaling_study_renders_sizes_and_the_trend(site):
     assert "| 10 x 10 | 100 | 10.1 ± " in md
     assert f"**{stats['trend']['original_minus_simple']['verdict']}**" in md
     assert stats["trend"]["original_minus_simple"]["verdict"] == "grows"
+    t = stats["trend"]["original_minus_simple"]
+    assert (f"| Sec. V: the gain against the cloth's size | `python experiments/fig7_scaling.py "
+            f"--goal diagonal` | diagonal, 10-20 per side, 3+ seeds: the gap to Original grows "
+            f"({t['slope'] * 1e3:.1f} ± {t['slope_ci95'] * 1e3:.1f} mm per log N) |") \
+        in block(site["readme"])
