@@ -551,7 +551,11 @@ def scaling_section(results: list[Result], page: Path) -> list[str]:
                   f"{num(t.get('p_holm'), 3)}, {t['n_points']} paired seeds over "
                   f"{t['n_sizes']} sizes: **{t['verdict']}**"
                   for key, t in d["trend"].items()]
-        return [f"### {d['goal']}: `{r.name}`", "",
+        image = page.parent / "images" / f"{r.path.stem}.png"
+        figure = ([f"![Final cost and the gaps to CEM(Simple) against the particle count, "
+                   f"{d['goal']} fold, 95 % intervals](images/{image.name})", ""]
+                  if image.exists() else [])   # the experiment's scaling.png, beside the docs
+        return [f"### {d['goal']}: `{r.name}`", "", *figure,
                 f"Protocol {d.get('protocol')}, physics preset `{d.get('physics_preset')}` at "
                 f"every size; final cost (mm) mean ± 95 % CI (seeds).", "",
                 *table(["cloth", "particles N", "CEM(Simple)", "CEM(Original)", "CEM(Random)",

@@ -1290,6 +1290,11 @@ def test_scaling_study_renders_sizes_and_the_trend(site):
     assert "| 10 x 10 | 100 | 10.1 ± " in md
     assert f"**{stats['trend']['original_minus_simple']['verdict']}**" in md
     assert stats["trend"]["original_minus_simple"]["verdict"] == "grows"
+    assert "images/fig7-scaling-diagonal.png" not in md
+    (site["md"].parent / "images").mkdir(exist_ok=True)
+    (site["md"].parent / "images" / "fig7-scaling-diagonal.png").write_bytes(b"png")
+    assert run(site) == 0
+    assert "](images/fig7-scaling-diagonal.png)" in site["md"].read_text()
     t = stats["trend"]["original_minus_simple"]
     assert (f"| Sec. V: the gain against the cloth's size | `python experiments/fig7_scaling.py "
             f"--goal diagonal` | diagonal, 10-20 per side, 3+ seeds: the gap to Original grows "
