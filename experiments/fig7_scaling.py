@@ -203,7 +203,8 @@ def plot(path: Path, stats: dict, goal: str) -> None:
         ax.set_xlabel("particles N")
         ax.set_ylabel(ylabel)
         ax.legend()
-    fig.suptitle(f"{goal}: {stats['verdict']}", fontsize=8)
+    # the verdict line is longer than the figure is wide: one line per compared method
+    fig.suptitle(f"{goal}: " + "\n".join(stats["verdict"].split("; ")), fontsize=8)
     fig.tight_layout()
     fig.savefig(path, dpi=120)
     plt.close(fig)

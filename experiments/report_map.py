@@ -135,12 +135,14 @@ def scaling_line(results: list[Result]) -> str | None:
         d = r.data
         t = d["trend"]["original_minus_simple"]
         sizes = d["sizes"]
-        seeds = min(e["methods"].get(m, {}).get("n", 0) for e in d["per_size"].values()
-                    for m in ("simple", "original"))
+        seeds = sorted({e["methods"].get(m, {}).get("n", 0) for e in d["per_size"].values()
+                        for m in ("simple", "original")})
         slope = (f" ({pm(mm(t['slope']), mm(t.get('slope_ci95')))} mm per log N)"
                  if t.get("slope") is not None else "")
-        parts.append(f"{goal}, {sizes[0]}-{sizes[-1]} per side, {seeds}+ seeds: the gap to "
-                     f"Original {t['verdict']}{slope}")
+        gap = (f"the gap to Original {t['verdict']}" if t["verdict"] in ("grows", "shrinks")
+               else f"gap to Original: {t['verdict']}")
+        seeds_text = str(seeds[0]) if len(seeds) == 1 else f"{seeds[0]}-{seeds[-1]}"
+        parts.append(f"{goal}, {sizes[0]}-{sizes[-1]} per side, {seeds_text} seeds: {gap}{slope}")
     return "; ".join(parts) or None
 
 

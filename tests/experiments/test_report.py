@@ -1297,6 +1297,6 @@ def test_scaling_study_renders_sizes_and_the_trend(site):
     assert "](images/fig7-scaling-diagonal.png)" in site["md"].read_text()
     t = stats["trend"]["original_minus_simple"]
     assert (f"| Sec. V: the gain against the cloth's size | `python experiments/fig7_scaling.py "
-            f"--goal diagonal` | diagonal, 10-20 per side, 3+ seeds: the gap to Original grows "
+            f"--goal diagonal` | diagonal, 10-20 per side, 3 seeds: the gap to Original grows "
             f"({t['slope'] * 1e3:.1f} ± {t['slope_ci95'] * 1e3:.1f} mm per log N) |") \
         in block(site["readme"])
