@@ -14,7 +14,8 @@ the paired difference against log N, Holm over the two comparisons), whose verdi
 
 Writes OUT/summary.json (experiment "fig7_scaling": the settings of every size in full, the
 physics preset, the statistics, the failures, the provenance), OUT/scaling.png (final cost and
-the gaps against the particle count, 95 % bars; only where matplotlib is installed).
+the gaps against the particle count, 95 % bars; only where matplotlib is installed: copied to
+docs/images/<record's name>.png, RESULTS.md shows it beside the record).
 Exits 1 if a trial failed, 2 on bad flags (one line).
 
     python experiments/fig7_scaling.py --goal diagonal --sizes 10,15,20,30 --seeds 5 \\
