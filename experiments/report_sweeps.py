@@ -26,7 +26,7 @@ from report_base import (
     short_commit,
     table,
 )
-from report_trials import TrialInfo, machines_text, out_folder, trial_stamp
+from report_trials import TrialInfo, machines_text, out_folder, record_stamp
 
 from dopt.trialpack import PackError, stored_trials
 from planners.trial_progress import iterations_done
@@ -164,7 +164,8 @@ def mpc_sweeps_in_progress_section(results_dir: Path, results: list[Result]) -> 
             continue
         try:
             files = stored_trials(folder / "trials")
-            params = [json.loads(p.read_text()).get("params") or {} for p in files]
+            records = [json.loads(p.read_text()) for p in files]        # each read once
+            params = [rec.get("params") or {} for rec in records]
         except (PackError, OSError, ValueError, AttributeError) as e:
             raise ReportError(f"{folder}: its trials cannot be read: {e}") from e
         if not files or not all(p.get("method") and "seed" in p for p in params):
@@ -175,7 +176,7 @@ def mpc_sweeps_in_progress_section(results_dir: Path, results: list[Result]) -> 
         scenes = sorted(len(s) for s in rows.values())
         seeds = sorted(set().union(*rows.values()))
         methods = Counter(method for method, _, _ in rows)
-        stamps = [trial_stamp(p) for p in files]
+        stamps = [record_stamp(rec) for rec in records]
         info = TrialInfo(folder.name, files, machines=Counter(m for _, m in stamps))
         commits = Counter(c for c, _ in stamps)
         first = params[0]

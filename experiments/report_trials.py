@@ -116,6 +116,11 @@ def trial_stamp(path: Path | StoredTrial) -> tuple[str, str | None]:
                if tail else json.loads(text))
     except ValueError:
         return "unknown", None
+    return record_stamp(rec)
+
+
+def record_stamp(rec) -> tuple[str, str | None]:
+    """:func:`trial_stamp` of a trial record already parsed."""
     code = rec.get("code") if isinstance(rec, dict) else None
     commit = code.get("commit") if isinstance(code, dict) else None
     where = rec.get("machine") if isinstance(rec, dict) else None
