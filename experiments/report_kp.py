@@ -450,15 +450,24 @@ def kp_paper_scale_section(results: list[Result], page: Path) -> list[str]:
                  "yes" if g["reached_threshold"] else "no", num(g["seconds"], 2)]
                 for g in d["goals"]]
         where = _machine_words(d["provenance"].get("machine", {}))
+        stick = d.get("yardstick")
+        measure = ([f"Yardstick of the machine, timed in the same run before and after the "
+                    f"folds: {stick[0]['what']} ({stick[0]['faces']} to "
+                    f"{stick[0]['target_faces']} faces), "
+                    f"{' and '.join(num(x['seconds'], 3) for x in stick)} s; the ratio to it "
+                    f"compares runs on different machines, the paper's seconds do not.", ""]
+                   if stick else [])
         return [f"{d['cloth_n']} x {d['cloth_n']} particles, {d['repeats']} timed run(s) "
                 f"per goal, on {where} (the paper's on a Xeon E5-2650).", "",
                 *table(["fold", "particles", "noise (mm)", "keys (reference)", "faces",
-                        "threshold reached", "s"], rows), "",
+                        "threshold reached", "s"], rows), "", *measure,
                 *table(["noise (mm)", "mean s over the folds", "paper s", "ratio",
-                        "reference keys"],
+                        "ratio to the yardstick", "reference keys"],
                        [[f"{float(k.removeprefix('noise_')) * 1e3:g}",
                          num(v["mean_seconds"], 2), num(v["paper_seconds"], 2),
-                         num(v["ratio_to_paper"], 2), f"{v['keys_held']} / 4"]
+                         num(v["ratio_to_paper"], 2),
+                         num(v["ratio_to_yardstick"], 2) if "ratio_to_yardstick" in v else "-",
+                         f"{v['keys_held']} / 4"]
                         for k, v in d["summary"].items()])]
 
     return section("Key particles at the paper's resolution",

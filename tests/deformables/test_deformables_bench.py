@@ -34,9 +34,25 @@ def test_paper_scale_times_the_four_folds_with_and_without_noise():
     record = bench.paper_scale(cloth_n=12, noise=5e-4)
     assert [(r["task"], r["noise_m"]) for r in record["goals"]] == [
         (task, sigma) for sigma in (0.0, 5e-4) for task in bench.CLOTH_TASKS]
+    sticks = record["yardstick"]
+    assert len(sticks) == 2 and all(s["faces"] == 242 and s["target_faces"] == 24
+                                    and s["seconds"] > 0 for s in sticks)
+    stick = (sticks[0]["seconds"] + sticks[1]["seconds"]) / 2
     for level in ("noise_0", "noise_0.0005"):
-        assert record["summary"][level]["keys_held"] == 4
-        assert record["summary"][level]["paper_seconds"] == 0.73
+        summary = record["summary"][level]
+        assert summary["keys_held"] == 4
+        assert summary["paper_seconds"] == 0.73
+        assert summary["yardstick_seconds"] == pytest.approx(stick, abs=1e-4)
+        assert summary["ratio_to_yardstick"] == pytest.approx(
+            summary["mean_seconds"] / stick, rel=1e-2)
+
+
+def test_the_yardstick_is_one_decimation_to_a_tenth_of_the_faces():
+    """The yardstick decimates the diagonal fold's goal as the reduction would: to a tenth of
+    its faces, and no lower than 2."""
+    stick = bench.yardstick(cloth_n=6, repeats=1)
+    assert stick == {**stick, "faces": 50, "target_faces": 5}
+    assert stick["seconds"] > 0
 
 
 def test_main_writes_the_record(tmp_path, capsys):

@@ -304,8 +304,12 @@ def test_key_particle_benches_and_simulated_goals(site):
     write(site["results"], "kp-scale.json",
           {"bench": "key-particles-paper-scale", "mode": "paper-scale", "cloth_n": 100,
            "repeats": 1, "goals": [goal],
+           "yardstick": [{"what": "a decimation", "faces": 19602, "target_faces": 1960,
+                          "seconds": 0.171}, {"what": "a decimation", "faces": 19602,
+                                              "target_faces": 1960, "seconds": 0.169}],
            "summary": {"noise_0.001": {"mean_seconds": 3.456, "paper_seconds": 0.73,
-                                       "ratio_to_paper": 4.734, "keys_held": 1}},
+                                       "ratio_to_paper": 4.734, "yardstick_seconds": 0.17,
+                                       "ratio_to_yardstick": 20.329, "keys_held": 1}},
            "provenance": provenance("python -m deformables.bench paper-scale")})
     mine = {"task": "cloth_side", "particles": 10000, "triangulation": "anti", "n_elements": 6,
             "paper_elements": 6, "n_keys": 6, "reference_keys": 6, "keys": [0, 50, 99],
@@ -338,7 +342,8 @@ def test_key_particle_benches_and_simulated_goals(site):
     assert "| paper | cloth diagonal | 0 | 4 / 12 | 3 / 12 | - | 2 (1), 37 (11) | 4 (4), 9 (8) " \
            "| 0.60 |" in md
     assert "| cloth side | 10000 | 1 | 6 (6) | 6 | yes | 3.46 |" in md
-    assert "| 1 | 3.46 | 0.73 | 4.73 | 1 / 4 |" in md
+    assert "| 1 | 3.46 | 0.73 | 4.73 | 20.33 | 1 / 4 |" in md
+    assert "a decimation (19602 to 1960 faces), 0.171 and 0.169 s" in md
     assert "| cloth side | 10000 | anti | 6 (6) | 6 (6) | 0, 50, 99 | 0, 49, 151 | no | yes | " \
            "2.35 |" in md
     assert "keys within 0.05 m of the authors' (both ways) on 0; mean 2.35 s per reduction " \
