@@ -21,7 +21,8 @@ Modes (JSON on stdout, one object per line; ``--out FILE`` also writes the whole
   triangulation of ``TRIANGULATIONS``, the default pipeline: faces against the paper's, keys
   against the reference count and the authors' own keys (within their 0.05 m filter, both
   ways), seconds (median of ``--repeats``, 1, after one warm-up reduction of a small goal),
-  and the mean seconds per reduction against the paper's 0.73 s.
+  and the mean seconds per reduction against the paper's 0.73 s and against the yardstick at
+  100 x 100 (as in ``paper-scale``).
 * ``compare``: the pipelines of ``PIPELINES`` on the same goals: the default
   (``ClothConfig()``), the paper's (``ClothConfig.paper()``) and the default with every
   restart decimating from the goal itself (``shared_faces=None``); the four folds x
@@ -174,6 +175,7 @@ def authors(external, repeats: int = 1) -> dict:
     docstring)."""
     goals = [load_authors_cloth(external, task) for task in sorted(AUTHORS_CLOTH)]
     _run("cloth_side", 12, 0.0)[0]()                         # loads the decimation back-end
+    sticks = [yardstick()]
     rows = []
     for goal in goals:
         for triangulation in TRIANGULATIONS:
@@ -191,15 +193,18 @@ def authors(external, repeats: int = 1) -> dict:
                          "keys_agree": keys_agree(goal.rest, result.indices, goal.keys),
                          "reached_threshold": result.reached_threshold,
                          "seconds": round(statistics.median(times), 4)})
+    sticks.append(yardstick())
+    stick = statistics.fmean(s["seconds"] for s in sticks)
     mean = statistics.fmean(r["seconds"] for r in rows)
     summary = {"goals": len(rows), "mean_seconds": round(mean, 4),
                "paper_seconds": PAPER_SECONDS["cloth"],
                "ratio_to_paper": round(mean / PAPER_SECONDS["cloth"], 3),
+               "yardstick_seconds": round(stick, 4), "ratio_to_yardstick": round(mean / stick, 3),
                "paper_elements_held": sum(r["n_elements"] == r["paper_elements"] for r in rows),
                "keys_held": sum(r["n_keys"] == r["reference_keys"] for r in rows),
                "keys_agree": sum(r["keys_agree"] for r in rows)}
     return {"bench": "key-particles-authors", "mode": "authors", "repeats": repeats,
-            "goals": rows, "summary": summary, "provenance": provenance()}
+            "goals": rows, "yardstick": sticks, "summary": summary, "provenance": provenance()}
 
 
 def compare(resolutions: tuple[int, ...] = (16, 25, 40), noise: float = 1e-3,

@@ -494,7 +494,11 @@ def kp_authors_section(results: list[Result], page: Path) -> list[str]:
                 f"{s['keys_held']}, keys within 0.05 m of the authors' (both ways) on "
                 f"{s['keys_agree']}; mean {num(s['mean_seconds'], 2)} s per reduction against "
                 f"the paper's {num(s['paper_seconds'], 2)} s on a Xeon E5-2650 (ratio "
-                f"{num(s['ratio_to_paper'], 2)}).", "",
+                f"{num(s['ratio_to_paper'], 2)})"
+                + (f"; {num(s['ratio_to_yardstick'], 2)} times the yardstick of the machine "
+                   f"timed in the same run ({d['yardstick'][0]['what']}, "
+                   f"{' and '.join(num(x['seconds'], 3) for x in d['yardstick'])} s)"
+                   if "yardstick" in d else "") + ".", "",
                 *table(["fold", "particles", "triangulation", "faces (paper)",
                         "keys (reference)", "our keys", "the authors' keys (before their filter)",
                         "keys agree", "threshold reached", "s"], rows)]

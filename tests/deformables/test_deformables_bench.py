@@ -91,6 +91,9 @@ def test_authors_mode_reads_goals_in_the_authors_format(tmp_path, monkeypatch):
     assert [r["keys_agree"] for r in rows] == [True] * 4 + [False] * 4
     assert record["summary"] == {**record["summary"], "goals": 8, "paper_elements_held": 8,
                                  "keys_held": 8, "keys_agree": 4, "paper_seconds": 0.73}
+    assert [stick["faces"] for stick in record["yardstick"]] == [19602, 19602]
+    assert record["summary"]["ratio_to_yardstick"] == pytest.approx(
+        record["summary"]["mean_seconds"] / record["summary"]["yardstick_seconds"], rel=1e-2)
 
 
 @pytest.mark.parametrize("argv", [["compare", "--resolutions", "1,2"], ["--noise", "-1"],
