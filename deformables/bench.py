@@ -6,9 +6,10 @@ Modes (JSON on stdout, one object per line; ``--out FILE`` also writes the whole
   Alg. 1 loop, extraction) over ``--repeats`` runs after one warm-up run (the rope's cvxpy
   problems are compiled once per process, the warm-up pays for that and is reported as
   ``first_call_seconds``), and the ratio to the paper's reported average (0.125 s per rope
-  task, 0.73 s per cloth task; Sec. IV-C.1). Ropes have 40 particles, cloths ``--cloth-n``
-  per side (40) with MuJoCo's triangulation. ``--noise SIGMA`` adds Gaussian goal noise
-  (metres, seed 0).
+  task, 0.73 s per cloth task; Sec. IV-C.1) and to the yardstick of the machine timed once
+  before the tasks (:func:`yardstick`, see ``paper-scale``). Ropes have 40 particles, cloths
+  ``--cloth-n`` per side (40) with MuJoCo's triangulation. ``--noise SIGMA`` adds Gaussian
+  goal noise (metres, seed 0).
 * ``paper-scale``: the four cloth folds at the paper's resolution, ``--cloth-n`` 100 per side
   (N = 10,000), each without noise and with ``--noise`` (1 mm), timed over ``--repeats`` runs
   after one warm-up reduction of a small goal; the mean over the folds per noise level against
@@ -87,8 +88,10 @@ def _run(task: str, cloth_n: int, noise: float, config: ClothConfig | None = Non
             len(positions), CLOTH_REFERENCE_KEYS[task])
 
 
-def bench(task: str, repeats: int = 5, cloth_n: int = 40, noise: float = 0.0) -> dict:
-    """Timing record of one task (``tasks`` mode, see the module docstring)."""
+def bench(task: str, repeats: int = 5, cloth_n: int = 40, noise: float = 0.0,
+          stick: float | None = None) -> dict:
+    """Timing record of one task (``tasks`` mode, see the module docstring); with ``stick``,
+    the seconds of :func:`yardstick` in the same run, also the median against it."""
     call, n_particles, _ = _run(task, cloth_n, noise)
     paper = PAPER_SECONDS[task.split("_")[0]]
     start = time.perf_counter()
@@ -108,7 +111,9 @@ def bench(task: str, repeats: int = 5, cloth_n: int = 40, noise: float = 0.0) ->
             "n_elements": result.n_elements, "n_keys": result.n_keys,
             "reached_threshold": result.reached_threshold, "seconds": round(seconds, 5),
             "first_call_seconds": round(first, 5), "paper_seconds": paper,
-            "ratio_to_paper": round(seconds / paper, 4), "speedup": round(paper / seconds, 2)}
+            "ratio_to_paper": round(seconds / paper, 4), "speedup": round(paper / seconds, 2),
+            **({} if stick is None else {"yardstick_seconds": stick,
+                                         "ratio_to_yardstick": round(seconds / stick, 4)})}
 
 
 def yardstick(cloth_n: int = 100, repeats: int = 3) -> dict:
@@ -296,7 +301,8 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
     if args.mode == "tasks":
         noise = args.noise or 0.0
-        record = [bench(task, args.repeats or 5, args.cloth_n or 40, noise)
+        stick = yardstick()["seconds"]
+        record = [bench(task, args.repeats or 5, args.cloth_n or 40, noise, stick)
                   for task in args.task or TASKS]
         for row in record:
             print(json.dumps(row), flush=True)

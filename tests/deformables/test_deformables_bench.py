@@ -47,6 +47,13 @@ def test_paper_scale_times_the_four_folds_with_and_without_noise():
             summary["mean_seconds"] / stick, rel=1e-2)
 
 
+def test_a_task_is_timed_against_the_paper_and_the_yardstick():
+    row = bench.bench("cloth_side", repeats=1, cloth_n=12, stick=0.05)
+    assert row["n_keys"] == 6 and row["paper_seconds"] == 0.73
+    assert row["ratio_to_yardstick"] == pytest.approx(row["seconds"] / 0.05, rel=1e-3)
+    assert "ratio_to_yardstick" not in bench.bench("rope_fold", repeats=1)
+
+
 def test_the_yardstick_is_one_decimation_to_a_tenth_of_the_faces():
     """The yardstick decimates the diagonal fold's goal as the reduction would: to a tenth of
     its faces, and no lower than 2."""
