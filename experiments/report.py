@@ -40,8 +40,9 @@ Standard library only (with dopt.cli, the command-line types, dopt.multiple, Hol
 correction, dopt.trialpack, the reader of committed trials, loose or packed, and
 planners.trial_progress, the reader of a trial's checkpoint, all standard library themselves),
 so it runs without torch, numpy or MuJoCo. Its sections live in
-report_base.py, report_fig7.py, report_kp.py, report_svr.py and report_sweeps.py, the README's
-map in report_map.py.
+report_base.py, report_fig7.py, report_kp.py, report_svr.py, report_sweeps.py and
+report_clock.py (the machine speed behind the virtual clock's sweeps), the README's map in
+report_map.py.
 """
 
 from __future__ import annotations
@@ -70,6 +71,7 @@ from report_base import (
     source,
     table,
 )
+from report_clock import host_speed_section
 from report_fig7 import (
     HOLM_NOTE,
     _departs,
@@ -273,7 +275,8 @@ def results_md(results: list[Result], results_dir: Path, page: Path) -> str:
     if beside:
         lines += ["", *beside]
     for in_progress in (sweeps_in_progress_section(results_dir, results),
-                        mpc_sweeps_in_progress_section(results_dir, results)):
+                        mpc_sweeps_in_progress_section(results_dir, results),
+                        host_speed_section(results_dir)):
         if in_progress:
             lines += ["", *in_progress]
     other = [r for r in results if r.kind not in SECTIONS]

@@ -1,5 +1,7 @@
 """experiments/report.py on synthetic state-vector-reduction results: Table 1 beside the
-paper, Fig. 4, clock checks, derivative variants and MPC sweeps in progress."""
+paper, Fig. 4, clock checks, derivative variants, MPC sweeps in progress and the machine speed
+behind the virtual clock."""
+import json
 
 import numpy as np
 import pytest
@@ -244,3 +246,40 @@ def test_an_mpc_sweep_in_progress_is_counted_until_a_summary_names_it(site):
     write(site["results"], "x.json", data)
     assert run(site) == 0
     assert "## MPC sweeps in progress" not in site["md"].read_text()
+
+
+def test_machine_speed_behind_the_virtual_clock_compares_each_sweeps_own_baselines(site):
+    """Per group of sweeps with the same baseline settings under the virtual clock: the one with
+    the most baseline scenes is the reference; another sweep's own baseline trials (not copies
+    of the reference's) give per scene the ratio of the mean optimisation times. Model-clock
+    sweeps and groups of copies only are left out."""
+    runs = site["results"] / "runs"
+    base = {"task": "clutter", "problem": "authors", "method": "baseline", "rho": 1.0,
+            "theta": 0, "clock": "virtual", "clock_ms": None}
+
+    def baseline(sweep, seed, ms, params=base, cost=1.0):
+        folder = runs / sweep / "trials"
+        folder.mkdir(parents=True, exist_ok=True)
+        (folder / f"b{seed}.json").write_text(json.dumps(
+            {"key": f"b{seed}", "params": {**params, "seed": seed},
+             "result": {"opt_ms_mean": ms, "mpc_cost": cost},
+             "code": {"version": "0.2.0", "commit": "a" * 40}}))
+
+    for seed in range(6):
+        baseline("table1-ref", seed, 100.0 + seed)                      # the reference
+        baseline("copies", seed, 100.0 + seed)                          # the same trials
+        baseline("model", seed, 300.0, {**base, "clock": "model"})
+    baseline("fig4-slow", 5, 105.0)                  # a copy of the reference's: not counted
+    for seed, ms in [(0, 150.0), (1, 101.0), (2, 204.0), (3, 103.0), (7, 500.0)]:
+        baseline("fig4-slow", seed, ms, cost=2.0)                       # seed 7: no reference
+    for seed in range(2):
+        baseline("ours", seed, 50.0, {**base, "problem": "ours"})       # a group of one
+    write(site["results"], "t1.json", table1())
+    assert run(site) == 0
+    md = site["md"].read_text()
+    section = md[md.index("## Machine speed behind the virtual clock"):]
+    assert "| `table1-ref` (reference) | clutter, authors | 6 | - | 102 ms per optimisation " \
+           "| - | - |" in section
+    # ratios 1.5, 1.0, 2.0, 1.0 on seeds 0-3: median 1.25, deciles 1.00 and 1.85
+    assert "| `fig4-slow` |  | 6 | 4 | 1.25 | 1.00-1.85 | 2 (seeds 0, 2) |" in section
+    assert "`copies`" not in section and "`model`" not in section and "`ours`" not in section

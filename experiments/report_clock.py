@@ -1,0 +1,117 @@
+"""RESULTS.md's section on the speed of the machines behind the virtual clock's MPC sweeps.
+
+Under the virtual clock (the authors' preset) an optimisation lasts its CPU time over a nominal
+thread count, so a sweep's lags, and through them its costs, depend on how fast the machine ran
+it: machines differ, and a shared one drifts. The baseline (full iLQR, every DoF) does the same
+work on a scene whatever the sweep, so its mean optimisation time on a scene measures the
+machine there. Sweeps whose baseline trials have the same settings form a group; the one with
+the most baseline scenes is the group's reference, and each other sweep gets, per scene both
+ran, the ratio of its baseline's mean optimisation time to the reference's (2: twice as slow).
+
+Standard library only, like the rest of experiments/report.py.
+"""
+from __future__ import annotations
+
+import json
+import statistics
+from pathlib import Path
+
+from report_base import ReportError, num, table
+
+from dopt.trialpack import PackError, stored_trials
+
+#: a scene whose ratio reaches this ran on a machine this much slower than the reference's
+SLOW = 1.5
+
+
+def virtual_clock_baselines(folder: Path) -> dict[str, dict[int, tuple[float, str]]]:
+    """The baseline trials under the virtual clock in ``folder``/trials: per settings (the
+    trial's params less the seed and unset fields, as JSON) and seed, the mean optimisation
+    time (ms) and the trial's result as JSON (a trial copied from another sweep has the same
+    result: it is not a second measurement)."""
+    groups: dict[str, dict[int, tuple[float, str]]] = {}
+    try:
+        for trial in stored_trials(folder / "trials"):
+            rec = json.loads(trial.read_text())
+            params = rec.get("params") or {}
+            if params.get("method") != "baseline" or params.get("clock") != "virtual":
+                continue
+            ms = (rec.get("result") or {}).get("opt_ms_mean")
+            if ms is None:
+                continue
+            key = json.dumps({k: v for k, v in params.items() if k != "seed" and v is not None},
+                             sort_keys=True)
+            groups.setdefault(key, {})[int(params["seed"])] = (
+                float(ms), json.dumps(rec["result"], sort_keys=True))
+    except (PackError, OSError, ValueError, AttributeError, KeyError, TypeError) as e:
+        raise ReportError(f"{folder}: its trials cannot be read: {e}") from e
+    return groups
+
+
+def speed_ratios(sweep: dict[int, tuple[float, str]],
+                 reference: dict[int, tuple[float, str]]) -> dict[int, float]:
+    """Per seed both ran, each its own trial (not a copy: the results differ), the sweep's
+    baseline mean optimisation time over the reference's."""
+    return {seed: sweep[seed][0] / reference[seed][0] for seed in sorted(sweep)
+            if seed in reference and reference[seed][0] > 0
+            and sweep[seed][1] != reference[seed][1]}
+
+
+def _seeds(seeds: list[int]) -> str:
+    """Seeds as ranges: 3, 5-8, 11."""
+    runs: list[list[int]] = []
+    for s in seeds:
+        if runs and s == runs[-1][-1] + 1:
+            runs[-1].append(s)
+        else:
+            runs.append([s])
+    return ", ".join(f"{r[0]}-{r[-1]}" if len(r) > 1 else f"{r[0]}" for r in runs)
+
+
+def host_speed_section(results_dir: Path) -> list[str]:
+    """The section: per group of sweeps (the same baseline settings, at least two sweeps) its
+    reference and, per other sweep, the scenes beside it, the median ratio and its 10-90 %
+    range over those scenes, and the scenes at ``SLOW`` or more."""
+    groups: dict[str, list[tuple[str, dict[int, float]]]] = {}
+    for folder in sorted(Path(results_dir).glob("runs/*")):
+        if folder.is_dir() and not folder.name.startswith("fig7-"):
+            for key, per_seed in virtual_clock_baselines(folder).items():
+                groups.setdefault(key, []).append((folder.name, per_seed))
+    rows = []
+    for key, sweeps in groups.items():
+        ref_name, ref = max(sweeps, key=lambda s: (len(s[1]), s[0]))
+        others = [(name, per_seed, speed_ratios(per_seed, ref)) for name, per_seed in
+                  sorted(sweeps) if name != ref_name]
+        others = [o for o in others if o[2]]         # not only copies of the reference's
+        if not others:
+            continue
+        settings = json.loads(key)
+        rows.append([f"`{ref_name}` (reference)", f"{settings.get('task')}, "
+                     f"{settings.get('problem', 'ours')}", str(len(ref)), "-",
+                     f"{num(statistics.median(ms for ms, _ in ref.values()), 0)} ms per "
+                     "optimisation", "-", "-"])
+        for name, per_seed, ratios in others:
+            values = list(ratios.values())
+            if len(values) >= 2:
+                deciles = statistics.quantiles(values, n=10, method="inclusive")
+                spread = f"{num(deciles[0], 2)}-{num(deciles[-1], 2)}"
+            else:
+                spread = "-"
+            slow = [s for s, r in ratios.items() if r >= SLOW]
+            rows.append([f"`{name}`", "", str(len(per_seed)), str(len(ratios)),
+                         num(statistics.median(values), 2), spread,
+                         f"{len(slow)}" + (f" (seeds {_seeds(slow)})" if slow else "")])
+    if not rows:
+        return []
+    return ["## Machine speed behind the virtual clock", "",
+            "Under the virtual clock an optimisation lasts its CPU time, so a sweep's lags and "
+            "costs depend on the speed of the machine that ran it (machines differ; a shared "
+            "one drifts). The baseline does about the same work per optimisation on a scene in "
+            "every sweep of the same settings, so its mean optimisation time per scene measures "
+            "the machine: per sweep, its ratio to the reference sweep's (the one with the most "
+            "baseline scenes) on the scenes both ran, each its own trial; 2 is twice as slow, "
+            f"and a scene at {SLOW:g} or more is listed. A seed's rows run one after another, "
+            "so within a scene the rows mostly share a speed.", "",
+            *table(["sweep", "task, problem", "baseline scenes",
+                    "own scenes beside the reference", "median ratio", "10-90 % of scenes",
+                    f"scenes at {SLOW:g}x or slower"], rows)]
