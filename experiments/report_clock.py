@@ -75,7 +75,7 @@ def host_speed_section(results_dir: Path) -> list[str]:
     """The section: per group of sweeps (the same baseline settings, at least two sweeps) its
     reference and, per other sweep, the scenes beside it, the median ratio and its 10-90 %
     range over those scenes, and the scenes at ``SLOW`` or more."""
-    groups: dict[str, list[tuple[str, dict[int, float]]]] = {}
+    groups: dict[str, list[tuple[str, dict[int, tuple[float, str]]]]] = {}
     for folder in sorted(Path(results_dir).glob("runs/*")):
         if folder.is_dir() and not folder.name.startswith("fig7-"):
             for key, per_seed in virtual_clock_baselines(folder).items():
