@@ -99,7 +99,7 @@ def test_a_cost_a_ratio_cannot_take_is_named(cost):
 log_ratios = st.lists(st.floats(-2.0, 2.0, allow_nan=False), min_size=3, max_size=25)
 
 
-@settings(max_examples=60, deadline=None)
+@settings(max_examples=60, deadline=None, derandomize=True, database=None)
 @given(st.lists(log_ratios, min_size=1, max_size=2),
        st.sampled_from([0.01, 0.05, 0.1]))
 def test_simultaneous_intervals_agree_with_holm(draws, alpha):

@@ -110,7 +110,7 @@ def _verdict(unstable, step, maxima, capped):
                      max_energy_gain=np.zeros(P))
 
 
-@settings(max_examples=60, deadline=None)
+@settings(max_examples=60, deadline=None, derandomize=True, database=None)
 @given(st.data())
 def test_the_merged_verdict_is_the_brute_force_merge(data):
     """Chunks of a sequence over random subsets of P samples: a sample is unstable at the
