@@ -2,11 +2,12 @@
 
 Under the virtual clock (the authors' preset) an optimisation lasts its CPU time over a nominal
 thread count, so a sweep's lags, and through them its costs, depend on how fast the machine ran
-it: machines differ, and a shared one drifts. The baseline (full iLQR, every DoF) does the same
-work on a scene whatever the sweep, so its mean optimisation time on a scene measures the
-machine there. Sweeps whose baseline trials have the same settings form a group; the one with
-the most baseline scenes is the group's reference, and each other sweep gets, per scene both
-ran, the ratio of its baseline's mean optimisation time to the reference's (2: twice as slow).
+it: machines differ, and a shared one drifts. The baseline (full iLQR, every DoF) does about the
+same work per optimisation on a scene whatever the sweep, so its mean optimisation time on a
+scene measures the machine there. Sweeps whose baseline trials have the same settings form a
+group; the one with the most baseline scenes is the group's reference, and each other sweep
+gets, per scene both ran, the ratio of its baseline's mean optimisation time to the
+reference's (2: twice as slow).
 
 Standard library only, like the rest of experiments/report.py.
 """
