@@ -19,6 +19,7 @@ not one of ours). Standard library only.
 
 from __future__ import annotations
 
+import contextlib
 import json
 import math
 import os
@@ -185,7 +186,9 @@ def loads(text: str | bytes, *, restore_values: bool = True, strict_numbers: boo
 def write_atomic(path: Path | str, obj, *, indent: int | None = None, reasons=None) -> None:
     """Write ``dumps(obj)`` to ``path`` atomically (a temporary file in its folder, then
     renamed over it: a reader or a killed writer never leaves half a file). The folder is
-    created. TypeError/ValueError (nothing written) for what is not JSON-able."""
+    created. TypeError/ValueError (nothing written) for what is not JSON-able. An exception
+    raised into it (a trial's interrupt) propagates as itself: the file then holds the old
+    or the new text, and no temporary file is left."""
     text = dumps(obj, indent=indent, reasons=reasons)
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
@@ -195,5 +198,7 @@ def write_atomic(path: Path | str, obj, *, indent: int | None = None, reasons=No
             f.write(text)
         os.replace(tmp, path)
     except BaseException:
-        os.unlink(tmp)
+        # an interrupt may land after the rename: the temporary file is gone, not an error
+        with contextlib.suppress(FileNotFoundError):
+            os.unlink(tmp)
         raise
