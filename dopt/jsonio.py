@@ -13,8 +13,8 @@ index path ("3", or "3.1" in a list of lists) to its reason. Every note starts w
 it stands for ("NaN", "+inf" or "-inf"), so that ``loads`` can give back exactly the numbers
 that were written (``restore``); any other reader sees a strict file with its reasons.
 
-``dumps``/``write_atomic`` write, ``loads`` reads (rejecting bare NaN/Infinity: such a file is
-not one of ours). Standard library only.
+``dumps``/``write_atomic`` write (``replace_atomic`` writes any bytes atomically), ``loads``
+reads (rejecting bare NaN/Infinity: such a file is not one of ours). Standard library only.
 """
 
 from __future__ import annotations
@@ -183,22 +183,34 @@ def loads(text: str | bytes, *, restore_values: bool = True, strict_numbers: boo
     return restore(obj) if restore_values else obj
 
 
-def write_atomic(path: Path | str, obj, *, indent: int | None = None, reasons=None) -> None:
-    """Write ``dumps(obj)`` to ``path`` atomically (a temporary file in its folder, then
-    renamed over it: a reader or a killed writer never leaves half a file). The folder is
-    created. TypeError/ValueError (nothing written) for what is not JSON-able. An exception
-    raised into it (a trial's interrupt) propagates as itself: the file then holds the old
-    or the new text, and no temporary file is left."""
-    text = dumps(obj, indent=indent, reasons=reasons)
+def replace_atomic(path: Path | str, data: bytes, *, suffix: str = "", fsync: bool = False
+                   ) -> None:
+    """Write the bytes ``data`` to ``path`` atomically: a temporary file in its folder (its
+    name ``.tmp-*`` + ``suffix``), flushed (and ``os.fsync``-ed with ``fsync``), then renamed
+    over ``path``, so a reader or a killed writer never sees half a file. The folder is
+    created. An exception raised into it (a trial's interrupt) propagates as itself: the file
+    then holds the old or the new bytes, and no temporary file is left."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=".tmp-", suffix=".json")
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=".tmp-", suffix=suffix)
     try:
-        with os.fdopen(fd, "w") as f:
-            f.write(text)
+        with os.fdopen(fd, "wb") as f:
+            f.write(data)
+            if fsync:
+                f.flush()
+                os.fsync(f.fileno())
         os.replace(tmp, path)
     except BaseException:
         # an interrupt may land after the rename: the temporary file is gone, not an error
         with contextlib.suppress(FileNotFoundError):
             os.unlink(tmp)
         raise
+
+
+def write_atomic(path: Path | str, obj, *, indent: int | None = None, reasons=None) -> None:
+    """Write ``dumps(obj)`` (UTF-8) to ``path`` atomically (``replace_atomic``). The folder is
+    created. TypeError/ValueError (nothing written) for what is not JSON-able. An exception
+    raised into it (a trial's interrupt) propagates as itself: the file then holds the old
+    or the new text, and no temporary file is left."""
+    replace_atomic(path, dumps(obj, indent=indent, reasons=reasons).encode("utf-8"),
+                   suffix=".json")

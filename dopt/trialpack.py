@@ -29,11 +29,11 @@ from __future__ import annotations
 import gzip
 import io
 import json
-import os
-import tempfile
 import zlib
 from dataclasses import dataclass
 from pathlib import Path
+
+from dopt.jsonio import replace_atomic
 
 #: the pack's file name inside a trial folder
 PACK_NAME = "pack.jsonl.gz"
@@ -242,18 +242,7 @@ def write_pack(folder: Path | str, lines: dict[str, str]) -> Path:
         return path
     data = pack_bytes(lines)
     old = path.read_bytes() if path.is_file() else None
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=".tmp-", suffix=".jsonl.gz")
-    try:
-        with os.fdopen(fd, "wb") as f:
-            f.write(data)
-            f.flush()
-            os.fsync(f.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
+    replace_atomic(path, data, suffix=".jsonl.gz", fsync=True)
     back = {k: t.text for k, t in read_pack(folder).items()}
     if back != lines:
         if old is not None:

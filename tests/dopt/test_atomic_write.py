@@ -8,7 +8,7 @@ import os
 
 import pytest
 
-from dopt import jsonio
+from dopt import jsonio, trialpack
 from dopt.provenance import COMMIT_ENV
 from dopt.sweep import CHECKPOINT_DIR, Trial, run_sweep
 from dopt.sweep_exec import TrialInterrupted
@@ -43,6 +43,20 @@ def test_an_interrupt_inside_the_write_propagates_and_leaves_one_whole_file(
         jsonio.write_atomic(path, {"v": "new"})
     assert json.loads(path.read_text()) == expect
     assert sorted(p.name for p in tmp_path.iterdir()) == ["a.json"]
+
+
+@pytest.mark.parametrize("replace, expect", [
+    (replace_then_raise(os.replace), {"k": '{"key": "k", "v": "new"}'}),
+    (replace_raising_before, {"k": '{"key": "k", "v": "old"}'}),
+])
+def test_an_interrupt_inside_a_pack_write_leaves_one_whole_pack(
+        tmp_path, monkeypatch, replace, expect):
+    trialpack.write_pack(tmp_path, {"k": '{"key": "k", "v": "old"}'})
+    monkeypatch.setattr(jsonio.os, "replace", replace)
+    with pytest.raises(Landed):
+        trialpack.write_pack(tmp_path, {"k": '{"key": "k", "v": "new"}'})
+    assert {k: t.text for k, t in trialpack.read_pack(tmp_path).items()} == expect
+    assert sorted(p.name for p in tmp_path.iterdir()) == [trialpack.PACK_NAME]
 
 
 def test_a_trial_interrupted_as_its_checkpoint_lands_is_stopped_with_it(tmp_path, monkeypatch):
