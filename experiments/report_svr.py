@@ -383,8 +383,9 @@ def fig4_section(results: list[Result], page: Path) -> list[str]:
                  + (" (quick)" if r.quick else ""), ""]
         if not points:
             return lines + ["No points (every trial failed?)."]
-        image = page.parent / "images" / f"fig4-{d.get('task')}.png"
-        if image.exists():     # the experiment's rho_sweep.png, copied beside the docs
+        # the sweep's rho_sweep.png, copied beside the docs under the summary's name
+        image = page.parent / "images" / f"{r.path.stem}.png"
+        if image.exists():
             lines += [f"![Fig. 4, {d.get('task')}: MPC cost / baseline and mean |C| against rho, "
                       f"ours (solid, 90 % CI bands) and the authors' (dashed)]"
                       f"(images/{image.name})", ""]

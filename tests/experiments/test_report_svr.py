@@ -220,6 +220,27 @@ def test_fig4_rows_read_the_authors_sweep_with_the_most_scenes_and_ours_apart(si
         readme.index("| Fig. 4 on dopt's own clutter (a second benchmark) |")
 
 
+def test_each_fig4_summary_shows_its_own_figure(site):
+    """A Fig. 4 section embeds the figure named after its own summary (docs/images/<stem>.png),
+    never another sweep's of the same task; a summary without one shows none."""
+    def fig4(problem):
+        return {"experiment": "fig4", "task": "clutter", "method": "svr-sum", "problem": problem,
+                "points": [dict(rho=1.0, theta=10, n_trials=5, **mpc_row(1.1, 0.1, 50.0, 20.0, 5))],
+                "failed": {}, "provenance": provenance("python experiments/rho_sweep.py")}
+
+    write(site["results"], "fig4-mine.json", fig4("ours"))
+    write(site["results"], "fig4-theirs.json", fig4("authors"))
+    images = site["md"].parent / "images"
+    images.mkdir(parents=True)
+    (images / "fig4-mine.png").write_bytes(b"png")
+    assert run(site) == 0
+    page = site["md"].read_text()
+    mine = page[page.index("`fig4-mine.json`"):]
+    theirs = page[page.index("`fig4-theirs.json`"):]
+    assert "(images/fig4-mine.png)" in mine.split("###")[0]
+    assert "images/" not in theirs.split("###")[0]
+
+
 def test_an_mpc_sweep_in_progress_is_counted_until_a_summary_names_it(site):
     """Committed MPC trials that no summary's --out names are counted per row and scene in
     "MPC sweeps in progress" (no costs); once a recorded summary names the folder they are
