@@ -226,9 +226,12 @@ def fig4_line(results: list[Result], problem: str = "ours") -> str | None:
     scenes = (f"; {min(p.get('n_trials') or 0 for p in points)} scenes per point"
               if problem == "authors" else "")
     cost = pm(num(best["mpc_cost_normalised_mean"]), num(best.get("mpc_cost_normalised_ci90")))
+    # every point against the baseline, one Holm family (summaries that hold "versus")
+    holm = "".join(f"; Holm over the grid: {c['cheaper']} of {c['n']} cheaper, {c['dearer']} "
+                   f"dearer" for c in verdict_counts(d.get("versus")).values())
     return (f"{d.get('task')}: lowest cost / baseline {cost} (90 % CI) at rho "
             f"{_g(best.get('rho'))}, theta {best.get('theta')}; {len(rhos)} rho from "
-            f"{_g(rhos[0])} to {_g(rhos[-1])}{scenes}")
+            f"{_g(rhos[0])} to {_g(rhos[-1])}{scenes}{holm}")
 
 
 def authors_line(results: list[Result]) -> str | None:

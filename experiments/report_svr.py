@@ -100,8 +100,8 @@ def table1_section(results: list[Result], page: Path) -> list[str]:
 
 
 def versus_lines(v: dict | None) -> list[str]:
-    """The table of each SVR row against rand and baseline (``planners.svr_mpc.versus``);
-    nothing for a summary without it."""
+    """The table of each SVR row against its references (``planners.svr_mpc.versus``: rand
+    and baseline in Table 1, the baseline in Fig. 4); nothing for a summary without it."""
     if not v or not v.get("pairs"):
         return []
     alpha = v["alpha"]
@@ -391,7 +391,7 @@ def fig4_section(results: list[Result], page: Path) -> list[str]:
                       f"(images/{image.name})", ""]
         return lines + table(["rho", "theta", *MPC_HEADER],
                              [[str(p.get("rho")), str(p.get("theta")), *mpc_cells(p)]
-                              for p in points])
+                              for p in points]) + versus_lines(d.get("versus"))
 
     return section("State-vector reduction, Fig. 4: importance threshold rho and random DoFs "
                    "theta", None, results, page, body)
@@ -407,7 +407,8 @@ def fig4_headline(r: Result) -> str:
     cost = pm(num(best["mpc_cost_normalised_mean"]), num(best.get("mpc_cost_normalised_ci90")))
     return (f"{r.data.get('method')}, {len(r.data.get('points'))} (rho, theta) points, "
             f"{trials} trials; lowest MPC cost / baseline {cost} at rho {best.get('rho')}, "
-            f"theta {best.get('theta')} ({num(best.get('n_dofs_mean'), 1)} DoFs)")
+            f"theta {best.get('theta')} ({num(best.get('n_dofs_mean'), 1)} DoFs)"
+            + versus_headline(r.data.get("versus")))
 
 
 def svr_explain_section(results: list[Result], page: Path) -> list[str]:

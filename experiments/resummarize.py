@@ -10,7 +10,8 @@ the fields an experiment computes from its trials (``TRIAL_FIELDS``) are compute
                    wall time
     table1         planners.svr_mpc.summarize, paired, authors_statistic, versus,
                    feedback_effect, derivatives_effect (experiments/mpc.py)
-    fig4           planners.svr_mpc.summarize per (rho, theta) (experiments/rho_sweep.py)
+    fig4           planners.svr_mpc.fig4_fields: summarize per (rho, theta), versus
+                   (experiments/rho_sweep.py)
     clock_check    experiments/clock_check.py's compare
     svr_explain    experiments/svr_explain.py's summarize_rows
     panda_execute  experiments/panda_execute.py's summarize
@@ -54,7 +55,7 @@ TRIAL_FIELDS = {
     "fig7": ("methods", "trials_wall_s", "trial_commits"),
     "table1": ("methods", "paired", "authors_statistic", "versus", "feedback_effect",
                "derivatives_effect", "row_settings", "trial_commits"),
-    "fig4": ("points", "trial_commits"),
+    "fig4": ("points", "versus", "trial_commits"),
     "clock_check": ("rows", "trial_commits"),
     "svr_explain": ("rows", "trial_commits"),
     "panda_execute": ("goals", "trial_commits"),
@@ -107,20 +108,10 @@ def _table1(d: dict, records: list[dict], info: TrialInfo) -> dict:
 
 
 def _fig4(d: dict, records: list[dict], info: TrialInfo) -> dict:
-    from planners.svr_mpc import row_label, summarize
+    from planners.svr_mpc import fig4_fields
 
-    method = d.get("method")
-    base = [r for r in records if r["params"]["method"] == "baseline"]
-    baseline = _baseline(records)
-    points = []
-    grid = sorted({(r["params"]["theta"], r["params"]["rho"]) for r in records
-                   if r["params"]["method"] == method})
-    for theta, rho in grid:
-        group = [r for r in records if r["params"]["method"] == method
-                 and r["params"]["rho"] == rho and r["params"]["theta"] == theta]
-        points.append(dict(rho=rho, theta=theta, **summarize(base + group, baseline=baseline)[
-            row_label(group[0]["params"])]))
-    return {"points": points, "trial_commits": commits_of(records)}
+    return {**fig4_fields(records, d.get("method"), baseline=_baseline(records)),
+            "trial_commits": commits_of(records)}
 
 
 def _clock_check(d: dict, records: list[dict], info: TrialInfo) -> dict:

@@ -27,7 +27,7 @@ import numpy as np
 from cli_args import EPILOG, ArgumentParser, guarded, number_list, write_summary
 from sweep_console import out_lock
 
-from planners.svr_mpc import row_label, summarize
+from planners.svr_mpc import fig4_fields, row_label
 
 
 def parser() -> argparse.ArgumentParser:
@@ -89,22 +89,14 @@ def _main(args, paper: dict | None, argv) -> int:
     trials.sort(key=lambda t: t.params["seed"])
     recs, res = table1.run(args, trials)
     failed = res.failed
-    base = [r for r in recs if r["params"]["method"] == "baseline"]
-    rows = []
-    for theta in args.thetas:
-        for rho in args.rhos:
-            group = [r for r in recs if r["params"]["method"] == args.method
-                     and r["params"]["rho"] == rho and r["params"]["theta"] == theta]
-            if group:
-                rows.append(dict(rho=rho, theta=theta,
-                                 **summarize(base + group, baseline=table1.baseline_label(args))[
-                                     row_label(group[0]["params"])]))
+    fields = fig4_fields(recs, args.method, baseline=table1.baseline_label(args))
+    rows = fields["points"]
     write_summary({"experiment": "fig4", "task": args.task, "method": args.method,
                    **table1.protocol(args, trials[0].params),
                    # every SVRMPCSettings field of each row (the trials' params less the seed)
                    "settings": {row_label(t.params): {k: v for k, v in t.params.items()
                                                       if k != "seed"} for t in trials},
-                   "points": rows, "failed": failed, "trial_commits": res.commits},
+                   **fields, "failed": failed, "trial_commits": res.commits},
                   args.out, args.record, "experiments/rho_sweep.py", argv)
     if rows:
         with open(args.out / "rho_sweep.csv", "w", newline="") as f:

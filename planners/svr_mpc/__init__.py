@@ -29,7 +29,8 @@ Shapes: T horizon, nu controls, ns state row, c = |C| active DoFs.
     episode.py   build_controller, wire_controller, run_svr_mpc -> SVRMPCResult, run_trial
                  and CapturingTrial (for dopt.sweep; keep_controls: for an exact replay)
     summary.py   summarize, paired, versus (SVR rows against rand and baseline, Holm),
-                 feedback_effect, derivatives_effect; table1_fields: all of them at once
+                 feedback_effect, derivatives_effect; table1_fields, fig4_fields: all of a
+                 Table 1 / Fig. 4 summary at once
     authors_data.py  the authors' Table 1 statistic on their per-episode files and on ours
 """
 
@@ -78,6 +79,7 @@ from planners.svr_mpc.summary import (
     OUTLIER_DISTANCE,
     derivatives_effect,
     feedback_effect,
+    fig4_fields,
     paired,
     paired_ratio,
     summarize,
@@ -90,7 +92,8 @@ __all__ = ["CLOCK_MODEL_MS", "CONTROLS_FIELDS", "DEFAULT_OPTIMISER", "FINITE_DIF
            "TABLE1_ROWS", "CapturingTrial", "Derivatives", "OptimiserContext", "Row",
            "SVRController", "SVRMPCResult", "SVRMPCSettings", "build_controller",
            "derivatives_effect", "derivatives_tag", "dofs_mask", "dofs_of_mask", "feedback_effect",
-           "optimiser_factory", "optimiser_names", "paired", "paired_ratio", "parse_row",
-           "parse_variants", "register_optimiser", "row_label", "row_name", "run_svr_mpc",
-           "run_trial", "split_params", "summarize", "svr_optimiser", "table1_fields",
-           "task_defaults", "trial_key", "trial_params", "versus", "wire_controller"]
+           "fig4_fields", "optimiser_factory", "optimiser_names", "paired", "paired_ratio",
+           "parse_row", "parse_variants", "register_optimiser", "row_label", "row_name",
+           "run_svr_mpc", "run_trial", "split_params", "summarize", "svr_optimiser",
+           "table1_fields", "task_defaults", "trial_key", "trial_params", "versus",
+           "wire_controller"]

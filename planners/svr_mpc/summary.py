@@ -261,3 +261,18 @@ def table1_fields(records: list[dict], baseline: str = "baseline") -> dict:
     if variants := derivatives_effect(records):
         out["derivatives_effect"] = variants
     return out
+
+
+def fig4_fields(records: list[dict], method: str, baseline: str = "baseline") -> dict:
+    """Everything a Fig. 4 summary computes from its trials: "points", one per (theta, rho)
+    of ``method``'s trials in that order, each {"rho", "theta", **``summarize``'s row
+    normalised by ``baseline``'s trials}; "versus", every point's row against ``baseline``
+    paired by seed, one Holm family over the grid (``versus``)."""
+    base = [r for r in records if r["params"]["method"] == "baseline"]
+    mine = [r for r in records if r["params"]["method"] == method]
+    points = []
+    for theta, rho in sorted({(r["params"]["theta"], r["params"]["rho"]) for r in mine}):
+        group = [r for r in mine if r["params"]["rho"] == rho and r["params"]["theta"] == theta]
+        points.append(dict(rho=rho, theta=theta, **summarize(base + group, baseline=baseline)[
+            row_label(group[0]["params"])]))
+    return {"points": points, "versus": versus(base + mine, references=(baseline,))}

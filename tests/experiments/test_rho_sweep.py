@@ -33,6 +33,9 @@ def test_tiny_grid_writes_points_and_the_plot_with_the_authors_curves(tmp_path):
     assert d["settings"]["sum-t0-r1"]["control_noise"] == 0.05
     assert "seed" not in d["settings"]["baseline"]
     assert (out / "rho_sweep.png").stat().st_size > 10_000
+    # every point against the baseline, one Holm family; one scene gives no test
+    assert d["versus"]["family_size"] == 2 and d["versus"]["references"] == ["baseline"]
+    assert {x["verdict"] for x in d["versus"]["pairs"].values()} == {"no difference shown"}
 
 
 def test_the_sweep_runs_scene_by_scene(tmp_path, monkeypatch, capsys):

@@ -126,3 +126,49 @@ def test_simultaneous_intervals_agree_with_holm(draws, alpha):
             assert pair["ratio_geomean"] < 1.0
         if pair["verdict"] == "dearer":
             assert pair["ratio_geomean"] > 1.0
+
+
+def test_fig4_fields_compare_every_grid_point_with_the_baseline_in_one_family():
+    """A Fig. 4 grid: one point per (theta, rho), in that order, each normalised by the
+    baseline; each point's p is scipy's paired t-test of its log costs against the baseline's,
+    Holm-adjusted over the whole grid (m = its size); only the truly cheaper point is found."""
+    from planners.svr_mpc import fig4_fields
+
+    def result(cost):
+        return {"mpc_cost": float(cost), "goal_distance_end": 0.01, "success": True,
+                "opt_ms_mean": 5.0, "dofs_mean": 20.0, "lag_steps_mean": 1.0}
+
+    rng = np.random.default_rng(11)
+    base = rng.uniform(50, 150, 10)
+    grid = [(10, 500.0), (0, 1.0), (10, 1.0)]             # unordered on purpose
+    def null():                     # log ratios with mean exactly 0: no difference
+        half = rng.normal(0, 0.1, 5)
+        return np.concatenate([half, -half])
+
+    costs = {(10, 500.0): base * np.exp(null()), (0, 1.0): base * np.exp(null()),
+             (10, 1.0): base * np.exp(rng.normal(-0.5, 0.1, 10))}
+    recs = [{"params": {"method": "baseline", "theta": 0, "rho": 1.0, "seed": s},
+             "result": result(c)} for s, c in enumerate(base)]
+    for (theta, rho), values in costs.items():
+        recs += [{"params": {"method": "svr-sum", "theta": theta, "rho": rho, "seed": s},
+                  "result": result(c)} for s, c in enumerate(values)]
+    out = fig4_fields(recs, "svr-sum")
+    assert [(p["theta"], p["rho"]) for p in out["points"]] == sorted(grid)
+    for p in out["points"]:
+        ratio = costs[p["theta"], p["rho"]] / base
+        assert p["n_trials"] == 10
+        assert p["mpc_cost_normalised_mean"] == pytest.approx(ratio.mean(), rel=1e-9)
+    v = out["versus"]
+    assert v["family_size"] == 3 and v["references"] == ["baseline"]
+    p = {g: stats.ttest_rel(np.log(costs[g]), np.log(base)).pvalue for g in grid}
+    order = sorted(grid, key=p.get)
+    running = 0.0
+    for k, g in enumerate(order):
+        running = max(running, min(1.0, (3 - k) * p[g]))
+        pair = v["pairs"][f"sum-t{g[0]}-r{g[1]:g} vs baseline"]
+        assert pair["p"] == pytest.approx(p[g], rel=1e-9)
+        assert pair["p_holm"] == pytest.approx(running, rel=1e-9)
+    verdicts = {name: x["verdict"] for name, x in v["pairs"].items()}
+    assert verdicts == {"sum-t0-r1 vs baseline": "no difference shown",
+                        "sum-t10-r1 vs baseline": "cheaper",
+                        "sum-t10-r500 vs baseline": "no difference shown"}
