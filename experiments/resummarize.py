@@ -22,7 +22,7 @@ field of the committed summary among those: a number that differs beyond roundin
 1e-9), a field the rebuild lacks (a summary of an older format), other values that differ.
 
     python experiments/resummarize.py --out /tmp/resummarized     # rebuild, compare, write
-    python experiments/resummarize.py --check                     # exit 1 on a mismatch
+    python experiments/resummarize.py --check     # exit 1 on a mismatch or a failed rebuild
     python experiments/resummarize.py --in-place [--only A.json,B.json]
 
 ``--in-place`` writes the rebuilt summary over the committed one, with this run's provenance
@@ -264,7 +264,8 @@ def parser() -> argparse.ArgumentParser:
     ap.add_argument("--only", default=None, metavar="NAMES",
                     help="comma-separated summary file names (default: all)")
     ap.add_argument("--check", action="store_true",
-                    help="exit 1 when a committed summary does not match its trials")
+                    help="exit 1 when a committed summary does not match its trials or "
+                         "cannot be rebuilt from them")
     return ap
 
 
@@ -278,7 +279,7 @@ def main(argv=None) -> int:
     if args.in_place and (problem := code_state().record_problem()):
         print(f"resummarize.py: error: --in-place: {problem}", file=sys.stderr)
         return 1
-    mismatched, written = [], []
+    mismatched, unbuilt, written = [], [], []
     for r in load_results(args.results_dir):
         if only is not None and r.name not in only:
             continue
@@ -286,7 +287,9 @@ def main(argv=None) -> int:
         if found is None:
             continue
         print(describe(r.name, found))
-        if not matches(found):
+        if found["error"]:
+            unbuilt.append(r.name)
+        elif not matches(found):
             mismatched.append(r.name)
         if found["fields"] is None:
             continue
@@ -303,8 +306,10 @@ def main(argv=None) -> int:
             written.append(str(target))
     print(f"{len(mismatched)} summaries do not match their trials"
           + (f": {', '.join(mismatched)}" if mismatched else "")
+          + (f"; {len(unbuilt)} cannot be rebuilt from them: {', '.join(unbuilt)}"
+             if unbuilt else "")
           + (f"; wrote {len(written)} file(s)" if written else ""))
-    return 1 if args.check and mismatched else 0
+    return 1 if args.check and (mismatched or unbuilt) else 0
 
 
 if __name__ == "__main__":
