@@ -115,6 +115,7 @@ from report_svr import (
     clock_model_section,
     fig4_headline,
     fig4_section,
+    fig4_vs_paper_section,
     ilqr_bench_section,
     kendall_tau_b,  # noqa: F401
     ordering_sentence,
@@ -271,9 +272,10 @@ def results_md(results: list[Result], results_dir: Path, page: Path) -> str:
             for r in chosen:                # a malformed file: an error that names it
                 _rendered(r, section, [r], page)
             lines += ["", *section(chosen, page)]
-    beside = table1_vs_paper_section(results, page)
-    if beside:
-        lines += ["", *beside]
+    for beside in (table1_vs_paper_section(results, page),
+                   fig4_vs_paper_section(results, page)):
+        if beside:
+            lines += ["", *beside]
     for in_progress in (sweeps_in_progress_section(results_dir, results),
                         mpc_sweeps_in_progress_section(results_dir, results),
                         host_speed_section(results_dir)):

@@ -227,8 +227,8 @@ def fig4_line(results: list[Result], problem: str = "ours") -> str | None:
               if problem == "authors" else "")
     cost = pm(num(best["mpc_cost_normalised_mean"]), num(best.get("mpc_cost_normalised_ci90")))
     # every point against the baseline, one Holm family (summaries that hold "versus")
-    holm = "".join(f"; Holm over the grid: {c['cheaper']} of {c['n']} cheaper, {c['dearer']} "
-                   f"dearer" for c in verdict_counts(d.get("versus")).values())
+    holm = "".join(f"; Holm: {c['cheaper']}/{c['n']} points cheaper, {c['dearer']} dearer"
+                   for c in verdict_counts(d.get("versus")).values())
     return (f"{d.get('task')}: lowest cost / baseline {cost} (90 % CI) at rho "
             f"{_g(best.get('rho'))}, theta {best.get('theta')}; {len(rhos)} rho from "
             f"{_g(rhos[0])} to {_g(rhos[-1])}{scenes}{holm}")

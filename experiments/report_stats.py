@@ -13,8 +13,9 @@ The report is standard library only, so the distributions are here in pure Pytho
 - ``normal_p_from_intervals``: a z-test from two means and normal half-widths (the SVR authors'
   Table 1 statistic, 1.645 std / sqrt(n)).
 
-``holm_family`` applies ``dopt.multiple.holm`` (pure Python) to a family of p-values. The tests
-check every function against scipy.
+``kendall_tau_b(x, y)``: Kendall's tau-b rank correlation (how two columns order the same
+rows). ``holm_family`` applies ``dopt.multiple.holm`` (pure Python) to a family of p-values.
+The tests check every function against scipy.
 """
 
 from __future__ import annotations
@@ -165,3 +166,22 @@ def pval(p: float | None) -> str:
     if p is None:
         return "n/a"
     return "< 0.001" if p < 0.001 else f"{p:.3f}"
+
+
+def kendall_tau_b(x: list[float], y: list[float]) -> float | None:
+    """Kendall's tau-b rank correlation of two equally long lists (ties in either count as
+    neither concordant nor discordant); None with fewer than two values or all tied."""
+    n = len(x)
+    c = d = tx = ty = 0
+    for i in range(n):
+        for j in range(i + 1, n):
+            sx, sy = (x[i] > x[j]) - (x[i] < x[j]), (y[i] > y[j]) - (y[i] < y[j])
+            if sx == 0 or sy == 0:
+                tx, ty = tx + (sx == 0), ty + (sy == 0)
+            elif sx == sy:
+                c += 1
+            else:
+                d += 1
+    pairs = n * (n - 1) // 2
+    denom = math.sqrt((pairs - tx) * (pairs - ty))
+    return (c - d) / denom if denom else None

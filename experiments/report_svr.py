@@ -13,6 +13,7 @@ from pathlib import Path
 from report_base import (
     Result,
     _finite,
+    link,
     num,
     pm,
     sci,
@@ -25,6 +26,7 @@ from report_stats import (
     CORRECTION,
     FAMILY_ALPHA,
     holm_family,
+    kendall_tau_b,
     normal_p_from_intervals,
     pval,
     welch_p_from_intervals,
@@ -247,25 +249,6 @@ def _our_p(a: tuple, b: tuple) -> float | None:
     return normal_p_from_intervals(a, b, 0.90)
 
 
-def kendall_tau_b(x: list[float], y: list[float]) -> float | None:
-    """Kendall's tau-b rank correlation of two equally long lists (ties in either count as
-    neither concordant nor discordant); None with fewer than two values or all tied."""
-    n = len(x)
-    c = d = tx = ty = 0
-    for i in range(n):
-        for j in range(i + 1, n):
-            sx, sy = (x[i] > x[j]) - (x[i] < x[j]), (y[i] > y[j]) - (y[i] < y[j])
-            if sx == 0 or sy == 0:
-                tx, ty = tx + (sx == 0), ty + (sy == 0)
-            elif sx == sy:
-                c += 1
-            else:
-                d += 1
-    pairs = n * (n - 1) // 2
-    denom = math.sqrt((pairs - tx) * (pairs - ty))
-    return (c - d) / denom if denom else None
-
-
 def _table1_columns(pub: dict, d: dict) -> tuple[dict, dict]:
     """The paper's column {row: (mean, CI90)} and ours {row: (mean, CI90, trials the mean is
     over: neither outliers nor unstable)}."""
@@ -395,6 +378,48 @@ def fig4_section(results: list[Result], page: Path) -> list[str]:
 
     return section("State-vector reduction, Fig. 4: importance threshold rho and random DoFs "
                    "theta", None, results, page, body)
+
+
+def fig4_against_paper(d: dict, paper: dict) -> str | None:
+    """One line on a Fig. 4 summary ``d`` beside the authors' runs of the same grid (``paper``:
+    the paper_svr file's data, its "fig4" points of the task), on the statistic both have, the
+    median MPC cost over the baseline's median: Kendall tau-b of our points' costs against
+    theirs, and of each side's costs against its mean |C| (positive: the fewer DoFs, the
+    cheaper). None with fewer than two common points."""
+    theirs = {(p.get("theta"), p.get("rho")): p
+              for p in paper.get("tasks", {}).get(d.get("task"), {}).get("fig4", [])}
+    common = []
+    for p in d.get("points") or []:
+        t = theirs.get((p.get("theta"), p.get("rho")))
+        if t and all(_finite(x) for x in (p.get("mpc_cost_median_ratio"), p.get("n_dofs_mean"),
+                                         t.get("median_ratio"), t.get("avg_dofs"))):
+            common.append((p, t))
+    if len(common) < 2:
+        return None
+    ours = [p["mpc_cost_median_ratio"] for p, _ in common]
+    their = [t["median_ratio"] for _, t in common]
+    return (f"`{d.get('task')}`, {len(common)} points in common: our points' order against "
+            f"theirs {num(kendall_tau_b(their, ours))}; cost against mean |C| "
+            f"{num(kendall_tau_b([p['n_dofs_mean'] for p, _ in common], ours))} here, "
+            f"{num(kendall_tau_b([t['avg_dofs'] for _, t in common], their))} in their runs.")
+
+
+def fig4_vs_paper_section(results: list[Result], page: Path) -> list[str]:
+    """Each Fig. 4 summary (not quick) beside the authors' runs of the same grid
+    (``fig4_against_paper``; empty without the paper_svr file or a common point)."""
+    refs = [r for r in results if r.kind == "paper_svr"]
+    if not refs:
+        return []
+    lines = [f"- {link(r, page)}: {line}" for r in results if r.kind == "fig4" and not r.quick
+             if (line := fig4_against_paper(r.data, refs[-1].data))]
+    if not lines:
+        return []
+    return ["## State-vector reduction, Fig. 4 beside the authors' runs", "",
+            f"Per Fig. 4 summary, against the authors' runs of the same (rho, theta) points "
+            f"({link(refs[-1], page)}), on the statistic both have, the median MPC cost over "
+            f"the baseline's median: Kendall tau-b of the two orders of the points, and of "
+            f"each side's cost against its mean |C| (positive: the fewer DoFs, the cheaper).",
+            "", *lines]
 
 
 def fig4_headline(r: Result) -> str:

@@ -215,9 +215,54 @@ def test_fig4_rows_read_the_authors_sweep_with_the_most_scenes_and_ours_apart(si
         "clutter: lowest cost / baseline 0.90 ± 0.10 (90 % CI) at rho 100, theta 10; 2 rho "
         "from 1 to 100; 100 scenes per point")
     assert report_map.fig4_line(results).startswith("clutter: lowest cost / baseline 0.50")
+    # with every point against the baseline (one Holm family) the row counts the verdicts
+    data = fig4("authors", 100, 0.9, "python experiments/rho_sweep.py --preset authors")
+    data["versus"] = {"alpha": 0.05, "family_size": 2, "references": ["baseline"], "pairs": {
+        f"sum-t10-r{r} vs baseline": {"row": f"sum-t10-r{r}", "reference": "baseline",
+                                      "verdict": v} for r, v in [(1, "no difference shown"),
+                                                                 (100, "cheaper")]}}
+    write(site["results"], "fig4-a-full.json", data)
+    assert report_map.fig4_line(report.load_results(site["results"]), "authors").endswith(
+        "; 100 scenes per point; Holm: 1/2 points cheaper, 0 dearer")
     readme = block(site["readme"])
     assert readme.index("| Fig. 4 on the authors' clutter: rho and theta |") < \
         readme.index("| Fig. 4 on dopt's own clutter (a second benchmark) |")
+
+
+def test_fig4_beside_the_authors_runs_ranks_both_sides_on_the_same_statistic(site):
+    """A Fig. 4 summary beside the authors' runs of the same points: Kendall tau-b (scipy's) of
+    the two sides' median cost ratios, and of each side's ratios against its mean |C|, over
+    the common points only; nothing without the authors' file."""
+    from scipy.stats import kendalltau
+
+    rng = np.random.default_rng(5)
+    grid = [(t, r) for t in (0, 10) for r in (1.0, 100.0, 500.0)]
+    ours = {k: (float(rng.uniform(0.8, 1.1)), float(rng.uniform(8, 35))) for k in grid}
+    theirs = {k: (float(rng.uniform(0.8, 1.1)), float(rng.uniform(8, 35))) for k in grid}
+    theirs[(5, 1.0)] = (0.9, 20.0)                        # a point only they ran
+    points = [dict(rho=r, theta=t, n_trials=5, mpc_cost_median_ratio=ours[t, r][0],
+                   n_dofs_mean=ours[t, r][1], **mpc_row(1.0, 0.1, 50.0, ours[t, r][1], 5))
+              for t, r in grid]
+    write(site["results"], "fig4-x.json",
+          {"experiment": "fig4", "task": "clutter", "method": "svr-sum", "problem": "authors",
+           "points": points, "failed": {}, "provenance": provenance("python rho_sweep.py")})
+    assert run(site) == 0
+    assert "Fig. 4 beside the authors' runs" not in site["md"].read_text()
+    write(site["results"], "paper-svr.json",
+          {"experiment": "paper_svr", "tasks": {"clutter": {"rows": {}, "fig4": [
+              {"theta": t, "rho": r, "median_ratio": c, "avg_dofs": n}
+              for (t, r), (c, n) in theirs.items()]}},
+           "provenance": provenance("python experiments/paper_reference.py")})
+    assert run(site) == 0
+    page = site["md"].read_text()
+
+    def tau(x, y):
+        return f"{kendalltau(x, y).statistic:.2f}"
+    want = (f"`clutter`, 6 points in common: our points' order against theirs "
+            f"{tau([theirs[k][0] for k in grid], [ours[k][0] for k in grid])}; cost against "
+            f"mean |C| {tau([ours[k][1] for k in grid], [ours[k][0] for k in grid])} here, "
+            f"{tau([theirs[k][1] for k in grid], [theirs[k][0] for k in grid])} in their runs.")
+    assert want in page
 
 
 def test_each_fig4_summary_shows_its_own_figure(site):
