@@ -115,8 +115,8 @@ def check_plan(plan, scene: Scene, name: str = "plan") -> Plan:
         if K.shape != (T, nu, 2 * c):
             raise ValueError(f"{name}.K must have shape ({T}, {nu}, {2 * c}) (T, nu, 2|C|), "
                              f"got {K.shape}")
-    elif plan.dofs is not None:
-        index_array(plan.dofs, f"{name}.dofs", scene.nv)
+    elif plan.dofs is not None:     # without gains the set may be empty: nothing optimised
+        index_array(plan.dofs, f"{name}.dofs", scene.nv, allow_empty=True)
     return plan
 
 

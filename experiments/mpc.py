@@ -135,7 +135,8 @@ def add_rows_argument(ap: argparse.ArgumentParser, default: tuple[str, ...] | No
     ap.add_argument("--rows", type=rows_list,
                     default=None if default is None else ",".join(default),
                     help="comma-separated Table 1 rows by name (" + ", ".join(TABLE1_ROWS)
-                    + ", or a registered optimiser's name: planners.svr_mpc.OPTIMISERS), "
+                    + ", or an optimiser's name: unoptimised runs the push plan as it is; "
+                    "planners.svr_mpc.OPTIMISERS), "
                     "each optionally with derivative variants +skip<K>, +adaptive, "
                     "+boxqp, +central (e.g. sum-t10-r1+skip5; they override --fd-skip, "
                     "--keypoints, --box-qp and --fd for that row); default "

@@ -6,7 +6,9 @@ An optimiser is any object with ``optimise(state, plan) -> dopt.mpc.Plan``
 scene, its cost, a rollout service over it (closed after the episode), the trial's
 ``SVRMPCSettings`` and the episode's own generator. ``OPTIMISERS`` maps names to factories;
 ``svr``, the paper's (``planners.svr.SVROptimiser``: iLQR on the DoF set of
-``settings.method``, the Table 1 rows baseline, rand, naive and SVR alike), is the default.
+``settings.method``, the Table 1 rows baseline, rand, naive and SVR alike), is the default;
+``unoptimised`` executes the task's first plan as it is (shifted and padded by the MPC loop),
+the control that says what an optimiser adds to it.
 
 ``register_optimiser(name, factory)`` adds one; ``run_svr_mpc(settings, seed,
 optimiser=name)`` (or a factory itself) runs it, and a trial's params name it ("optimiser",
@@ -35,6 +37,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from dopt.mpc import Plan
 from dopt.rollout import RolloutService
 from dopt.scene import Scene
 from dopt.tasks.push.task_model import TaskModel
@@ -77,9 +80,23 @@ def svr_optimiser(context: OptimiserContext) -> SVROptimiser:
     return SVROptimiser(ILQR(c.service, c.cost, c.settings.ilqr), selector)
 
 
+class Unoptimised:
+    """Returns the plan it is given: the episode executes its first plan (the push plan with
+    ``warm_start``), shifted and padded with its last control by the MPC loop, on no DoF."""
+
+    def optimise(self, state: np.ndarray, plan: Plan) -> Plan:
+        return Plan(plan.controls, dofs=np.zeros(0, dtype=int))
+
+
+def unoptimised(context: OptimiserContext) -> Unoptimised:
+    """The control row: no optimisation (what the MPC cost is without an optimiser)."""
+    return Unoptimised()
+
+
 OptimiserFactory = Callable[[OptimiserContext], object]
 #: the optimisers by name (``register_optimiser`` adds one)
-OPTIMISERS: dict[str, OptimiserFactory] = {DEFAULT_OPTIMISER: svr_optimiser}
+OPTIMISERS: dict[str, OptimiserFactory] = {DEFAULT_OPTIMISER: svr_optimiser,
+                                           "unoptimised": unoptimised}
 
 
 def register_optimiser(name: str, factory: OptimiserFactory, replace: bool = False) -> None:

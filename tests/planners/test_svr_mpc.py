@@ -331,6 +331,25 @@ def test_a_factory_runs_without_a_name_and_summaries_give_it_a_row():
     assert out["constant"]["mpc_cost_normalised_mean"] == pytest.approx((0.5 + 1.5) / 2)
 
 
+def test_unoptimised_executes_the_first_plan_padded_with_its_last_control():
+    """The built-in ``unoptimised`` optimiser changes nothing: the executed controls are the
+    episode's first plan (the warm-started push plan) and then its last control repeated,
+    whatever the lag, and it optimises no DoF."""
+    from planners.svr_mpc.episode import start_and_plan
+
+    settings = SVRMPCSettings(task="clutter", method="baseline", synchronous=False, timeout=100,
+                              threads=1, control_noise=0.0)
+    res = run_svr_mpc(settings, seed=2, optimiser="unoptimised", keep_controls=True)
+    task = settings.build_task(2)
+    start, plan = start_and_plan(settings, task, task.model.nu)
+    T = len(plan.controls)
+    assert T < res.steps == 100                     # the padding is exercised
+    expected = plan.controls[np.minimum(np.arange(res.steps), T - 1)]
+    np.testing.assert_array_equal(np.asarray(res.controls), expected)
+    np.testing.assert_array_equal(np.asarray(res.start_state), start)
+    assert set(res.n_dofs) == {0} and len(res.opt_ms) >= 1
+
+
 def test_history_needs_an_optimiser_that_keeps_one():
     settings = SVRMPCSettings(task="clutter", method="baseline", synchronous=True, timeout=2,
                               threads=1)
