@@ -127,23 +127,30 @@ def cloth_line(results: list[Result]) -> str | None:
 
 def scaling_line(results: list[Result]) -> str | None:
     """Sec. V's claim per recorded scaling fold: whether the gap CEM(Original) - CEM(Simple)
-    grows with the particle count (the trend test's verdict, its slope per unit of log N with
-    the 95 % interval), over which sizes and seeds."""
+    grows with the particle count (the trend test's verdict, "no trend" where it finds none,
+    its slope per unit of log N with the 95 % interval), over which sizes and seeds (said
+    once where every fold has the same)."""
     files = {r.data.get("goal"): r for r in results if r.kind == "fig7_scaling"}
-    parts = []
+    scopes, verdicts = [], []
     for goal, r in sorted(files.items(), key=lambda kv: str(kv[0])):
         d = r.data
         t = d["trend"]["original_minus_simple"]
         sizes = d["sizes"]
         seeds = sorted({e["methods"].get(m, {}).get("n", 0) for e in d["per_size"].values()
                         for m in ("simple", "original")})
-        slope = (f" ({pm(mm(t['slope']), mm(t.get('slope_ci95')))} mm per log N)"
-                 if t.get("slope") is not None else "")
-        gap = (f"the gap to Original {t['verdict']}" if t["verdict"] in ("grows", "shrinks")
-               else f"gap to Original: {t['verdict']}")
         seeds_text = str(seeds[0]) if len(seeds) == 1 else f"{seeds[0]}-{seeds[-1]}"
-        parts.append(f"{goal}, {sizes[0]}-{sizes[-1]} per side, {seeds_text} seeds: {gap}{slope}")
-    return "; ".join(parts) or None
+        scopes.append(f"{sizes[0]}-{sizes[-1]} per side, {seeds_text} seeds")
+        slope = (f" ({pm(mm(t['slope']), mm(t.get('slope_ci95')))} mm)"
+                 if t.get("slope") is not None else "")
+        verdict = t["verdict"] if t["verdict"] in ("grows", "shrinks") else "no trend"
+        verdicts.append((goal, f"{verdict}{slope}"))
+    if not verdicts:
+        return None
+    head = "Original - Simple gap per log N"
+    if len(set(scopes)) == 1:
+        return f"{head} ({scopes[0]}): " + ", ".join(f"{g} {v}" for g, v in verdicts)
+    return f"{head}: " + ", ".join(f"{g} ({s}) {v}"
+                                   for (g, v), s in zip(verdicts, scopes, strict=True))
 
 
 def panda_line(results: list[Result]) -> str | None:
