@@ -204,3 +204,22 @@ def write_summary(summary: dict, out: Path, record: Path | None, script: str, ar
         Path(record).parent.mkdir(parents=True, exist_ok=True)
         Path(record).write_text(text)
     return text
+
+
+def record_figure(figure: Path, record: Path | None) -> Path | None:
+    """With --record, copy the run's ``figure`` where RESULTS.md shows it beside the record:
+    <docs>/images/<record's name>.png where the record lies in a folder named "results" (the
+    docs layout: docs/results/X.json, docs/images/X.png), else <record's name>.png beside the
+    record. Call it after ``write_summary`` wrote the record. Returns the copy's path; None
+    without --record or without the figure (matplotlib not installed)."""
+    import shutil
+
+    if record is None or not Path(figure).is_file():
+        return None
+    record = Path(record)
+    folder = (record.parent.parent / "images" if record.parent.name == "results"
+              else record.parent)
+    folder.mkdir(parents=True, exist_ok=True)
+    dest = folder / f"{record.stem}.png"
+    shutil.copyfile(figure, dest)
+    return dest

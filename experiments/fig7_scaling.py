@@ -14,8 +14,8 @@ the paired difference against log N, Holm over the two comparisons), whose verdi
 
 Writes OUT/summary.json (experiment "fig7_scaling": the settings of every size in full, the
 physics preset, the statistics, the failures, the provenance), OUT/scaling.png (final cost and
-the gaps against the particle count, 95 % bars; only where matplotlib is installed: copied to
-docs/images/<record's name>.png, RESULTS.md shows it beside the record).
+the gaps against the particle count, 95 % bars; only where matplotlib is installed; with
+--record also copied to docs/images/<record's name>.png, which RESULTS.md shows beside it).
 Exits 1 if a trial failed, 2 on bad flags (one line).
 
     python experiments/fig7_scaling.py --goal diagonal --sizes 10,15,20,30 --seeds 5 \\
@@ -42,6 +42,7 @@ from cli_args import (
     output_file,
     positive_int,
     record_problem,
+    record_figure,
     reuse_mode,
     settings_dict,
     write_summary,
@@ -167,6 +168,7 @@ def _experiment(args, argv) -> int:
                "wall_s": time.perf_counter() - start}
     write_summary(summary, out, args.record, "experiments/fig7_scaling.py", argv)
     plot(out / "scaling.png", stats, args.goal)
+    record_figure(out / "scaling.png", args.record)
     print(f"{args.goal}, physics preset {any_settings.physics!r}: {stats['verdict']}")
     print(f"wrote {out}/summary.json")
     for key, err in res.failed.items():

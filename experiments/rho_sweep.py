@@ -3,7 +3,8 @@
 Runs svr-sum (or --method svr-svd) for every (rho, theta) and baseline once per seed for the
 normalisation, all as resumable trials under OUT/trials (the MPC flags are experiments/mpc.py's).
 Writes OUT/summary.json, OUT/rho_sweep.csv and OUT/rho_sweep.png (normalised MPC cost and mean
-|C| vs rho, one line per theta, with the authors' curves from --paper-reference; summary.json
+|C| vs rho, one line per theta, with the authors' curves from --paper-reference; with --record also
+copied to docs/images/<record's name>.png, which RESULTS.md shows beside it; summary.json
 also holds "trial_commits", the code commits of the trial results). Exits 1 if a trial failed
 (listed under "failed" in summary.json) or the run failed (one line on stderr); 2 on a bad
 flag. The authors' grid under their protocol:
@@ -24,7 +25,7 @@ from pathlib import Path
 
 import mpc as table1
 import numpy as np
-from cli_args import EPILOG, ArgumentParser, guarded, number_list, write_summary
+from cli_args import EPILOG, ArgumentParser, guarded, number_list, record_figure, write_summary
 from sweep_console import out_lock
 
 from planners.svr_mpc import fig4_fields, row_label
@@ -104,6 +105,7 @@ def _main(args, paper: dict | None, argv) -> int:
             w.writeheader()
             w.writerows(rows)
         plot(rows, args.thetas, args.out / "rho_sweep.png", args.task, args.method, paper)
+        record_figure(args.out / "rho_sweep.png", args.record)
     return 1 if failed else 0
 
 

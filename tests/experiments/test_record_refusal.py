@@ -107,3 +107,23 @@ def test_reuse_any_flag():
     add_reuse_argument(ap)
     assert reuse_mode(ap.parse_args([])) == "same-code"
     assert reuse_mode(ap.parse_args(["--reuse-any"])) == "any"
+
+
+def test_record_figure_lands_where_results_md_shows_it(tmp_path):
+    """With --record in a "results" folder the figure goes to the sibling images/ folder under
+    the record's name (what RESULTS.md links); elsewhere beside the record; nothing without a
+    record or without the figure."""
+    from cli_args import record_figure
+
+    fig = tmp_path / "out" / "scaling.png"
+    fig.parent.mkdir()
+    fig.write_bytes(b"\x89PNG figure")
+    docs = tmp_path / "docs"
+    dest = record_figure(fig, docs / "results" / "fig7-scaling-side.json")
+    assert dest == docs / "images" / "fig7-scaling-side.png"
+    assert dest.read_bytes() == fig.read_bytes()
+    other = record_figure(fig, tmp_path / "mine" / "run.json")
+    assert other == tmp_path / "mine" / "run.png" and other.read_bytes() == fig.read_bytes()
+    assert record_figure(fig, None) is None
+    assert record_figure(tmp_path / "out" / "missing.png", docs / "results" / "x.json") is None
+    assert not (docs / "images" / "x.png").exists()
