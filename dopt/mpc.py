@@ -18,6 +18,9 @@ its measured CPU time (``time.process_time``: all threads of the process, which 
 else meanwhile) divided by ``threads`` (``virtual``), or ``a + b |C|`` ms (``model``, a fixed
 cost model, so the same seed gives the same episode bit for bit); the agent executes the old
 plan for the steps that fall before c + duration, and the new plan lands shifted by them.
+On every clock an optimisation starts from a state the optimiser has not started from: one
+that ends before the agent's next step waits for it (an optimiser faster than the control
+period runs once per step, not over and over from the same state).
 Lag then is what the algorithm costs, immune to other processes on the machine, so trials can
 run in parallel.
 
@@ -328,10 +331,15 @@ class MPC:
         return seconds
 
     def _virtual_loop(self) -> None:
-        """Optimisations back to back on the virtual time line (module docstring)."""
+        """Optimisations back to back on the virtual time line (module docstring); one that
+        ends before the agent's next step waits for it."""
         clock = 0.0
         while not self._done:
+            start = self._step
             clock += self._optimise_once(clock)
+            if self._step == start and not self._done:
+                clock = max(clock, self._step * self._period)
+                self._agent_step()
 
     def _agent_step(self) -> None:
         m, d = self.scene.model, self._data
@@ -422,7 +430,10 @@ class MPC:
     def _optimiser_loop(self) -> None:
         try:
             while not self._done:
+                start = self._step
                 self._optimise_once()
+                while self._step == start and not self._done and self._error is None:
+                    time.sleep(self._period / 10)        # wait for the agent's next state
         except Exception as e:  # surfaced in the caller's thread
             log.exception("optimiser failed")
             self._error = e

@@ -187,6 +187,34 @@ def test_model_clock_is_deterministic_and_follows_the_cost_model(slider):
     np.testing.assert_array_equal(runs[0].lag_steps, runs[1].lag_steps)
 
 
+class Idle:
+    """Returns the plan it is given, at once."""
+
+    def __init__(self):
+        self.calls = 0
+
+    def optimise(self, state, plan):
+        self.calls += 1
+        return Plan(plan.controls)
+
+
+@pytest.mark.parametrize("cfg", [dict(clock="virtual"), dict(clock="model", model_ms=(1e-3, 0.0)),
+                                 dict(slowdown=1.0)], ids=["virtual", "model", "real"])
+def test_an_optimiser_faster_than_a_step_waits_for_the_next_state(slider, cfg):
+    """An optimisation that ends before the agent's next step does not start again from the
+    same state: the starts are distinct agent steps (at most one per step, not thousands),
+    and the executed controls are the unchanged plan, padded with its last control."""
+    scene, x0 = slider
+    opt = Idle()
+    plan = Plan(np.linspace(-1.0, 1.0, 12)[:, None])
+    res = MPC(scene, opt, MPCConfig(timeout=40, **cfg), np.random.default_rng(0)).run(x0, plan)
+    starts = np.asarray(res.opt_step)
+    assert opt.calls == len(starts) and 1 <= len(starts) <= 40
+    assert (np.diff(starts) >= 1).all()
+    expected = plan.controls[np.minimum(np.arange(40), 11), 0]
+    np.testing.assert_array_equal(res.controls[:, 0], expected)
+
+
 @pytest.mark.parametrize("kwargs, match", [
     ({"clock": "wall"}, "clock must be one of"),
     ({"clock": "model"}, "model_ms"),
