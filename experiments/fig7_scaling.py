@@ -167,8 +167,8 @@ def _experiment(args, argv) -> int:
                **stats, "failed": res.failed, "trial_commits": res.commits,
                "wall_s": time.perf_counter() - start}
     write_summary(summary, out, args.record, "experiments/fig7_scaling.py", argv)
-    plot(out / "scaling.png", stats, args.goal)
-    record_figure(out / "scaling.png", args.record)
+    if plot(out / "scaling.png", stats, args.goal):        # never an older run's figure
+        record_figure(out / "scaling.png", args.record)
     print(f"{args.goal}, physics preset {any_settings.physics!r}: {stats['verdict']}")
     print(f"wrote {out}/summary.json")
     for key, err in res.failed.items():
@@ -176,15 +176,15 @@ def _experiment(args, argv) -> int:
     return 1 if res.failed else 0
 
 
-def plot(path: Path, stats: dict, goal: str) -> None:
+def plot(path: Path, stats: dict, goal: str) -> bool:
     """Final cost per method and the gaps over CEM(Simple) against N = n * n (log axis), with
-    95 % bars; nothing where matplotlib is not installed."""
+    95 % bars. Returns whether it wrote ``path`` (not where matplotlib is not installed)."""
     try:
         import matplotlib
         matplotlib.use("Agg")
         import matplotlib.pyplot as plt
     except ImportError:
-        return
+        return False
     fig, (a, b) = plt.subplots(1, 2, figsize=(10, 4))
     for m, colour in COLOURS.items():
         rows = [(n * n, e["methods"][m]) for n, e in
@@ -211,6 +211,7 @@ def plot(path: Path, stats: dict, goal: str) -> None:
     fig.tight_layout()
     fig.savefig(path, dpi=120)
     plt.close(fig)
+    return True
 
 
 if __name__ == "__main__":
