@@ -192,11 +192,13 @@ def paper_preset_table1(results: list[Result], task: str,
                         presets: tuple[str, ...] = ("authors", "paper")) -> Result | None:
     """The Table 1 file of ``task`` run under the authors' protocol (not quick), if any: the
     newest of the first of ``presets`` that has one (by default on the authors' problems,
-    preset ``authors``, where there is one, else on ours, ``paper``)."""
+    preset ``authors``, where there is one, else on ours, ``paper``), with an SVR row (not a
+    run of other optimisers' rows only)."""
     for preset in presets:
         chosen = [r for r in results if r.kind == "table1" and r.data.get("task") == task
                   and r.data.get("preset") == preset and not r.quick
-                  and not r.data.get("derivatives_effect") and r.data.get("clock_ms") is None]
+                  and not r.data.get("derivatives_effect") and r.data.get("clock_ms") is None
+                  and any(k.startswith(("sum-", "svd-")) for k in r.data.get("methods", {}))]
         if chosen:
             return chosen[-1]
     return None

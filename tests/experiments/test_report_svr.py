@@ -170,6 +170,24 @@ def test_a_derivative_variant_run_has_its_own_row_not_table1s(site):
     assert report.paper_preset_table1(report.load_results(site["results"]), "clutter") is None
 
 
+def test_a_run_of_other_optimisers_rows_is_never_taken_for_table1(site):
+    """A record of baseline and an optimiser's row only (``--rows baseline,unoptimised``),
+    newest by name, renders its own section but the README's Table 1 row stays on the run
+    with the paper's rows."""
+    data = table1()
+    data.update(preset="authors", methods={"baseline": mpc_row(1.0, 0.0, 266.0, 55.0),
+                                           "sum-t10-r1": mpc_row(0.93, 0.02, 170.0, 32.0)})
+    write(site["results"], "table1-clutter-authors.json", data)
+    other = table1()
+    other.update(preset="authors", methods={"baseline": mpc_row(1.0, 0.0, 266.0, 55.0),
+                                            "unoptimised": mpc_row(0.98, 0.02, 0.0, 0.0)})
+    write(site["results"], "table1-clutter-authors_other.json", other)
+    assert run(site) == 0
+    chosen = report.paper_preset_table1(report.load_results(site["results"]), "clutter")
+    assert chosen.path.name == "table1-clutter-authors.json"
+    assert "| unoptimised | 0.98 ± 0.02 |" in site["md"].read_text()
+
+
 def test_a_table1_result_is_checked_on_its_trials_settings(site):
     """Table 1's protocol is in every trial's params: a trial run on another cost than the
     paper preset gives today is stale, unless the command set that cost itself."""
