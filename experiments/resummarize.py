@@ -89,10 +89,11 @@ def _fig7(d: dict, records: list[dict], info: TrialInfo) -> dict:
 
 def _baseline(records: list[dict]) -> str:
     """The row every other is normalised by (experiments/mpc.py's ``baseline_label``): the
-    row of the baseline trials run without feedback."""
+    row of the baseline trials run without feedback (by the paper's optimiser)."""
     from planners.svr_mpc import row_label
 
-    base = [r for r in records if r["params"]["method"] == "baseline"]
+    base = [r for r in records if r["params"]["method"] == "baseline"
+            and r["params"].get("optimiser", "svr") == "svr"]
     plain = [r for r in base if not r["params"].get("feedback")] or base
     return row_label(plain[0]["params"]) if plain else "baseline"
 
@@ -100,6 +101,8 @@ def _baseline(records: list[dict]) -> str:
 def _table1(d: dict, records: list[dict], info: TrialInfo) -> dict:
     from planners.svr_mpc import row_label, table1_fields
 
+    if rows := d.get("methods"):        # its own rows: another run may share the folder
+        records = [r for r in records if row_label(r["params"]) in rows]
     return {"row_settings": {row_label(r["params"]): {k: r["params"][k]
                                                       for k in ("method", "theta", "rho")}
                              for r in records},
