@@ -90,10 +90,10 @@ def _fig7(d: dict, records: list[dict], info: TrialInfo) -> dict:
 def _baseline(records: list[dict]) -> str:
     """The row every other is normalised by (experiments/mpc.py's ``baseline_label``): the
     row of the baseline trials run without feedback (by the paper's optimiser)."""
-    from planners.svr_mpc import row_label
+    from planners.svr_mpc import DEFAULT_OPTIMISER, row_label
 
     base = [r for r in records if r["params"]["method"] == "baseline"
-            and r["params"].get("optimiser", "svr") == "svr"]
+            and r["params"].get("optimiser", DEFAULT_OPTIMISER) == DEFAULT_OPTIMISER]
     plain = [r for r in base if not r["params"].get("feedback")] or base
     return row_label(plain[0]["params"]) if plain else "baseline"
 
