@@ -3,10 +3,11 @@ provenance's "git_commit" and its "trial_commits") and no committed trial under
 docs/results/runs/ (a file, or a record packed in a sweep's ``trials/pack.jsonl.gz``) comes
 from uncommitted code ("-dirty") or names a commit that is not an ancestor of HEAD (issue 57).
 
-It fails on main today (9 of 67 summaries and 1,096 of 3,452 unique committed trial files are
-"-dirty"; every named commit is an ancestor of HEAD): marked xfail(strict=True), so that it
-turns into a failure (XPASS) the day the files are re-recorded from committed code, and the
-mark is removed. ``python tests/test_results_provenance.py`` prints the counts.
+It fails on main today (9 summaries and 1,096 unique committed trial files are "-dirty", all from
+runs made before issue 57's rule; every named commit is an ancestor of HEAD):
+marked xfail(strict=True), so that it turns into a failure (XPASS) the day the files are
+re-recorded from committed code, and the mark is removed. ``python
+tests/test_results_provenance.py`` prints the counts.
 """
 
 from __future__ import annotations
@@ -19,7 +20,7 @@ from pathlib import Path
 
 import pytest
 
-from dopt.trialpack import PACK_NAME, stored_trials
+from dopt.trialpack import PACK_NAME, StoredTrial, pack_path, read_pack
 
 ROOT = Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "docs" / "results"
@@ -64,12 +65,24 @@ def _trial_commits(value, where: str):
 def committed_trials():
     """(path, bytes) of every committed trial record under docs/results/runs/, loose files and
     packed records alike (``dopt.trialpack``; a packed one under the path its file would have),
-    in folder and name order."""
+    in folder and name order. In a git checkout only the files git tracks count (a run's own
+    summary.json, or a sweep's loose trials not yet committed, are not committed trials)."""
     runs = RESULTS / "runs"
-    folders = {p.parent for p in runs.rglob("*.json")} | {p.parent for p in runs.rglob(PACK_NAME)}
-    for folder in sorted(folders):
-        for t in stored_trials(folder):
-            yield t.path, t.read_bytes()
+    if in_git():
+        listed = _git("ls-files", "-z", "--", str(runs.relative_to(ROOT))).stdout.split("\0")
+        files = [ROOT / p for p in listed if p]
+    else:
+        files = [*runs.rglob("*.json"), *runs.rglob(PACK_NAME)]
+    by_folder: dict = {}
+    for f in files:
+        if f.suffix == ".json" or f.name == PACK_NAME:
+            by_folder.setdefault(f.parent, set()).add(f)
+    for folder in sorted(by_folder):
+        loose = {f.stem: StoredTrial(f) for f in by_folder[folder] if f.suffix == ".json"}
+        packed = read_pack(folder) if pack_path(folder) in by_folder[folder] else {}
+        merged = {**{k: t for k, t in packed.items() if k not in loose}, **loose}
+        for key in sorted(merged, key=lambda k: f"{k}.json"):
+            yield merged[key].path, merged[key].read_bytes()
 
 
 def audit() -> dict:
