@@ -3,11 +3,10 @@ provenance's "git_commit" and its "trial_commits") and no committed trial under
 docs/results/runs/ (a file, or a record packed in a sweep's ``trials/pack.jsonl.gz``) comes
 from uncommitted code ("-dirty") or names a commit that is not an ancestor of HEAD (issue 57).
 
-It fails on main today (9 summaries and 1,096 unique committed trial files are "-dirty", all from
-runs made before issue 57's rule; every named commit is an ancestor of HEAD):
-marked xfail(strict=True), so that it turns into a failure (XPASS) the day the files are
-re-recorded from committed code, and the mark is removed. ``python
-tests/test_results_provenance.py`` prints the counts.
+It fails on main today: summaries and trial files from runs made before issue 57's rule
+are "-dirty" (every named commit is an ancestor of HEAD). It is marked xfail(strict=True), so
+that it turns into a failure (XPASS) the day they are re-recorded from committed code, and the
+mark is removed. ``python tests/test_results_provenance.py`` prints them with their counts.
 """
 
 from __future__ import annotations
@@ -140,10 +139,11 @@ def test_the_auditor_reads_commits_as_git_does():
 
 
 @pytest.mark.xfail(strict=True, reason=(
-    "issue 57: 9 result summaries and 1,096 unique committed trial files "
-    "(all 900 Table 1 clutter trials at 450d745-dirty, all 180 Table 1 soft trials at "
-    "a6a0d05-dirty, and those copied into other sweeps), were recorded from uncommitted code; "
-    "every named commit is an ancestor of HEAD. Remove this mark when they are re-recorded."))
+    "issue 57: result summaries and committed trial files recorded from uncommitted code "
+    "before issue 57's rule (Table 1 on dopt's own soft task, the runs that copied Table 1's "
+    "trials, the cloth underneath fold, the physics benches, the H200 Warp runs; "
+    "`python tests/test_results_provenance.py` lists them); every named commit is an "
+    "ancestor of HEAD. Remove this mark when they are re-recorded."))
 def test_no_result_comes_from_uncommitted_or_foreign_code():
     if not in_git():
         pytest.skip("the results are checked against git: not a git checkout")
