@@ -41,8 +41,8 @@ correction, dopt.trialpack, the reader of committed trials, loose or packed, wit
 dopt.jsonio, and planners.trial_progress, the reader of a trial's checkpoint, all standard
 library themselves), so it runs without torch, numpy or MuJoCo. Its sections live in
 report_base.py, report_fig7.py, report_kp.py, report_svr.py, report_sweeps.py and
-report_clock.py (the machine speed behind the virtual clock's sweeps), the README's map in
-report_map.py.
+report_clock.py (the MPC clocks and the machine speed behind the virtual clock's sweeps), the
+README's map in report_map.py.
 """
 
 from __future__ import annotations
@@ -71,7 +71,12 @@ from report_base import (
     source,
     table,
 )
-from report_clock import host_speed_section
+from report_clock import (
+    clock_check_headline,
+    clock_check_section,
+    clock_model_section,
+    host_speed_section,
+)
 from report_fig7 import (
     HOLM_NOTE,
     _departs,
@@ -110,9 +115,6 @@ from report_stale import (
 )
 from report_svr import (
     _table1_columns,
-    clock_check_headline,
-    clock_check_section,
-    clock_model_section,
     fig4_headline,
     fig4_section,
     fig4_vs_paper_section,

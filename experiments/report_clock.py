@@ -1,4 +1,5 @@
-"""RESULTS.md's section on the speed of the machines behind the virtual clock's MPC sweeps.
+"""RESULTS.md's sections on the MPC clocks: the virtual clock against the real one, the model
+clock's fit, and the speed of the machines behind the virtual clock's MPC sweeps.
 
 Under the virtual clock (the authors' preset) an optimisation lasts its CPU time over a nominal
 thread count, so a sweep's lags, and through them its costs, depend on how fast the machine ran
@@ -17,7 +18,8 @@ import json
 import statistics
 from pathlib import Path
 
-from report_base import ReportError, num, table
+from report_base import ReportError, Result, num, pm, section, table
+from report_svr import protocol_line
 
 from dopt.trialpack import PackError, stored_trials
 
@@ -119,3 +121,61 @@ def host_speed_section(results_dir: Path) -> list[str]:
             *table(["sweep", "task, problem", "baseline scenes",
                     "own scenes beside the reference", "median ratio", "10-90 % of scenes",
                     f"scenes at {SLOW:g}x or slower"], rows)]
+
+
+def clock_check_section(results: list[Result], page: Path) -> list[str]:
+    def body(r: Result) -> list[str]:
+        d = r.data
+        rows = []
+        for name, row in d["rows"].items():
+            real, virt = row.get("real", {}), row.get("virtual", {})
+            rows.append([name, str(real.get("n_trials")), num(real.get("lag_steps_mean"), 1),
+                         num(virt.get("lag_steps_mean"), 1), num(row.get("lag_ratio")),
+                         num(row.get("opt_ms_ratio")), num(row.get("real_speedup")),
+                         pm(num(real.get("mpc_cost_mean"), 0), num(real.get("mpc_cost_ci90"), 0)),
+                         pm(num(virt.get("mpc_cost_mean"), 0), num(virt.get("mpc_cost_ci90"), 0)),
+                         "yes" if row.get("lag_within_10_percent") else "no",
+                         "yes" if row.get("cost_intervals_overlap") else "no"])
+        seeds = d.get("seeds")
+        return [f"### {d.get('task')}: `{r.name}`", "", protocol_line(d)
+                + (f" Seeds {seeds[0]} to {seeds[-1]}." if seeds else ""), "",
+                *table(["row", "trials", "lag real", "lag virtual", "lag ratio",
+                        "opt. time ratio", "real speed-up", "cost real", "cost virtual",
+                        "lag within 10 %", "costs overlap"], rows)]
+
+    return section("The virtual clock against the real clock",
+                   "The same trials under both clocks: real (alone, in real time, on the "
+                   "machine's threads) and virtual (one thread, CPU time / nominal threads). "
+                   "Ratios are virtual / real; the lag should be within 10 % and the MPC cost "
+                   "intervals (90 %) should overlap. The real speed-up is one thread's CPU time "
+                   "(nominal threads x the virtual optimisation time) over the real one: the "
+                   "nominal thread count at which the two clocks agree.", results, page, body)
+
+
+def clock_check_headline(r: Result) -> str:
+    rows = r.data["rows"]
+    overlap = sum(bool(v.get("cost_intervals_overlap")) for v in rows.values())
+    nominal = r.data.get("nominal_threads")
+    seeds = r.data.get("seeds")
+    return (f"{r.data.get('task')}" + (f", {nominal:g} nominal threads" if nominal else "")
+            + ": lag virtual / real "
+            + ", ".join(f"{name} {num(v.get('lag_ratio'))}" for name, v in rows.items())
+            + f"; MPC cost intervals overlap on {overlap} of {len(rows)} rows "
+              f"({max((v.get('real') or {}).get('n_trials') or 0 for v in rows.values())} "
+              f"seeds each" + (f", {seeds[0]}-{seeds[-1]}" if seeds else "") + ")")
+
+
+def clock_model_section(results: list[Result], page: Path) -> list[str]:
+    def body(r: Result) -> list[str]:
+        d = r.data
+        return table(["task", "points (|C|: ms)", "a (ms)", "b (ms per DoF)", "R^2"],
+                     [[task, ", ".join(f"{row['n_dofs']}: {row['ms']:.0f}"
+                                       for row in d["rows"] if row["task"] == task),
+                       num(f["a_ms"], 1), num(f["b_ms"], 2), num(f["r2"], 3)]
+                      for task, f in d["fits"].items()])
+
+    return section("The model clock: CPU time of an MPC optimisation against |C|",
+                   "One optimisation of `rand` at theta random DoFs (|C| = 7 + theta) per point, "
+                   "the paper's protocol, one simulation thread; ms = CPU time / nominal "
+                   "threads. `planners.svr_mpc.CLOCK_MODEL_MS` holds the fits.",
+                   results, page, body)

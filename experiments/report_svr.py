@@ -438,6 +438,22 @@ def fig4_headline(r: Result) -> str:
             + versus_headline(r.data.get("versus")))
 
 
+HELD_LEGEND = ("; goal held: the share of those optimisations whose C holds both the goal "
+               "object's x and y, and the median dJ/J of those and of the rest; rho 1 cuts "
+               "the goal: the share of the SVR optimisations holding both whose least goal "
+               "importance is below 1, where the new nominal touches the object and where "
+               "it does not")
+
+
+def held_cells(m: dict) -> list[str]:
+    """The mechanism table's cells of ``svr_explain.goal_held_split``."""
+    return [num(m.get("goal_held_share_away")),
+            f"{sci(m.get('rel_improvement_median_away_held'))} / "
+            f"{sci(m.get('rel_improvement_median_away_dropped'))}",
+            f"{num(m.get('goal_cut_share_contact'))} / "
+            f"{num(m.get('goal_cut_share_no_contact'))}"]
+
+
 def svr_explain_section(results: list[Result], page: Path) -> list[str]:
     def body(r: Result) -> list[str]:
         d = r.data
@@ -446,6 +462,8 @@ def svr_explain_section(results: list[Result], page: Path) -> list[str]:
         shares = ("zero", "lt_0.1", "0.1_to_1", "1_to_500", "ge_500") if fine else \
             ("zero", "lt_1", "1_to_500", "ge_500")
         goal = any("goal_importance" in row for row in d["rows"].values())
+        held = any("goal_held_share_away" in (row.get("mechanism") or {})
+                   for row in d["rows"].values())
         for name, row in d["rows"].items():
             share = row.get("importance_share") or {}
             n_dofs = [v for v in row["n_dofs"] if v is not None]
@@ -461,7 +479,8 @@ def svr_explain_section(results: list[Result], page: Path) -> list[str]:
                              num(m.get("accepted_share")), num(m.get("contact_share")),
                              sci(m.get("mu_median")), num(m.get("travel_median"), 3),
                              num(m.get("goal_distance_end_median"), 3),
-                             f"{num(m.get('lag_steps_median'), 1)} / {m.get('horizon')}"])
+                             f"{num(m.get('lag_steps_median'), 1)} / {m.get('horizon')}",
+                             *(held_cells(m) if held else [])])
         labels = {"zero": "= 0", "lt_0.1": "(0, 0.1)", "0.1_to_1": "[0.1, 1)", "lt_1": "< 1",
                   "1_to_500": "[1, 500)", "ge_500": ">= 500"}
         out = [f"### {d.get('task')}: `{r.name}`", "", protocol_line(d), "",
@@ -476,9 +495,12 @@ def svr_explain_section(results: list[Result], page: Path) -> list[str]:
             out += ["", "Whether the optimiser engages (dJ/J: the median relative improvement "
                     "of an optimisation while the goal object is more than 5 cm from the goal; "
                     "contact: the share of optimisations whose new nominal touches the pushed "
-                    "object; travel and end distance: medians over episodes, m):", "",
+                    "object; travel and end distance: medians over episodes, m"
+                    + (HELD_LEGEND if held else "") + "):", "",
                     *table(["row", "dJ/J", "accepted", "contact", "mu", "travel",
-                            "end distance", "lag / T"], mech)]
+                            "end distance", "lag / T",
+                            *(["goal held", "dJ/J held / dropped",
+                               "rho 1 cuts the goal: contact / none"] if held else [])], mech)]
         return out
 
     return section("State-vector reduction: which DoFs each method holds, and what rho cuts",
@@ -535,64 +557,3 @@ def paper_svr_section(results: list[Result], page: Path) -> list[str]:
                    "mean final goal distance, mean DoFs and optimisation time. Rows their data "
                    "does not name (rand, naive) are absent; a second plain iLQR run per task is "
                    "not identified in it.", results, page, body)
-
-
-def clock_check_section(results: list[Result], page: Path) -> list[str]:
-    def body(r: Result) -> list[str]:
-        d = r.data
-        rows = []
-        for name, row in d["rows"].items():
-            real, virt = row.get("real", {}), row.get("virtual", {})
-            rows.append([name, str(real.get("n_trials")), num(real.get("lag_steps_mean"), 1),
-                         num(virt.get("lag_steps_mean"), 1), num(row.get("lag_ratio")),
-                         num(row.get("opt_ms_ratio")), num(row.get("real_speedup")),
-                         pm(num(real.get("mpc_cost_mean"), 0), num(real.get("mpc_cost_ci90"), 0)),
-                         pm(num(virt.get("mpc_cost_mean"), 0), num(virt.get("mpc_cost_ci90"), 0)),
-                         "yes" if row.get("lag_within_10_percent") else "no",
-                         "yes" if row.get("cost_intervals_overlap") else "no"])
-        seeds = d.get("seeds")
-        return [f"### {d.get('task')}: `{r.name}`", "", protocol_line(d)
-                + (f" Seeds {seeds[0]} to {seeds[-1]}." if seeds else ""), "",
-                *table(["row", "trials", "lag real", "lag virtual", "lag ratio",
-                        "opt. time ratio", "real speed-up", "cost real", "cost virtual",
-                        "lag within 10 %", "costs overlap"], rows)]
-
-    return section("The virtual clock against the real clock",
-                   "The same trials under both clocks: real (alone, in real time, on the "
-                   "machine's threads) and virtual (one thread, CPU time / nominal threads). "
-                   "Ratios are virtual / real; the lag should be within 10 % and the MPC cost "
-                   "intervals (90 %) should overlap. The real speed-up is one thread's CPU time "
-                   "(nominal threads x the virtual optimisation time) over the real one: the "
-                   "nominal thread count at which the two clocks agree.", results, page, body)
-
-
-def clock_check_headline(r: Result) -> str:
-    rows = r.data["rows"]
-    overlap = sum(bool(v.get("cost_intervals_overlap")) for v in rows.values())
-    nominal = r.data.get("nominal_threads")
-    seeds = r.data.get("seeds")
-    return (f"{r.data.get('task')}" + (f", {nominal:g} nominal threads" if nominal else "")
-            + ": lag virtual / real "
-            + ", ".join(f"{name} {num(v.get('lag_ratio'))}" for name, v in rows.items())
-            + f"; MPC cost intervals overlap on {overlap} of {len(rows)} rows "
-              f"({max((v.get('real') or {}).get('n_trials') or 0 for v in rows.values())} "
-              f"seeds each" + (f", {seeds[0]}-{seeds[-1]}" if seeds else "") + ")")
-
-
-def clock_model_section(results: list[Result], page: Path) -> list[str]:
-    def body(r: Result) -> list[str]:
-        d = r.data
-        return table(["task", "points (|C|: ms)", "a (ms)", "b (ms per DoF)", "R^2"],
-                     [[task, ", ".join(f"{row['n_dofs']}: {row['ms']:.0f}"
-                                       for row in d["rows"] if row["task"] == task),
-                       num(f["a_ms"], 1), num(f["b_ms"], 2), num(f["r2"], 3)]
-                      for task, f in d["fits"].items()])
-
-    return section("The model clock: CPU time of an MPC optimisation against |C|",
-                   "One optimisation of `rand` at theta random DoFs (|C| = 7 + theta) per point, "
-                   "the paper's protocol, one simulation thread; ms = CPU time / nominal "
-                   "threads. `planners.svr_mpc.CLOCK_MODEL_MS` holds the fits.",
-                   results, page, body)
-
-
-

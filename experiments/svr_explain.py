@@ -18,8 +18,10 @@ at or above 500 (what no rho of the paper's grid below 1e6 removes); robot DoFs,
 removed, are left out; the shares of those importances that are 0, in (0, 0.1), [0.1, 1),
 [1, 500) and >= 500; per row under "mechanism": the median dJ/J while the goal object is more
 than 5 cm from the goal, the shares of accepted optimisations and of nominals in contact, the
-median mu, the goal object's median travel and final distance, and the median lag against the
-horizon T. And OUT/svr_explain.png. Exits 1 if a trial failed, 2 on a bad flag.
+median mu, the goal object's median travel and final distance, the median lag against the
+horizon T, and whether an optimisation that drops the goal object's DoFs can still move it
+(``goal_held_split``: dJ/J with them held and dropped; how often rho 1 cuts them with and
+without contact). And OUT/svr_explain.png. Exits 1 if a trial failed, 2 on a bad flag.
 
     python experiments/svr_explain.py --task clutter --preset authors \\
         --layouts ../shared/external/ilqr_svr/push_mcl_layouts --trials 10 \\
@@ -211,7 +213,35 @@ def mechanism(results: list[dict]) -> dict:
                                           if len(res["n_dofs"])])),
             "n_unstable_rollouts": int(sum(res.get("n_unstable_rollouts", 0) for res in results)),
             "n_unstable_episodes": int(sum(bool(res.get("unstable")) for res in results)),
-            "horizon": results[0]["horizon"]}
+            "horizon": results[0]["horizon"], **goal_held_split(results)}
+
+
+def goal_held_split(results: list[dict]) -> dict:
+    """Per row, whether an optimisation can move the goal object: over the optimisations
+    while it is more than ``AWAY`` from the goal, the share whose C holds every planar DoF of
+    it and the median dJ/J of those ("held") and of the rest ("dropped"); over every
+    optimisation that held them with importances (SVR), the share whose least goal
+    importance is below rho 1 (Table 1's cut removes them) among those whose new nominal
+    touches the pushed object and among those whose nominal does not. None where no
+    optimisation falls in a group."""
+    held, dropped = [], []
+    cut = {True: [], False: []}
+    for res in results:
+        imps = res.get("goal_importance") or [None] * len(res["goal_share"])  # older trials
+        for share, dj, dist, imp, touch in zip(res["goal_share"], res["rel_improvement"],
+                                               res["goal_distance_at_opt"], imps,
+                                               res["contact_steps"], strict=True):
+            if dist > AWAY:
+                (held if share == 1.0 else dropped).append(dj)
+            if share == 1.0 and imp:
+                cut[touch > 0].append(min(imp) < RHO_CUTS[0])
+    n_away = len(held) + len(dropped)
+    return {"goal_held_share_away": len(held) / n_away if n_away else None,
+            "rel_improvement_median_away_held": _median(held),
+            "rel_improvement_median_away_dropped": _median(dropped),
+            "goal_cut_share_contact": float(np.mean(cut[True])) if cut[True] else None,
+            "goal_cut_share_no_contact": float(np.mean(cut[False])) if cut[False] else None,
+            "n_goal_importances": {"contact": len(cut[True]), "no_contact": len(cut[False])}}
 
 
 def summarize_rows(records: list[dict], bins: int) -> dict:

@@ -69,6 +69,28 @@ def test_goal_importance_is_the_least_of_the_goal_dofs_held_whole():
     assert svr_explain.goal_importance_summary([{}]) is None
 
 
+def test_goal_held_split_separates_optimisations_by_whether_c_holds_the_goal():
+    # five optimisations: the goal object away (> 5 cm) in the first four; C holds both goal
+    # DoFs in the 1st, 3rd and 5th; SVR importances with and without a touching nominal
+    res = {"goal_share": [1.0, 0.5, 1.0, 0.0, 1.0],
+           "rel_improvement": [1e-2, 1e-6, 3e-2, 2e-6, 5e-1],
+           "goal_distance_at_opt": [0.2, 0.2, 0.1, 0.06, 0.01],
+           "goal_importance": [[700.0, 900.0], [4.0], [0.5, 30.0], [], [1e-16, 2.0]],
+           "contact_steps": [10, 0, 4, 0, 0]}
+    s = svr_explain.goal_held_split([res])
+    assert s["goal_held_share_away"] == 0.5                # 2 of the 4 away
+    assert s["rel_improvement_median_away_held"] == pytest.approx(2e-2)
+    assert s["rel_improvement_median_away_dropped"] == pytest.approx(1.5e-6)
+    # held with importances: (contact, least 700), (contact, least 0.5), (none, least 1e-16)
+    assert s["goal_cut_share_contact"] == 0.5 and s["goal_cut_share_no_contact"] == 1.0
+    assert s["n_goal_importances"] == {"contact": 2, "no_contact": 1}
+    # a row without importances (rand, baseline, older trials) has no cut shares
+    plain = dict(res, goal_importance=[None] * 5)
+    assert svr_explain.goal_held_split([plain])["goal_cut_share_contact"] is None
+    older = {k: v for k, v in res.items() if k != "goal_importance"}
+    assert svr_explain.goal_held_split([older])["goal_held_share_away"] == 0.5
+
+
 def test_short_run_writes_summary_and_plot(tmp_path):
     out = tmp_path / "ex"
     env = dict(os.environ, PYTHONPATH=str(ROOT))
