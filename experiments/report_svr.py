@@ -1,6 +1,6 @@
 """The state-vector-reduction sections of experiments/report.py: Table 1 (and beside the
 paper's, its pairwise orderings judged with Holm's correction), Fig. 4, the SVR explanation, the
-iLQR bench, the authors' data and the clocks.
+iLQR bench and the authors' data (the clocks: report_clock.py).
 
 Standard library only (and ``dopt.multiple``, pure Python).
 """
