@@ -8,7 +8,8 @@ re-summarised file): ``trials/*.json`` there and the records packed in ``trials/
 ``real/`` and ``virtual/`` below it for the clock check. Where several summaries share a
 folder, or a folder holds more than one summary used, only the summary's own are taken: a
 Fig. 7 summary's methods and seeds (the trial key is ``<method>-seed<seed>-<settings hash>``),
-a clock check's seeds. Everything else in the folder is the summary's (the docs/results test
+a scaling summary's methods, seeds and cloth sizes (each trial's settings "n"), a clock check's
+seeds. Everything else in the folder is the summary's (the docs/results test
 checks the counts against "trial_commits").
 
 A trial's commit is read from its record's "code" (``dopt.sweep`` writes it last, so the tail
@@ -99,7 +100,21 @@ def _files(folder: Path, r: Result) -> list[StoredTrial]:
         held = {m: set(e.get("seeds") or ()) for m, e in (d.get("methods") or {}).items()}
         return [p for p in files if (m := FIG7_KEY.match(p.stem))
                 and int(m["seed"]) in held.get(m["method"], ())]
+    if r.kind == "fig7_scaling":
+        methods, seeds = set(d.get("methods_run") or ()), set(d.get("seeds") or ())
+        sizes = set(d.get("sizes") or ())
+        return [p for p in files if (m := FIG7_KEY.match(p.stem)) and m["method"] in methods
+                and int(m["seed"]) in seeds and _cloth_size(p) in sizes]
     return files
+
+
+def _cloth_size(path: Path | StoredTrial) -> int | None:
+    """The particles per side a pick-and-place trial ran on (its params' settings "n")."""
+    try:
+        n = json.loads(path.read_text())["params"]["settings"]["n"]
+    except (OSError, ValueError, KeyError, TypeError):
+        return None
+    return n if isinstance(n, int) else None
 
 
 def trial_stamp(path: Path | StoredTrial) -> tuple[str, str | None]:

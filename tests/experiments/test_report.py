@@ -5,6 +5,7 @@ recorded."""
 import json
 import subprocess
 import sys
+from pathlib import Path
 
 import report
 import report_trials
@@ -229,6 +230,27 @@ def test_trials_from_uncommitted_code_are_counted_next_to_the_result(site):
     assert ("Trial commits (the summary's \"trial_commits\"; its trials are not committed): "
             "`aaaaaaaa-dirty` (2), `bbbbbbbb` (1).") in site["md"].read_text()
     assert "uncommitted code" not in headlines(site)
+
+
+def test_a_scaling_summary_holds_only_its_own_sizes_methods_and_seeds(site):
+    """Trials of a size the scaling summary does not hold (a larger cloth committed while its
+    sweep runs), of another method or seed, are not the summary's: its trials line counts
+    only its own."""
+    from report_base import Result
+
+    folder = site["results"] / "runs" / "fig7-scaling-diagonal" / "trials"
+    for method, seed, n, commit in (("simple", 0, 10, "a" * 40), ("original", 1, 15, "a" * 40),
+                                    ("simple", 0, 30, "b" * 40), ("random", 0, 10, "a" * 40),
+                                    ("simple", 7, 10, "a" * 40)):
+        _trial(folder, f"{method}-seed{seed}-{n:08x}", {"settings": {"n": n}}, commit)
+    data = {"experiment": "fig7_scaling", "sizes": [10, 15], "seeds": [0, 1],
+            "methods_run": ["simple", "original"],
+            "provenance": provenance("python experiments/fig7_scaling.py --goal diagonal --out "
+                                     "docs/results/runs/fig7-scaling-diagonal")}
+    info = report_trials.summary_trials(site["results"], Result(Path("s.json"), data))
+    assert sorted(p.stem for p in info.files) == ["original-seed1-0000000f",
+                                                 "simple-seed0-0000000a"]
+    assert dict(info.commits) == {"a" * 40: 2}
 
 
 def test_the_machines_trials_ran_on_are_counted_as_their_records_name_them(site, monkeypatch):
