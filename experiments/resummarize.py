@@ -204,8 +204,16 @@ def rebuild(results_dir: Path, r: Result) -> dict | None:
     except Exception as e:  # named in the report, the others go on
         return {"info": info, "fields": None, "diff": None,
                 "error": f"{type(e).__name__}: {' '.join(str(e).split())}"}
-    committed = {k: r.data[k] for k in TRIAL_FIELDS[r.kind] if k in r.data}
-    return {"info": info, "fields": fields, "diff": compare(committed, fields), "error": None}
+    return {"info": info, "fields": fields, "diff": compare(committed_fields(r), fields),
+            "error": None}
+
+
+def committed_fields(r: Result) -> dict:
+    """The trial fields of a committed summary, each value the writer meant: a non-finite
+    number written as null with its note (``dopt.jsonio``) is that number again and the note
+    is gone, as the rebuild holds them."""
+    return jsonio.restore(copy.deepcopy({k: r.data[k] for k in TRIAL_FIELDS[r.kind]
+                                         if k in r.data}))
 
 
 def matches(found: dict) -> bool:

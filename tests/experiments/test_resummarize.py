@@ -128,3 +128,20 @@ def test_in_place_brings_a_clean_summary_of_an_older_format_up_to_date(tmp_path,
     assert new["resummarized_from"] == old["provenance"]
     assert new["methods"] == old["methods"] and new["versus"]["pairs"]
     assert resummarize.main(["--results-dir", str(results), "--check"]) == 0
+
+
+def test_a_committed_nan_written_as_null_with_its_note_is_compared_as_nan():
+    """A summary's mean over no kept pair is NaN, written null with a note beside it
+    (dopt.jsonio); the rebuild holds NaN and no note, and the two match."""
+    from report_base import Result
+
+    from dopt import jsonio
+
+    methods = {"naive": {"mpc_cost_normalised_mean": float("nan"), "n_trials": 20}}
+    written = json.loads(jsonio.dumps({"methods": methods}))
+    assert "mpc_cost_normalised_mean_undefined" in written["methods"]["naive"]
+    r = Result(path=Path("table1-soft.json"), data={"experiment": "table1", **written})
+    committed = resummarize.committed_fields(r)
+    assert resummarize.compare(committed, {"methods": methods}) == {
+        "differs": [], "missing": [], "new": []}
+    assert "mpc_cost_normalised_mean_undefined" in written["methods"]["naive"]  # not touched
