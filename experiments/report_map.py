@@ -18,7 +18,9 @@ from pathlib import Path
 from report_base import KP, REGENERATE, SVR, Result, _label, cell, mm, num, pm, table
 from report_fig7 import CLOTH_DIFFICULTY, _departs, fig7_claims
 from report_svr import (
+    MIN_KEPT_BASELINE,
     _table1_columns,
+    kept_baseline,
     orderings,
     paper_preset_table1,
     paper_table1,
@@ -172,12 +174,21 @@ def table1_line(results: list[Result], preset: str = "authors") -> str | None:
     """The cheapest reduced row per task under the authors' protocol on the problems of
     ``preset`` (``authors``: theirs, ``paper``: ours), or where the summaries have them how
     many SVR rows Holm finds cheaper than baseline and than rand; and Kendall's tau of our
-    order against the paper's printed one."""
+    order against the paper's printed one. A task whose baseline is kept (neither outlier
+    nor unstable) in fewer than ``MIN_KEPT_BASELINE`` of its episodes says so instead of
+    means over the few seeds left ("-" for its tau)."""
     _, published = paper_table1(results)
-    parts, taus, tasks, versus = [], [], [], {}
+    parts, taus, tasks, versus, few = [], [], [], {}, []
     for task in ("clutter", "soft", "soft_rigid"):
         r = paper_preset_table1(results, task, (preset,))
         if r is None:
+            continue
+        kept = kept_baseline(r.data)
+        if kept and kept[0] < MIN_KEPT_BASELINE * kept[1]:
+            few.append(f"{task} n/a (baseline kept {kept[0]}/{kept[1]})")
+            parts.append(few[-1])
+            if task in published:
+                taus.append("-")
             continue
         tasks.append(task)
         for ref, count in versus_counts(r.data.get("versus")).items():
@@ -194,8 +205,8 @@ def table1_line(results: list[Result], preset: str = "authors") -> str | None:
         return None
     if versus and all(len(v) == len(tasks) for v in versus.values()):
         text = (f"SVR rows cheaper than {' / '.join(versus)} (Holm): "
-                + "; ".join(f"{task} {', '.join(v[i] for v in versus.values())}"
-                            for i, task in enumerate(tasks)))
+                + "; ".join([f"{task} {', '.join(v[i] for v in versus.values())}"
+                             for i, task in enumerate(tasks)] + few))
     else:
         text = "cheapest reduced row / baseline: " + ", ".join(parts)
     if taus:

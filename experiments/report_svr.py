@@ -149,6 +149,8 @@ def protocol_line(d: dict) -> str:
     return (f"Protocol `{d['preset']}`: cost `{d.get('cost')}`"
             + (", the authors' set-up motion and push plan" if d.get("warm_start")
                else ", zero initial plan")
+            + (" ending braking (`--push-tail off`)"
+               if d.get("warm_start") and d.get("push_tail") is False else "")
             + f", {d.get('clock')} clock"
             + (f" ({d.get('nominal_threads'):g} nominal threads)"
                if d.get("clock") == "virtual" else "")
@@ -156,6 +158,32 @@ def protocol_line(d: dict) -> str:
                if d.get("clock_ms") is not None else "")
             + f", control noise {d.get('control_noise')}, {d.get('fd')} differences, "
               f"slowdown {d.get('slowdown')}.")
+
+
+#: the README map reads a Table 1 file's means only where at least this share of its
+#: baseline's episodes is kept (neither an outlier nor flagged unstable): a row's mean is over
+#: the seeds whose baseline is kept, and over the few unflagged episodes of a mostly flagged
+#: baseline it describes a selected handful of seeds, not the task
+MIN_KEPT_BASELINE = 0.5
+
+
+def kept_baseline(data: dict) -> tuple[int, int] | None:
+    """(kept, trials) of a Table 1 summary's baseline row: its episodes that are neither
+    outliers nor unstable, the seeds every row's normalised mean can be over; None without
+    a baseline row or its counts."""
+    m = (data.get("methods") or {}).get("baseline")
+    n = m and m.get("n_trials", m.get("trials"))
+    return (_kept_trials(m), n) if isinstance(n, int) and n > 0 else None
+
+
+def unstable_headline(data: dict) -> str:
+    """"; episodes flagged unstable (left out of the means): row a/n, ..." for the rows with
+    any (empty without)."""
+    flagged = [f"{name} {m['n_unstable_trials']}/{m.get('n_trials', m.get('trials'))}"
+               for name, m in (data.get("methods") or {}).items()
+               if m.get("n_unstable_trials")]
+    return ("; episodes flagged unstable (left out of the means): " + ", ".join(flagged)
+            if flagged else "")
 
 
 def table1_headline(r: Result) -> str:
@@ -177,7 +205,7 @@ def table1_headline(r: Result) -> str:
     return (f"protocol `{r.data.get('preset', 'ours')}`{cost_used}; MPC cost / baseline "
             f"(opt. time, DoFs): " + "; ".join(parts)
             + f" ({trials} trial{'s' if trials != 1 else ''} each)"
-            + versus_headline(r.data.get("versus")))
+            + unstable_headline(r.data) + versus_headline(r.data.get("versus")))
 
 
 # ------------------------------------------------------------- table1 beside the paper

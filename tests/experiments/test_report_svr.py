@@ -367,3 +367,43 @@ def test_machine_speed_behind_the_virtual_clock_compares_each_sweeps_own_baselin
     # ratios 1.5, 1.0, 2.0, 1.0 on seeds 0-3: median 1.25, deciles 1.00 and 1.85
     assert "| `fig4-slow` |  | 6 | 4 | 1.25 | 1.00-1.85 | 2 (seeds 0, 2) |" in section
     assert "`copies`" not in section and "`model`" not in section and "`ours`" not in section
+
+
+def test_a_table1_file_with_flagged_episodes_says_so_and_the_map_reads_no_means_off_few(site):
+    """The headline counts each row's episodes flagged unstable (they are left out of the
+    means); the README map gives no mean of a task whose baseline is kept (neither outlier
+    nor unstable) in under half its episodes, and no Kendall tau for it."""
+    import report_map
+
+    def soft(unstable_baseline):
+        data = table1()
+        base = {**mpc_row(1.0, 0.0, 1500.0, 115.0), "n_unstable_trials": unstable_baseline}
+        data.update(task="soft", preset="paper",
+                    methods={"baseline": base,
+                             "sum-t10-r1": {**mpc_row(0.49, None, 1400.0, 107.0),
+                                            "n_unstable_trials": 18},
+                             "rand-t5": mpc_row(0.39, 0.37, 270.0, 12.0)})
+        return data
+
+    write(site["results"], "table1-soft.json", soft(18))
+    assert run(site) == 0
+    assert ("episodes flagged unstable (left out of the means): baseline 18/20, "
+            "sum-t10-r1 18/20") in headlines(site)
+    results = report.load_results(site["results"])
+    assert report_map.table1_line(results, "paper") == (
+        "cheapest reduced row / baseline: soft n/a (baseline kept 1/20)")
+    write(site["results"], "table1-soft.json", soft(9))     # kept 10 of 20: half, enough
+    results = report.load_results(site["results"])
+    assert report_map.table1_line(results, "paper") == (
+        "cheapest reduced row / baseline: soft rand-t5 0.39")
+
+
+def test_the_protocol_line_says_when_the_push_plan_ends_braking():
+    from report_svr import protocol_line
+
+    d = {"preset": "paper", "cost": "paper-reach", "warm_start": True, "clock": "real",
+         "control_noise": 0.05, "fd": "forward", "slowdown": 3.0}
+    assert "braking" not in protocol_line(d)
+    assert "braking" not in protocol_line({**d, "push_tail": True})
+    assert "push plan ending braking (`--push-tail off`)" in protocol_line(
+        {**d, "push_tail": False})
