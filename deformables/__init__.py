@@ -14,6 +14,8 @@ dopt.provenance and dopt.cli. Modules:
                      layers.py (stacking axis and layer gap), panels.py (rigid panels of noisy
                      folds), frame.py (the goal's own frame)
     validation.py    goal checks and repairs
+    authors.py       the paper authors' own cloth goals (their SoftGym / FleX files, read from
+                     outside the project) and their key particles beside ours
     bench.py         python -m deformables.bench: timings, the paper's scale, paper vs default
 """
 from .cloth import ClothConfig, cloth_key_particles

@@ -18,6 +18,7 @@ It knows MuJoCo and no planner (docs/ARCHITECTURE.md has the map and the rule). 
     provenance.py           command, commit, versions of a result; the recording and reuse rules
     stats.py, multiple.py   means and intervals; Holm's correction
     validation.py, cli.py   argument checks; the command lines' shared types and guarded()
+    dicts.py                small helpers on nested JSON-like dicts (standard library only)
     render.py               offscreen images of states (numpy arrays; no task knowledge)
     scripts.py              the console scripts of the experiment scripts
     tasks/                  the two papers' tasks: registries in tasks/__init__.py, the wings

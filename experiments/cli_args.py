@@ -114,6 +114,18 @@ def record_problem(record: Path | None, out: Path, root: Path | None = None) -> 
     return None if problem is None else f"argument --record: {problem}"
 
 
+def check_outputs(ap, args, default: str) -> None:
+    """Every experiment's last flag check: ``args.out`` defaults to ``results/<default>`` (a
+    folder of this checkout's, ignored by git), then a usage error (one line, exit 2) when the
+    run cannot write its --out or --record (``record_problem``)."""
+    if args.out is None:
+        args.out = Path("results") / default
+        if (problem := folder_problem(args.out)) is not None:
+            ap.error(f"argument --out: (default) {problem}")
+    if (problem := record_problem(args.record, args.out)) is not None:
+        ap.error(problem)
+
+
 def settings_dict(settings) -> dict:
     """Every field of a settings object as plain JSON values: a dataclass (nested ones as
     dicts, ``dataclasses.asdict``), or a dict of them (per goal, per row), or a dict already.

@@ -35,6 +35,7 @@ from cli_args import (
     EPILOG,
     ArgumentParser,
     add_reuse_argument,
+    check_outputs,
     choices_type,
     guarded,
     number_list,
@@ -42,7 +43,6 @@ from cli_args import (
     output_file,
     positive_int,
     record_figure,
-    record_problem,
     reuse_mode,
     settings_dict,
     write_summary,
@@ -82,7 +82,8 @@ def parser() -> argparse.ArgumentParser:
                     help="comma-separated subset of " + ", ".join(SCALING_METHODS))
     ap.add_argument("--workers", type=positive_int, default=1,
                     help="trials at once (processes; default 1)")
-    ap.add_argument("--out", type=output_dir, required=True, help="the run's folder")
+    ap.add_argument("--out", type=output_dir, default=None,
+                    help="the run's folder (default results/fig7_scaling_<goal>)")
     ap.add_argument("--record", type=output_file, default=None,
                     help="also write the summary here (committed code only)")
     ap.add_argument("--reuse-from", type=Path, default=None,
@@ -102,8 +103,7 @@ def parse(argv=None) -> argparse.Namespace:
         ap.error("argument --methods: the gains are against simple, which it must name")
     if args.reuse_from is not None and not (args.reuse_from / "trials").is_dir():
         ap.error(f"argument --reuse-from: {args.reuse_from}/trials is not a folder")
-    if (problem := record_problem(args.record, args.out)) is not None:
-        ap.error(problem)
+    check_outputs(ap, args, f"fig7_scaling_{args.goal}")
     return args
 
 

@@ -33,6 +33,7 @@ import numpy as np
 from cli_args import (
     EPILOG,
     ArgumentParser,
+    check_outputs,
     choices_type,
     guarded,
     int_at_least,
@@ -42,7 +43,6 @@ from cli_args import (
     output_dir,
     output_file,
     positive_int,
-    record_problem,
     settings_dict,
     write_summary,
 )
@@ -348,9 +348,9 @@ def parser() -> argparse.ArgumentParser:
     ap.add_argument("--task", choices=TASKS + ["all"], default="all",
                     help="goal to reduce (rope_fold_unequal is the crossed triangle with "
                          "legs 1 : 1.3 : 1.6); 'all' runs every task")
-    ap.add_argument("--out", type=output_dir, required=True,
+    ap.add_argument("--out", type=output_dir, default=None,
                     help="output folder for summary.json, curve_<task>.csv, <task>.png, "
-                         "noise.jsonl")
+                         "noise.jsonl (default results/key_particles_<task>)")
     ap.add_argument("--record", type=output_file, default=None, metavar="PATH",
                     help="also write the summary to PATH (the committed result files under "
                          "docs/results/ that docs/RESULTS.md is generated from)")
@@ -476,13 +476,18 @@ def robustness(args, rng: np.random.Generator, rope_config: RopeConfig,
             commits[c] = commits.get(c, 0) + 1
 
 
-@guarded("key_particles.py")
-def main(argv=None) -> int:
+def parse_args(argv=None) -> argparse.Namespace:
+    """Parsed flags; exit 2 with one line on a bad one."""
     ap = parser()
     args = ap.parse_args(argv)
-    if record_problem(args.record, args.out):
-        ap.error(record_problem(args.record, args.out))
+    check_outputs(ap, args, f"key_particles_{args.task}")
     check_sizes(ap, args)
+    return args
+
+
+@guarded("key_particles.py")
+def main(argv=None) -> int:
+    args = parse_args(argv)
     logging.basicConfig(level=logging.INFO, format="%(levelname)s %(name)s: %(message)s")
 
     rng = np.random.default_rng(args.seed)

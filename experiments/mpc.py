@@ -50,6 +50,7 @@ from cli_args import (
     ArgumentParser,
     add_reuse_argument,
     blowup_captures,
+    check_outputs,
     choices_type,
     guarded,
     no_repeats,
@@ -59,7 +60,6 @@ from cli_args import (
     output_file,
     positive_float,
     positive_int,
-    record_problem,
     reuse_mode,
     write_summary,
 )
@@ -216,9 +216,9 @@ def add_run_arguments(ap: argparse.ArgumentParser) -> None:
                     help="simulation threads per trial (default: all cores, 1 with workers>1)")
     ap.add_argument("--quick", action="store_true",
                     help="smoke run: 1 trial per method, Y = 100 steps")
-    ap.add_argument("--out", type=output_dir, required=True,
-                    help="output folder; finished trials are kept under OUT/trials and a "
-                         "rerun resumes")
+    ap.add_argument("--out", type=output_dir, default=None,
+                    help="output folder (default results/<script>_<task>); finished trials "
+                         "are kept under OUT/trials and a rerun resumes")
     ap.add_argument("--fresh", action="store_true",
                     help="recompute every trial (old trial files go to OUT/trials/outdated/)")
     add_reuse_argument(ap)
@@ -248,8 +248,7 @@ def parse_args(argv=None, ap: argparse.ArgumentParser | None = None,
             settings_of(args, row, args.feedback == "on")
     except (ValueError, TypeError) as e:
         ap.error(str(e))
-    if record_problem(args.record, args.out):
-        ap.error(record_problem(args.record, args.out))
+    check_outputs(ap, args, f"{Path(ap.prog).stem}_{args.task}")
     return args
 
 

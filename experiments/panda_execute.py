@@ -37,13 +37,13 @@ from cli_args import (
     EPILOG,
     ArgumentParser,
     blowup_captures,
+    check_outputs,
     choices_type,
     guarded,
     nonneg_int,
     output_dir,
     output_file,
     positive_int,
-    record_problem,
     write_summary,
 )
 
@@ -67,8 +67,9 @@ def parser() -> argparse.ArgumentParser:
                     help="cloth particles per side (default: the goal's preset)")
     ap.add_argument("--quick", action="store_true",
                     help="smoke run: one seed, 8 x 8 cloth, 2 CEM iterations")
-    ap.add_argument("--out", type=output_dir, required=True,
-                    help="output folder; finished trials are kept under OUT/trials")
+    ap.add_argument("--out", type=output_dir, default=None,
+                    help="output folder (default results/panda_execute); finished trials are "
+                         "kept under OUT/trials")
     ap.add_argument("--fresh", action="store_true", help="recompute every trial")
     ap.add_argument("--record", type=output_file, default=None, metavar="PATH",
                     help="also write the summary to PATH (docs/results/...)")
@@ -177,13 +178,18 @@ def render_strip(path, arm, states) -> None:
     iio.imwrite(path, np.concatenate(list(frames), axis=1))
 
 
+def parse_args(argv=None) -> argparse.Namespace:
+    """Parsed flags; exit 2 with one line on a bad one."""
+    ap = parser()
+    args = ap.parse_args(argv)
+    check_outputs(ap, args, "panda_execute")
+    return args
+
+
 @guarded("panda_execute.py")
 def main(argv=None) -> int:
     logging.basicConfig(level=logging.WARNING)
-    ap = parser()
-    args = ap.parse_args(argv)
-    if record_problem(args.record, args.out):
-        ap.error(record_problem(args.record, args.out))
+    args = parse_args(argv)
     seeds = range(args.seed, args.seed + (1 if args.quick else args.seeds))
     trials = []
     for goal in args.goals:

@@ -28,15 +28,14 @@ from cli_args import (
     EPILOG,
     ArgumentParser,
     blowup_captures,
+    check_outputs,
     choices_type,
-    folder_problem,
     guarded,
     nonneg_int,
     output_dir,
     output_file,
     positive_float,
     positive_int,
-    record_problem,
     write_summary,
 )
 from pick_sweep import BUDGET_FLAGS, SCHEMA
@@ -57,6 +56,7 @@ from planners.pick_place import (
     PickPlaceSettings,
     capture_label,
     make_problem,
+    seconds_per_action,
     summarize,
     trial_key,
 )
@@ -67,12 +67,6 @@ COLOURS = {"simple": "tab:blue", "original": "tab:red", "random": "tab:green",
 #: seeds per method of a command that names neither --seeds nor --preset: a first answer in
 #: minutes (the protocols' seeds, ``PROTOCOL_SEEDS``, are a flag away)
 FIRST_SEEDS = 1
-#: the calibration step times a batched rollout of this share of a CEM population (at least
-#: ``CALIBRATION_MIN_PLANS`` random plans of the settings' horizon)
-CALIBRATION_SHARE = 0.25
-CALIBRATION_MIN_PLANS = 4
-#: times the calibration rollout runs (the fastest counts)
-CALIBRATION_REPEATS = 2
 
 
 def parser(task: str, doc: str, help_: dict) -> argparse.ArgumentParser:
@@ -170,13 +164,7 @@ def parse(ap: argparse.ArgumentParser, task: str, argv) -> tuple[argparse.Namesp
         ap.error(str(e))
     if (too_big := budget_problem(s)) is not None:   # what the sizes need, before any is made
         ap.error(f"argument {BUDGET_FLAGS[too_big.field]}: {too_big}")
-    if args.out is None:
-        args.out = Path("results") / f"{task}_{args.goal}"
-        problem = folder_problem(args.out)
-        if problem:
-            ap.error(f"argument --out: (default) {problem}")
-    if record_problem(args.record, args.out):
-        ap.error(record_problem(args.record, args.out))
+    check_outputs(ap, args, f"{task}_{args.goal}")
     return args, s
 
 
@@ -248,34 +236,6 @@ def _experiment(task: str, script: str, args, settings: PickPlaceSettings, argv)
     for key, err in failed.items():
         print(f"FAILED {key}: {err}", file=sys.stderr)
     return 1 if failed else 0
-
-
-def seconds_per_action(problem, settings: PickPlaceSettings) -> tuple[float, int]:
-    """The calibration step: wall seconds per simulated pick-and-place action on this machine
-    now, timed on a batched rollout of random plans (``CALIBRATION_SHARE`` of the population,
-    at least ``CALIBRATION_MIN_PLANS``; the settings' horizon, threads and planning physics)
-    from the problem's start, the fastest of ``CALIBRATION_REPEATS``; and the plans timed."""
-    from dopt.rollout import RolloutConfig, RolloutService
-    from dopt.tasks.pick.scene import PickPlaceTask
-
-    scene = problem.planning_scene or problem.scene
-    P, H = settings.cem.population, settings.cem.horizon
-    plans = max(CALIBRATION_MIN_PLANS, int(P * CALIBRATION_SHARE))
-    rng = np.random.default_rng(0)
-    keys = problem.stages[0].keys
-    particles = keys[rng.integers(0, len(keys), (plans, H))]
-    displacements = rng.uniform(-0.5, 0.5, (plans, H, 3)) * scene.picker.bound
-    service = RolloutService(scene.scene, RolloutConfig(threads=settings.threads))
-    try:
-        task = PickPlaceTask(scene, problem.final_goal, problem.start_state, service)
-        seconds = []
-        for _ in range(CALIBRATION_REPEATS):          # the fastest: a first call's set-up out
-            t0 = time.perf_counter()
-            task.rollout(particles, displacements)
-            seconds.append(time.perf_counter() - t0)
-        return min(seconds) / (plans * H), plans
-    finally:
-        service.close()
 
 
 def estimate_line(problem, settings: PickPlaceSettings, trials: list[Trial], iterations: int,

@@ -18,5 +18,6 @@ loop and summaries. Modules:
                       progress (standard library only)
     pick_budget.py    the sizes a pick-and-place setting implies, checked before allocating
     view.py           dopt-view's sources of pick-and-place and MPC trial files
+    _checks.py        input checks the planners share (particle indices, a picker bound)
     bench/            python -m planners.bench: CEM, iLQR, the model clock, physics sweeps
 """

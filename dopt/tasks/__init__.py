@@ -33,6 +33,10 @@ fields; this package knows no planner. The wings never import each other nor thi
 Franka Panda both use (the push tasks' arm, the pick wing's executor) is the neutral
 ``dopt.tasks.panda`` (tests/test_layers.py checks the rooms). Shape letters (see ``dopt``): ns
 the size of one ``mjSTATE_INTEGRATION`` state, nv the number of DoFs (``model.nv``).
+
+Modules: this front (the registries ``PUSH_TASKS``, ``AUTHORS_PUSH_TASKS``, ``PICK_SCENES``);
+``push/`` and ``pick/`` (the wings, each package's docstring lists its modules); ``panda.py``
+and ``assets/`` (the arm).
 """
 
 from __future__ import annotations

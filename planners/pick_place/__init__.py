@@ -33,6 +33,8 @@ Modules, one job each (every name is re-exported here):
     run.py       run_problem (with checkpoints and blow-up captures: capture_label), solve,
                  run_trial, PickPlaceResult
     summary.py   summarize, last_improvement
+    calibration.py  seconds_per_action: what one simulated action costs on this machine now
+                 (a command line's estimate of a run's time)
     scaling.py   the gain against the particle count: scaling_trials (Fig. 7's trials at
                  several cloth sizes), scaling_summary (intervals, the trend test on log N)
     random_reach.py  why CEM(Random) lands where it does: each trial's candidates re-drawn
@@ -41,6 +43,7 @@ Modules, one job each (every name is re-exported here):
 Shapes: N particles, K key particles, H actions per plan, ns state row.
 """
 
+from planners.pick_place.calibration import seconds_per_action
 from planners.pick_place.planners import (
     CEM_CANDIDATES,
     LABELS,
@@ -102,5 +105,5 @@ __all__ = [
     "ScriptedPlanner", "Stage", "StagePlan", "TrialProgress", "capture_label", "cloth_sequence",
     "last_improvement", "make_planner", "make_problem", "metric_names", "paper_preset",
     "pick_task", "quick_preset", "register_goal", "register_task", "rope_stage", "run_problem",
-    "run_trial", "solve", "summarize", "trial_key",
+    "run_trial", "seconds_per_action", "solve", "summarize", "trial_key",
 ]

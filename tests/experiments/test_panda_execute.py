@@ -29,9 +29,9 @@ def test_quick_run_writes_both_goals_and_resumes(tmp_path):
     assert {p.name: p.stat().st_mtime_ns for p in (out / "trials").glob("*.json")} == stamp
 
 
-@pytest.mark.parametrize("argv", [["--goals", "reflective"], ["--seeds", "0"], []])
+@pytest.mark.parametrize("argv", [["--goals", "reflective"], ["--seeds", "0"],
+                                  ["--seed", "-1"]])
 def test_bad_flags_exit_2(tmp_path, argv, capsys):
-    extra = [] if not argv else ["--out", str(tmp_path / "o")]
     with pytest.raises(SystemExit) as e:
-        panda_execute.main(argv + extra)
+        panda_execute.main(argv + ["--out", str(tmp_path / "o")])
     assert e.value.code == 2
