@@ -5,7 +5,6 @@ the paper's triangle counts (4 and 6) and its key counts in every triangulation 
 with the keys where the authors' are; their straight rope keeps only its two ends. Skipped when
 the folder is absent (a user's clone has no ``../shared``)."""
 
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -14,9 +13,9 @@ from deformables.authors import AUTHORS_CLOTH, keys_agree, load_authors_cloth
 from deformables.cloth import cloth_key_particles
 from deformables.goals import CLOTH_REFERENCE_KEYS, TRIANGULATIONS, grid_faces
 from deformables.rope import rope_key_particles
+from tests.external import AC_SOFTAGENT
 
-EXTERNAL = Path(__file__).resolve().parents[2] / ".." / "shared" / "external" / "ac_softagent"
-needs_files = pytest.mark.skipif(not EXTERNAL.is_dir(), reason=(
+needs_files = pytest.mark.skipif(not AC_SOFTAGENT.is_dir(), reason=(
     "the authors' files (../shared/external/ac_softagent) are not beside the project"))
 
 
@@ -24,7 +23,7 @@ needs_files = pytest.mark.skipif(not EXTERNAL.is_dir(), reason=(
 @pytest.mark.parametrize("triangulation", TRIANGULATIONS)
 @pytest.mark.parametrize("task", sorted(AUTHORS_CLOTH))
 def test_the_authors_cloth_goals_reduce_to_the_papers_counts(task, triangulation):
-    goal = load_authors_cloth(EXTERNAL, task)                 # float32, as given
+    goal = load_authors_cloth(AC_SOFTAGENT, task)                 # float32, as given
     faces = grid_faces(goal.n, triangulation, rng=np.random.default_rng(0))
     kp = cloth_key_particles(goal.goal, faces, rest_positions=goal.rest)
     assert kp.reached_threshold
@@ -50,14 +49,14 @@ def test_a_bad_authors_folder_is_named(tmp_path):
 
 @needs_files
 def test_the_authors_straight_rope_keeps_its_two_ends():
-    rope = np.load(EXTERNAL / "rope" / "rope_folding_particles.npy")
+    rope = np.load(AC_SOFTAGENT / "rope" / "rope_folding_particles.npy")
     kp = rope_key_particles(rope)
     assert kp.indices.tolist() == [0, len(rope) - 1]
 
 
 @needs_files
 def test_the_authors_crumpled_rope_reduces_below_its_threshold_with_both_ends():
-    rope = np.load(EXTERNAL / "rope" / "rope_flatten_particles.npy")
+    rope = np.load(AC_SOFTAGENT / "rope" / "rope_flatten_particles.npy")
     kp = rope_key_particles(rope)
     assert kp.reached_threshold and kp.error <= kp.threshold
     assert {0, len(rope) - 1} <= set(kp.indices.tolist()) and kp.n_keys < len(rope)

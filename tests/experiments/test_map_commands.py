@@ -11,9 +11,10 @@ from pathlib import Path
 import pytest
 import report_map
 
-EXTERNAL = Path(__file__).resolve().parents[2].parent / "shared" / "external"
-#: the map's placeholder for the authors' data, per script: the folder it stands for
-DIRS = {"--layouts": EXTERNAL / "ilqr_svr" / "push_mcl_layouts"}
+from tests.external import LAYOUTS
+
+#: the map's placeholder for the authors' data, per flag: the folder it stands for
+DIRS = {"--layouts": LAYOUTS}
 #: where a script's flags are checked last (the module whose ``check_outputs`` it calls)
 CHECKED_IN = {"rho_sweep": "mpc", "svr_explain": "mpc", "rope": "pick_place_cli",
               "cloth_fold": "pick_place_cli"}

@@ -21,9 +21,8 @@ from dopt.tasks.panda import TABLE_NAME
 from dopt.tasks.push import authors
 from dopt.tasks.push.clutter import DISTRACTORS, GOAL_CYLINDER
 from dopt.tasks.push.soft import SoftMaterial, add_soft_block, block_mesh
+from tests.external import LAYOUTS
 
-EXTERNAL = Path(__file__).resolve().parents[3] / ".." / "shared" / "external"
-LAYOUTS = EXTERNAL / "ilqr_svr" / "push_mcl_layouts"
 needs_layouts = pytest.mark.skipif(
     not LAYOUTS.is_dir(), reason=f"the authors' layout files are not here ({LAYOUTS})")
 INTEGRATION = mujoco.mjtState.mjSTATE_INTEGRATION
