@@ -37,6 +37,7 @@ from pathlib import Path
 from report_base import Result
 
 from dopt.dicts import flatten
+from planners.trial_progress import RUN_ONLY_SETTINGS
 
 #: where the snapshot lies under the results folder
 SNAPSHOT = Path("presets") / "resolved.json"
@@ -116,8 +117,8 @@ def _pick_findings(what: str, settings: dict, physics: dict | None, protocol: st
     preset = ((pick.get("protocols") or {}).get(protocol) or {}).get(f"{task}/{goal}")
     departing = set(flatten(departures or {}))
     if preset is not None and not quick:
-        diff = _diff({k: v for k, v in settings.items() if k != "threads"}, preset,
-                     skip=("threads", *departing))
+        diff = _diff({k: v for k, v in settings.items() if k not in RUN_ONLY_SETTINGS},
+                     preset, skip=(*RUN_ONLY_SETTINGS, *departing))
         if diff:
             out.append(f"{what}protocol `{protocol}` now sets " + ", ".join(diff))
     physics_now = (pick.get("physics") or {}).get(task) or {}

@@ -29,7 +29,7 @@ from report_base import (
 from report_trials import TrialInfo, machines_text, out_folder, record_stamp
 
 from dopt.trialpack import PackError, stored_trials
-from planners.trial_progress import iterations_done
+from planners.trial_progress import RUN_ONLY_SETTINGS, iterations_done
 
 
 # ----------------------------------------------------------------- sweeps in progress
@@ -91,7 +91,8 @@ def checkpointed_trials(folder: Path) -> list[str]:
 
 
 def sweeps_in_progress_section(results_dir: Path, results: list[Result]) -> list[str]:
-    """Per unrecorded Fig. 7 sweep (``unrecorded_sweeps``) and per settings key in it: each
+    """Per unrecorded Fig. 7 sweep (``unrecorded_sweeps``) and per settings in it (those
+    that name a trial: ``RUN_ONLY_SETTINGS`` such as the thread count left out): each
     method's committed seeds with their final costs, and the measured cost of a trial. No
     means or claims: those wait for the recorded summary."""
     sweeps = unrecorded_sweeps(results_dir, results)
@@ -112,7 +113,8 @@ def sweeps_in_progress_section(results_dir: Path, results: list[Result]) -> list
     for name, records in sorted(sweeps.items(), key=panel_order):
         by_settings: dict[str, list[dict]] = {}
         for rec in records:
-            by_settings.setdefault(json.dumps(rec["settings"], sort_keys=True), []).append(rec)
+            named = {k: v for k, v in rec["settings"].items() if k not in RUN_ONLY_SETTINGS}
+            by_settings.setdefault(json.dumps(named, sort_keys=True), []).append(rec)
         for group in by_settings.values():
             s = group[0]["settings"]
             cem = s.get("cem") or {}

@@ -9,6 +9,10 @@ CEM's under "cem", or None), "planner" (the generators' state), "segments" and "
 
 from __future__ import annotations
 
+#: settings fields that say how a trial runs, not what it computes (the simulation threads):
+#: left out of its identity (``PickPlaceSettings.identity``, the sweep's key), so trials
+#: differing only in them are the same trial, and the report groups them together
+RUN_ONLY_SETTINGS = ("threads",)
 #: keys every pick-and-place trial result holds (``PickPlaceResult.to_dict``): what the
 #: summary, the curves, the renders and the report read; a stored result without one of them
 #: is not reused (``dopt.sweep.Schema``)

@@ -28,6 +28,7 @@ from planners.cem import CEMConfig
 from planners.pick_place.presets import PROTOCOLS, quick_preset
 from planners.pick_place.tasks import GOALS, PICK_TASKS, pick_task
 from planners.scripted import ScriptedConfig
+from planners.trial_progress import RUN_ONLY_SETTINGS
 
 #: optional settings ``PickPlaceSettings.identity`` leaves out at None: options whose unset
 #: value is what every trial ran before they existed, so those trials stay valid
@@ -130,7 +131,8 @@ class PickPlaceSettings:
         not a setting of the experiment and is left out. Empty: the protocol as it stands."""
         base = flatten(type(self).preset(self.task, self.goal, quick, protocol).to_dict())
         mine = flatten(self.to_dict())
-        return {k: v for k, v in mine.items() if k != "threads" and base.get(k) != v}
+        return {k: v for k, v in mine.items()
+                if k not in RUN_ONLY_SETTINGS and base.get(k) != v}
 
     def constraint(self) -> ActionConstraint:
         """C(a_t) of the task (``dopt.tasks.pick.constraints``): SoftGym's workspace, the
@@ -184,7 +186,7 @@ class PickPlaceSettings:
         (``resolved_physics``, under "resolved"). Plain JSON types (tuples as lists), so it
         equals itself read back from a file."""
         out = {k: v for k, v in self.to_dict().items()
-               if k != "threads" and not (k in UNSET_SETTINGS and v is None)}
+               if k not in RUN_ONLY_SETTINGS and not (k in UNSET_SETTINGS and v is None)}
         out["resolved"] = self.resolved_physics()
         return json.loads(json.dumps(out))
 

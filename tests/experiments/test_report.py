@@ -176,6 +176,23 @@ def test_a_sweep_without_its_summary_is_shown_seed_by_seed_until_recorded(site):
     assert "sweeps in progress" not in site["md"].read_text()
 
 
+def test_trials_differing_only_in_their_thread_count_share_one_table(site):
+    """The thread count says how a trial ran, not what it computed (a sweep with one worker
+    runs inline on every core, with two each trial on one thread): such trials are one
+    group, while a real setting (the cloth's size) still splits them."""
+    trials = site["results"] / "runs" / "fig7-cloth-side" / "trials"
+    for method, seed, threads, n in (("simple", 0, 1, 20), ("simple", 1, 0, 20),
+                                     ("original", 2, 1, 30)):
+        record = trial_record(method, seed, 0.005, 2000.0)
+        record["params"]["settings"].update(threads=threads, n=n)
+        write(trials, f"{method}-seed{seed}-abc.json", record)
+    write(site["results"], "fig7_cloth_diagonal.json", fig7())
+    assert run(site) == 0
+    part = site["md"].read_text().split("## Fig. 7 sweeps in progress")[1]
+    assert part.count("### `fig7-cloth-side`") == 2          # 20 x 20 and 30 x 30
+    assert "| CEM(Simple) | 0, 1 | 5.0, 5.0 |" in part
+
+
 def test_a_sweep_lists_its_checkpointed_trials(site, capsys):
     trials = site["results"] / "runs" / "fig7-cloth-side" / "trials"
     write(trials, "simple-seed0-abc.json", trial_record("simple", 0, 0.0069, 2100.0))
