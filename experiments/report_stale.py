@@ -117,8 +117,7 @@ def _pick_findings(what: str, settings: dict, physics: dict | None, protocol: st
     preset = ((pick.get("protocols") or {}).get(protocol) or {}).get(f"{task}/{goal}")
     departing = set(flatten(departures or {}))
     if preset is not None and not quick:
-        diff = _diff({k: v for k, v in settings.items() if k not in RUN_ONLY_SETTINGS},
-                     preset, skip=(*RUN_ONLY_SETTINGS, *departing))
+        diff = _diff(settings, preset, skip=(*RUN_ONLY_SETTINGS, *departing))
         if diff:
             out.append(f"{what}protocol `{protocol}` now sets " + ", ".join(diff))
     physics_now = (pick.get("physics") or {}).get(task) or {}
