@@ -202,12 +202,17 @@ def test_a_sweep_lists_its_checkpointed_trials(site, capsys):
                 "stage": {"cem": {"iteration": 12}}, "wall_s": 3456.4, "segments": 1}
     write(trials / "checkpoints", "original-seed4-abc.json",
           {"key": "original-seed4-abc", "code": {"version": "0"}, "progress": progress})
+    # one iteration into its only stage: the count is singular
+    first = {"trial": {"method": "random", "seed": 3, "settings": {}}, "stages": [],
+             "stage": {"cem": {"iteration": 1}}, "wall_s": 177.0, "segments": 1}
+    write(trials / "checkpoints", "random-seed3-abc.json",
+          {"key": "random-seed3-abc", "code": {"version": "0"}, "progress": first})
     write(site["results"], "fig7_cloth_diagonal.json", fig7())
     assert run(site) == 0
     part = site["md"].read_text().split("## Fig. 7 sweeps in progress")[1]
     assert ("Stopped part-way, their progress committed under `trials/checkpoints/` (a rerun "
             "resumes each where it stopped): CEM(Original) seed 4: 72 CEM iterations done, "
-            "3456 s.") in part
+            "3456 s; CEM(Random) seed 3: 1 CEM iteration done, 177 s.") in part
     bad = write(trials / "checkpoints", "x.json", {"key": "x", "progress": {}})
     assert run(site) == 2
     assert str(bad) in capsys.readouterr().err
