@@ -81,9 +81,9 @@ def checkpointed_trials(folder: Path) -> list[str]:
         try:
             progress = json.loads(path.read_text())["progress"]
             trial, iterations = progress["trial"], iterations_done(progress)
-            unit = "iteration" if iterations == 1 else "iterations"
             out.append(f"{_label(trial['method'])} seed {trial['seed']}: {iterations} CEM "
-                       f"{unit} done, {num(progress['wall_s'], 0)} s")
+                       f"iteration{'s' if iterations != 1 else ''} done, "
+                       f"{num(progress['wall_s'], 0)} s")
         except (OSError, ValueError, KeyError, TypeError) as e:
             raise ReportError(f"{path}: not a checkpoint of a Fig. 7 trial "
                               f"({type(e).__name__}: {e})") from e
