@@ -33,15 +33,25 @@ from planners.trial_progress import RUN_ONLY_SETTINGS, iterations_done
 
 
 # ----------------------------------------------------------------- sweeps in progress
+def held_seeds(summary: dict, method: str, settings: dict) -> set:
+    """The seeds of ``method`` that a recorded Fig. 7 ``summary`` holds for trials with these
+    ``settings``: a sweep's (``methods.<m>.seeds``), or a scaling study's for the trial's size
+    (``per_size.<n>.methods.<m>.seeds``, ``fig7_scaling.py``); none where ``summary`` is empty."""
+    if "per_size" in summary:
+        summary = summary["per_size"].get(str(settings.get("n")), {})
+    return set(summary.get("methods", {}).get(method, {}).get("seeds") or ())
+
+
 def unrecorded_sweeps(results_dir: Path, results: list[Result]) -> dict[str, list[dict]]:
     """{folder name: its trial records} of every ``runs/fig7-*`` folder under ``results_dir``
     with committed trials (``trials/*.json`` as ``dopt.sweep`` writes them, or packed:
     ``dopt.trialpack.stored_trials``) that its recorded summary ``<folder>.json`` among
     ``results`` (``load_results(results_dir)``) does not hold: all of them while no summary
-    is recorded, else those whose method and seed the summary
-    lacks (a sweep recorded for some methods or seeds, more committed since). Folders in name
-    order, records in file-name order; a folder whose trials the summary holds all of is left
-    out."""
+    is recorded, else those whose method and seed (and a scaling study's size: ``held_seeds``)
+    the summary lacks (a sweep recorded for some methods, seeds or sizes, more committed
+    since). Folders in name order, records in file-name order; a folder whose trials the
+    summary holds all of is left out, unless trials of it stopped part-way (its
+    ``trials/checkpoints/``: then with no records)."""
     recorded = {r.path.stem: r.data for r in results}
     out = {}
     for folder in sorted(Path(results_dir).glob("runs/fig7-*")):
@@ -49,8 +59,7 @@ def unrecorded_sweeps(results_dir: Path, results: list[Result]) -> dict[str, lis
             files = stored_trials(folder / "trials")
         except PackError as e:
             raise ReportError(str(e)) from e
-        held = {m: set(row.get("seeds") or ())
-                for m, row in recorded.get(folder.name, {}).get("methods", {}).items()}
+        summary = recorded.get(folder.name, {})
         records = []
         for path in files:
             try:
@@ -65,9 +74,9 @@ def unrecorded_sweeps(results_dir: Path, results: list[Result]) -> dict[str, lis
             except (OSError, ValueError, KeyError, TypeError) as e:
                 raise ReportError(f"{path}: not a trial record of a Fig. 7 sweep "
                                   f"({type(e).__name__}: {e})") from e
-            if record["seed"] not in held.get(record["method"], ()):
+            if record["seed"] not in held_seeds(summary, record["method"], record["settings"]):
                 records.append(record)
-        if records:
+        if records or any(folder.glob("trials/checkpoints/*.json")):
             out[folder.name] = records
     return out
 
@@ -90,6 +99,27 @@ def checkpointed_trials(folder: Path) -> list[str]:
     return out
 
 
+def _group_table(group: list[dict]) -> list[str]:
+    """One settings group's table: per method its seeds, their final costs, the median
+    cost of an iteration and of a trial, and its flagged rollouts and unstable plans."""
+    rows = []
+    for m in _in_label_order(r["method"] for r in group):
+        runs = sorted((r for r in group if r["method"] == m), key=lambda r: r["seed"])
+        res = [r["result"] for r in runs]
+        flagged = [x.get("n_unstable_rollouts") for x in res]
+        rollouts = [x.get("n_rollouts") for x in res]
+        rows.append([_label(m), ", ".join(str(r["seed"]) for r in runs),
+                     ", ".join(mm(x.get("final_cost")) for x in res),
+                     num(_median([x.get("s_per_iteration") for x in res]), 1),
+                     num(_median([x.get("wall_s") for x in res]), 0),
+                     f"{sum(flagged)} / {sum(rollouts)}"
+                     if all(_finite(x) for x in flagged + rollouts) else "not judged",
+                     str(sum(bool(x.get("unstable")) for x in res))])
+    return table(["method", "seeds", "final cost per seed (mm)",
+                  "s / CEM iteration (median)", "s / trial (median)",
+                  "planning rollouts flagged", "executed plans unstable"], rows)
+
+
 def sweeps_in_progress_section(results_dir: Path, results: list[Result]) -> list[str]:
     """Per unrecorded Fig. 7 sweep (``unrecorded_sweeps``) and per settings in it (those
     that name a trial: ``RUN_ONLY_SETTINGS`` such as the thread count left out): each
@@ -101,16 +131,34 @@ def sweeps_in_progress_section(results_dir: Path, results: list[Result]) -> list
     lines = ["## Fig. 7 sweeps in progress", "",
              "Trials committed under `docs/results/runs/<sweep>/trials/` that the sweep's "
              "summary (`docs/results/<sweep>.json`) does not hold yet (not recorded, or recorded "
-             "for other methods or seeds): each seed's final cost (mean particle distance, mm) "
-             "as its trial file holds it, and what a trial cost. Means, intervals and the "
-             "paper's claims wait for the recorded summary; the command in the results table "
-             "above (with these methods in `--methods` and enough `--seeds`) resumes the sweep "
-             "where it stopped."]
+             "for other methods, seeds or sizes), and trials stopped part-way: each seed's "
+             "final cost (mean particle distance, mm) as its trial file holds it, and what a "
+             "trial cost. Means, intervals and the paper's claims wait for the recorded "
+             "summary; the command in the results table above (with these methods in "
+             "`--methods` and enough `--seeds`) resumes the sweep where it stopped."]
+    summaries = {r.path.stem for r in results}
+
+    def settings_of(name: str, records: list[dict]) -> dict:
+        """A trial's settings, or (none finished) those of its first checkpoint."""
+        if records:
+            return records[0]["settings"]
+        first = sorted((Path(results_dir) / "runs" / name).glob("trials/checkpoints/*.json"))[0]
+        try:
+            return json.loads(first.read_text())["progress"]["trial"].get("settings") or {}
+        except (OSError, ValueError, KeyError, TypeError, AttributeError) as e:
+            raise ReportError(f"{first}: not a checkpoint of a Fig. 7 trial "
+                              f"({type(e).__name__}: {e})") from e
+
     def panel_order(item) -> tuple:
-        s = item[1][0]["settings"]
+        s = settings_of(*item)
         return _panel_rank(s.get("task"), s.get("goal")), item[0]
 
     for name, records in sorted(sweeps.items(), key=panel_order):
+        if not records:
+            s = settings_of(name, records)
+            lines += ["", f"### `{name}`: Fig. 7 {_panel_of(s.get('task'), s.get('goal'))}",
+                      "", "No trial has finished yet" + (" beyond those its summary holds"
+                                                         if name in summaries else "") + "."]
         by_settings: dict[str, list[dict]] = {}
         for rec in records:
             named = {k: v for k, v in rec["settings"].items() if k not in RUN_ONLY_SETTINGS}
@@ -126,22 +174,7 @@ def sweeps_in_progress_section(results_dir: Path, results: list[Result]) -> list
                       f"CEM population {cem.get('population')}, elites {cem.get('elites')}, "
                       f"{cem.get('iterations')} iterations per stage, horizon "
                       f"{cem.get('horizon')}.", ""]
-            rows = []
-            for m in _in_label_order(r["method"] for r in group):
-                runs = sorted((r for r in group if r["method"] == m), key=lambda r: r["seed"])
-                res = [r["result"] for r in runs]
-                flagged = [x.get("n_unstable_rollouts") for x in res]
-                rollouts = [x.get("n_rollouts") for x in res]
-                rows.append([_label(m), ", ".join(str(r["seed"]) for r in runs),
-                             ", ".join(mm(x.get("final_cost")) for x in res),
-                             num(_median([x.get("s_per_iteration") for x in res]), 1),
-                             num(_median([x.get("wall_s") for x in res]), 0),
-                             f"{sum(flagged)} / {sum(rollouts)}"
-                             if all(_finite(x) for x in flagged + rollouts) else "not judged",
-                             str(sum(bool(x.get("unstable")) for x in res))])
-            lines += table(["method", "seeds", "final cost per seed (mm)",
-                            "s / CEM iteration (median)", "s / trial (median)",
-                            "planning rollouts flagged", "executed plans unstable"], rows)
+            lines += _group_table(group)
             wall = sum(x for r in group if _finite(x := r["result"].get("wall_s")))
             n = len(group)
             lines += ["", f"{n} trial{'s' if n != 1 else ''}, {num(wall, 0)} s of trials "

@@ -218,6 +218,51 @@ def test_a_sweep_lists_its_checkpointed_trials(site, capsys):
     assert str(bad) in capsys.readouterr().err
 
 
+def test_a_scaling_summary_holds_its_trials_size_by_size(site):
+    """A scaling study's summary (``scaling_summary``) holds each trial by size, method and
+    seed: its folder lists only the trials of a size it lacks, and once those are held, a
+    trial stopped part-way still lists the folder with its checkpoint."""
+    from planners.pick_place.scaling import scaling_summary
+
+    trials = site["results"] / "runs" / "fig7-scaling-side" / "trials"
+    records = []
+    for n in (10, 20):
+        for seed in range(2):
+            for method in ("simple", "original"):
+                record = trial_record(method, seed, 0.01 + 0.001 * n, 1000.0)
+                record["params"]["settings"]["n"] = n
+                write(trials, f"{method}-seed{seed}-n{n}.json", record)
+                records.append(record)
+    write(site["results"], "fig7-scaling-side.json",
+          {"experiment": "fig7_scaling", "task": "cloth", "goal": "side",
+           "protocol": "paper", "physics_preset": "default", **scaling_summary(records),
+           "failed": {}, "provenance": provenance("python experiments/fig7_scaling.py")})
+    assert run(site) == 0
+    assert "sweeps in progress" not in site["md"].read_text()
+    # a seed of a size the summary lacks (30) is listed; the same seed at held sizes is not
+    extra = trial_record("simple", 0, 0.0042, 7000.0)
+    extra["params"]["settings"]["n"] = 30
+    path = write(trials, "simple-seed0-n30.json", extra)
+    assert run(site) == 0
+    part = site["md"].read_text().split("## Fig. 7 sweeps in progress")[1]
+    assert part.count("### `fig7-scaling-side`") == 1 and "30 x 30 particles" in part
+    assert "| CEM(Simple) | 0 | 4.2 |" in part and "1 trial, 7000 s of trials" in part
+    # nothing unheld finished, one trial stopped part-way: the folder and its checkpoint
+    path.unlink()
+    progress = {"trial": {"method": "original", "seed": 0,
+                          "settings": {"task": "cloth", "goal": "side", "n": 30}},
+                "stages": [], "stage": {"cem": {"iteration": 5}}, "wall_s": 1100.0,
+                "segments": 1}
+    write(trials / "checkpoints", "original-seed0-n30.json",
+          {"key": "original-seed0-n30", "code": {"version": "0"}, "progress": progress})
+    assert run(site) == 0
+    part = site["md"].read_text().split("## Fig. 7 sweeps in progress")[1]
+    assert "### `fig7-scaling-side`: Fig. 7 (d) cloth side fold" in part
+    assert "No trial has finished yet beyond those its summary holds." in part
+    assert "CEM(Original) seed 0: 5 CEM iterations done, 1100 s." in part
+    assert "| CEM(" not in part
+
+
 def test_a_malformed_trial_file_of_a_sweep_in_progress_is_named(site, capsys):
     write(site["results"], "fig7_cloth_diagonal.json", fig7())
     bad = write(site["results"] / "runs" / "fig7-cloth-side" / "trials", "x.json",
