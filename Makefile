@@ -1,6 +1,7 @@
 # One virtual environment for everything; created and filled on first use.
 #   make demo   -> the main job: diagonal cloth fold (small by default)
-#   make test   -> ruff, then the test suite on every core (pytest-xdist; tests are independent)
+#   make test   -> ruff, then the test suite on every core (pytest-xdist; tests are independent),
+#                  naming its 15 slowest tests (CI's whole run must stay under 20 minutes)
 PYTHON ?= python3
 VENV   ?= .venv
 PY     := $(VENV)/bin/python
@@ -31,7 +32,7 @@ demo: $(STAMP)
 
 test: $(STAMP)
 	$(VENV)/bin/ruff check .
-	MUJOCO_GL=egl OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 $(PY) -m pytest -q -n auto tests
+	MUJOCO_GL=egl OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 $(PY) -m pytest -q -n auto --durations=15 tests
 
 clean:
 	rm -rf $(VENV) results
