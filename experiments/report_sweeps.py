@@ -81,22 +81,39 @@ def unrecorded_sweeps(results_dir: Path, results: list[Result]) -> dict[str, lis
     return out
 
 
-def checkpointed_trials(folder: Path) -> list[str]:
-    """"<method label> seed <s>: <n> CEM iterations done, <t> s" per checkpoint under
+def _checkpoints(folder: Path) -> list[tuple[dict, int, float]]:
+    """(trial, CEM iterations done, seconds so far) per checkpoint under
     ``folder/trials/checkpoints/`` (``dopt.sweep.Checkpoint``: a trial stopped part-way that
-    a rerun resumes), in file-name order."""
+    a rerun resumes), in file-name order; ``ReportError`` naming the file for one that is not
+    a Fig. 7 trial's."""
     out = []
     for path in sorted(Path(folder).glob("trials/checkpoints/*.json")):
         try:
             progress = json.loads(path.read_text())["progress"]
-            trial, iterations = progress["trial"], iterations_done(progress)
-            out.append(f"{_label(trial['method'])} seed {trial['seed']}: {iterations} CEM "
-                       f"iteration{'s' if iterations != 1 else ''} done, "
-                       f"{num(progress['wall_s'], 0)} s")
+            trial = progress["trial"]
+            if not isinstance(trial, dict) or not isinstance(trial.get("settings") or {}, dict):
+                raise TypeError("its trial or the trial's settings is not a mapping")
+            missing = [k for k in ("method", "seed") if k not in trial]
+            if missing:
+                raise KeyError(f"its trial has no {' or '.join(missing)}")
+            out.append((trial, iterations_done(progress), progress["wall_s"]))
         except (OSError, ValueError, KeyError, TypeError) as e:
             raise ReportError(f"{path}: not a checkpoint of a Fig. 7 trial "
                               f"({type(e).__name__}: {e})") from e
     return out
+
+
+def checkpointed_trials(folder: Path) -> list[str]:
+    """"<method label> seed <s>: <n> CEM iterations done, <t> s" per checkpoint under
+    ``folder/trials/checkpoints/`` (``_checkpoints``), in file-name order."""
+    return [f"{_label(trial['method'])} seed {trial['seed']}: {n} CEM "
+            f"iteration{'s' if n != 1 else ''} done, {num(wall, 0)} s"
+            for trial, n, wall in _checkpoints(folder)]
+
+
+def _sweep_heading(name: str, settings: dict) -> list[str]:
+    """The blank line and "### `<sweep>`: Fig. 7 <panel>" heading of one sweep's block."""
+    return ["", f"### `{name}`: Fig. 7 {_panel_of(settings.get('task'), settings.get('goal'))}"]
 
 
 def _group_table(group: list[dict]) -> list[str]:
@@ -142,12 +159,8 @@ def sweeps_in_progress_section(results_dir: Path, results: list[Result]) -> list
         """A trial's settings, or (none finished) those of its first checkpoint."""
         if records:
             return records[0]["settings"]
-        first = sorted((Path(results_dir) / "runs" / name).glob("trials/checkpoints/*.json"))[0]
-        try:
-            return json.loads(first.read_text())["progress"]["trial"].get("settings") or {}
-        except (OSError, ValueError, KeyError, TypeError, AttributeError) as e:
-            raise ReportError(f"{first}: not a checkpoint of a Fig. 7 trial "
-                              f"({type(e).__name__}: {e})") from e
+        trial, _, _ = _checkpoints(Path(results_dir) / "runs" / name)[0]
+        return trial.get("settings") or {}
 
     def panel_order(item) -> tuple:
         s = settings_of(*item)
@@ -155,10 +168,9 @@ def sweeps_in_progress_section(results_dir: Path, results: list[Result]) -> list
 
     for name, records in sorted(sweeps.items(), key=panel_order):
         if not records:
-            s = settings_of(name, records)
-            lines += ["", f"### `{name}`: Fig. 7 {_panel_of(s.get('task'), s.get('goal'))}",
-                      "", "No trial has finished yet" + (" beyond those its summary holds"
-                                                         if name in summaries else "") + "."]
+            lines += _sweep_heading(name, settings_of(name, records)) + [
+                "", "No trial has finished yet" + (" beyond those its summary holds"
+                                                   if name in summaries else "") + "."]
         by_settings: dict[str, list[dict]] = {}
         for rec in records:
             named = {k: v for k, v in rec["settings"].items() if k not in RUN_ONLY_SETTINGS}
@@ -168,12 +180,12 @@ def sweeps_in_progress_section(results_dir: Path, results: list[Result]) -> list
             cem = s.get("cem") or {}
             size = (f"{s.get('n')} x {s.get('n')}" if s.get("task") == "cloth"
                     else str(s.get("n")))
-            lines += ["", f"### `{name}`: Fig. 7 {_panel_of(s.get('task'), s.get('goal'))}", "",
-                      f"{size} particles, self-collision "
-                      f"{'on' if s.get('selfcollide') else 'off'}, physics {s.get('physics')}; "
-                      f"CEM population {cem.get('population')}, elites {cem.get('elites')}, "
-                      f"{cem.get('iterations')} iterations per stage, horizon "
-                      f"{cem.get('horizon')}.", ""]
+            lines += _sweep_heading(name, s) + [
+                "", f"{size} particles, self-collision "
+                    f"{'on' if s.get('selfcollide') else 'off'}, physics {s.get('physics')}; "
+                    f"CEM population {cem.get('population')}, elites {cem.get('elites')}, "
+                    f"{cem.get('iterations')} iterations per stage, horizon "
+                    f"{cem.get('horizon')}.", ""]
             lines += _group_table(group)
             wall = sum(x for r in group if _finite(x := r["result"].get("wall_s")))
             n = len(group)

@@ -218,7 +218,7 @@ def test_a_sweep_lists_its_checkpointed_trials(site, capsys):
     assert str(bad) in capsys.readouterr().err
 
 
-def test_a_scaling_summary_holds_its_trials_size_by_size(site):
+def test_a_scaling_summary_holds_its_trials_size_by_size(site, capsys):
     """A scaling study's summary (``scaling_summary``) holds each trial by size, method and
     seed: its folder lists only the trials of a size it lacks, and once those are held, a
     trial stopped part-way still lists the folder with its checkpoint."""
@@ -261,6 +261,12 @@ def test_a_scaling_summary_holds_its_trials_size_by_size(site):
     assert "No trial has finished yet beyond those its summary holds." in part
     assert "CEM(Original) seed 0: 5 CEM iterations done, 1100 s." in part
     assert "| CEM(" not in part
+    # a checkpoint that does not name its trial's seed is named, not read as settings
+    bad = write(trials / "checkpoints", "a-bad.json",
+                {"key": "a", "code": {"version": "0"},
+                 "progress": {**progress, "trial": {"method": "simple", "settings": {}}}})
+    assert run(site) == 2
+    assert str(bad) in capsys.readouterr().err
 
 
 def test_a_malformed_trial_file_of_a_sweep_in_progress_is_named(site, capsys):
