@@ -103,12 +103,12 @@ def _checkpoints(folder: Path) -> list[tuple[dict, int, float]]:
     return out
 
 
-def checkpointed_trials(folder: Path) -> list[str]:
-    """"<method label> seed <s>: <n> CEM iterations done, <t> s" per checkpoint under
-    ``folder/trials/checkpoints/`` (``_checkpoints``), in file-name order."""
+def checkpointed_trials(checkpoints: list[tuple[dict, int, float]]) -> list[str]:
+    """"<method label> seed <s>: <n> CEM iterations done, <t> s" per checkpoint of
+    ``_checkpoints``, in its order."""
     return [f"{_label(trial['method'])} seed {trial['seed']}: {n} CEM "
             f"iteration{'s' if n != 1 else ''} done, {num(wall, 0)} s"
-            for trial, n, wall in _checkpoints(folder)]
+            for trial, n, wall in checkpoints]
 
 
 def _sweep_heading(name: str, settings: dict) -> list[str]:
@@ -154,12 +154,13 @@ def sweeps_in_progress_section(results_dir: Path, results: list[Result]) -> list
              "summary; the command in the results table above (with these methods in "
              "`--methods` and enough `--seeds`) resumes the sweep where it stopped."]
     summaries = {r.path.stem for r in results}
+    checkpoints = {name: _checkpoints(Path(results_dir) / "runs" / name) for name in sweeps}
 
     def settings_of(name: str, records: list[dict]) -> dict:
         """A trial's settings, or (none finished) those of its first checkpoint."""
         if records:
             return records[0]["settings"]
-        trial, _, _ = _checkpoints(Path(results_dir) / "runs" / name)[0]
+        trial, _, _ = checkpoints[name][0]
         return trial.get("settings") or {}
 
     def panel_order(item) -> tuple:
@@ -191,7 +192,7 @@ def sweeps_in_progress_section(results_dir: Path, results: list[Result]) -> list
             n = len(group)
             lines += ["", f"{n} trial{'s' if n != 1 else ''}, {num(wall, 0)} s of trials "
                           f"({num(wall / 3600, 1)} h of one core)."]
-        stopped = checkpointed_trials(Path(results_dir) / "runs" / name)
+        stopped = checkpointed_trials(checkpoints[name])
         if stopped:
             lines += ["", "Stopped part-way, their progress committed under "
                           "`trials/checkpoints/` (a rerun resumes each where it stopped): "
