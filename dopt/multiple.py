@@ -10,6 +10,10 @@ procedure rejects everything Bonferroni's (p <= alpha / m) does, and possibly mo
 The adjusted p-value of H_(i) is max over j <= i of min(1, (m - j + 1) p_(j)): H_(i) is
 rejected at level alpha exactly when its adjusted p-value is <= alpha, so one adjustment
 serves every alpha. Pure Python (no numpy), like ``dopt.stats``.
+
+Slope tests (does an effect grow with a size?) get a three-way verdict, "grows" / "shrinks" /
+``NO_TREND``, from the slope's sign and its Holm-adjusted p (``slope_verdict``); a claim that
+spans several groups of tests (folds) judges all of them as one family (``holm_slopes``).
 """
 
 from __future__ import annotations
@@ -17,7 +21,12 @@ from __future__ import annotations
 import math
 from numbers import Real
 
-__all__ = ["holm", "holm_reject"]
+__all__ = ["NO_TREND", "TREND_LEVEL", "holm", "holm_reject", "holm_slopes", "slope_verdict"]
+
+#: the family-wise confidence level of a slope test's verdict
+TREND_LEVEL = 0.95
+#: the verdict of a slope test whose adjusted p-value is above 1 - ``TREND_LEVEL``
+NO_TREND = "no trend detected at 95 %"
 
 
 def _pvalues(pvalues) -> list[float]:
@@ -83,3 +92,28 @@ def holm_reject(pvalues, alpha: float = 0.05) -> list[bool]:
             break
         reject[i] = True
     return reject
+
+
+def slope_verdict(slope: float | None, p_adjusted: float | None) -> str:
+    """"grows" / "shrinks" (the slope's sign) where the adjusted p is at most 1 - TREND_LEVEL,
+    else ``NO_TREND`` (also where either is None: too few points to fit)."""
+    if slope is None or p_adjusted is None or p_adjusted > 1 - TREND_LEVEL:
+        return NO_TREND
+    return "grows" if slope > 0 else "shrinks"
+
+
+def holm_slopes(groups: dict) -> dict:
+    """Several groups of slope tests judged as one family: Holm over every p-value together, so
+    a claim that spans the groups keeps its family-wise level.
+
+    ``groups``: {group: {test: {"slope": float | None, "p": float | None, ...}}} (a scaling
+    summary's "trend" per fold). Returns {(group, test): {"p_holm": adjusted over the whole
+    family (None where the test had no p), "verdict": ``slope_verdict`` at that p, "m": the
+    family's size}}."""
+    tested = [(g, k) for g, tests in groups.items() for k, t in tests.items()
+              if t.get("p") is not None]
+    adjusted = dict(zip(tested, holm([groups[g][k]["p"] for g, k in tested]), strict=True))
+    return {(g, k): {"p_holm": adjusted.get((g, k)),
+                     "verdict": slope_verdict(t.get("slope"), adjusted.get((g, k))),
+                     "m": len(tested)}
+            for g, tests in groups.items() for k, t in tests.items()}

@@ -27,6 +27,8 @@ from report_svr import (
     verdict_counts,
 )
 
+from dopt.multiple import holm_slopes
+
 #: the longest cell the map may have (characters, Markdown included)
 MAX_CELL = 160
 #: the RESULTS.md section of the headline of every result file (report.headlines_section)
@@ -130,29 +132,36 @@ def cloth_line(results: list[Result]) -> str | None:
 def scaling_line(results: list[Result]) -> str | None:
     """Sec. V's claim per recorded scaling fold: whether the gap CEM(Original) - CEM(Simple)
     grows with the particle count (the trend test's verdict, "no trend" where it finds none,
-    its slope per unit of log N with the 95 % interval), over which sizes and seeds (said
-    once where every fold has the same)."""
+    its slope per unit of log N with the 95 % interval), over which particle counts N and
+    seeds (said once where every fold has the same). With several folds the verdicts are
+    Holm's over all their trend tests together (``holm_slopes``); the line says so."""
     files = {r.data.get("goal"): r for r in results if r.kind == "fig7_scaling"}
-    scopes, verdicts = [], []
+    family = holm_slopes({g: r.data["trend"] for g, r in files.items()})
+    sizes, seeds, verdicts = [], [], []
     for goal, r in sorted(files.items(), key=lambda kv: str(kv[0])):
         d = r.data
-        t = d["trend"]["original_minus_simple"]
-        sizes = d["sizes"]
-        seeds = sorted({e["methods"].get(m, {}).get("n", 0) for e in d["per_size"].values()
-                        for m in ("simple", "original")})
-        seeds_text = str(seeds[0]) if len(seeds) == 1 else f"{seeds[0]}-{seeds[-1]}"
-        scopes.append(f"{sizes[0]}-{sizes[-1]} per side, {seeds_text} seeds")
+        t = {**d["trend"]["original_minus_simple"], **family[(goal, "original_minus_simple")]}
+        counts = sorted({e["methods"].get(m, {}).get("n", 0) for e in d["per_size"].values()
+                         for m in ("simple", "original")})
+        seeds.append(str(counts[0]) if len(counts) == 1 else f"{counts[0]}-{counts[-1]}")
+        sizes.append(f"N {d['n_particles'][0]}-{d['n_particles'][-1]}")
         slope = (f" ({pm(mm(t['slope']), mm(t.get('slope_ci95')))} mm)"
                  if t.get("slope") is not None else "")
         verdict = t["verdict"] if t["verdict"] in ("grows", "shrinks") else "no trend"
         verdicts.append((goal, f"{verdict}{slope}"))
     if not verdicts:
         return None
-    head = "Original - Simple gap per log N"
-    if len(set(scopes)) == 1:
-        return f"{head} ({scopes[0]}): " + ", ".join(f"{g} {v}" for g, v in verdicts)
-    return f"{head}: " + ", ".join(f"{g} ({s}) {v}"
-                                   for (g, v), s in zip(verdicts, scopes, strict=True))
+    same_sizes, same_seeds = len(set(sizes)) == 1, len(set(seeds)) == 1
+    shared = [x for x, same in ((sizes[0], same_sizes), (f"{seeds[0]} seeds", same_seeds))
+              if same]
+    parts = []
+    for (goal, v), z, n in zip(verdicts, sizes, seeds, strict=True):
+        own = [x for x, same in ((z, same_sizes), (f"{n} seeds", same_seeds)) if not same]
+        parts.append(f"{goal} ({', '.join(own)}) {v}" if own else f"{goal} {v}")
+    m = next(iter(family.values()))["m"]
+    tail = f"; Holm over {m} tests" if len(files) > 1 and m else ""
+    return ("Original - Simple gap per log N" + (f" ({', '.join(shared)})" if shared else "")
+            + ": " + ", ".join(parts) + tail)
 
 
 def panda_line(results: list[Result]) -> str | None:

@@ -11,7 +11,8 @@ The trend test: the paired difference of the final cost, method minus CEM(Simple
 common to both at each size, regressed on log N (N = n * n particles) by ordinary least squares
 (``scipy.stats.linregress``; the slope's 95 % interval from the t quantile with n_points - 2
 degrees of freedom); the p-values of Original - Simple and Random - Simple are Holm-adjusted
-together (``dopt.multiple.holm``). A positive slope: the gain of CEM(Simple) grows with the
+together (``dopt.multiple.holm``); a claim over several folds judges all their tests as one
+family (``dopt.multiple.holm_slopes``). A positive slope: the gain of CEM(Simple) grows with the
 particle count. Means and differences are over the stable trials only (as ``summarize``).
 """
 
@@ -23,7 +24,7 @@ from dataclasses import replace
 import numpy as np
 from scipy import stats
 
-from dopt.multiple import holm
+from dopt.multiple import NO_TREND, TREND_LEVEL, holm, slope_verdict
 from dopt.stats import mean_ci
 from dopt.sweep import Trial
 from planners.pick_place.settings import PickPlaceSettings, trial_key
@@ -31,9 +32,7 @@ from planners.pick_place.settings import PickPlaceSettings, trial_key
 #: the methods compared to CEM(Simple) by the trend test
 COMPARED = ("original", "random")
 #: the family-wise level of the trend test's verdict (and the intervals' level)
-LEVEL = 0.95
-#: the verdict when the Holm-adjusted slope's p-value is above 1 - LEVEL
-NO_TREND = "no trend detected at 95 %"
+LEVEL = TREND_LEVEL
 
 
 def scaling_settings(goal: str, n: int, threads: int = 0) -> PickPlaceSettings:
@@ -100,14 +99,6 @@ def trend(sizes: Sequence[int], diffs: Sequence[float]) -> dict:
             "intercept": float(fit.intercept), "p": p}
 
 
-def verdict(slope: float | None, p_holm: float | None) -> str:
-    """"grows" / "shrinks" (the slope's sign) where the Holm-adjusted p is at most
-    1 - LEVEL, else ``NO_TREND``."""
-    if slope is None or p_holm is None or p_holm > 1 - LEVEL:
-        return NO_TREND
-    return "grows" if slope > 0 else "shrinks"
-
-
 def scaling_summary(records: Iterable[dict]) -> dict:
     """The statistics of the scaling sweep's records (``dopt.sweep`` records: {"params",
     "result"}).
@@ -146,7 +137,7 @@ def scaling_summary(records: Iterable[dict]) -> dict:
     for m in COMPARED:
         p_holm = adjusted.get(m)
         out_trend[f"{m}_minus_simple"] = {**fits[m], "p_holm": p_holm,
-                                          "verdict": verdict(fits[m]["slope"], p_holm)}
+                                          "verdict": slope_verdict(fits[m]["slope"], p_holm)}
     return {"sizes": sizes, "n_particles": [n * n for n in sizes], "per_size": per_size,
             "trend": out_trend, "verdict": verdict_line(out_trend)}
 
@@ -163,3 +154,4 @@ def verdict_line(trends: dict) -> str:
         parts.append(f"{m} - simple {t['verdict']} (slope {t['slope'] * 1e3:+.2f} mm per log N"
                      f" +- {t['slope_ci95'] * 1e3:.2f}, Holm p {t['p_holm']:.3g})")
     return "; ".join(parts)
+

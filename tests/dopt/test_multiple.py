@@ -1,11 +1,12 @@
 """Holm's step-down correction (dopt.multiple) against hand-computed references and against the
-procedure's definition, computed here by brute force (no statsmodels, no scipy)."""
+procedure's definition, computed here by brute force (no statsmodels, no scipy); slope tests
+over several groups judged as one family."""
 
 import random
 
 import pytest
 
-from dopt.multiple import holm, holm_reject
+from dopt.multiple import NO_TREND, holm, holm_reject, holm_slopes
 
 
 def test_the_worked_example_by_hand():
@@ -59,6 +60,33 @@ def test_against_the_definition_on_random_families():
             assert {i for i, a in enumerate(adjusted) if a <= alpha} == expected
             bonferroni = {i for i in range(m) if p[i] <= alpha / m}
             assert bonferroni <= expected                      # never rejects less
+
+
+def test_slope_tests_over_folds_are_one_holm_family():
+    """Four tests over two folds, Holm by hand: p (0.01, 0.04, 0.03, 0.5) adjust to (0.04,
+    0.09, 0.09, 0.5). The diagonal's Original test (p 0.04) passes within its fold (Holm over
+    two: 0.04) but not in the family of four."""
+
+    def t(slope, p):
+        return {"slope": slope, "p": p}
+
+    fam = holm_slopes({
+        "diagonal": {"original_minus_simple": t(0.01, 0.04), "random_minus_simple": t(-0.01, 0.01)},
+        "side": {"original_minus_simple": t(-0.02, 0.03), "random_minus_simple": t(0.0, 0.5)}})
+    expected = {("diagonal", "original_minus_simple"): (0.09, NO_TREND),
+                ("diagonal", "random_minus_simple"): (0.04, "shrinks"),
+                ("side", "original_minus_simple"): (0.09, NO_TREND),
+                ("side", "random_minus_simple"): (0.5, NO_TREND)}
+    assert set(fam) == set(expected)
+    for key, (p, word) in expected.items():
+        assert fam[key]["p_holm"] == pytest.approx(p) and fam[key]["verdict"] == word, key
+        assert fam[key]["m"] == 4
+    alone = holm_slopes({"diagonal": {"original_minus_simple": t(0.01, 0.04),
+                                      "random_minus_simple": t(-0.01, 0.01)}})
+    assert alone[("diagonal", "original_minus_simple")]["verdict"] == "grows"
+    untested = holm_slopes({"side": {"original_minus_simple": t(None, None)}})
+    assert untested[("side", "original_minus_simple")] == {"p_holm": None,
+                                                           "verdict": NO_TREND, "m": 0}
 
 
 @pytest.mark.parametrize("pvalues, alpha, error, message", [
