@@ -12,8 +12,8 @@ common to both at each size, regressed on log N (N = n * n particles) by ordinar
 (``scipy.stats.linregress``; the slope's 95 % interval from the t quantile with n_points - 2
 degrees of freedom); the p-values of Original - Simple and Random - Simple are Holm-adjusted
 together (``dopt.multiple.holm``); a claim over several folds judges all their tests as one
-family (``dopt.multiple.holm_slopes``). A positive slope: the gain of CEM(Simple) grows with the
-particle count. Means and differences are over the stable trials only (as ``summarize``).
+family (``dopt.multiple.holm_slopes``). A positive slope: the gain of CEM(Simple) grows with
+the particle count. Means and differences are over the stable trials only (as ``summarize``).
 """
 
 from __future__ import annotations
@@ -154,4 +154,3 @@ def verdict_line(trends: dict) -> str:
         parts.append(f"{m} - simple {t['verdict']} (slope {t['slope'] * 1e3:+.2f} mm per log N"
                      f" +- {t['slope_ci95'] * 1e3:.2f}, Holm p {t['p_holm']:.3g})")
     return "; ".join(parts)
-
