@@ -31,8 +31,6 @@ from planners.pick_place.settings import PickPlaceSettings, trial_key
 
 #: the methods compared to CEM(Simple) by the trend test
 COMPARED = ("original", "random")
-#: the family-wise level of the trend test's verdict (and the intervals' level)
-LEVEL = TREND_LEVEL
 
 
 def scaling_settings(goal: str, n: int, threads: int = 0) -> PickPlaceSettings:
@@ -78,7 +76,7 @@ def _by_size(records: Iterable[dict]) -> dict[int, dict[str, dict[int, float]]]:
 def _ci(values) -> tuple[float | None, float | None]:
     if not values:
         return None, None
-    mean, half = mean_ci(values, LEVEL)
+    mean, half = mean_ci(values, TREND_LEVEL)   # intervals at the verdict's level
     return mean, (half if np.isfinite(half) else None)
 
 
@@ -93,7 +91,7 @@ def trend(sizes: Sequence[int], diffs: Sequence[float]) -> dict:
     if out["n_sizes"] < 2 or y.size < 3:
         return out
     fit = stats.linregress(x, y)
-    half = float(stats.t.ppf(0.5 + LEVEL / 2, y.size - 2) * fit.stderr)
+    half = float(stats.t.ppf(0.5 + TREND_LEVEL / 2, y.size - 2) * fit.stderr)
     p = float(fit.pvalue) if np.isfinite(fit.pvalue) else 1.0
     return {**out, "slope": float(fit.slope), "slope_ci95": half,
             "intercept": float(fit.intercept), "p": p}
