@@ -11,13 +11,28 @@ The heavy work of both threads runs in MuJoCo (``mj_step``, ``mujoco.batch``) an
 release the GIL; the agent sleeps between steps. The synchronous mode (the agent waits for the
 optimiser, ``steps_per_plan`` steps per optimisation) is deterministic, for tests and debugging.
 
+Executors (``MPCConfig.executor``): ``alg1`` is the above, the paper's Alg. 1 (a plan that
+runs out is padded with its last control; a plan lands shifted by its lag). ``authors`` is the
+executing thread of the authors' data generator (DMackRus/iLQR_SVR ``GenTestingData.cpp``,
+``SingleAsynchronusRun`` / ``AsyncronusMPCWorker``): the agent holds a buffer of controls and
+a cursor into it; it applies buffered controls only while the cursor is below
+``min(apply_limit, T)`` (theirs: 80) and otherwise holds the arm under gravity compensation
+(zero commanded control: dopt's robots are gravity compensated by MuJoCo's ``gravcomp``) until
+a plan lands; the buffer is empty at the start (the arm holds through the first
+optimisation, whose warm start is the initial plan); a landed plan's cursor starts at the
+row of its nominal nearest the agent's state at landing (L1 over positions and velocities of
+the plan's DoF set, rows 0..T-2, an error below ``NEAREST_MAX_L1``), else at min(lag, T - 1).
+An optimiser whose returned plan has ``info["keep"]`` true lands nothing once a plan
+executes (the executing plan goes on; ``Unoptimised`` after its first plan).
+
 Clocks (``MPCConfig.clock``): ``real`` is the above. ``virtual`` and ``model`` run the same
 schedule in one thread on a virtual time line: the agent takes step k at virtual time
 k dt slowdown; an optimisation that starts at virtual time c from the agent's state then lasts
 its measured CPU time (``time.process_time``: all threads of the process, which runs nothing
-else meanwhile) divided by ``threads`` (``virtual``), or ``a + b |C|`` ms (``model``, a fixed
-cost model, so the same seed gives the same episode bit for bit); the agent executes the old
-plan for the steps that fall before c + duration, and the new plan lands shifted by them.
+else meanwhile) divided by ``threads`` (``virtual``), or ``a + b |C|`` ms (``model``,
+a fixed cost model, so the same seed gives the same episode bit for bit, on any machine);
+the agent executes the old plan for the steps that fall before c + duration, and the new
+plan lands shifted by them.
 On every clock an optimisation starts from a state the optimiser has not started from: one
 that ends before the agent's next step waits for it (an optimiser faster than the control
 period runs once per step, not over and over from the same state).
@@ -59,6 +74,10 @@ from dopt.view.blowup import KEEP, capture_dir, save_blowup, warning_body
 
 log = logging.getLogger(__name__)
 CLOCKS = ("real", "virtual", "model")
+EXECUTORS = ("alg1", "authors")
+#: the authors' landing search starts from this smallest error (``AsyncronusMPCWorker``): a
+#: plan whose nominal rows are all at least this far (L1) from the state lands at its lag
+NEAREST_MAX_L1 = 1000.0
 _BAD = (mujoco.mjtWarning.mjWARN_BADQPOS, mujoco.mjtWarning.mjWARN_BADQVEL,
         mujoco.mjtWarning.mjWARN_BADQACC, mujoco.mjtWarning.mjWARN_BADCTRL)
 
@@ -138,7 +157,9 @@ class MPCConfig:
     warmup: optimiser iterations before the agent starts. clock: ``real``, ``virtual`` or
     ``model`` (module docstring); threads: the nominal thread count a virtual duration divides
     the CPU time by (2: this project's reference machine); model_ms: (a, b) of the model
-    clock, ms per optimisation = a + b |C|."""
+    clock, ms per optimisation = a + b |C|. executor: ``alg1`` or
+    ``authors`` (module docstring); apply_limit: the authors' executor applies buffered
+    controls while its cursor is below min(apply_limit, T), then holds."""
 
     timeout: int
     slowdown: float = 1.0
@@ -150,11 +171,15 @@ class MPCConfig:
     clock: str = "real"
     threads: float = 2.0
     model_ms: tuple[float, float] | None = None
+    executor: str = "alg1"
+    apply_limit: int = 80
 
     def __post_init__(self):
         check_config(self, positive=("slowdown", "threads"),
                      minimum={"timeout": 1, "steps_per_plan": 1, "control_noise": 0,
-                              "warmup": 0})
+                              "warmup": 0, "apply_limit": 1})
+        if self.executor not in EXECUTORS:
+            raise ValueError(f"executor must be one of {EXECUTORS}, got {self.executor!r}")
         if self.clock not in CLOCKS:
             raise ValueError(f"clock must be one of {CLOCKS}, got {self.clock!r}")
         if self.synchronous and self.clock != "real":
@@ -180,7 +205,10 @@ class MPCResult:
     cost model); stability: the verdict on the executed episode (one rollout,
     judged by the scene's ``StabilityBounds`` after every agent step; a broken bound is
     reported here, MuJoCo warnings and non-finite states raise); blowups: the blow-up
-    capture folders written (``MPC``'s ``blowup_out``; the module docstring)."""
+    capture folders written (``MPC``'s ``blowup_out``; the module docstring); landed_at: the
+    row of each optimisation's plan the agent went on from (alg1: its lag; authors: the
+    nearest nominal row; -1: nothing landed); held_steps: agent steps under the authors'
+    executor's hold (alg1: 0)."""
 
     states: np.ndarray
     controls: np.ndarray
@@ -194,6 +222,8 @@ class MPCResult:
     stability: Stability
     cpu_seconds: list = field(default_factory=list)
     blowups: tuple = ()
+    landed_at: list = field(default_factory=list)
+    held_steps: int = 0
 
 
 class MPC:
@@ -277,7 +307,8 @@ class MPC:
         return MPCResult(np.array(self._states[:n + 1]), np.array(self._controls[:n]),
                          self._succeeded, self._log["seconds"], self._log["step"],
                          self._log["n_dofs"], self._log["dofs"], self._log["lag"], self._late,
-                         self._scan.result(), self._log["cpu"], tuple(self._blowups))
+                         self._scan.result(), self._log["cpu"], tuple(self._blowups),
+                         self._log["landed"], self._held)
 
     # ---------------------------------------------------------------- internals
     def _reset(self, x0: np.ndarray, plan: Plan) -> None:
@@ -286,10 +317,13 @@ class MPC:
         mujoco.mj_setState(m, self._data, x0, INTEGRATION)
         mujoco.mj_forward(m, self._data)
         self._plan, self._step, self._consumed, self._late = plan, 0, 0, 0
+        # the authors' executor: its buffer (None: empty, the arm holds) and cursor into it
+        self._buffer, self._cursor, self._held = None, 0, 0
         self._states, self._controls = [x0.copy()], []
         self._succeeded, self._error, self._blowups = False, None, []
         self._stop = threading.Event()
-        self._log = {"seconds": [], "step": [], "n_dofs": [], "dofs": [], "lag": [], "cpu": []}
+        self._log = {"seconds": [], "step": [], "n_dofs": [], "dofs": [], "lag": [], "cpu": [],
+                     "landed": []}
         self._scan = self.scene.monitor.start(1)
 
     @property
@@ -302,7 +336,7 @@ class MPC:
         starts at; the agent steps that fall before its end are taken first. Returns its
         duration on the episode's clock (s)."""
         with self._lock:
-            state, plan, start = self._states[-1].copy(), self._plan, self._step
+            state, plan, start = self._states[-1].copy(), self._warm_start(), self._step
         t0, c0 = time.perf_counter(), time.process_time()
         new = check_plan(self.optimiser.optimise(state, plan), self.scene,
                          "plan returned by the optimiser: plan")
@@ -320,8 +354,9 @@ class MPC:
             # controls the agent has taken since `start` (it takes one before stepping, so
             # this can be one ahead of _step): row 0 of the new plan is for step `start`
             lag = self._consumed - start
-            self._plan = new.shifted(lag)
+            landed = self._land(new, lag)
             lg = self._log
+            lg["landed"].append(landed)
             lg["seconds"].append(seconds)
             lg["step"].append(start)
             lg["lag"].append(lag)
@@ -329,6 +364,39 @@ class MPC:
             lg["n_dofs"].append(len(dofs))
             lg["dofs"].append(np.asarray(dofs).tolist())
         return seconds
+
+    def _warm_start(self) -> Plan:
+        """The plan the next optimisation starts from: the executing plan from its current
+        row (alg1: the plan itself; authors: the buffer from its cursor, padded with its last
+        control; the initial plan while the buffer is empty)."""
+        if self.config.executor == "authors" and self._buffer is not None:
+            return self._buffer.shifted(self._cursor)
+        return self._plan
+
+    def _land(self, new: Plan, lag: int) -> int:
+        """Make ``new`` (row 0 for the state the optimisation started from, ``lag`` agent
+        steps ago) the executing plan; the row the agent goes on from (-1: ``new`` keeps the
+        executing plan, nothing lands)."""
+        if new.info.get("keep") and (self._buffer is not None
+                                     or self.config.executor == "alg1"):
+            return -1
+        if self.config.executor == "alg1":
+            self._plan = new.shifted(lag)
+            return lag
+        T = len(new.controls)
+        row = min(lag, T - 1)
+        if new.states is not None and T > 1:
+            lay, x = self.scene.layout, self._states[-1]
+            C = np.arange(self.scene.nv) if new.dofs is None else np.asarray(new.dofs)
+            nominal = new.states[:T - 1]
+            dq = self.scene.tangent.difference(nominal[:, lay["qpos"]], x[lay["qpos"]], 1.0, C)
+            err = (np.abs(dq).sum(1)
+                   + np.abs(x[lay["qvel"]][C] - nominal[:, lay["qvel"]][:, C]).sum(1))
+            best = int(np.argmin(err))            # the first of equal errors, as theirs
+            if err[best] < NEAREST_MAX_L1:
+                row = best
+        self._buffer, self._cursor = new, row
+        return row
 
     def _virtual_loop(self) -> None:
         """Optimisations back to back on the virtual time line (module docstring); one that
@@ -344,13 +412,19 @@ class MPC:
     def _agent_step(self) -> None:
         m, d = self.scene.model, self._data
         with self._lock:
-            plan = self._plan
-            u = plan.controls[0].copy()
-            if self.config.feedback and plan.K is not None and plan.states is not None:
-                u += plan.K[0] @ self._deviation(plan)
-            self._plan = plan.shifted(1)
+            if self.config.executor == "authors":
+                u = self._buffered_control()
+            else:
+                plan = self._plan
+                u = plan.controls[0].copy()
+                if self.config.feedback and plan.K is not None and plan.states is not None:
+                    u += plan.K[0] @ self._deviation(plan)
+                self._plan = plan.shifted(1)
             self._consumed += 1
-        if self._noise_std.any():
+        if u is None:                          # the authors' hold: gravity compensation only
+            u = np.zeros(m.nu)
+            self._held += 1
+        elif self._noise_std.any():
             u += self.rng.normal(0.0, self._noise_std)
         d.ctrl[:] = u
         row = self.scene.state_of(d)             # the row holds the control executed now
@@ -378,6 +452,18 @@ class MPC:
                 self._succeeded = True
         if self.on_step is not None:
             self.on_step()
+
+    def _buffered_control(self) -> np.ndarray | None:
+        """The authors' executor's next control (u + K dx with ``feedback``), advancing its
+        cursor; None: hold (the buffer is empty or its cursor reached min(apply_limit, T))."""
+        buf, i = self._buffer, self._cursor
+        if buf is None or i >= min(self.config.apply_limit, len(buf.controls)):
+            return None
+        self._cursor += 1
+        u = buf.controls[i].copy()
+        if self.config.feedback and buf.K is not None and buf.states is not None:
+            u += buf.K[i] @ self._deviation(buf.shifted(i))
+        return u
 
     def _capture(self, row: np.ndarray, nxt: np.ndarray, reason: str) -> str | None:
         """With ``blowup_out``: a blow-up capture of the current step failing for ``reason``,

@@ -65,7 +65,7 @@ from cli_args import (
 )
 from sweep_console import out_lock, run_with_console
 
-from dopt.mpc import CLOCKS
+from dopt.mpc import EXECUTORS
 from dopt.sweep import Schema, SweepResult, Trial, is_finished
 from dopt.tasks import PUSH_TASKS
 from dopt.tasks.push.costs import COST_PRESETS
@@ -73,6 +73,7 @@ from planners.svr import METHODS, paper_theta
 from planners.svr_mpc import (
     CONTROLS_FIELDS,
     OUTLIER_DISTANCE,
+    SVR_CLOCKS,
     TABLE1_ROWS,
     CapturingTrial,
     Derivatives,
@@ -172,9 +173,16 @@ def add_run_arguments(ap: argparse.ArgumentParser) -> None:
                          "reach residual) or ee (with the end-effector term)")
     ap.add_argument("--warm-start", default=None, choices=["on", "off"],
                     help="start from the authors' set-up state and push plan")
-    ap.add_argument("--clock", default=None, choices=list(CLOCKS),
-                    help="real (wall time), virtual (CPU time / --nominal-threads) or model "
-                         "(ms = a + b |C|, deterministic)")
+    ap.add_argument("--clock", default=None, choices=list(SVR_CLOCKS),
+                    help="real (wall time), virtual (CPU time / --nominal-threads), model "
+                         "(ms = a + b |C| fitted on this project's machine) or authors (ms = a "
+                         "+ b |C| fitted to the authors' own times; --preset authors); model "
+                         "and authors are deterministic, the same on any machine")
+    ap.add_argument("--executor", default=None, choices=list(EXECUTORS),
+                    help="alg1: the paper's Alg. 1 (pad with the last control, land a plan "
+                         "shifted by its lag); authors: their data generator's (hold the arm "
+                         "after 80 controls until a plan lands, land at the nearest nominal "
+                         "state; the default of --preset authors)")
     ap.add_argument("--clock-ms", type=positive_float, default=None, metavar="MS",
                     help="every optimisation lasts MS on the model clock (sets --clock model): "
                          "every row lags alike, so rows differ only in the DoFs they choose")
@@ -262,7 +270,7 @@ def settings_of(args, row: Row, feedback: bool) -> SVRMPCSettings:
     if args.push_tail == "off":
         preset = replace(preset, push_tail=False)
     over = {"cost": args.cost, "control_noise": args.control_noise, "clock": args.clock,
-            "clock_ms": args.clock_ms}
+            "clock_ms": args.clock_ms, "executor": args.executor}
     if args.clock_ms is not None:
         over["clock"] = "model"
     over = {k: v for k, v in over.items() if v is not None}
@@ -327,6 +335,7 @@ def protocol(args, params: dict) -> dict:
             "box_qp": params["box_qp"], "slowdown": params["slowdown"],
             "problem": params["problem"], "layouts": params["layouts"],
             "islands": params["islands"], "push_tail": params["push_tail"],
+            "executor": params.get("executor", "alg1"),
             **({"clock_ms": params["clock_ms"]} if params.get("clock_ms") is not None else {})}
 
 

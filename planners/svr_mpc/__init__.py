@@ -32,6 +32,8 @@ Shapes: T horizon, nu controls, ns state row, c = |C| active DoFs.
                  feedback_effect, derivatives_effect; table1_fields, fig4_fields: all of a
                  Table 1 / Fig. 4 summary at once
     authors_data.py  the authors' Table 1 statistic on their per-episode files and on ours
+    authors_clock.py  the model clock fitted to the authors' optimisation times (clock
+                 ``authors``)
 """
 
 from planners.svr_mpc.episode import (
@@ -61,6 +63,7 @@ from planners.svr_mpc.settings import (
     FINITE_DIFFERENCES,
     PAPER_COSTS,
     PRESETS,
+    SVR_CLOCKS,
     TABLE1_ROWS,
     Derivatives,
     Row,
@@ -89,7 +92,7 @@ from planners.svr_mpc.summary import (
 
 __all__ = ["CLOCK_MODEL_MS", "CONTROLS_FIELDS", "DEFAULT_OPTIMISER", "FINITE_DIFFERENCES",
            "GOAL_DISTANCE_STRIDE", "OPTIMISERS", "OUTLIER_DISTANCE", "PAPER_COSTS", "PRESETS",
-           "TABLE1_ROWS", "CapturingTrial", "Derivatives", "OptimiserContext", "Row",
+           "SVR_CLOCKS", "TABLE1_ROWS", "CapturingTrial", "Derivatives", "OptimiserContext", "Row",
            "SVRController", "SVRMPCResult", "SVRMPCSettings", "build_controller",
            "derivatives_effect", "derivatives_tag", "dofs_mask", "dofs_of_mask", "feedback_effect",
            "fig4_fields", "optimiser_factory", "optimiser_names", "paired", "paired_ratio",

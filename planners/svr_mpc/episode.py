@@ -27,6 +27,7 @@ from dopt.validation import check_int
 from dopt.view.blowup import retire_captures
 from planners.ilqr import ILQR, ILQRConfig
 from planners.svr import DofSelector, SelectionConfig, SVROptimiser
+from planners.svr_mpc import authors_clock
 from planners.svr_mpc.optimisers import (
     DEFAULT_OPTIMISER,
     OptimiserContext,
@@ -116,7 +117,9 @@ class SVRMPCResult:
     With ``keep_controls`` (``run_svr_mpc``) also the executed episode's start state (ns,)
     and controls (S, nu) as lists, and the final state unrounded, so that re-simulating the
     controls from the start (``dopt.view.replay_controls``) ends exactly on it; None (and
-    absent from ``to_dict``) otherwise."""
+    absent from ``to_dict``) otherwise. held_steps: steps the authors' executor held the arm
+    (``dopt.mpc``; 0 under Alg. 1); landed_at: per optimisation the row of its plan the agent
+    went on from (-1: nothing landed)."""
 
     mpc_cost: float
     success: bool
@@ -143,6 +146,8 @@ class SVRMPCResult:
     blowups: list = field(default_factory=list)
     start_state: list | None = None
     controls: list | None = None
+    held_steps: int = 0
+    landed_at: list = field(default_factory=list)
 
     @property
     def opt_ms_mean(self) -> float:
@@ -244,13 +249,18 @@ def mpc_config(settings: SVRMPCSettings, task) -> MPCConfig:
     """The MPC loop's config of an episode: the settings' timeout and slowdown (else the
     task's), clock, noise, feedback and, on the model clock, the settings' fixed duration or
     else the task's cost model."""
+    if settings.clock == "authors":
+        clock, ms = "model", authors_clock.model_ms(settings.task, settings.method)
+    else:
+        clock, ms = settings.clock, (None if settings.clock != "model"
+                                     else CLOCK_MODEL_MS[settings.task]
+                                     if settings.clock_ms is None else (settings.clock_ms, 0.0))
     return MPCConfig(timeout=int(settings.timeout or task.timeout),
                      slowdown=float(settings.slowdown or task.slowdown),
                      synchronous=settings.synchronous, feedback=settings.feedback,
-                     control_noise=float(settings.control_noise), clock=settings.clock,
-                     threads=float(settings.nominal_threads),
-                     model_ms=(None if settings.clock != "model" else CLOCK_MODEL_MS[settings.task]
-                               if settings.clock_ms is None else (settings.clock_ms, 0.0)))
+                     control_noise=float(settings.control_noise), clock=clock,
+                     threads=float(settings.nominal_threads), model_ms=ms,
+                     executor=settings.executor)
 
 
 def keep_history(ctl, task, name: str) -> None:
@@ -305,7 +315,8 @@ def episode_result(ctl, res, start: np.ndarray, config: MPCConfig,
         clock=config.clock, cpu_ms=[round(1e3 * s, 2) for s in res.cpu_seconds],
         lag_steps=[int(v) for v in res.lag_steps], blowups=list(res.blowups),
         start_state=res.states[0].tolist() if keep_controls else None,
-        controls=res.controls.tolist() if keep_controls else None)
+        controls=res.controls.tolist() if keep_controls else None,
+        held_steps=int(res.held_steps), landed_at=[int(v) for v in res.landed_at])
 
 
 def run_trial(params: dict, report: Callable[[], None] | None = None,

@@ -81,11 +81,18 @@ def svr_optimiser(context: OptimiserContext) -> SVROptimiser:
 
 
 class Unoptimised:
-    """Returns the plan it is given: the episode executes its first plan (the push plan with
-    ``warm_start``), shifted and padded with its last control by the MPC loop, on no DoF."""
+    """Returns the plan it is given, on no DoF; after its first, marked ``keep`` (nothing
+    lands: ``dopt.mpc``): the episode executes its first plan (the push plan with
+    ``warm_start``) as the executor runs any plan: Alg. 1 pads it with its last control for
+    ever, the authors' executor holds the arm after min(80, T) of its controls."""
+
+    def __init__(self):
+        self.calls = 0
 
     def optimise(self, state: np.ndarray, plan: Plan) -> Plan:
-        return Plan(plan.controls, dofs=np.zeros(0, dtype=int))
+        self.calls += 1
+        return Plan(plan.controls, dofs=np.zeros(0, dtype=int),
+                    info={"keep": True} if self.calls > 1 else {})
 
 
 def unoptimised(context: OptimiserContext) -> Unoptimised:

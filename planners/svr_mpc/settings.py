@@ -13,7 +13,7 @@ from typing import Literal
 import mujoco
 import numpy as np
 
-from dopt.mpc import CLOCKS
+from dopt.mpc import CLOCKS, EXECUTORS
 from dopt.rollout import FDConfig
 from dopt.tasks import PUSH_PROBLEMS, build_push_task, get_task
 from dopt.tasks.push.costs import COST_PRESETS
@@ -48,6 +48,10 @@ PRESETS = ("ours", "paper", "authors")
 #: the authors' cost per task where it is not Eq. 2 alone (``COST_PRESETS["paper"]``): their
 #: push_soft task file adds a terminal reach residual (``dopt.tasks.push.costs``)
 PAPER_COSTS = {"soft": "paper-reach"}
+
+#: the clocks a trial can run on: ``dopt.mpc.CLOCKS`` and ``authors``, the model clock fitted
+#: to the authors' own optimisation times (``planners.svr_mpc.authors_clock``)
+SVR_CLOCKS = CLOCKS + ("authors",)
 
 #: the model clock per task, ms per optimisation = a + b |C| on the nominal 2 threads: fitted
 #: by ``python -m planners.bench clock`` (docs/results/clock-model.json)
@@ -183,9 +187,11 @@ class SVRMPCSettings:
             soft-task reach residual).
         warm_start: start from the authors' set-up state and initial push plan
             (``dopt.tasks.push.warm_start``) instead of the task's start and zero controls.
-        clock: ``real``, ``virtual`` or ``model`` (``dopt.mpc``); nominal_threads: the thread
-            count a virtual duration divides the CPU time by; the model clock's coefficients
-            are the task's ``CLOCK_MODEL_MS``.
+        clock: ``real``, ``virtual`` or ``model`` (``dopt.mpc``; the model clock's
+            coefficients are the task's ``CLOCK_MODEL_MS``, fitted on this project's
+            machine), or ``authors``: the model clock fitted to the authors' own times
+            (``planners.svr_mpc.authors_clock``); nominal_threads: the thread count a virtual
+            duration divides the CPU time by.
         fd_centered, fd_eps: the finite differences (default forward 1e-3; the authors:
             centred 1e-6).
         keypoints, fd_skip: the timesteps the finite differences cover (``every``, ``skip``
@@ -203,6 +209,9 @@ class SVRMPCSettings:
         clock_ms: on the model clock, every optimisation lasts this long (ms) instead of the
             task's fitted a + b |C| (``CLOCK_MODEL_MS``): every row then lags alike, so what
             is left between rows is their choice of DoFs, not their speed.
+        executor: ``alg1`` (the paper's Alg. 1: pad with the last control, land shifted by
+            the lag) or ``authors`` (their data generator's: hold after 80 controls, land at
+            the nearest nominal state; ``dopt.mpc``).
     """
 
     task: str = "clutter"
@@ -229,6 +238,7 @@ class SVRMPCSettings:
     islands: bool = True
     push_tail: bool = True
     clock_ms: float | None = None
+    executor: str = "alg1"
 
     def __post_init__(self):
         get_task(self.task)                       # ValueError naming the known tasks
@@ -236,8 +246,10 @@ class SVRMPCSettings:
             raise ValueError(f"unknown method {self.method!r}; choose from {METHODS}")
         if self.cost not in COST_PRESETS:
             raise ValueError(f"unknown cost {self.cost!r}; choose from {tuple(COST_PRESETS)}")
-        if self.clock not in CLOCKS:
-            raise ValueError(f"unknown clock {self.clock!r}; choose from {CLOCKS}")
+        if self.clock not in SVR_CLOCKS:
+            raise ValueError(f"unknown clock {self.clock!r}; choose from {SVR_CLOCKS}")
+        if self.executor not in EXECUTORS:
+            raise ValueError(f"unknown executor {self.executor!r}; choose from {EXECUTORS}")
         if self.problem not in PROBLEMS:
             raise ValueError(f"unknown problem {self.problem!r}; choose from {PROBLEMS}")
         if self.problem == "authors" and self.task == "clutter" and not self.layouts:
@@ -274,14 +286,17 @@ class SVRMPCSettings:
     @classmethod
     def authors(cls, task: str, row: str = "sum-t10-r1", layouts: str | None = None,
                 **overrides) -> SVRMPCSettings:
-        """The paper's protocol for ``row`` on the authors' own problem ``task``: their scenes
+        """The authors' regime for ``row`` on their own problem ``task``: their scenes
         (clutter: scene ``seed`` of ``layouts``), objects and contacts, their cost weights
         without a control cost (``dopt.tasks.push.costs.AUTHORS_COSTS``), their initial plan
-        and padding (``dopt.tasks.push.warm_start``, the plan keeps pushing at its end), no
-        control noise (every run of their paper data records ``controls_noise: 0``), the
-        virtual clock."""
+        (``dopt.tasks.push.warm_start``), no control noise (every run of their paper data
+        records ``controls_noise: 0``), their data generator's executor (``authors``: hold
+        after 80 controls, nearest-state landing) and the clock fitted to their times
+        (``authors``). Where the paper's text (Alg. 1) and their code differ, this follows
+        the code, which generated their data; ``executor="alg1"`` is the text's reading."""
         return cls.paper(task, row, **{"problem": "authors", "layouts": layouts,
                                        "cost": f"authors-{task}", "control_noise": 0.0,
+                                       "executor": "authors", "clock": "authors",
                                        **overrides})
 
     @classmethod
@@ -362,8 +377,12 @@ def trial_key(p: dict) -> str:
         parts.append(f"cost{p['cost']}")
     if p.get("warm_start"):
         parts.append("ws")
-    if p.get("clock", "real") != "real":
+    if p.get("clock", "real") == "authors":
+        parts.append("clockauthors")
+    elif p.get("clock", "real") != "real":
         parts.append(f"clock{p['clock']}{p.get('nominal_threads', 2.0):g}")
+    if p.get("executor", "alg1") != "alg1":
+        parts.append(f"exec{p['executor']}")
     if p.get("clock_ms") is not None:
         parts.append(f"ms{p['clock_ms']:g}")
     if p.get("synchronous"):

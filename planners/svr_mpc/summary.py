@@ -34,7 +34,10 @@ def summarize(records: list[dict], baseline: str = "baseline", level: float = 0.
       trials, unpaired; the authors' own statistic is ``authors_data.authors_statistic``);
     - ``opt_ms_mean`` (duration on the episode's clock), ``n_dofs_mean``, ``lag_steps_mean``,
       ``success_rate``, ``goal_distance_end_median``, ``n_trials``, ``n_unstable_trials``,
-      ``n_unstable_rollouts``.
+      ``n_unstable_rollouts``;
+    - ``travel_median``: median over the trials of how far the goal object came toward its
+      goal (start distance - end distance, m; the authors' files give the same per episode);
+      ``held_steps_mean``: steps the authors' executor held the arm (0 under Alg. 1).
 
     records: {"params", "result"} of finished trials of one task.
     """
@@ -68,12 +71,20 @@ def summarize(records: list[dict], baseline: str = "baseline", level: float = 0.
             "goal_distance_end_median": float(np.median([v["goal_distance_end"] for v in res])),
             "goal_distance_end_mean": float(np.mean([v["goal_distance_end"] for v in res])),
             "lag_steps_mean": float(np.mean([v["lag_steps_mean"] for v in res])),
+            "travel_median": _median([v["goal_distance_start"] - v["goal_distance_end"]
+                                      for v in res if "goal_distance_start" in v]),
+            "held_steps_mean": float(np.mean([v.get("held_steps", 0) for v in res])),
             "outliers": int(sum(outlier(v) for v in res)),
             "n_trials": len(res),
             "n_unstable_trials": int(sum(v.get("unstable", False) for v in res)),
             "n_unstable_rollouts": int(sum(v.get("n_unstable_rollouts", 0) for v in res)),
         }
     return out
+
+
+def _median(values: list) -> float | None:
+    """The median of ``values``; None for none."""
+    return float(np.median(values)) if values else None
 
 
 def paired_ratio(numerator: dict, denominator: dict, level: float = 0.90) -> dict:
