@@ -108,6 +108,7 @@ from report_map import HEADLINES_TITLE, map_block
 from report_stale import (
     SNAPSHOT,
     SVR_KINDS,
+    code_findings,
     load_snapshot,
     needs_backfill,
     stale_findings,
@@ -382,6 +383,8 @@ def annotate(results: list[Result], results_dir: Path) -> None:
         r.notes["trials_line"] = trials_line(r, info)
         params = first_params(info) if r.kind in SVR_KINDS else None
         findings = _rendered(r, stale_findings, r, snap, params)
+        if findings is not None:
+            findings = findings + code_findings(r, results_dir)
         r.notes["stale"] = findings
         line = stale_note(findings)
         if findings is None and snap is not None and needs_backfill(r):
