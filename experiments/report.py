@@ -336,9 +336,9 @@ def headlines_section(results: list[Result], page: Path) -> list[str]:
                       f"method's mean minus Simple's ± its Welch 95 % interval; {HOLM_NOTE}):",
                   "", *claims]
     if beside:
-        lines += ["", "Table 1 under `--preset paper` against the paper's printed Table 1 "
-                      "(MPC cost / baseline, means; the rows side by side are in \"State-vector "
-                      "reduction, Table 1 beside the paper\" below):", ""]
+        lines += ["", "Table 1 under `--preset authors` (else `paper`) against the paper's "
+                      "printed Table 1 (MPC cost / baseline, means; the rows side by side are "
+                      "in \"State-vector reduction, Table 1 beside the paper\" below):", ""]
         lines += [f"- {task}: paper cheapest first {', '.join(o['paper_order'][:3])}; ours "
                   f"{', '.join(o['our_order'][:3])}. {ordering_sentence(o)}; {source(r, page)}."
                   for task, r in beside
