@@ -84,6 +84,7 @@ from planners.svr_mpc import (
     trial_key,
     trial_params,
 )
+from planners.svr_mpc.authors_data import TASK_DIRS, authors_travel
 
 log = logging.getLogger(__name__)
 FEEDBACK = {"off": (False,), "on": (True,), "both": (False, True)}
@@ -158,6 +159,10 @@ def add_run_arguments(ap: argparse.ArgumentParser) -> None:
     ap.add_argument("--layouts", type=Path, default=None, metavar="DIR",
                     help="the authors' clutter scenes (a folder of {0..99}.csv, e.g. "
                          "../shared/external/ilqr_svr/push_mcl_layouts); seed i runs scene i")
+    ap.add_argument("--authors-data", type=Path, default=None, metavar="DIR",
+                    help="the authors' PaperData folder (e.g. ../shared/external/ilqr_svr/"
+                         "paper_data): the summary then holds their rows' goal distances and, "
+                         "with --layouts, travel, beside ours (authors_rows)")
     ap.add_argument("--push-tail", default="on", choices=["on", "off"],
                     help="the first push plan ends moving forward (default on); off: it ends "
                          "braking at its end point (dopt.tasks.push.warm_start)")
@@ -247,6 +252,9 @@ def parse_args(argv=None, ap: argparse.ArgumentParser | None = None,
     if args.clock_ms is not None and args.clock not in (None, "model"):
         ap.error(f"--clock-ms sets the model clock's duration; it cannot go with --clock "
                  f"{args.clock}")
+    if args.authors_data is not None and not (args.authors_data / TASK_DIRS[args.task]).is_dir():
+        ap.error(f"--authors-data: no {TASK_DIRS[args.task]} folder under {args.authors_data} "
+                 f"(the authors' PaperData)")
     if args.quick:
         args.trials, args.timeout = 1, args.timeout or 100
     if args.threads is None:
@@ -389,6 +397,9 @@ def _main(args, argv) -> int:
                         for t in trials for row in [row_label(t.params)]},
                **fields, "failed": failed, "trial_commits": res.commits,
                "blowups": blowup_captures(args.out, [t.key for t in trials])}
+    if getattr(args, "authors_data", None) is not None:
+        summary["authors_rows"] = authors_travel(args.authors_data / TASK_DIRS[args.task],
+                                                 args.layouts)
     write_summary(summary, args.out, args.record, "experiments/mpc.py", argv)
     write_table(args.out, args.task, rows, summary.get("feedback_effect"))
     write_plots(args.out, args.task, records, list(rows), render=not args.no_render)

@@ -347,18 +347,28 @@ def table1_vs_paper_section(results: list[Result], page: Path) -> list[str]:
                          num((data_rows.get(row) or {}).get("median_ratio")),
                          f"{num(p.get('n_dofs'), 1)} / "
                          f"{num(m.get('n_dofs_mean', m.get('dofs_mean')), 1)}",
-                         f"{num(p.get('opt_ms'), 0)} / {num(m.get('opt_ms_mean'), 0)}"])
+                         f"{num(p.get('opt_ms'), 0)} / {num(m.get('opt_ms_mean'), 0)}",
+                         travel_cell((d.get("authors_rows") or {}).get(row), m)])
         o = orderings(*_table1_columns(pub, d))
         alike = equal_lag_table1(results, task)
         lines += [f"### {task}: `{r.name}` beside the paper", "",
                   *table(["row", "paper MPC cost", "ours mean", "ours median ratio",
                           "ours paired geomean [CI90]", "authors' data median ratio",
-                          "DoFs paper / ours", "opt. ms paper / ours"], rows), "",
+                          "DoFs paper / ours", "opt. ms paper / ours",
+                          "goal object travel, cm: authors / ours"], rows), "",
                   f"Cheapest first, paper: {', '.join(o['paper_order'])}; ours: "
                   f"{', '.join(o['our_order'])}.", "", ordering_sentence(o) + ".", "",
                   *equal_lag_lines(alike, pub),
                   *source_lines([r, ref] + ([alike] if alike else []), page), ""]
     return lines[:-1]
+
+
+def travel_cell(authors: dict | None, ours: dict) -> str:
+    """How far the goal object came toward its goal (median, cm): the authors' run of the row
+    (a summary's "authors_rows", ``--authors-data``) / ours ("-" where either is unknown)."""
+    def cm(v):
+        return "-" if not isinstance(v, (int, float)) else f"{100 * v:.1f}"
+    return f"{cm((authors or {}).get('travel_median'))} / {cm(ours.get('travel_median'))}"
 
 
 def equal_lag_table1(results: list[Result], task: str) -> Result | None:

@@ -60,6 +60,8 @@ def test_travel_is_start_distance_minus_final_distance(tmp_path):
     assert out["baseline"]["travel_median"] == pytest.approx(np.median([0.10, 0.18, 0.14]))
     assert out["naive"]["final_distance_median"] == pytest.approx(0.05)
     assert out["rand-t5"]["travel_median"] == pytest.approx(0.20)
+    assert authors_travel(task)["baseline"] == {"travel_median": None,
+                                                "final_distance_median": 0.15, "n_episodes": 3}
     (layouts / "2.csv").unlink()
     with pytest.raises(ValueError, match="no scene 2.csv"):
         authors_travel(task, layouts)
