@@ -286,7 +286,7 @@ def settings_of(args, row: Row, feedback: bool) -> SVRMPCSettings:
         over["warm_start"] = args.warm_start == "on"
     kp = args.keypoints or ("skip" if args.fd_skip > 1 else "every")
     flags = Derivatives(args.fd, kp, args.fd_skip if kp == "skip" else 1, args.box_qp)
-    over.update(replace(flags, **row.variants).fields())
+    over.update(replace(flags, **row.variants).fields(), **row.fixes)
     return replace(preset, task=args.task, method=row.method, theta=row.theta,
                    rho=float(row.rho),
                    slowdown=args.slowdown or task_defaults(args.task)[0], timeout=args.timeout,

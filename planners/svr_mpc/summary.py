@@ -234,8 +234,8 @@ def feedback_effect(records: list[dict], level: float = 0.90) -> dict:
 
 def derivatives_effect(records: list[dict], level: float = 0.90) -> dict:
     """Per row run with a derivative variant (``derivatives_tag``: central differences, key
-    timesteps, box QP) and without it: the variant's MPC cost over the plain row's on the
-    same seeds.
+    timesteps, box QP) or a fix beyond the paper (``fixes_tag``) and without it: the
+    variant's MPC cost over the plain row's on the same seeds.
 
     Returns {row label: {"versus": the plain row's label, "ratio_geomean", "ratio_ci90",
     "better", "pairs" (``paired_ratio``; "better": pairs where the variant cost less),
@@ -244,7 +244,8 @@ def derivatives_effect(records: list[dict], level: float = 0.90) -> dict:
     """
     def plain(p):
         return row_label({**p, "keypoints": "every", "fd_skip": 1, "box_qp": False,
-                          "fd_centered": False, "fd_eps": 1e-3})
+                          "fd_centered": False, "fd_eps": 1e-3, "keep_costed": False,
+                          "mu_reset": False})
 
     def mean(results, field):
         return float(np.mean([v[field] for v in results.values()]))
