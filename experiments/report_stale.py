@@ -272,16 +272,40 @@ def _changed_since(root: str, commit: str, head: str) -> tuple[str, ...] | None:
     return tuple(proc.stdout.split()) if proc.returncode == 0 else None
 
 
+def _verification(root: Path, r: Result, head: str) -> str | None:
+    """What ``verified/<result>`` (experiments/verify_trials.py) says of ``r`` today: None
+    without one, or when the code that computes trials changed since it ran; "" where every
+    rerun gave its recorded outcome at a commit with today's code; a finding where a rerun
+    differed."""
+    path = Path(root) / "verified" / r.name
+    try:
+        v = json.loads(path.read_text())
+        commit = v["provenance"]["git_commit"]
+    except (OSError, ValueError, KeyError, TypeError):
+        return None
+    base = base_commit(commit)
+    if not base or base != commit or _changed_since(str(root), base, head) != ():
+        return None
+    if v.get("all_equal") is True:
+        return "verified"
+    return (f"the code at {base[:8]} reruns {sum(not t.get('equal') for t in v['trials'])} of "
+            f"{len(v['trials'])} sampled trials to other outcomes (verified/{r.name})")
+
+
 def code_findings(r: Result, root: Path) -> list[str]:
     """Per commit its trials ran on (``trial_commits``), of a result on Table 1's protocol:
     the files that compute its trials and changed since, one finding each (none: the code is
-    the same, or git cannot say)."""
+    the same, git cannot say, or a sample of its trials reran to the last bit at a commit whose
+    code is today's: ``experiments/verify_trials.py``)."""
     if r.kind not in SVR_KINDS or not isinstance(r.data.get("trial_commits"), dict):
         return []
     head = _head(str(root))
     if head is None:
         return []
-    out = []
+    checked = _verification(root, r, head)
+    if checked is not None and not checked.startswith("the code "):
+        return []                        # a sample reran to the last bit since the change
+    out = [checked] if checked else []
     for commit in sorted(r.data["trial_commits"]):
         base = base_commit(commit)
         changed = _changed_since(str(root), base, head) if base else None

@@ -47,3 +47,34 @@ def test_a_change_to_the_runtime_makes_the_trials_stale_a_summary_change_does_no
 
 def test_an_unknown_commit_or_no_git_says_nothing(tmp_path):
     assert code_findings(result("f" * 40), tmp_path) == []
+
+
+def test_a_verification_at_todays_code_clears_the_finding_until_the_code_changes(tmp_path):
+    """verified/<result> (experiments/verify_trials.py) at a commit with today's code: current
+    when every rerun matched, a finding naming the reruns when one differed; ignored once the
+    code that computes trials changes again."""
+    import json
+
+    root = tmp_path / "repo"
+    root.mkdir()
+    git(root, "init", "-q")
+    first = commit(root, {"dopt/mpc.py": "a\n", "docs/results/x.json": "{}\n"}, "one")
+    head = commit(root, {"dopt/mpc.py": "b\n"}, "runtime")
+    results = root / "docs" / "results"
+    verified = results / "verified"
+    verified.mkdir()
+
+    def write(all_equal):
+        (verified / "table1-x.json").write_text(json.dumps(
+            {"provenance": {"git_commit": head}, "all_equal": all_equal,
+             "trials": [{"key": "k", "equal": all_equal}]}))
+
+    write(True)
+    assert code_findings(result(first), results) == []
+    write(False)
+    findings = code_findings(result(first), results)
+    assert findings[0].startswith(f"the code at {head[:8]} reruns 1 of 1 sampled trials")
+    write(True)
+    commit(root, {"planners/svr.py": "c\n"}, "runtime again")
+    (finding,) = code_findings(result(first), results)
+    assert "planners/svr.py" in finding and "dopt/mpc.py" in finding
