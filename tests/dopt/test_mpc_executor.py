@@ -9,8 +9,6 @@ import pytest
 
 from dopt.mpc import MPC, NEAREST_MAX_L1, MPCConfig, Plan
 
-from .test_mpc import slider  # noqa: F401 (the fixture: two sliders, no gravity, at rest)
-
 
 class Scripted:
     """Returns ``plans[i]`` at its i-th call (the last one after), marked ``keep`` from call
