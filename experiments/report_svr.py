@@ -21,6 +21,7 @@ from report_base import (
     source_lines,
     span,
     table,
+    travel_cell,
 )
 from report_stats import (
     CORRECTION,
@@ -361,14 +362,6 @@ def table1_vs_paper_section(results: list[Result], page: Path) -> list[str]:
                   *equal_lag_lines(alike, pub),
                   *source_lines([r, ref] + ([alike] if alike else []), page), ""]
     return lines[:-1]
-
-
-def travel_cell(authors: dict | None, ours: dict) -> str:
-    """How far the goal object came toward its goal (median, cm): the authors' run of the row
-    (a summary's "authors_rows", ``--authors-data``) / ours ("-" where either is unknown)."""
-    def cm(v):
-        return "-" if not isinstance(v, (int, float)) else f"{100 * v:.1f}"
-    return f"{cm((authors or {}).get('travel_median'))} / {cm(ours.get('travel_median'))}"
 
 
 def equal_lag_table1(results: list[Result], task: str) -> Result | None:
