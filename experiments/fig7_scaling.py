@@ -50,6 +50,8 @@ from cli_args import (
 from pick_sweep import SCHEMA, cem_trial, iterations_held
 from sweep_console import out_lock, run_with_console
 
+from dopt.rollout import share_cores
+from dopt.tasks.pick.picker import MOVE_RULES
 from dopt.trialpack import is_stored_trial, read_trial_text
 from planners.pick_place.scaling import (
     COMPARED,
@@ -81,7 +83,12 @@ def parser() -> argparse.ArgumentParser:
                     default=",".join(SCALING_METHODS),
                     help="comma-separated subset of " + ", ".join(SCALING_METHODS))
     ap.add_argument("--workers", type=positive_int, default=1,
-                    help="trials at once (processes; default 1)")
+                    help="trials at once (processes; default 1); the cores are shared out "
+                         "over them as simulation threads")
+    ap.add_argument("--move", choices=MOVE_RULES, default=None,
+                    help="how long each action's move lasts: fixed (the default) or sized "
+                         "(as long as its own displacement takes; PickPlaceSettings."
+                         "picker_move)")
     ap.add_argument("--out", type=output_dir, default=None,
                     help="the run's folder (default results/fig7_scaling_<goal>)")
     ap.add_argument("--record", type=output_file, default=None,
@@ -142,12 +149,14 @@ def _experiment(args, argv) -> int:
     """The sweep, the summary, the plot and the printed verdict."""
     start = time.perf_counter()
     out = args.out
-    threads = 1 if args.workers > 1 else 0
-    trials = scaling_trials(args.goal, args.sizes, range(args.seeds), args.methods, threads)
+    n_trials = len(args.sizes) * args.seeds * len(args.methods)
+    threads = share_cores(min(args.workers, n_trials))
+    trials = scaling_trials(args.goal, args.sizes, range(args.seeds), args.methods, threads,
+                            args.move)
     if args.reuse_from is not None:
         print(f"copied {copy_finished(trials, args.reuse_from, out)} finished trials from "
               f"{args.reuse_from}")
-    settings = {n: scaling_settings(args.goal, n, threads) for n in args.sizes}
+    settings = {n: scaling_settings(args.goal, n, threads, args.move) for n in args.sizes}
     per_trial = next(iter(settings.values())).cem.iterations   # one stage: diagonal, side
     res = run_with_console(
         functools.partial(cem_trial, blowup_out=str(out)), trials, out, unit="it",
