@@ -389,7 +389,7 @@ class Report:
         if self.callback is not None or self.done == self._written:
             return
         try:
-            jsonio.write_atomic(self.path, {"key": self.key, "done": self.done})
+            jsonio.write_atomic(self.path, {"key": self.key, "done": self.done}, fsync=False)
         except OSError as e:                 # a bar is not worth a trial
             log.debug("progress of %s not written: %s", self.key, e)
         self._written, self._last = self.done, time.monotonic()
