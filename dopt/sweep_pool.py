@@ -119,17 +119,18 @@ class _Sender(threading.Thread):
 
     def run(self) -> None:
         while (msg := self.messages.get()) is not None:
+            tag = msg[0][:1].encode()              # b"l": a log record, b"d": a trial's end
             try:
-                data = ForkingPickler.dumps(msg)
-            except Exception as e:                     # a result that cannot be pickled
+                data = tag + ForkingPickler.dumps(msg[1:])
+            except Exception as e:                 # a result that cannot be pickled
                 if msg[0] != "done":
                     continue
-                data = ForkingPickler.dumps(("done", False, TypeError(
+                data = tag + ForkingPickler.dumps((False, TypeError(
                     f"its result cannot be sent from the worker ({type(e).__name__}: {e})"),
                     None))
             try:
                 self.conn.send_bytes(data)
-            except OSError:                            # the sweep is gone
+            except OSError:                        # the sweep is gone
                 return
 
     def put(self, msg) -> None:
@@ -286,29 +287,35 @@ class _Pool:
                 self._died(w)
 
     def _read(self, w: _Worker) -> None:
-        """Handle every message waiting in ``w``'s pipe."""
+        """Handle every message waiting in ``w``'s pipe (its first byte says what it is: a
+        trial's end that cannot be unpickled here still ends the trial)."""
         while not w.eof:
             try:
                 if not w.conn.poll():
                     return
-                msg = pickle.loads(w.conn.recv_bytes())
+                data = w.conn.recv_bytes()
             except (EOFError, OSError):
                 w.eof = True
                 return
-            except Exception as e:                 # a message this process cannot unpickle
-                log.error("a message of sweep worker %d could not be read: %s", w.pid, e)
-                continue
-            if msg[0] == "log":
-                logger = logging.getLogger(msg[1].name)
-                if logger.isEnabledFor(msg[1].levelno):
-                    logger.handle(msg[1])
+            try:
+                body = pickle.loads(data[1:])
+            except Exception as e:
+                body = (False, RuntimeError(f"what worker {w.pid} sent back cannot be read "
+                                            f"here ({type(e).__name__}: {e})"), None)
+                if data[:1] == b"l":
+                    log.error("a log record of sweep worker %d: %s", w.pid, body[1])
+                    continue
+            if data[:1] == b"l":
+                logger = logging.getLogger(body[0].name)
+                if logger.isEnabledFor(body[0].levelno):
+                    logger.handle(body[0])
             elif w.trial is not None:
                 trial, w.trial = w.trial, None
                 self.progress.end(trial.key)
-                if msg[1]:
-                    self.finish(trial, msg[2], machine=msg[3])
+                if body[0]:
+                    self.finish(trial, body[1], machine=body[2])
                 else:
-                    self.finish(trial, error=msg[2])
+                    self.finish(trial, error=body[1])
 
     def _died(self, w: _Worker) -> None:
         """``w``'s process ended: its trial (if any) fails naming it, or, while the sweep
