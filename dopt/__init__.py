@@ -12,12 +12,9 @@ It knows MuJoCo and no planner (docs/ARCHITECTURE.md has the map and the rule). 
                             with its real, virtual and model clocks, mpc_cost (Eq. 5)
     sweep.py                resumable trial sweeps (inline, process pool, Ray), checkpoints,
                             schemas, the folder's lock, interrupts; its files sweep_store.py,
-                            its lock sweep_lock.py, its runners sweep_exec.py and (the pool:
-                            workers that end with it, a dead worker fails its own trial)
-                            sweep_pool.py; jsonio.py: strict JSON (no bare NaN); atomic.py:
-                            every file written whole or not at all (temporary file, fsync,
-                            rename); trialpack.py: finished trials packed, the one reader of
-                            trials; sweep_pack.py: pack_trials, loose trial files into the pack
+                            its runners sweep_exec.py; jsonio.py: strict JSON (no bare NaN);
+                            trialpack.py: finished trials packed, the one reader of trials;
+                            sweep_pack.py: pack_trials, loose trial files into the pack
     provenance.py           command, commit, versions of a result; the recording and reuse rules
     stats.py, multiple.py   means and intervals; Holm's correction
     validation.py, cli.py   argument checks; the command lines' shared types and guarded()
