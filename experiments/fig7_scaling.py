@@ -50,6 +50,7 @@ from cli_args import (
 from pick_sweep import SCHEMA, cem_trial, iterations_held
 from sweep_console import out_lock, run_with_console
 
+from dopt import atomic
 from dopt.rollout import share_cores
 from dopt.tasks.pick.picker import MOVE_RULES
 from dopt.trialpack import is_stored_trial, read_trial_text
@@ -125,7 +126,7 @@ def copy_finished(trials, source: Path, out: Path) -> int:
         src, dst = source / "trials" / f"{t.key}.json", dest / f"{t.key}.json"
         if dst.exists() or is_stored_trial(dst) or not is_stored_trial(src):
             continue
-        dst.write_text(read_trial_text(src))
+        atomic.write_text(dst, read_trial_text(src))
         copied += 1
     return copied
 
@@ -218,7 +219,8 @@ def plot(path: Path, stats: dict, goal: str) -> bool:
     # the verdict line is longer than the figure is wide: one line per compared method
     fig.suptitle(f"{goal}: " + "\n".join(stats["verdict"].split("; ")), fontsize=8)
     fig.tight_layout()
-    fig.savefig(path, dpi=120)
+    with atomic.writing(path) as tmp:
+        fig.savefig(tmp, dpi=120)
     plt.close(fig)
     return True
 

@@ -11,6 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
+from dopt import atomic
 from planners.svr_mpc import OUTLIER_DISTANCE, row_label, split_params
 
 log = logging.getLogger(__name__)
@@ -32,7 +33,7 @@ def write_table(out: Path, task: str, methods: dict, feedback: dict | None = Non
                      f"{m['lag_steps_mean']:.0f}", f"{m['success_rate']:.2f}",
                      f"{m['goal_distance_end_median']:.3f}", str(m["outliers"]),
                      str(m["n_trials"])))
-    with open(out / "table1.csv", "w", newline="") as f:
+    with atomic.writing(out / "table1.csv") as tmp, open(tmp, "w", newline="") as f:
         csv.writer(f).writerows(rows)
     lines = [f"Task: {task}. Normalised by baseline on the same instance; mean and 90% CI "
              f"exclude outliers (goal object > {OUTLIER_DISTANCE} m from the goal) and unstable "
@@ -48,7 +49,7 @@ def write_table(out: Path, task: str, methods: dict, feedback: dict | None = Non
                   f"{f['ratio_ci90'][1]:.2f} | {f['better']}/{f['pairs']} | "
                   f"{f['success_open_loop']} -> {f['success_feedback']} |"
                   for name, f in feedback.items()]
-    (out / "table1.md").write_text("\n".join(lines) + "\n")
+    atomic.write_text(out / "table1.md", "\n".join(lines) + "\n")
 
 
 # ---------------------------------------------------------------------------------- plots
@@ -197,7 +198,8 @@ def write_final(path: Path, task: str, row: str, r: dict) -> None:
                  f"({r['steps']} steps)", y=1 - 6 / H, fontsize=12, fontweight="bold")
     fig.text(0.25, 6 / H, "ring: start of each object (black: the goal object), line: to its "
              "end; x: the goal", ha="center", fontsize=10)
-    fig.savefig(path, dpi=100)
+    with atomic.writing(path) as tmp:
+        fig.savefig(tmp, dpi=100)
     plt.close(fig)
 
 
@@ -212,5 +214,6 @@ def _save(fig, ax, path: Path, xlabel: str, ylabel: str, title: str) -> None:
     ax.grid(alpha=0.3)
     ax.legend(fontsize=9)
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
+    with atomic.writing(path) as tmp:
+        fig.savefig(tmp, dpi=110)
     plt.close(fig)

@@ -43,6 +43,7 @@ from pick_sweep import iterations_held as _iterations_held
 from pick_sweep import run_trials as _run
 from sweep_console import out_lock
 
+from dopt import atomic
 from dopt.rollout import share_cores
 from dopt.stats import mean_ci
 from dopt.sweep import Trial, is_finished
@@ -285,7 +286,7 @@ def _duration(seconds: float) -> str:
 # --------------------------------------------------------------------------------- report
 def write_curves(path: Path, results: list) -> None:
     """CSV: method, seed, iteration, stage, best_cost_m (scripted: one row per stage)."""
-    with open(path, "w", newline="") as f:
+    with atomic.writing(path) as tmp, open(tmp, "w", newline="") as f:
         w = csv.writer(f)
         w.writerow(["method", "seed", "iteration", "stage", "best_cost_m"])
         for r in sorted(results, key=lambda r: (r["method"], r["seed"])):
@@ -332,7 +333,8 @@ def plot_curves(path: Path, results: list, methods, title: str) -> None:
     if ax.get_legend_handles_labels()[0]:          # nothing to label when every trial failed
         ax.legend()
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
+    with atomic.writing(path) as tmp:
+        fig.savefig(tmp, dpi=110)
     plt.close(fig)
 
 
@@ -474,7 +476,8 @@ def write_comparison(path: Path, problem, r: dict) -> None:
     ]
     fig.legend(handles=handles, loc="lower center", ncol=4, frameon=False, fontsize=11,
                bbox_to_anchor=(0.5, 0.0))
-    fig.savefig(path, dpi=100)
+    with atomic.writing(path) as tmp:
+        fig.savefig(tmp, dpi=100)
     plt.close(fig)
 
 
@@ -551,7 +554,8 @@ def write_plan_gif(path: Path, problem, r: dict) -> None:
             draw.text((4, 1 + 15 * k), text, fill=colour, font=ft)
         captioned.append(np.asarray(canvas))
     captioned += [captioned[-1]] * GIF_HOLD
-    iio.imwrite(path, np.stack(captioned), duration=GIF_MS_PER_FRAME, loop=0)
+    with atomic.writing(path) as tmp:
+        iio.imwrite(tmp, np.stack(captioned), duration=GIF_MS_PER_FRAME, loop=0)
 
 
 def _font(size: int):

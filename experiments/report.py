@@ -134,6 +134,8 @@ from report_svr import (
 from report_sweeps import mpc_sweeps_in_progress_section, sweeps_in_progress_section
 from report_trials import first_params, summary_trials, trials_line, uncommitted_note
 
+from dopt import atomic
+
 
 @dataclass(frozen=True)
 class Entry:
@@ -461,8 +463,7 @@ def main(argv=None) -> int:
             print("up to date: " + ", ".join(_display(p) for p in gen["files"]))
         return 1 if stale else 0
     for p in stale:
-        p.parent.mkdir(parents=True, exist_ok=True)
-        p.write_text(gen["files"][p])
+        atomic.write_text(p, gen["files"][p])
     print("wrote " + (", ".join(_display(p) for p in stale) or "nothing (up to date)"))
     return 0
 
