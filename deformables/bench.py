@@ -44,6 +44,7 @@ from collections import Counter
 
 import numpy as np
 
+from dopt.atomic import write_text
 from dopt.cli import (
     EPILOG,
     ArgumentParser,
@@ -324,9 +325,7 @@ def main(argv=None) -> int:
             print(json.dumps(row), flush=True)
         print(json.dumps({"summary": record["summary"]}), flush=True)
     if args.out:
-        with open(args.out, "w") as handle:
-            json.dump(record, handle, indent=1)
-            handle.write("\n")
+        write_text(args.out, json.dumps(record, indent=1) + "\n")
     return 0
 
 

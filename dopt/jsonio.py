@@ -14,18 +14,19 @@ it stands for ("NaN", "+inf" or "-inf"), so that ``loads`` can give back exactly
 that were written (``restore``); any other reader sees a strict file with its reasons.
 
 ``dumps``/``write_atomic`` write (``replace_atomic`` writes any bytes atomically), ``loads``
-reads (rejecting bare NaN/Infinity: such a file is not one of ours). Standard library only.
+reads (rejecting bare NaN/Infinity: such a file is not one of ours). Standard library only
+(with ``dopt.atomic``).
 """
 
 from __future__ import annotations
 
-import contextlib
 import json
 import math
-import os
-import tempfile
+import os  # noqa: F401  (jsonio.os: the tests patch os.replace through it)
 from collections.abc import Callable, Mapping
 from pathlib import Path
+
+from dopt import atomic
 
 #: what is appended to a member's name for the note of its undefined value(s)
 UNDEFINED_SUFFIX = "_undefined"
@@ -183,34 +184,23 @@ def loads(text: str | bytes, *, restore_values: bool = True, strict_numbers: boo
     return restore(obj) if restore_values else obj
 
 
-def replace_atomic(path: Path | str, data: bytes, *, suffix: str = "", fsync: bool = False
+def replace_atomic(path: Path | str, data: bytes, *, suffix: str = "", fsync: bool = True
                    ) -> None:
-    """Write the bytes ``data`` to ``path`` atomically: a temporary file in its folder (its
-    name ``.tmp-*`` + ``suffix``), flushed (and ``os.fsync``-ed with ``fsync``), then renamed
-    over ``path``, so a reader or a killed writer never sees half a file. The folder is
-    created. An exception raised into it (a trial's interrupt) propagates as itself: the file
-    then holds the old or the new bytes, and no temporary file is left."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=".tmp-", suffix=suffix)
-    try:
-        with os.fdopen(fd, "wb") as f:
-            f.write(data)
-            if fsync:
-                f.flush()
-                os.fsync(f.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        # an interrupt may land after the rename: the temporary file is gone, not an error
-        with contextlib.suppress(FileNotFoundError):
-            os.unlink(tmp)
-        raise
+    """Write the bytes ``data`` to ``path`` atomically (``dopt.atomic.replace_atomic``: a
+    temporary file in its folder, flushed and ``os.fsync``-ed unless ``fsync`` is False, then
+    renamed over ``path``), so a reader, a killed writer or a full disk never sees half a
+    file; an OSError names ``path``. The folder is created. An exception raised into it (a
+    trial's interrupt) propagates as itself: the file then holds the old or the new bytes,
+    and no temporary file is left."""
+    atomic.replace_atomic(path, data, suffix=suffix, fsync=fsync)
 
 
-def write_atomic(path: Path | str, obj, *, indent: int | None = None, reasons=None) -> None:
-    """Write ``dumps(obj)`` (UTF-8) to ``path`` atomically (``replace_atomic``). The folder is
-    created. TypeError/ValueError (nothing written) for what is not JSON-able. An exception
-    raised into it (a trial's interrupt) propagates as itself: the file then holds the old
-    or the new text, and no temporary file is left."""
+def write_atomic(path: Path | str, obj, *, indent: int | None = None, reasons=None,
+                 fsync: bool = True) -> None:
+    """Write ``dumps(obj)`` (UTF-8) to ``path`` atomically (``replace_atomic``; ``fsync``:
+    synced to the disk before the rename, as every result must be). The folder is created.
+    TypeError/ValueError (nothing written) for what is not JSON-able. An exception raised
+    into it (a trial's interrupt) propagates as itself: the file then holds the old or the
+    new text, and no temporary file is left."""
     replace_atomic(path, dumps(obj, indent=indent, reasons=reasons).encode("utf-8"),
-                   suffix=".json")
+                   suffix=".json", fsync=fsync)

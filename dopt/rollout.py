@@ -34,7 +34,7 @@ from dopt.rollout_c import CRoute
 from dopt.scene import Scene
 from dopt.stability import Monitor, Stability
 from dopt.state import MAXVAL, check_spec, check_states, fault
-from dopt.validation import check_config, float_array, is_int
+from dopt.validation import check_config, check_int, float_array, index_array, is_int
 
 CTRL = int(mujoco.mjtState.mjSTATE_CTRL)
 USER = int(mujoco.mjtState.mjSTATE_USER)
@@ -55,6 +55,26 @@ class RolloutConfig:
 
     def __post_init__(self):
         check_config(self, minimum={"threads": 0}, choices={"on_unstable": ("flag", "raise")})
+
+
+def share_cores(concurrent: int, cores: int | None = None) -> int:
+    """``RolloutConfig.threads`` for each of ``concurrent`` rollout services that run at once
+    (a sweep's trials in parallel workers): 0, every core, for one; else the ``cores``
+    (default: those this process may use) shared out, at least one thread each. A batch's
+    results do not depend on its threads (``mujoco.batch.Batch``: bit-identical at any
+    count), so a single trial takes every core and a sweep of as many trials as cores keeps
+    one thread per trial."""
+    concurrent = check_int(concurrent, "concurrent", minimum=1)
+    cores = available_cores() if cores is None else check_int(cores, "cores", minimum=1)
+    return 0 if concurrent == 1 else max(1, cores // concurrent)
+
+
+def available_cores() -> int:
+    """The cores this process may run on (its affinity, else the machine's)."""
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:                       # no affinity on this platform
+        return os.cpu_count() or 1
 
 
 @dataclass(frozen=True)
@@ -214,7 +234,7 @@ class RolloutService:
 
     # ------------------------------------------------------------------ rollouts
     def rollout(self, initial_states, controls, *, record: Sequence = (),
-                control_spec: int = CTRL) -> RolloutResult:
+                control_spec: int = CTRL, lengths=None) -> RolloutResult:
         """Run P open-loop rollouts of T steps in one batched call.
 
         Args:
@@ -224,6 +244,10 @@ class RolloutService:
             record: MjData field names and/or mjtState specs to record after each step.
             control_spec: mjtState bits within mjSTATE_USER that ``controls`` sets before each
                 step (e.g. ctrl | eq_active for a picker that grasps and releases).
+            lengths: (P,) ints in [1, T]: rollout p takes only its first ``lengths[p]`` steps
+                (its final state is the one after them, its later records repeat its last,
+                its verdict covers them), bit for bit as a call with its rows alone; None:
+                all T.
 
         Returns:
             RolloutResult; its ``stability`` flags every rollout that broke the scene's
@@ -258,8 +282,10 @@ class RolloutService:
                              f"{u.shape[0]}; give one of them for all or P of each")
         P = max(u.shape[0], n_x0)
         u = np.broadcast_to(u, (P, u.shape[1], ncontrol))
+        steps = _check_lengths(lengths, P, u.shape[1])
         with self._lock:
-            final, records, verdict = self._open_route().rollout(x0, u, control_spec, record)
+            final, records, verdict = self._open_route().rollout(x0, u, control_spec, record,
+                                                                 steps)
         self._check_verdict(verdict, "rollout")
         return RolloutResult(final, records, verdict)
 
@@ -389,6 +415,18 @@ def judge_states(scene: Scene, states: np.ndarray) -> Stability:
             scan.flag(0, t, why)
             break
     return scan.result()
+
+
+def _check_lengths(lengths, P: int, T: int) -> np.ndarray:
+    """The steps of each of P rollouts of at most T: (P,) int64 in [1, T] (None: all T);
+    TypeError / ValueError naming ``lengths`` otherwise."""
+    if lengths is None:
+        return np.full(P, T, dtype=np.int64)
+    out = index_array(lengths, "lengths", T + 1)
+    if np.ndim(lengths) != 1 or out.shape != (P,) or (out < 1).any():
+        raise ValueError(f"lengths must be ({P},) step counts in [1, {T}], one per rollout, "
+                         f"got {np.asarray(lengths).tolist()}")
+    return out
 
 
 def _check_record(record) -> tuple:

@@ -87,14 +87,16 @@ class BatchRoute:
 
     # ------------------------------------------------------------------ rollouts
     def rollout(self, x0: np.ndarray, u: np.ndarray, control_spec: int,
-                record) -> tuple[np.ndarray, dict, Stability]:
-        """P open-loop rollouts of T steps: x0 (ns,) or (P, ns) or (1, ns), u (P, T, ncontrol).
+                record, lengths: np.ndarray) -> tuple[np.ndarray, dict, Stability]:
+        """P open-loop rollouts of up to T steps: x0 (ns,) or (P, ns) or (1, ns), u (P, T,
+        ncontrol), lengths (P,) the steps each takes (in [1, T]).
 
         Runs in chunks of steps so that the fields the stability monitor reads are checked
-        after every step without holding all T of them. Every rollout runs its T steps (a
-        broken bound is only flagged) unless MuJoCo warns or raises, where it stops (its later
-        records repeat its last; NaN, or 0 for integer items, where it has none);
-        results do not depend on the chunk length.
+        after every step without holding all T of them; a chunk ends at every rollout's own
+        length, where that rollout leaves the batch. Every rollout runs its steps (a broken
+        bound is only flagged) unless MuJoCo warns or raises, where it stops; a rollout that
+        stopped or ended repeats its last record (NaN, or 0 for integer items, where it has
+        none); results do not depend on the chunk length nor on the other rollouts.
 
         Returns (final states (P, ns), records: item -> (P, T, ...), the verdict)."""
         P, T = u.shape[:2]
@@ -107,8 +109,9 @@ class BatchRoute:
         K = self._chunk(P, T, items)
         rec = {item: self._record(item, P, T) for item in record}
         active = np.arange(P, dtype=np.int32)
-        for s in range(0, T, K):
-            k = min(K, T - s)
+        s = 0
+        for stop in np.union1d(np.arange(K, lengths.max(), K), lengths):
+            k = int(stop) - s
             out, raised = self._chunk_rollout(batch, active, k, u[:, s:s + k], control_spec,
                                               items)
             for i, why in raised.items():        # MuJoCo raised: flagged, stopped at its state
@@ -131,20 +134,22 @@ class BatchRoute:
                     stopped = np.setdiff1d(np.arange(P), active)
                     rec[item][stopped, s:s + k] = rec[item][stopped, s - 1:s]
             scan.update(active, s, {f: out[f] for f in mon.record})
-            keep = ~(batch.warning[active, :, 1] > 0).any(axis=1)
-            if s + k < T and not keep.all():     # Batch stops a warned simulation: so here
-                active = active[keep]
-                if not len(active):
-                    for item in record:
-                        rec[item][:, s + k:] = rec[item][:, s + k - 1:s + k]
-                    break
+            s += k
+            # Batch stops a warned simulation: so here; an ended one leaves the batch
+            active = active[~(batch.warning[active, :, 1] > 0).any(axis=1)
+                            & (lengths[active] > s)]
+            if not len(active):
+                for item in record:
+                    rec[item][:, s:] = rec[item][:, s - 1:s]
+                break
         final = batch.state[:P].copy()
         warned = (batch.warning[:P, :, 1] > 0).any(axis=1) | faulty_rows(self.scene.layout,
                                                                           final)
         for i in np.flatnonzero(warned):
             start = x0 if x0.ndim == 1 else x0[i if len(x0) > 1 else 0]
             fallback = why_unstable(batch, i, final[i], self.scene.layout)
-            step, reason = self._replay(start, u[i], control_spec) or (T - 1, fallback)
+            step, reason = (self._replay(start, u[i, :lengths[i]], control_spec)
+                            or (int(lengths[i]) - 1, fallback))
             scan.flag(int(i), step, reason)
         return final, rec, scan.result()
 

@@ -60,15 +60,23 @@ change would hide it): one that cannot stand for this code is moved to
 ``OUT/trials/checkpoints/outdated/`` and its trial starts afresh; one whose progress does not
 fit the ``Schema`` (another format) to ``OUT/trials/checkpoints/corrupt/``.
 
-**One run per folder.** ``run_sweep`` holds ``OUT/.lock`` (``OutLock``: pid, host, command)
-while it runs; a second process on the same OUT refuses (``SweepLockedError``, one line naming
-the first) unless that process is dead (a stale lock is taken over).
+**One run per folder.** ``run_sweep`` holds ``OUT/.lock`` (``OutLock``: pid, host, command,
+and the pids of its pool's workers) while it runs; a second process on the same OUT refuses
+(``SweepLockedError``, one line naming the first) unless that process is dead and none of its
+workers still runs (a stale lock is taken over).
+
+**Processes that die.** The pool's workers end within a second of the sweep's process (a
+``kill -9`` or the OOM killer's: the kernel kills them on Linux, a watch thread elsewhere) and
+start no trial after it; a worker that dies while the sweep runs fails only the trial it was
+running, as ``WorkerDied`` naming its pid and signal or exit code, and the other trials go on
+(``dopt.sweep_pool``).
 
 **Interrupts.** SIGINT (Ctrl-C) or SIGTERM cancels the queued trials, stops the running ones
 (each keeps the checkpoint of its last completed step, if it saved one), writes those that
 finished and raises ``SweepInterrupted`` (a KeyboardInterrupt) within a few seconds, inline,
-on the pool and on Ray alike (``dopt.sweep_exec``); its ``exit_code`` is 130 or 143 and its
-message says how to resume. The rerun gives exactly the result of an uninterrupted sweep.
+on the pool and on Ray alike (``dopt.sweep_exec``, ``dopt.sweep_pool``); its ``exit_code`` is
+130 or 143 and its message says how to resume. The rerun gives exactly the result of an
+uninterrupted sweep.
 
 **Progress.** ``on_start`` is given the ``SweepPlan`` (trials reused, resumed from a checkpoint,
 run from the start); ``progress`` is called as each trial ends; a trial function with a
@@ -96,10 +104,10 @@ from dopt.sweep_exec import (
     _Progress,
     progress_reports,
     run_inline,
-    run_pool,
     run_ray,
 )
 from dopt.sweep_pack import PackResult, pack_trials  # noqa: F401
+from dopt.sweep_pool import WorkerDied, run_pool  # noqa: F401
 from dopt.sweep_store import (  # noqa: F401  (the public names of dopt.sweep)
     ANY,
     CHECKPOINT_DIR,
@@ -477,7 +485,8 @@ def _execute(fn, todo, out_dir, code, checkpoints, records, progress, tick, sche
     elif workers == 1:
         run_inline(fn, todo, kwargs_of, finish, stop)
     else:
-        run_pool(fn, todo, kwargs_of, finish, stop, workers, watch)
+        run_pool(fn, todo, kwargs_of, finish, stop, workers, watch,
+                 on_workers=OutLock(out_dir).note_workers)
     for r in reports.values():
         r.clear()
     return failed, interrupted, stop

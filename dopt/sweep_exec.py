@@ -1,5 +1,6 @@
-"""How ``dopt.sweep`` runs its trials, inline, on a spawn process pool or on Ray, and how it
-stops when asked to.
+"""How ``dopt.sweep`` runs its trials, inline or on Ray, and how it stops when asked to; the
+local process pool, ``run_pool``, lives in ``dopt.sweep_pool`` (with the pool workers' side:
+they end with their parent, and one's death fails its own trial only).
 
 **Interrupts.** While trials run, SIGINT (Ctrl-C) and SIGTERM are caught (when the sweep runs
 in the main thread). Queued trials are cancelled; a running trial is interrupted
@@ -25,16 +26,12 @@ from __future__ import annotations
 
 import contextlib
 import logging
-import logging.handlers
 import os
-import queue
 import signal
 import sys
 import threading
 import time
 from collections.abc import Callable
-from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
-from multiprocessing import get_context
 from pathlib import Path
 
 from dopt.provenance import machine
@@ -98,21 +95,14 @@ class Stopper:
 
 
 # ------------------------------------------------------------------------- worker side
+#: a pool worker's state (``dopt.sweep_pool``): its sweep is stopping; a trial runs
 _STOPPING = False
 _IN_TRIAL = False
 
 
-def _worker_init(records, level: int) -> None:
-    """A pool worker's set-up: SIGINT ignored, SIGTERM stops its trial, logs to the sweep."""
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-    signal.signal(signal.SIGTERM, _worker_stop)
-    root = logging.getLogger()
-    root.handlers[:] = [logging.handlers.QueueHandler(records)]
-    root.setLevel(level)
-    logging.captureWarnings(True)
-
-
 def _worker_stop(signum, frame) -> None:
+    """A pool worker's SIGTERM handler: no trial starts after it, and the running one is
+    interrupted (``TrialInterrupted`` raised inside it)."""
     global _STOPPING
     _STOPPING = True
     if _IN_TRIAL:
@@ -192,102 +182,6 @@ def _run_inline(fn, todo, kwargs_of, finish, stop: Stopper) -> None:
             finish(t, result, machine=machine())
 
 
-class _LogRelay(threading.Thread):
-    """Hands the log records of a pool's workers to this process's loggers."""
-
-    def __init__(self, records):
-        super().__init__(name="dopt-sweep-logs", daemon=True)
-        self.records, self.done = records, threading.Event()
-
-    def run(self) -> None:
-        while not self.done.is_set():
-            try:
-                rec = self.records.get(timeout=0.1)
-            except queue.Empty:
-                continue
-            except (EOFError, OSError, ValueError):
-                return
-            logger = logging.getLogger(rec.name)
-            if logger.isEnabledFor(rec.levelno):
-                logger.handle(rec)
-
-    def stop(self) -> None:
-        self.done.set()
-        self.join(timeout=2)
-
-
-def run_pool(fn, todo, kwargs_of, finish, stop: Stopper, workers: int,
-             progress: _Progress) -> None:
-    """The trials on a spawn process pool of ``workers`` (see the module docstring)."""
-    ctx = get_context("spawn")
-    records = ctx.Queue()
-    relay = _LogRelay(records)
-    relay.start()
-    pool = ProcessPoolExecutor(workers, mp_context=ctx, initializer=_worker_init,
-                               initargs=(records, logging.getLogger().getEffectiveLevel()))
-    clean = False
-    try:
-        with stop:
-            pending = {pool.submit(call_trial, fn, t.params, kwargs_of(t)): t for t in todo}
-            while pending and stop.signum is None:
-                done, _ = wait(pending, timeout=POLL_S, return_when=FIRST_COMPLETED)
-                for fut in done:
-                    _finish_future(fut, pending.pop(fut), finish, progress)
-                progress.poll([t.key for t in pending.values()])
-            clean = not pending
-            if pending:
-                _stop_pool(pool, pending, finish, stop, progress)
-    finally:
-        if not clean:
-            _kill_workers(pool)
-        pool.shutdown(wait=clean, cancel_futures=True)
-        relay.stop()
-        records.cancel_join_thread()
-        records.close()
-
-
-def _finish_future(fut, trial, finish, progress: _Progress) -> None:
-    progress.end(trial.key)
-    if fut.cancelled():
-        finish(trial, error=TrialInterrupted("not started", started=False))
-        return
-    err = fut.exception()
-    if err is not None:
-        finish(trial, error=err)
-        return
-    result, where = fut.result()
-    finish(trial, result, machine=where)
-
-
-def _stop_pool(pool, pending: dict, finish, stop: Stopper, progress: _Progress) -> None:
-    """Cancel the queued trials, interrupt the running ones, write those that end within
-    ``GRACE_S``; the rest count as interrupted."""
-    for fut in pending:
-        fut.cancel()
-    for pid in list(pool._processes or {}):     # their pids, to signal
-        try:
-            os.kill(pid, signal.SIGTERM)
-        except (ProcessLookupError, PermissionError):
-            pass
-    deadline = time.monotonic() + GRACE_S
-    while pending and time.monotonic() < deadline and not stop.hurry:
-        done, _ = wait(pending, timeout=0.05, return_when=FIRST_COMPLETED)
-        for fut in done:
-            _finish_future(fut, pending.pop(fut), finish, progress)
-    for trial in pending.values():
-        progress.end(trial.key)
-        finish(trial, error=TrialInterrupted(f"stopped: its worker did not end within "
-                                             f"{GRACE_S:g} s and was killed"))
-
-
-def _kill_workers(pool) -> None:
-    for proc in list((pool._processes or {}).values()):
-        try:
-            proc.kill()
-        except (OSError, ValueError):
-            pass
-
-
 def run_ray(fn, todo, address: str, kwargs_of, finish, stop: Stopper,
             progress: _Progress) -> None:
     """The trials on Ray (``address`` "local": a local instance)."""
@@ -324,7 +218,7 @@ def run_ray(fn, todo, address: str, kwargs_of, finish, stop: Stopper,
                 _finish_ref(ray, ref, trial, finish, progress, True, kwargs_of(trial))
         for ref, trial in pending.items():
             ray.cancel(ref, force=True)
-            stopped = _ray_stopped(kwargs_of(trial), "its Ray task was killed")
+            stopped = _stopped(kwargs_of(trial), "its Ray task was killed")
             progress.end(trial.key)                 # (this removes its progress file)
             finish(trial, error=stopped)
 
@@ -347,11 +241,12 @@ def _sigint_not_ignored():
             signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
-def _ray_stopped(kwargs: dict, why: str) -> TrialInterrupted:
-    """What a Ray trial stopped by the sweep (cancelled or killed; ``kwargs``: its trial
-    function's) became: Ray does not say whether a task had begun, so a trial that left no
-    progress (no checkpoint, no step reported; read before its progress file is removed)
-    counts as not started (a rerun runs it from its start either way)."""
+def _stopped(kwargs: dict, why: str) -> TrialInterrupted:
+    """What a trial stopped by the sweep (a Ray task cancelled or killed, a pool worker that
+    died while the sweep stopped; ``kwargs``: its trial function's) became: neither says
+    whether the trial had begun, so a trial that left no progress (no checkpoint, no step
+    reported; read before its progress file is removed) counts as not started (a rerun runs
+    it from its start either way)."""
     checkpoint, report = kwargs.get("checkpoint"), kwargs.get("report")
     began = ((checkpoint is not None and checkpoint.path.is_file())
              or (isinstance(report, Report) and report.read() > 0))
@@ -366,7 +261,7 @@ def _finish_ref(ray, ref, trial, finish, progress: _Progress, stopping: bool,
         result = ray.get(ref)
     except Exception as e:
         if stopping or isinstance(e, ray.exceptions.TaskCancelledError):
-            error = _ray_stopped(kwargs, type(e).__name__)
+            error = _stopped(kwargs, type(e).__name__)
         else:
             error = e.cause if isinstance(getattr(e, "cause", None), Exception) else e
         progress.end(trial.key)

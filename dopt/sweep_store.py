@@ -11,10 +11,12 @@
   (``Checkpoint``; its progress is checked against the ``Schema`` too);
 - ``OUT/trials/.progress/<key>.json``: how far a running trial has got (``Report``: what a
   progress bar of a process pool or of Ray shows between whole trials), deleted when it ends;
-- ``OUT/.lock``: the process that runs a sweep on OUT (``OutLock``): a second one refuses.
+- ``OUT/.lock``: the process that runs a sweep on OUT, and its pool's workers (``OutLock``,
+  ``dopt.sweep_lock``, importable from here): a second one refuses.
 
 Every file is written atomically and as strict JSON (``dopt.jsonio``: no bare NaN).
-Standard library only (with ``dopt.provenance``, ``dopt.jsonio`` and ``dopt.trialpack``).
+Standard library only (with ``dopt.provenance``, ``dopt.jsonio``, ``dopt.sweep_lock`` and
+``dopt.trialpack``).
 Packing itself (``pack_trials``, ``PackResult``) lives in ``dopt.sweep_pack``; both names are
 still importable from here.
 """
@@ -23,8 +25,6 @@ from __future__ import annotations
 
 import logging
 import os
-import socket
-import sys
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -32,6 +32,7 @@ from pathlib import Path
 
 from dopt import jsonio
 from dopt.provenance import COMMIT_ENV, CodeState, code_state, repo_root, reuse_problem
+from dopt.sweep_lock import FRESH_LOCK_S, LOCK_NAME, OutLock, SweepLockedError  # noqa: F401
 from dopt.trialpack import StoredTrial, loose_files, read_pack
 
 log = logging.getLogger("dopt.sweep")
@@ -44,10 +45,6 @@ CHECKPOINT_DIR = "checkpoints"
 PROGRESS_DIR = ".progress"
 #: the fields every trial record has
 RECORD_FIELDS = ("key", "params", "result", "code")
-#: the lock file of a sweep's folder, and how long (s) an unreadable one counts as being
-#: written (older: garbage, taken over)
-LOCK_NAME = ".lock"
-FRESH_LOCK_S = 5.0
 
 #: {root: CodeState} this process last saw (run_sweep refreshes it; is_finished and
 #: Checkpoint read it, so that asking about many trials asks git once)
@@ -389,7 +386,7 @@ class Report:
         if self.callback is not None or self.done == self._written:
             return
         try:
-            jsonio.write_atomic(self.path, {"key": self.key, "done": self.done})
+            jsonio.write_atomic(self.path, {"key": self.key, "done": self.done}, fsync=False)
         except OSError as e:                 # a bar is not worth a trial
             log.debug("progress of %s not written: %s", self.key, e)
         self._written, self._last = self.done, time.monotonic()
@@ -405,128 +402,6 @@ class Report:
             self.path.unlink()
         except FileNotFoundError:
             pass
-
-
-class SweepLockedError(RuntimeError):
-    """Another live process runs a sweep on the same folder."""
-
-
-#: {lock file: how many times this process holds it}
-_HELD: dict[str, int] = {}
-
-
-class OutLock:
-    """``OUT/.lock``: one process at a time runs sweeps on OUT. Holds {"pid", "host",
-    "started", "command"}; a lock of a dead process on this host is stale and taken over
-    (logged). Reentrant within a process (an experiment holds it, and so does each of its
-    sweeps). Use as a context manager.
-
-    Raises (on enter):
-        SweepLockedError: a live process (or one on another host, which cannot be asked)
-            holds it; the one-line message names it.
-    """
-
-    def __init__(self, out_dir: Path | str):
-        self.path = Path(out_dir).absolute() / LOCK_NAME
-
-    def __enter__(self) -> OutLock:
-        self.acquire()
-        return self
-
-    def __exit__(self, *exc) -> None:
-        self.release()
-
-    def acquire(self) -> None:
-        where = str(self.path)
-        if _HELD.get(where):
-            _HELD[where] += 1
-            return
-        self.path.parent.mkdir(parents=True, exist_ok=True)
-        me = {"pid": os.getpid(), "host": socket.gethostname(),
-              "started": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
-              "command": " ".join(sys.argv)}
-        for _ in range(3):
-            try:
-                fd = os.open(self.path, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o644)
-            except FileExistsError:
-                holder = self._holder()
-                if holder is None and _age(self.path) < FRESH_LOCK_S:
-                    raise SweepLockedError(f"{self.path.parent} is being locked by another "
-                                           f"process right now ({self.path})") from None
-                if holder is not None and not _stale(holder):
-                    raise SweepLockedError(_locked_message(self.path.parent, holder)) \
-                        from None
-                log.warning("%s: taking over the stale lock of %s", self.path.parent,
-                            _describe(holder) if holder else "an unreadable lock file")
-                try:
-                    self.path.unlink()
-                except FileNotFoundError:
-                    pass
-                continue
-            with os.fdopen(fd, "w") as f:
-                f.write(jsonio.dumps(me))
-            _HELD[where] = 1
-            return
-        raise SweepLockedError(f"{self.path.parent}: could not take its lock {self.path}")
-
-    def release(self) -> None:
-        where = str(self.path)
-        if not _HELD.get(where):
-            return
-        _HELD[where] -= 1
-        if _HELD[where]:
-            return
-        del _HELD[where]
-        holder = self._holder()
-        if holder is not None and holder.get("pid") == os.getpid():
-            try:
-                self.path.unlink()
-            except FileNotFoundError:
-                pass
-
-    def _holder(self) -> dict | None:
-        rec, problem = read_json(self.path)
-        return rec if problem is None and isinstance(rec, dict) else None
-
-
-def _stale(holder: dict) -> bool:
-    """Whether the lock ``holder`` wrote is of a dead process (or of this one) on this host;
-    a process on another host cannot be asked, so its lock is never stale here."""
-    if holder.get("host") != socket.gethostname():
-        return False
-    pid = holder.get("pid")
-    if not isinstance(pid, int) or pid <= 0 or pid == os.getpid():
-        return True
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return True
-    except PermissionError:                  # alive, another user's
-        return False
-    try:                                     # alive: the same program, or a reused pid?
-        running = Path(f"/proc/{pid}/cmdline").read_bytes().replace(b"\0", b" ").decode()
-    except (OSError, UnicodeDecodeError):    # no /proc here: trust the pid
-        return False
-    return str(holder.get("command", "")) not in running
-
-
-def _age(path: Path) -> float:
-    try:
-        return time.time() - path.stat().st_mtime
-    except OSError:
-        return float("inf")
-
-
-def _describe(holder: dict) -> str:
-    return (f"process {holder.get('pid')} on {holder.get('host')} since "
-            f"{holder.get('started')} ({holder.get('command')})")
-
-
-def _locked_message(out: Path, holder: dict) -> str:
-    other = holder.get("host") != socket.gethostname()
-    return (f"{out} is in use by {_describe(holder)}; wait for it to finish or use another "
-            f"--out" + (f" (if it is no longer running on {holder.get('host')}, delete "
-                        f"{out / LOCK_NAME})" if other else ""))
 
 
 def __getattr__(name: str):

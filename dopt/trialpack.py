@@ -246,7 +246,7 @@ def write_pack(folder: Path | str, lines: dict[str, str]) -> Path:
     back = {k: t.text for k, t in read_pack(folder).items()}
     if back != lines:
         if old is not None:
-            path.write_bytes(old)
+            replace_atomic(path, old, suffix=".jsonl.gz", fsync=True)
         raise RuntimeError(f"trial pack {path} does not read back as written")
     return path
 

@@ -184,15 +184,17 @@ def write_summary(summary: dict, out: Path, record: Path | None, script: str, ar
     """Add this run's provenance (``script`` and its flags: ``argv``, or ``sys.argv[1:]`` when
     None) and the trials its sweeps reused deliberately across code changes ("reused_across_code":
     {key: why}, only when there are any) to ``summary``, write it to OUT/summary.json and, with
-    --record, to that path too. Returns the JSON text.
+    --record, to that path too, each atomically (``dopt.atomic``). Returns the JSON text.
 
     Raises:
+        OSError: a file cannot be written (a full disk): it names the file, which is left as
+            it was.
         RuntimeError: --record from uncommitted code, outside git, or from code that changed
             during the run (HEAD is not the commit the provenance names, or the one the last
             sweep of this process ran at); the --record file is then not written
             (OUT/summary.json is).
     """
-    from dopt import jsonio
+    from dopt import atomic, jsonio
     from dopt.provenance import code_state, provenance  # pure Python: no MuJoCo, no torch
     from dopt.sweep import current_code, take_deliberate_reuse
 
@@ -202,7 +204,7 @@ def write_summary(summary: dict, out: Path, record: Path | None, script: str, ar
     summary["provenance"] = provenance([script, *(sys.argv[1:] if argv is None else argv)],
                                        root)
     text = jsonio.dumps(summary, indent=indent)
-    (Path(out) / "summary.json").write_text(text)
+    atomic.write_text(Path(out) / "summary.json", text)
     if record:
         state = code_state(root)
         problem = state.record_problem()
@@ -213,8 +215,7 @@ def write_summary(summary: dict, out: Path, record: Path | None, script: str, ar
                            f"HEAD is now {state.commit})")
         if problem is not None:
             raise RuntimeError(f"{record} is not written: {problem}")
-        Path(record).parent.mkdir(parents=True, exist_ok=True)
-        Path(record).write_text(text)
+        atomic.write_text(record, text)
     return text
 
 
@@ -224,7 +225,7 @@ def record_figure(figure: Path, record: Path | None) -> Path | None:
     docs layout: docs/results/X.json, docs/images/X.png), else <record's name>.png beside the
     record. Call it after ``write_summary`` wrote the record. Returns the copy's path; None
     without --record or without the figure (matplotlib not installed)."""
-    import shutil
+    from dopt import atomic
 
     if record is None or not Path(figure).is_file():
         return None
@@ -233,5 +234,5 @@ def record_figure(figure: Path, record: Path | None) -> Path | None:
               else record.parent)
     folder.mkdir(parents=True, exist_ok=True)
     dest = folder / f"{record.stem}.png"
-    shutil.copyfile(figure, dest)
+    atomic.copy_file(figure, dest)
     return dest

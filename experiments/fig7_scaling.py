@@ -50,6 +50,9 @@ from cli_args import (
 from pick_sweep import SCHEMA, cem_trial, iterations_held
 from sweep_console import out_lock, run_with_console
 
+from dopt import atomic
+from dopt.rollout import share_cores
+from dopt.tasks.pick.picker import MOVE_RULES
 from dopt.trialpack import is_stored_trial, read_trial_text
 from planners.pick_place.scaling import (
     COMPARED,
@@ -81,7 +84,12 @@ def parser() -> argparse.ArgumentParser:
                     default=",".join(SCALING_METHODS),
                     help="comma-separated subset of " + ", ".join(SCALING_METHODS))
     ap.add_argument("--workers", type=positive_int, default=1,
-                    help="trials at once (processes; default 1)")
+                    help="trials at once (processes; default 1); the cores are shared out "
+                         "over them as simulation threads")
+    ap.add_argument("--move", choices=MOVE_RULES, default=None,
+                    help="how long each action's move lasts: fixed (the default) or sized "
+                         "(as long as its own displacement takes; PickPlaceSettings."
+                         "picker_move)")
     ap.add_argument("--out", type=output_dir, default=None,
                     help="the run's folder (default results/fig7_scaling_<goal>)")
     ap.add_argument("--record", type=output_file, default=None,
@@ -118,7 +126,7 @@ def copy_finished(trials, source: Path, out: Path) -> int:
         src, dst = source / "trials" / f"{t.key}.json", dest / f"{t.key}.json"
         if dst.exists() or is_stored_trial(dst) or not is_stored_trial(src):
             continue
-        dst.write_text(read_trial_text(src))
+        atomic.write_text(dst, read_trial_text(src))
         copied += 1
     return copied
 
@@ -142,12 +150,14 @@ def _experiment(args, argv) -> int:
     """The sweep, the summary, the plot and the printed verdict."""
     start = time.perf_counter()
     out = args.out
-    threads = 1 if args.workers > 1 else 0
-    trials = scaling_trials(args.goal, args.sizes, range(args.seeds), args.methods, threads)
+    n_trials = len(args.sizes) * args.seeds * len(args.methods)
+    threads = share_cores(min(args.workers, n_trials))
+    trials = scaling_trials(args.goal, args.sizes, range(args.seeds), args.methods, threads,
+                            args.move)
     if args.reuse_from is not None:
         print(f"copied {copy_finished(trials, args.reuse_from, out)} finished trials from "
               f"{args.reuse_from}")
-    settings = {n: scaling_settings(args.goal, n, threads) for n in args.sizes}
+    settings = {n: scaling_settings(args.goal, n, threads, args.move) for n in args.sizes}
     per_trial = next(iter(settings.values())).cem.iterations   # one stage: diagonal, side
     res = run_with_console(
         functools.partial(cem_trial, blowup_out=str(out)), trials, out, unit="it",
@@ -209,7 +219,8 @@ def plot(path: Path, stats: dict, goal: str) -> bool:
     # the verdict line is longer than the figure is wide: one line per compared method
     fig.suptitle(f"{goal}: " + "\n".join(stats["verdict"].split("; ")), fontsize=8)
     fig.tight_layout()
-    fig.savefig(path, dpi=120)
+    with atomic.writing(path) as tmp:
+        fig.savefig(tmp, dpi=120)
     plt.close(fig)
     return True
 

@@ -57,7 +57,7 @@ from deformables import (
 )
 from deformables.cloth import PANEL_MODES
 from deformables.goals import CLOTH_REFERENCE_KEYS, TRIANGULATIONS, check_cloth_size
-from dopt import jsonio
+from dopt import atomic, jsonio
 from dopt.provenance import code_version
 from dopt.tasks.pick.cloth_scene import PHYSICS_PRESETS
 
@@ -92,7 +92,7 @@ def record(result) -> dict:
 
 
 def write_curve(path: Path, result) -> None:
-    with path.open("w", newline="") as handle:
+    with atomic.writing(path) as tmp, open(tmp, "w", newline="") as handle:
         writer = csv.writer(handle)
         writer.writerow(["size", "error", "threshold", "accepted"])
         for size, error in zip(result.sizes, result.errors, strict=True):
@@ -129,7 +129,8 @@ def plot_task(path: Path, task: str, goal, result, z_scale: float) -> None:
         ax.set_title(f"{title}: {result.n_elements} elements, {result.n_keys} keys")
     axes[1].legend(loc="best", fontsize=8)
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
+    with atomic.writing(path) as tmp:
+        fig.savefig(tmp, dpi=110)
     plt.close(fig)
 
 

@@ -47,6 +47,7 @@ from cli_args import (
     write_summary,
 )
 
+from dopt import atomic
 from dopt.stats import mean_ci
 from dopt.sweep import Trial, run_sweep
 from dopt.view.blowup import retire_captures
@@ -175,7 +176,8 @@ def render_strip(path, arm, states) -> None:
     points = np.concatenate([arm.positions(), arm.positions() + [0, 0, 0.25]])
     cam = fit_camera(points, azimuth=200.0, elevation=-35.0, fill=0.8)
     frames = render_states(arm.model, np.asarray(states), SNAPSHOT_SPEC, cam, 320, 240)
-    iio.imwrite(path, np.concatenate(list(frames), axis=1))
+    with atomic.writing(path) as tmp:
+        iio.imwrite(tmp, np.concatenate(list(frames), axis=1))
 
 
 def parse_args(argv=None) -> argparse.Namespace:

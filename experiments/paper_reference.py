@@ -39,7 +39,7 @@ from pathlib import Path
 
 from cli_args import EPILOG, ArgumentParser, existing_dir, guarded, output_file
 
-from dopt import jsonio
+from dopt import atomic, jsonio
 from planners.svr_mpc import TABLE1_ROWS, row_name
 from planners.svr_mpc.authors_data import RAND_MIN_RHO, RAND_THETA, TASK_DIRS, authors_table1
 
@@ -218,8 +218,7 @@ def main(argv=None) -> int:
 
     summary["provenance"] = provenance(["experiments/paper_reference.py",
                                         *(sys.argv[1:] if argv is None else argv)])
-    args.record.parent.mkdir(parents=True, exist_ok=True)
-    args.record.write_text(jsonio.dumps(summary, indent=2))
+    atomic.write_text(args.record, jsonio.dumps(summary, indent=2))
     return 0
 
 

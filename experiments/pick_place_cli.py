@@ -43,9 +43,12 @@ from pick_sweep import iterations_held as _iterations_held
 from pick_sweep import run_trials as _run
 from sweep_console import out_lock
 
+from dopt import atomic
+from dopt.rollout import share_cores
 from dopt.stats import mean_ci
 from dopt.sweep import Trial, is_finished
 from dopt.tasks.pick.cloth_scene import PHYSICS_PRESETS
+from dopt.tasks.pick.picker import MOVE_RULES
 from planners.pick_budget import budget_problem
 from planners.pick_place import (
     GOALS,
@@ -126,9 +129,15 @@ def parser(task: str, doc: str, help_: dict) -> argparse.ArgumentParser:
                     help="settle CEM's sampled rollouts until the particles' RMS speed is below "
                          "this (default: every sample settles the picker's full time; "
                          "executed plans always do)")
+    ap.add_argument("--move", choices=MOVE_RULES, default=None,
+                    help="how long each action's move lasts: fixed (the default), as long as "
+                         "the bound box's diagonal takes at the picker's speed; sized, as long "
+                         "as the action's own displacement takes (fewer steps; not with "
+                         "--rest-speed)")
     ap.add_argument("--threads", type=nonneg_int, default=0,
-                    help="simulation threads per trial (0, the default: one per core, or one "
-                         "with --workers above 1)")
+                    help="simulation threads per trial (0, the default: the cores shared out "
+                         "over the trials that run at once: all of them for one, one each "
+                         "with --workers as many as the cores)")
     ap.add_argument("--workers", type=positive_int, default=1,
                     help="trials run at once on a local process pool (default %(default)s: "
                          "one after another in this process, with a bar of CEM iterations)")
@@ -150,16 +159,17 @@ def parse(ap: argparse.ArgumentParser, task: str, argv) -> tuple[argparse.Namesp
                                      protocol=args.preset)
         cem = {k: getattr(args, k) for k in ("population", "elites", "iterations", "horizon")
                if getattr(args, k) is not None}
-        threads = 1 if args.threads == 0 and args.workers > 1 else args.threads
+        if args.seeds is None:
+            args.seeds = PROTOCOL_SEEDS[args.preset] if named else FIRST_SEEDS
+        trials = (1 if args.quick else args.seeds) * len(args.methods)
+        threads = args.threads or share_cores(min(args.workers, trials))
         s = replace(s, cem=replace(s.cem, **cem), threads=threads,
                     n=args.n or s.n, bound=args.bound or s.bound,
                     physics=args.physics or s.physics,
                     planning_physics=args.planning_physics or s.planning_physics,
                     max_stretch=args.max_stretch,
                     picker_speed=args.picker_speed or s.picker_speed,
-                    rest_speed=args.rest_speed)
-        if args.seeds is None:
-            args.seeds = PROTOCOL_SEEDS[args.preset] if named else FIRST_SEEDS
+                    rest_speed=args.rest_speed, picker_move=args.move)
     except (ValueError, TypeError) as e:
         ap.error(str(e))
     if (too_big := budget_problem(s)) is not None:   # what the sizes need, before any is made
@@ -276,7 +286,7 @@ def _duration(seconds: float) -> str:
 # --------------------------------------------------------------------------------- report
 def write_curves(path: Path, results: list) -> None:
     """CSV: method, seed, iteration, stage, best_cost_m (scripted: one row per stage)."""
-    with open(path, "w", newline="") as f:
+    with atomic.writing(path) as tmp, open(tmp, "w", newline="") as f:
         w = csv.writer(f)
         w.writerow(["method", "seed", "iteration", "stage", "best_cost_m"])
         for r in sorted(results, key=lambda r: (r["method"], r["seed"])):
@@ -323,7 +333,8 @@ def plot_curves(path: Path, results: list, methods, title: str) -> None:
     if ax.get_legend_handles_labels()[0]:          # nothing to label when every trial failed
         ax.legend()
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
+    with atomic.writing(path) as tmp:
+        fig.savefig(tmp, dpi=110)
     plt.close(fig)
 
 
@@ -465,7 +476,8 @@ def write_comparison(path: Path, problem, r: dict) -> None:
     ]
     fig.legend(handles=handles, loc="lower center", ncol=4, frameon=False, fontsize=11,
                bbox_to_anchor=(0.5, 0.0))
-    fig.savefig(path, dpi=100)
+    with atomic.writing(path) as tmp:
+        fig.savefig(tmp, dpi=100)
     plt.close(fig)
 
 
@@ -542,7 +554,8 @@ def write_plan_gif(path: Path, problem, r: dict) -> None:
             draw.text((4, 1 + 15 * k), text, fill=colour, font=ft)
         captioned.append(np.asarray(canvas))
     captioned += [captioned[-1]] * GIF_HOLD
-    iio.imwrite(path, np.stack(captioned), duration=GIF_MS_PER_FRAME, loop=0)
+    with atomic.writing(path) as tmp:
+        iio.imwrite(tmp, np.stack(captioned), duration=GIF_MS_PER_FRAME, loop=0)
 
 
 def _font(size: int):

@@ -41,6 +41,8 @@ from cli_args import EPILOG, ArgumentParser, existing_dir, guarded
 from report_base import ROOT, load_results
 from report_stale import SNAPSHOT, base_commit, needs_backfill
 
+from dopt import atomic
+
 #: resolves the pick-and-place presets of the code it is run in (this checkout, or a commit's
 #: code extracted elsewhere): prints {"physics", "protocols", "resolved"} as JSON
 PICK_RESOLVER = r'''
@@ -166,8 +168,7 @@ def main(argv=None) -> int:
               file=sys.stdout if current else sys.stderr)
         return 0 if current else 1
     if not current:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        path.write_text(text)
+        atomic.write_text(path, text)
     print(f"{'wrote' if not current else 'up to date:'} {path}")
     return 0
 

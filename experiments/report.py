@@ -108,6 +108,7 @@ from report_map import HEADLINES_TITLE, map_block
 from report_stale import (
     SNAPSHOT,
     SVR_KINDS,
+    code_findings,
     load_snapshot,
     needs_backfill,
     stale_findings,
@@ -132,6 +133,8 @@ from report_svr import (
 )
 from report_sweeps import mpc_sweeps_in_progress_section, sweeps_in_progress_section
 from report_trials import first_params, summary_trials, trials_line, uncommitted_note
+
+from dopt import atomic
 
 
 @dataclass(frozen=True)
@@ -335,9 +338,9 @@ def headlines_section(results: list[Result], page: Path) -> list[str]:
                       f"method's mean minus Simple's ± its Welch 95 % interval; {HOLM_NOTE}):",
                   "", *claims]
     if beside:
-        lines += ["", "Table 1 under `--preset paper` against the paper's printed Table 1 "
-                      "(MPC cost / baseline, means; the rows side by side are in \"State-vector "
-                      "reduction, Table 1 beside the paper\" below):", ""]
+        lines += ["", "Table 1 under `--preset authors` (else `paper`) against the paper's "
+                      "printed Table 1 (MPC cost / baseline, means; the rows side by side are "
+                      "in \"State-vector reduction, Table 1 beside the paper\" below):", ""]
         lines += [f"- {task}: paper cheapest first {', '.join(o['paper_order'][:3])}; ours "
                   f"{', '.join(o['our_order'][:3])}. {ordering_sentence(o)}; {source(r, page)}."
                   for task, r in beside
@@ -382,6 +385,8 @@ def annotate(results: list[Result], results_dir: Path) -> None:
         r.notes["trials_line"] = trials_line(r, info)
         params = first_params(info) if r.kind in SVR_KINDS else None
         findings = _rendered(r, stale_findings, r, snap, params)
+        if findings is not None:
+            findings = findings + code_findings(r, results_dir)
         r.notes["stale"] = findings
         line = stale_note(findings)
         if findings is None and snap is not None and needs_backfill(r):
@@ -458,8 +463,7 @@ def main(argv=None) -> int:
             print("up to date: " + ", ".join(_display(p) for p in gen["files"]))
         return 1 if stale else 0
     for p in stale:
-        p.parent.mkdir(parents=True, exist_ok=True)
-        p.write_text(gen["files"][p])
+        atomic.write_text(p, gen["files"][p])
     print("wrote " + (", ".join(_display(p) for p in stale) or "nothing (up to date)"))
     return 0
 

@@ -155,6 +155,14 @@ def mm(x, digits: int = 1) -> str:
     return num(x, digits, 1e3)
 
 
+def travel_cell(authors: dict | None, ours: dict) -> str:
+    """How far the goal object came toward its goal (median, cm): the authors' run of the row
+    (a summary's "authors_rows", ``--authors-data``) / ours ("-" where either is unknown)."""
+    def cm(v):
+        return "-" if not isinstance(v, (int, float)) else f"{100 * v:.1f}"
+    return f"{cm((authors or {}).get('travel_median'))} / {cm(ours.get('travel_median'))}"
+
+
 def pm(mean: str, ci: str) -> str:
     """"mean ± ci", or the mean alone when there is no interval."""
     return mean if ci == "n/a" or mean == "n/a" else f"{mean} ± {ci}"

@@ -114,6 +114,7 @@ def fig7_detail(r: Result, page: Path, results: list[Result]) -> list[str]:
                   + "".join(f", {label} {s[k]}" for k, label in (
                       ("planning_physics", "CEM plans on preset"),
                       ("picker_speed", "picker speed (m/s)"),
+                      ("picker_move", "picker move"),
                       ("rest_speed", "samples settle until at rest below (m/s)"),
                       ("max_stretch", "stretch limit")) if s.get(k) is not None)
                   + f"; CEM population {cem.get('population')}, elites {cem.get('elites')}, "

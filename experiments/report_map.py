@@ -213,7 +213,7 @@ def table1_line(results: list[Result], preset: str = "authors") -> str | None:
     if not parts:
         return None
     if versus and all(len(v) == len(tasks) for v in versus.values()):
-        text = (f"SVR rows cheaper than {' / '.join(versus)} (Holm): "
+        text = (f"SVR cheaper:dearer/n vs {', '.join(versus)} (Holm): "
                 + "; ".join([f"{task} {', '.join(v[i] for v in versus.values())}"
                              for i, task in enumerate(tasks)] + few))
     else:
@@ -224,9 +224,9 @@ def table1_line(results: list[Result], preset: str = "authors") -> str | None:
 
 
 def versus_counts(v: dict | None) -> dict[str, str]:
-    """{reference: "a/n"}: of a summary's SVR rows, how many Holm finds cheaper than each
-    reference ({} without ``versus``)."""
-    return {ref: f"{c['cheaper']}/{c['n']}" for ref, c in verdict_counts(v).items()}
+    """{reference: "a:b/n"}: of a summary's n SVR rows, how many Holm finds cheaper (a) and
+    dearer (b) than each reference ({} without ``versus``)."""
+    return {ref: f"{c['cheaper']}:{c['dearer']}/{c['n']}" for ref, c in verdict_counts(v).items()}
 
 
 def _fig4_files(results: list[Result], problem: str) -> list[Result]:

@@ -1,5 +1,6 @@
 """Stale results: a result recorded on a named preset (a physics preset, a protocol's budget,
-the SVR protocol) that no longer resolves to the fields it ran with.
+the SVR protocol) that no longer resolves to the fields it ran with, or whose trials ran on
+code that has changed since in the files that compute them (``code_findings``).
 
 The presets live in code that needs torch and MuJoCo, which experiments/report.py does not
 load. So ``python experiments/presets_snapshot.py`` writes what every preset resolves to today
@@ -29,9 +30,11 @@ record does not hold (added to a config since) are not compared.
 
 from __future__ import annotations
 
+import functools
 import json
 import re
 import shlex
+import subprocess
 from pathlib import Path
 
 from report_base import Result
@@ -48,16 +51,27 @@ OWN_PICKER_FIELDS = ("bound", "workspace")
 #: the SVRMPCSettings fields a Table 1 protocol sets (the rest are the row's and the run's)
 SVR_PRESET_FIELDS = ("cost", "warm_start", "control_noise", "clock", "nominal_threads",
                      "synchronous", "problem", "layouts", "islands", "fd_centered", "fd_eps",
-                     "keypoints", "fd_skip", "box_qp")
+                     "keypoints", "fd_skip", "box_qp", "executor")
 #: experiments/mpc.py's flags -> the SVRMPCSettings fields they set
 SVR_FLAGS = {"--cost": ("cost",), "--control-noise": ("control_noise",), "--clock": ("clock",),
-             "--clock-ms": ("clock", "clock_ms"),
+             "--clock-ms": ("clock", "clock_ms"), "--executor": ("executor",),
              "--warm-start": ("warm_start",), "--nominal-threads": ("nominal_threads",),
              "--fd": ("fd_centered", "fd_eps"), "--fd-skip": ("keypoints", "fd_skip"),
              "--keypoints": ("keypoints", "fd_skip"), "--box-qp": ("box_qp",),
              "--islands": ("islands",), "--layouts": ("layouts",)}
 #: the experiment kinds that run on Table 1's protocol
 SVR_KINDS = ("table1", "svr_explain", "clock_check", "fig4")
+#: the files that compute an MPC trial on Table 1's protocol (git pathspecs): the runtime
+#: (dopt, less the lab: sweeps, packs, file writing, provenance, statistics, the command-line
+#: helpers, the viewer and its blow-up captures) and the SVR slice's planners; a change
+#: elsewhere (summaries, reports, the viewer) cannot change a trial's outcome
+SVR_COMPUTE_PATHS = ("dopt", "planners/ilqr.py", "planners/svr.py", "planners/keypoints.py",
+                     "planners/_checks.py", "planners/svr_mpc/episode.py",
+                     "planners/svr_mpc/optimisers.py", "planners/svr_mpc/settings.py",
+                     "planners/svr_mpc/authors_clock.py",
+                     *(f":(exclude)dopt/{f}" for f in (
+                         "sweep*.py", "trialpack.py", "jsonio.py", "atomic.py", "provenance.py",
+                         "stats.py", "multiple.py", "cli.py", "bench", "render.py", "view")))
 
 
 def load_snapshot(results_dir: Path) -> dict | None:
@@ -234,6 +248,74 @@ def stale_findings(r: Result, snap: dict | None, params: dict | None = None) -> 
     return []
 
 
+def _head(root: str) -> str | None:
+    """HEAD's sha of the git checkout at ``root`` (None: not one)."""
+    try:
+        proc = subprocess.run(["git", "-C", root, "rev-parse", "HEAD"], capture_output=True,
+                              text=True, timeout=60, check=False)
+    except (OSError, subprocess.TimeoutExpired):
+        return None
+    return proc.stdout.strip() if proc.returncode == 0 else None
+
+
+@functools.cache
+def _changed_since(root: str, commit: str, head: str) -> tuple[str, ...] | None:
+    """The files of ``SVR_COMPUTE_PATHS`` that differ between ``commit`` and ``head`` in the
+    git checkout at ``root``; None where git cannot say (a commit it does not know)."""
+    try:
+        proc = subprocess.run(["git", "-C", root, "diff", "--name-only", commit, head, "--",
+                               *(f":(top{',exclude' if p.startswith(':(exclude)') else ''})"
+                                 + p.removeprefix(":(exclude)") for p in SVR_COMPUTE_PATHS)],
+                              capture_output=True, text=True, timeout=60, check=False)
+    except (OSError, subprocess.TimeoutExpired):
+        return None
+    return tuple(proc.stdout.split()) if proc.returncode == 0 else None
+
+
+def _verification(root: Path, r: Result, head: str) -> str | None:
+    """What ``verified/<result>`` (experiments/verify_trials.py) says of ``r`` today: None
+    without one, or when the code that computes trials changed since it ran; "" where every
+    rerun gave its recorded outcome at a commit with today's code; a finding where a rerun
+    differed."""
+    path = Path(root) / "verified" / r.name
+    try:
+        v = json.loads(path.read_text())
+        commit = v["provenance"]["git_commit"]
+    except (OSError, ValueError, KeyError, TypeError):
+        return None
+    base = base_commit(commit)
+    if not base or base != commit or _changed_since(str(root), base, head) != ():
+        return None
+    if v.get("all_equal") is True:
+        return "verified"
+    return (f"the code at {base[:8]} reruns {sum(not t.get('equal') for t in v['trials'])} of "
+            f"{len(v['trials'])} sampled trials to other outcomes (verified/{r.name})")
+
+
+def code_findings(r: Result, root: Path) -> list[str]:
+    """Per commit its trials ran on (``trial_commits``), of a result on Table 1's protocol:
+    the files that compute its trials and changed since, one finding each (none: the code is
+    the same, git cannot say, or a sample of its trials reran to the last bit at a commit whose
+    code is today's: ``experiments/verify_trials.py``)."""
+    if r.kind not in SVR_KINDS or not isinstance(r.data.get("trial_commits"), dict):
+        return []
+    head = _head(str(root))
+    if head is None:
+        return []
+    checked = _verification(root, r, head)
+    if checked is not None and not checked.startswith("the code "):
+        return []                        # a sample reran to the last bit since the change
+    out = [checked] if checked else []
+    for commit in sorted(r.data["trial_commits"]):
+        base = base_commit(commit)
+        changed = _changed_since(str(root), base, head) if base else None
+        if changed:
+            more = f" and {len(changed) - 3} more" if len(changed) > 3 else ""
+            out.append(f"the code that computes its trials changed since {base[:8]} ("
+                       + ", ".join(changed[:3]) + more + ")")
+    return out
+
+
 def stale_note(findings: list[str] | None, *, short: bool = False) -> str:
     """How a page shows a result's findings: "" when current; the README (``short``) gives
     the first finding and how many more."""
@@ -242,9 +324,11 @@ def stale_note(findings: list[str] | None, *, short: bool = False) -> str:
     if short:
         more = f" (and {len(findings) - 1} more)" if len(findings) > 1 else ""
         return f"**stale**: {_arrows(findings[0])}{more}"
-    return ("**Stale**: recorded on presets that today's code resolves otherwise ("
-            + "; ".join(_arrows(f) for f in findings) + "); rerun the command to record it "
-            "on today's.")
+    presets = [_arrows(f) for f in findings if not f.startswith("the code ")]
+    code = [f for f in findings if f.startswith("the code ")]
+    return ("**Stale**: " + "; ".join(
+        ([f"recorded on presets that today's code resolves otherwise ({'; '.join(presets)})"]
+         if presets else []) + code) + "; rerun the command to record it on today's code.")
 
 
 def _arrows(text: str) -> str:

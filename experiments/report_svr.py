@@ -21,6 +21,7 @@ from report_base import (
     source_lines,
     span,
     table,
+    travel_cell,
 )
 from report_stats import (
     CORRECTION,
@@ -219,16 +220,17 @@ def paper_table1(results: list[Result]) -> tuple[Result | None, dict]:
 def paper_preset_table1(results: list[Result], task: str,
                         presets: tuple[str, ...] = ("authors", "paper")) -> Result | None:
     """The Table 1 file of ``task`` run under the authors' protocol (not quick), if any: the
-    newest of the first of ``presets`` that has one (by default on the authors' problems,
-    preset ``authors``, where there is one, else on ours, ``paper``), with an SVR row (not a
-    run of other optimisers' rows only)."""
+    newest (by the date its trials' run recorded) of the first of ``presets`` that has one
+    (by default on the authors' problems, preset ``authors``, where there is one, else on
+    ours, ``paper``), with an SVR row (not a run of other optimisers' rows only)."""
     for preset in presets:
         chosen = [r for r in results if r.kind == "table1" and r.data.get("task") == task
                   and r.data.get("preset") == preset and not r.quick
+                  and r.data.get("cost") != "ee"          # our cost term, not the paper's
                   and not r.data.get("derivatives_effect") and r.data.get("clock_ms") is None
                   and any(k.startswith(("sum-", "svd-")) for k in r.data.get("methods", {}))]
-        if chosen:
-            return chosen[-1]
+        if chosen:                       # the newest run (by its own date)
+            return max(chosen, key=lambda r: str(r.origin.get("date", "")))
     return None
 
 
@@ -322,7 +324,8 @@ def table1_vs_paper_section(results: list[Result], page: Path) -> list[str]:
              "mean ± 90 % CI of the per-seed cost / baseline, outliers left out; the median of "
              "the per-seed ratios; "
              "the geometric mean of the per-seed ratios with its 90 % CI), the authors' data's "
-             "median final cost over baseline's (absent for rand and naive), DoFs and "
+             "median final cost over baseline's (a robust summary; their own statistic, the fenced "
+             "mean, is the paper's column), DoFs and "
              "optimisation time. Paired ratios and medians are ours only: the paper prints "
              "means.", ""]
     for task, r in ours.items():
@@ -345,13 +348,15 @@ def table1_vs_paper_section(results: list[Result], page: Path) -> list[str]:
                          num((data_rows.get(row) or {}).get("median_ratio")),
                          f"{num(p.get('n_dofs'), 1)} / "
                          f"{num(m.get('n_dofs_mean', m.get('dofs_mean')), 1)}",
-                         f"{num(p.get('opt_ms'), 0)} / {num(m.get('opt_ms_mean'), 0)}"])
+                         f"{num(p.get('opt_ms'), 0)} / {num(m.get('opt_ms_mean'), 0)}",
+                         travel_cell((d.get("authors_rows") or {}).get(row), m)])
         o = orderings(*_table1_columns(pub, d))
         alike = equal_lag_table1(results, task)
         lines += [f"### {task}: `{r.name}` beside the paper", "",
                   *table(["row", "paper MPC cost", "ours mean", "ours median ratio",
                           "ours paired geomean [CI90]", "authors' data median ratio",
-                          "DoFs paper / ours", "opt. ms paper / ours"], rows), "",
+                          "DoFs paper / ours", "opt. ms paper / ours",
+                          "goal object travel, cm: authors / ours"], rows), "",
                   f"Cheapest first, paper: {', '.join(o['paper_order'])}; ours: "
                   f"{', '.join(o['our_order'])}.", "", ordering_sentence(o) + ".", "",
                   *equal_lag_lines(alike, pub),
@@ -581,7 +586,10 @@ def paper_svr_section(results: list[Result], page: Path) -> list[str]:
 
     return section("The state-vector-reduction authors' own data",
                    "Their run summaries (`experiments/paper_reference.py`): per Table 1 row the "
-                   "runs, the median final cost over the baseline's (their Table 1's statistic), "
-                   "mean final goal distance, mean DoFs and optimisation time. Rows their data "
-                   "does not name (rand, naive) are absent; a second plain iLQR run per task is "
-                   "not identified in it.", results, page, body)
+                   "runs, the median final cost over the baseline's (a robust summary; their "
+                   "Table 1's statistic is the fenced mean, `dopt.stats.authors_mean_ci`, which "
+                   "reproduces the printed table), mean final goal distance, mean DoFs and "
+                   "optimisation time, rows named by their settings here (rand and naive are "
+                   "identified by `planners.svr_mpc.authors_data.authors_rows`: rand the Sum run "
+                   "with theta 5 and rho >= 1e6, naive the faster plain iLQR run).",
+                   results, page, body)

@@ -48,7 +48,7 @@ from cli_args import EPILOG, ArgumentParser, existing_dir, guarded, output_dir
 from report_base import ROOT, Result, load_results
 from report_trials import TrialInfo, summary_trials, uncommitted
 
-from dopt import jsonio
+from dopt import atomic, jsonio
 
 #: the fields each kind of summary computes from its trials
 TRIAL_FIELDS = {
@@ -312,8 +312,7 @@ def main(argv=None) -> int:
             summary = resummarized(r, found)
             summary["provenance"] = provenance(["experiments/resummarize.py", *argv])
             target = r.path if args.in_place else Path(args.out) / r.name
-            target.parent.mkdir(parents=True, exist_ok=True)
-            target.write_text(jsonio.dumps(summary, indent=2))
+            atomic.write_text(target, jsonio.dumps(summary, indent=2))
             written.append(str(target))
     print(f"{len(mismatched)} summaries do not match their trials"
           + (f": {', '.join(mismatched)}" if mismatched else "")

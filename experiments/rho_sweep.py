@@ -28,6 +28,7 @@ import numpy as np
 from cli_args import EPILOG, ArgumentParser, guarded, number_list, record_figure, write_summary
 from sweep_console import out_lock
 
+from dopt import atomic
 from planners.svr_mpc import fig4_fields, row_label
 
 
@@ -100,7 +101,8 @@ def _main(args, paper: dict | None, argv) -> int:
                    **fields, "failed": failed, "trial_commits": res.commits},
                   args.out, args.record, "experiments/rho_sweep.py", argv)
     if rows:
-        with open(args.out / "rho_sweep.csv", "w", newline="") as f:
+        with atomic.writing(args.out / "rho_sweep.csv") as tmp, \
+                open(tmp, "w", newline="") as f:
             w = csv.DictWriter(f, fieldnames=list(rows[0]))
             w.writeheader()
             w.writerows(rows)
@@ -145,7 +147,8 @@ def plot(rows, thetas, path, task, method, paper: dict | None = None) -> None:
     a.axhline(1.0, color="k", lw=0.5)
     fig.suptitle(f"{task}: {method}")
     fig.tight_layout()
-    fig.savefig(path, dpi=120)
+    with atomic.writing(path) as tmp:
+        fig.savefig(tmp, dpi=120)
     plt.close(fig)
 
 

@@ -38,6 +38,7 @@ import numpy as np
 from cli_args import EPILOG, ArgumentParser, guarded, positive_int, write_summary
 from sweep_console import out_lock
 
+from dopt import atomic
 from dopt.sweep import Schema
 from planners.svr_mpc import row_label, run_svr_mpc, split_params
 
@@ -318,7 +319,8 @@ def plot(rows: dict, path, task: str) -> None:
         ax.grid(alpha=0.3)
         ax.legend(fontsize=8)
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
+    with atomic.writing(path) as tmp:
+        fig.savefig(tmp, dpi=110)
     plt.close(fig)
 
 

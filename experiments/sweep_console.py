@@ -6,7 +6,7 @@
   pool's and Ray's running trials included (their ``report``), starting at what the folder
   already holds; a trial that ends early (an MPC episode that succeeds) tops the bar up;
 - log records and Python warnings printed above the bar, never on its line (tqdm's logging
-  redirect; the pool's workers send theirs to this process, ``dopt.sweep_exec``).
+  redirect; the pool's workers send theirs to this process, ``dopt.sweep_pool``).
 
 Also ``out_lock``: an experiment holds its --out folder's lock (``dopt.sweep.OutLock``) for the
 whole run, so that a second run on the same folder refuses at once, naming the first.

@@ -40,7 +40,9 @@ class ILQRConfig:
     (``mujoco.mju_boxQP``; the gains of clamped controls are 0, as in MuJoCo MPC's iLQG),
     instead of leaving the limits to the clamping of the simulator.
     mu_init/mu_min/mu_max/mu_factor: Levenberg-Marquardt regularisation of Q_uu (authors:
-    0.1, 1e-4..10, x10). alphas: line-search step sizes tried in parallel."""
+    0.1, 1e-4..10, x10); mu_reset: every ``iterate`` starts from mu_init (beyond the paper: in
+    MPC a mu left at its cap by rejected steps makes later steps nil; the authors' and the
+    default keep mu between calls). alphas: line-search step sizes tried in parallel."""
 
     fd: FDConfig = FDConfig()
     keypoints: KeypointConfig = KeypointConfig()
@@ -49,6 +51,7 @@ class ILQRConfig:
     mu_min: float = 1e-4
     mu_max: float = 10.0
     mu_factor: float = 10.0
+    mu_reset: bool = False
     alphas: tuple[float, ...] = field(default_factory=_default_alphas)
 
     def __post_init__(self):
@@ -144,6 +147,8 @@ class ILQR:
                 T >= 1, a nominal that is not (T+1, ns), bad DoFs or a bad x0 (the rollout
                 service's checks).
         """
+        if self.config.mu_reset:
+            self.mu = self.config.mu_init
         svc, scene = self.service, self.service.scene
         C = scene.dofs() if dofs is None else scene.as_dofs(dofs)
         U = _controls(controls, scene.nu)

@@ -81,13 +81,16 @@ def paper_theta(method: str) -> int:
 class SelectionConfig:
     """method: one of METHODS; rho: importance threshold below which SVR removes a DoF;
     theta: random unused DoFs (re-)introduced per iteration (rand: DoFs besides the robot);
-    g: singular values used by svr-svd. The defaults are the paper's svr-sum row of Table 1
-    (rho 1, theta 10); ``paper_theta(method)`` gives any method's theta."""
+    g: singular values used by svr-svd; keep_costed: the DoFs the cost weights are always in
+    the set, as the robot's (rand and SVR; beyond the paper: a goal object cut from C cannot
+    be moved toward its goal by that optimisation). The defaults are the paper's svr-sum row
+    of Table 1 (rho 1, theta 10); ``paper_theta(method)`` gives any method's theta."""
 
     method: str = "svr-sum"
     rho: float = 1.0
     theta: int = 10
     g: int = 3
+    keep_costed: bool = False
 
     def __post_init__(self):
         if self.method not in METHODS:
@@ -116,6 +119,8 @@ class DofSelector:
         self.nv, self.config, self.rng = nv, config, rng
         self.robot = np.unique(index_array(robot, "robot", nv, allow_empty=True))
         costed = index_array(costed, "costed", nv, allow_empty=True)
+        # DoFs never dropped: the robot's, and with keep_costed those the cost weights
+        self.kept = np.union1d(self.robot, costed) if config.keep_costed else self.robot
         if config.method == "naive":
             self.active = np.union1d(self.robot, costed)
         else:
@@ -126,9 +131,9 @@ class DofSelector:
         """The DoF set for the next optimisation (adds theta random unused DoFs for SVR)."""
         method, theta = self.config.method, self.config.theta
         if method == "rand":
-            others = np.setdiff1d(np.arange(self.nv), self.robot)
+            others = np.setdiff1d(np.arange(self.nv), self.kept)
             pick = self.rng.choice(others, size=min(theta, len(others)), replace=False)
-            self.active = np.union1d(self.robot, pick)
+            self.active = np.union1d(self.kept, pick)
         elif method.startswith("svr"):
             unused = np.setdiff1d(np.arange(self.nv), self.active)
             if len(unused) and theta:
@@ -148,7 +153,7 @@ class DofSelector:
                              f"2 |dofs| = {2 * len(dofs)}")
         imp = importance_sum(K) if method == "svr-sum" else importance_svd(K, self.config.g)
         self.importance = imp.numpy()
-        keep = (self.importance >= self.config.rho) | np.isin(dofs, self.robot)
+        keep = (self.importance >= self.config.rho) | np.isin(dofs, self.kept)
         self.active = np.asarray(dofs)[keep]
         return self.active
 

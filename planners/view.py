@@ -62,12 +62,12 @@ def pick_controls(scene, actions: list) -> tuple[np.ndarray, np.ndarray]:
         particles = np.asarray(stage["particles"], dtype=int)
         if not particles.size:
             continue
-        U = scene.picker.encode(particles[None], np.asarray(stage["displacements"])[None])[0]
-        K = scene.picker.steps_per_action
-        for a, i in enumerate(particles):
-            info += [(k, a, int(i), g)] * K
+        plan = scene.picker.schedule(particles[None],
+                                     np.asarray(stage["displacements"])[None])
+        for a, (i, K) in enumerate(zip(particles, plan.steps[0], strict=True)):
+            info += [(k, a, int(i), g)] * int(K)
             g += 1
-        rows.append(U)
+        rows.append(plan.controls[0])
     nc = scene.picker.ncontrol
     return (np.concatenate(rows) if rows else np.empty((0, nc)),
             np.array(info, dtype=int).reshape(-1, 4))

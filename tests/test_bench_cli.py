@@ -16,6 +16,7 @@ import dopt.bench.cloth_steps
 import dopt.bench.cloth_warp
 import dopt.bench.rollout
 import planners.bench.__main__ as planners_bench
+import planners.bench.budget
 import planners.bench.cem
 import planners.bench.clock
 import planners.bench.ilqr
@@ -40,6 +41,7 @@ def no_run(monkeypatch):
                          (planners.bench.clock, "bench_clock"),
                          (planners.bench.cem, "bench_cem"),
                          (planners.bench.cem, "bench_cem_limit"),
+                         (planners.bench.budget, "bench_cloth_budget"),
                          (planners.bench.physics, "bench_physics"),
                          (planners.bench.settle, "bench_settle"),
                          (deformables_bench, "bench"), (deformables_bench, "paper_scale"),
@@ -68,6 +70,10 @@ BAD = [
     ("planners", ["cem-limit", "--sizes", "10,2"], "argument --sizes: particles per side must "
                                                    "be finite and >= 3, got 2 in '10,2'"),
     ("planners", ["cem-limit", "--iterations", "0"], "argument --iterations: must be >= 1"),
+    ("planners", ["cloth-budget", "--folds", "diagonal,reflective"],
+     "argument --folds: unknown folds"),
+    ("planners", ["cloth-budget", "--n", "2"], "argument --n: must be >= 3, got 2"),
+    ("planners", ["cloth-budget", "--population", "1"], "argument --population: must be >= 2"),
     ("planners", ["settle", "--speeds", "0.01,0"], "argument --speeds: rest speeds must be "
                                                     "finite and > 0, got 0 in '0.01,0'"),
     ("planners", ["settle", "--samples", "1"], "argument --samples: must be >= 2, got 1"),
@@ -99,6 +105,7 @@ def test_a_bad_flag_is_a_usage_error_naming_it(capsys, no_run, package, argv, me
 @pytest.mark.parametrize("package, argv", [("dopt", ["cloth-steps"]),
                                             ("planners", ["ilqr"]),
                                             ("planners", ["cem-limit"]),
+                                            ("planners", ["cloth-budget"]),
                                             ("deformables", ["tasks"])])
 def test_an_unwritable_record_is_a_usage_error(tmp_path, capsys, no_run, package, argv):
     flag = "--out" if package == "deformables" else "--record"

@@ -2,8 +2,8 @@
 
 Every import statement of every module (top level and inside functions) is parsed with ast,
 so a lazy import that runs up the house fails here as well. deformables may import the
-pure-Python modules of dopt, dopt.validation, dopt.provenance and dopt.cli, and importing them
-must not load MuJoCo.
+pure-Python modules of dopt, dopt.validation, dopt.provenance, dopt.cli and dopt.atomic, and
+importing them must not load MuJoCo.
 
 Inside dopt the same holds between its rooms (``room``): the core (every module outside
 dopt/tasks and dopt/bench) imports nothing of ``dopt.tasks``; the two task wings,
@@ -24,14 +24,15 @@ ROOT = Path(__file__).resolve().parents[1]
 #: package -> top-level names its modules must never import
 FORBIDDEN = {
     "dopt": {"planners", "deformables", "experiments"},
-    # deformables may import dopt.validation, dopt.provenance and dopt.cli (ALLOWED)
+    # deformables may import dopt.validation, dopt.provenance, dopt.cli, dopt.atomic (ALLOWED)
     "deformables": {"dopt", "planners", "experiments", "mujoco"},
     "planners": {"experiments"},
 }
 
 
-#: modules importable across the rule above (pure Python, no MuJoCo, no torch)
-ALLOWED = {"dopt.validation", "dopt.provenance", "dopt.cli"}
+#: modules importable across the rule above (pure Python, no MuJoCo, no torch; dopt.atomic:
+#: the one atomic writer of every result file, the benchmarks' included)
+ALLOWED = {"dopt.validation", "dopt.provenance", "dopt.cli", "dopt.atomic"}
 
 
 def imported_roots(path: Path) -> set[str]:

@@ -7,6 +7,7 @@ from __future__ import annotations
 import argparse
 import json
 
+from dopt import atomic
 from dopt.cli import nonneg_int, output_file, positive_int
 
 
@@ -35,9 +36,8 @@ def write_record(path, experiment: str, rows: list[dict], **fields) -> None:
     as a result file ``{"experiment", **fields, "rows", "provenance"}``."""
     from dopt.provenance import provenance
 
-    with open(path, "w") as f:
-        json.dump({"experiment": experiment, **fields, "rows": rows,
-                   "provenance": provenance()}, f, indent=1)
+    atomic.write_text(path, json.dumps({"experiment": experiment, **fields, "rows": rows,
+                                        "provenance": provenance()}, indent=1))
 
 
 def print_json(out: dict | list[dict]) -> None:

@@ -36,6 +36,7 @@ from pathlib import Path
 import mujoco
 import numpy as np
 
+from dopt import atomic
 from dopt.state import INTEGRATION, StateLayout, check_model, check_spec, check_states
 from dopt.validation import check_int, float_array
 
@@ -83,15 +84,17 @@ def save_blowup(out_dir, model: mujoco.MjModel, states: np.ndarray, step: int, r
                          f"{step}")
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    mujoco.mj_saveModel(model, str(out / "model.mjb"), None)
+    with atomic.writing(out / "model.mjb") as tmp:
+        mujoco.mj_saveModel(model, str(tmp), None)
     wrote_xml = _write_xml(out / "model.xml", model, xml)
-    np.save(out / "states.npy", rows)
+    with atomic.writing(out / "states.npy") as tmp:
+        np.save(tmp, rows)
     body = offending_body(model, rows[-1], reason, spec)
     meta = {"format": FORMAT, "step": step, "first_row": first, "reason": reason,
             "body": _body_name(model, body), "body_id": body, "spec": spec, "nstate": ns,
             "rows": len(rows), "label": label, "xml": wrote_xml,
             "created": time.strftime("%Y-%m-%dT%H:%M:%S"), "version": _version()}
-    (out / "blowup.json").write_text(json.dumps(meta, indent=1) + "\n")
+    atomic.write_text(out / "blowup.json", json.dumps(meta, indent=1) + "\n")
     log.warning("blow-up capture %s: step %d, %s (body %s)", out, step, reason, meta["body"])
     return out
 
@@ -250,11 +253,12 @@ def _write_xml(path: Path, model: mujoco.MjModel, xml) -> bool:
     """model.xml from an MjSpec, an MJCF string, or mj_saveLastXML; False when none fits."""
     try:
         if isinstance(xml, mujoco.MjSpec):
-            path.write_text(xml.to_xml())
+            atomic.write_text(path, xml.to_xml())
         elif isinstance(xml, str):
-            path.write_text(xml)
+            atomic.write_text(path, xml)
         elif xml is None:
-            mujoco.mj_saveLastXML(str(path), model)
+            with atomic.writing(path) as tmp:
+                mujoco.mj_saveLastXML(str(tmp), model)
         else:
             raise TypeError(f"xml must be an MJCF string or an MjSpec, got {type(xml).__name__}")
     except (ValueError, RuntimeError, mujoco.FatalError) as e:

@@ -14,6 +14,7 @@ from pathlib import Path
 import mujoco
 import numpy as np
 
+from dopt import atomic
 from dopt.render import OBLIQUE, draw_markers, fit_camera, project
 from dopt.validation import check_int
 from dopt.view.episode import Episode, drawable_state
@@ -64,13 +65,14 @@ def frame_image(ep: Episode, frame: int, width: int = 800, height: int = 600,
 
 
 def write_png(ep: Episode, frame: int, path, width: int = 800, height: int = 600) -> Path:
-    """``frame_image`` written as a PNG at ``path`` (its folder created); returns the path."""
+    """``frame_image`` written as a PNG at ``path`` (its folder created; atomically,
+    ``dopt.atomic``); returns the path."""
     from PIL import Image
 
     image = frame_image(ep, frame, width, height)
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    Image.fromarray(image).save(path)
+    with atomic.writing(path) as tmp:
+        Image.fromarray(image).save(tmp)
     return path
 
 

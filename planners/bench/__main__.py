@@ -1,6 +1,6 @@
-"""python -m planners.bench {ilqr,clock,cem,cem-limit,settle,cloth,rope} [options]: print
-timings as JSON (cem-limit: a table, one line per cloth size; --record writes its rows as
-JSON)."""
+"""python -m planners.bench {ilqr,clock,cem,cem-limit,cloth-budget,settle,cloth,rope}
+[options]: print timings as JSON (cem-limit: a table, one line per cloth size; --record
+writes its rows as JSON)."""
 
 from __future__ import annotations
 
@@ -11,6 +11,7 @@ from dopt.bench.cli import add_common_args, add_record_arg, print_json, write_re
 from dopt.cli import (
     EPILOG,
     ArgumentParser,
+    choices_type,
     guarded,
     int_at_least,
     nonneg_int,
@@ -18,6 +19,7 @@ from dopt.cli import (
     positive_float,
     positive_int,
 )
+from planners.bench.budget import FOLDS
 
 
 def _add_ilqr(sub) -> None:
@@ -92,6 +94,31 @@ def _add_cem_limit(sub) -> None:
     add_record_arg(p, "cem_limit", "as each size finishes")
 
 
+def _add_cloth_budget(sub) -> None:
+    """The ``cloth-budget`` subcommand's flags."""
+    p = sub.add_parser("cloth-budget", help="the same CEM samples of the paper protocol's "
+                                            "cloth folds simulated with the fixed move (one "
+                                            "thread) and with moves sized per sample (all "
+                                            "cores): steps, CPU and wall ratios, paired cost "
+                                            "differences, a Fig. 7 panel's projected time")
+    p.add_argument("--n", type=int_at_least(3), default=20,
+                   help="cloth particles per side (default %(default)s)")
+    p.add_argument("--folds", type=choices_type(FOLDS, "folds"), default=",".join(FOLDS),
+                   help="comma-separated folds (default %(default)s)")
+    p.add_argument("--iterations", type=positive_int, default=3,
+                   help="CEM iterations whose samples are simulated both ways (default "
+                        "%(default)s)")
+    p.add_argument("--population", type=int_at_least(2), default=None,
+                   help="CEM population (default: the protocol's)")
+    p.add_argument("--threads", type=nonneg_int, default=0,
+                   help="simulation threads of the sized moves (0: all cores); the fixed "
+                        "move runs on one")
+    p.add_argument("--seed", type=nonneg_int, default=0, help="seed of the CEM plan")
+    p.add_argument("--quick", action="store_true",
+                   help="a smoke run: an 8 x 8 cloth, one iteration of 4 samples per fold")
+    add_record_arg(p, "cloth_budget", "as each fold finishes")
+
+
 def _add_settle(sub) -> None:
     """The ``settle`` subcommand's flags."""
     p = sub.add_parser("settle", help="what settling CEM's sampled rollouts until at rest cuts "
@@ -138,7 +165,8 @@ def parser() -> argparse.ArgumentParser:
                         epilog=EPILOG)
     sub = ap.add_subparsers(dest="bench", required=True)
 
-    for add in (_add_ilqr, _add_clock, _add_cem, _add_cem_limit, _add_settle, _add_physics):
+    for add in (_add_ilqr, _add_clock, _add_cem, _add_cem_limit, _add_cloth_budget,
+                _add_settle, _add_physics):
         add(sub)
     return ap
 
@@ -173,6 +201,16 @@ def run(args) -> int:
         bench_cem_limit(args.sizes, args.threads, args.iterations, args.seed, args.candidates,
                         args.step_samples, on_row=on_row)
         return 0
+    elif args.bench == "cloth-budget":
+        from planners.bench.budget import bench_cloth_budget
+
+        def on_fold(out: dict) -> None:
+            if args.record:
+                write_record(args.record, "cloth_budget", list(out["folds"].values()),
+                             **{k: v for k, v in out.items() if k != "folds"})
+
+        out = bench_cloth_budget(args.n, args.folds, args.iterations, args.population,
+                                 args.seed, args.threads, args.quick, on_fold=on_fold)
     elif args.bench == "settle":
         from planners.bench.settle import SPEEDS, bench_settle
 

@@ -25,7 +25,6 @@ simulation.
 from __future__ import annotations
 
 import cProfile
-import os
 import pstats
 import time
 from dataclasses import replace
@@ -35,7 +34,7 @@ import mujoco.batch
 import numpy as np
 import torch
 
-from dopt.rollout import RolloutConfig, RolloutService
+from dopt.rollout import RolloutConfig, RolloutService, available_cores
 from dopt.rollout_batch import BatchRoute, why_unstable
 from dopt.stability import Monitor, Scan
 from dopt.state import faulty_rows
@@ -156,11 +155,7 @@ def breakdown(stats: dict) -> dict:
 def _cores(threads: int, population: int) -> int:
     """The cores a batched rollout of ``population`` on ``threads`` threads runs on: no more
     than the threads, the rollouts or the cores this process may use."""
-    try:
-        available = len(os.sched_getaffinity(0))
-    except AttributeError:                       # no affinity on this platform
-        available = os.cpu_count() or 1
-    return max(1, min(threads, population, available))
+    return max(1, min(threads, population, available_cores()))
 
 
 def time_iterations(task: PickPlaceTask, candidates, config: CEMConfig, seed: int,

@@ -33,15 +33,18 @@ from planners.pick_place.settings import PickPlaceSettings, trial_key
 COMPARED = ("original", "random")
 
 
-def scaling_settings(goal: str, n: int, threads: int = 0) -> PickPlaceSettings:
+def scaling_settings(goal: str, n: int, threads: int = 0,
+                     move: str | None = None) -> PickPlaceSettings:
     """The paper protocol's cloth settings of ``goal`` with ``n`` particles per side (and the
-    simulation ``threads``, not part of a trial's identity)."""
+    simulation ``threads``, not part of a trial's identity; ``move``: the picker's move rule,
+    ``PickPlaceSettings.picker_move``, None the fixed move)."""
     return replace(PickPlaceSettings.preset("cloth", goal, protocol="paper"), n=int(n),
-                   threads=int(threads))
+                   threads=int(threads), picker_move=move)
 
 
 def scaling_trials(goal: str, sizes: Sequence[int], seeds: Iterable[int],
-                   methods: Sequence[str], threads: int = 0) -> list[Trial]:
+                   methods: Sequence[str], threads: int = 0,
+                   move: str | None = None) -> list[Trial]:
     """The ``dopt.sweep`` trials of every (size, seed, method): key ``trial_key(method, seed,
     settings)`` and params {"settings": settings.to_dict(), "method", "seed"}, exactly as the
     Fig. 7 sweep (experiments/pick_place_cli.py) builds them, so ``run_trial`` runs them.
@@ -50,7 +53,7 @@ def scaling_trials(goal: str, sizes: Sequence[int], seeds: Iterable[int],
     out = []
     seeds = [int(s) for s in seeds]
     for n in sizes:
-        settings = scaling_settings(goal, n, threads)
+        settings = scaling_settings(goal, n, threads, move)
         out += [Trial(trial_key(m, s, settings),
                       {"settings": settings.to_dict(), "method": m, "seed": s})
                 for s in seeds for m in methods]

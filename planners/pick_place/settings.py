@@ -20,7 +20,7 @@ import numpy as np
 from dopt.dicts import flatten
 from dopt.tasks.pick.cloth_scene import PHYSICS_PRESETS
 from dopt.tasks.pick.constraints import ActionConstraint
-from dopt.tasks.pick.picker import PickerConfig
+from dopt.tasks.pick.picker import MOVE_RULES, PickerConfig
 from dopt.tasks.pick.scene import PICK_BOUNDS
 from dopt.tasks.pick.settle import RestTest
 from dopt.validation import check_config, check_int
@@ -32,9 +32,13 @@ from planners.trial_progress import RUN_ONLY_SETTINGS
 
 #: optional settings ``PickPlaceSettings.identity`` leaves out at None: options whose unset
 #: value is what every trial ran before they existed, so those trials stay valid
-UNSET_SETTINGS = ("planning_physics", "max_stretch", "picker_speed", "rest_speed")
+UNSET_SETTINGS = ("planning_physics", "max_stretch", "picker_speed", "rest_speed",
+                  "picker_move")
 #: scene-config fields a trial's identity leaves out at these values, for the same reason
 UNSET_SCENE_FIELDS = {"passive": False}
+#: picker-config fields a trial's identity leaves out while the move is the fixed one (they
+#: came with the sized move, and the fixed move ignores them), for the same reason
+UNSET_PICKER_FIELDS = ("move", "min_move")
 
 
 @dataclass(frozen=True)
@@ -65,6 +69,10 @@ class PickPlaceSettings:
             root-mean-square speed, ``dopt.tasks.pick.settle.RestTest``): a sample's settle
             ends once slower; executed plans keep the full settle. None: every sample
             simulates every step.
+        picker_move: how long each action's move lasts (``PickerConfig.move``): None (the
+            default) or "fixed", as long as the bound box's diagonal takes; "sized", as long
+            as the action's own displacement takes at the same speed (fewer steps; not with
+            ``rest_speed``). "fixed" is stored as None, so that a trial keeps its key.
     """
 
     task: str
@@ -82,6 +90,7 @@ class PickPlaceSettings:
     max_stretch: float | None = None
     picker_speed: float | None = None
     rest_speed: float | None = None
+    picker_move: str | None = None
 
     def __post_init__(self):
         pick_task(self.task).goal(self.goal)      # ValueError naming an unknown task or goal
@@ -96,6 +105,14 @@ class PickPlaceSettings:
                                "rest_speed"),
                      minimum={"n": 3, "threads": 0},
                      choices={"physics": tuple(PHYSICS_PRESETS)})
+        if self.picker_move not in (None, *MOVE_RULES):
+            raise ValueError(f"PickPlaceSettings.picker_move must be None or one of "
+                             f"{list(MOVE_RULES)}, got {self.picker_move!r}")
+        if self.picker_move == "fixed":        # the default's own name: the same trial
+            object.__setattr__(self, "picker_move", None)
+        if self.picker_move is not None and self.rest_speed is not None:
+            raise ValueError(f"PickPlaceSettings.picker_move {self.picker_move!r} cannot go "
+                             f"with rest_speed (the rest test needs the fixed move)")
         if self.planning_physics is not None and self.planning_physics not in PHYSICS_PRESETS:
             raise ValueError(f"PickPlaceSettings.planning_physics must be None or one of "
                              f"{sorted(PHYSICS_PRESETS)}, got {self.planning_physics!r}")
@@ -144,7 +161,9 @@ class PickPlaceSettings:
     def picker(self) -> PickerConfig:
         """The picker of the task's scenes: the bound per axis, limited to ``constraint()``."""
         speed = {} if self.picker_speed is None else {"speed": float(self.picker_speed)}
-        return PickerConfig(bound=(self.bound,) * 3, workspace=self.constraint(), **speed)
+        move = {} if self.picker_move is None else {"move": self.picker_move}
+        return PickerConfig(bound=(self.bound,) * 3, workspace=self.constraint(), **speed,
+                            **move)
 
     def rest(self) -> RestTest | None:
         """The rest test of CEM's sampled rollouts (``rest_speed``), or None."""
@@ -171,7 +190,8 @@ class PickPlaceSettings:
         today) and the stability bounds their rollouts are judged by (CEM scores an unstable
         sample +inf): a trial's identity, so that a changed preset, picker or verdict is not
         reused. Scene fields in ``UNSET_SCENE_FIELDS`` appear only when set."""
-        out = {"scene": _scene_identity(self.scene_config()), "picker": asdict(self.picker()),
+        out = {"scene": _scene_identity(self.scene_config()),
+               "picker": _picker_identity(self.picker()),
                "stability": asdict(PICK_BOUNDS)}
         planning = self.planning_scene_config()
         if planning is not None:
@@ -191,8 +211,14 @@ class PickPlaceSettings:
         return json.loads(json.dumps(out))
 
     def to_dict(self) -> dict:
-        """JSON-able form (nested configs as dicts); ``from_dict`` inverts it."""
-        return asdict(self)
+        """JSON-able form (nested configs as dicts); ``from_dict`` inverts it. ``picker_move``
+        appears only when set, so that the settings of a trial with the fixed move read as
+        they did before the field existed (in its record, the sweep's params, the presets'
+        snapshot)."""
+        out = asdict(self)
+        if out["picker_move"] is None:
+            del out["picker_move"]
+        return out
 
     @classmethod
     def from_dict(cls, d: dict) -> PickPlaceSettings:
@@ -212,6 +238,15 @@ def _scene_identity(config) -> dict:
     """``asdict(config)`` without the ``UNSET_SCENE_FIELDS`` at their unset values."""
     return {k: v for k, v in asdict(config).items()
             if k not in UNSET_SCENE_FIELDS or v != UNSET_SCENE_FIELDS[k]}
+
+
+def _picker_identity(config: PickerConfig) -> dict:
+    """``asdict(config)`` without the ``UNSET_PICKER_FIELDS`` while the move is fixed."""
+    out = asdict(config)
+    if config.move == "fixed":
+        for name in UNSET_PICKER_FIELDS:
+            out.pop(name)
+    return out
 
 
 def check_seed(seed) -> None:

@@ -236,3 +236,39 @@ def authors_statistic(records: list[dict], baseline: str = "baseline") -> dict[s
     episodes = {row: {m: np.asarray(v) for m, v in cols.items()} for row, cols in by.items()}
     base = (authors_mean_ci(episodes[baseline]["cost"])[0] if baseline in episodes else None)
     return {row: _cells(e, base) for row, e in episodes.items()}
+
+
+def authors_travel(task_dir: Path, layouts: Path | None = None) -> dict[str, dict]:
+    """How far the authors' goal object came toward its goal, per Table 1 row of one of their
+    tasks (``authors_rows``): their ``Final dist`` per episode and, on clutter with
+    ``layouts``, the travel: episode i ran scene i of ``layouts`` (``push_mcl_layouts/{i}.csv``,
+    ``dopt.tasks.push.authors.read_layout``), whose start distance is the goal cylinder's xy
+    to its target; travel = start distance - final distance.
+
+    Returns {row: {"travel_median" (m; None without ``layouts``), "final_distance_median" (m),
+    "n_episodes"}}; a ValueError names a run without a ``Final dist`` value in every episode
+    or a missing scene file.
+    """
+    from dopt.tasks.push.authors import read_layout
+
+    out = {}
+    for row, r in authors_rows(task_dir).items():
+        path = Path(task_dir) / ("iLQR" if row in ("baseline", "naive") else "iLQR_SVR") \
+            / r["run_dir"] / "summary.csv"
+        with open(path, newline="") as f:
+            final = [float(e["Final dist"]) for e in csv.DictReader(f) if e.get("Final dist")]
+        if len(final) != len(r["episodes"]["cost"]):
+            raise ValueError(f"{path}: no 'Final dist' value in every episode")
+        travel = None
+        if layouts is not None:
+            start = []
+            for i in range(len(final)):
+                scene = Path(layouts) / f"{i}.csv"
+                if not scene.is_file():
+                    raise ValueError(f"{layouts}: no scene {i}.csv for episode {i} of {path}")
+                lay = read_layout(scene)
+                start.append(float(np.hypot(*(lay.goal - lay.poses[0, :2]))))
+            travel = float(np.median(np.asarray(start) - np.asarray(final)))
+        out[row] = {"travel_median": travel, "final_distance_median": float(np.median(final)),
+                    "n_episodes": len(final)}
+    return out

@@ -102,12 +102,19 @@ class Derivatives:
                 "fd_skip": self.fd_skip, "box_qp": self.box_qp}
 
 
+#: the fixes beyond the paper a row can name (``sum-t10-r500+costdofs``): the
+#: ``SVRMPCSettings`` field each sets (``SelectionConfig.keep_costed``, ``ILQRConfig.mu_reset``)
+FIXES = {"costdofs": "keep_costed", "mureset": "mu_reset"}
+
+
 def parse_variants(mods, what: str = "variants") -> dict:
     """The ``Derivatives`` fields that a row's derivative variants set: ``skip<K>`` or
     ``adaptive`` (key timesteps, ``planners.keypoints``), ``boxqp`` (the box-QP backward pass),
     ``central`` (the authors' central differences); ``what`` names them in errors."""
     over: dict = {}
     for mod in mods:
+        if mod in FIXES:
+            continue                                  # a fix, not a derivative variant
         if mod == "boxqp" and "box_qp" not in over:
             over["box_qp"] = True
         elif mod == "central" and "fd" not in over:
@@ -135,16 +142,27 @@ class Row:
     rho: float
     variants: dict = field(default_factory=dict)
     optimiser: str = DEFAULT_OPTIMISER
+    fixes: dict = field(default_factory=dict)
+
+
+def parse_fixes(mods, what: str) -> dict:
+    """The ``SVRMPCSettings`` fields a row's fixes (``FIXES``) set to True."""
+    names = [m for m in mods if m in FIXES]
+    if len(set(names)) < len(names):
+        raise ValueError(f"{what}: a fix is repeated")
+    return {FIXES[m]: True for m in names}
 
 
 def parse_row(spec: str) -> Row:
     """A row of ``TABLE1_ROWS`` by name, or a registered optimiser's (``optimiser_names``; it
     runs with every DoF, as baseline), optionally with derivative variants (``parse_variants``):
     ``sum-t10-r1+skip5``, ``sum-t10-r1+adaptive``, ``sum-t10-r1+skip5+boxqp``,
-    ``sum-t10-r1+central``."""
+    ``sum-t10-r1+central``; and fixes beyond the paper (``FIXES``): ``sum-t10-r500+costdofs``
+    (the cost's DoFs always in C), ``sum-t10-r500+mureset`` (mu reset every MPC call)."""
     name, *mods = spec.split("+")
     if name in TABLE1_ROWS:
-        return Row(*TABLE1_ROWS[name], parse_variants(mods, f"row {spec!r}"))
+        return Row(*TABLE1_ROWS[name], parse_variants(mods, f"row {spec!r}"),
+                   fixes=parse_fixes(mods, f"row {spec!r}"))
     names = optimiser_names()
     if name in names and name != DEFAULT_OPTIMISER:
         return Row("baseline", 0, 1.0, parse_variants(mods, f"row {spec!r}"), name)
@@ -165,6 +183,12 @@ def derivatives_tag(p: dict) -> str:
     elif p.get("keypoints", "every") == "skip" and p.get("fd_skip", 1) > 1:
         tag += f" +skip{p['fd_skip']}"
     return tag + (" +boxqp" if p.get("box_qp") else "")
+
+
+def fixes_tag(p: dict) -> str:
+    """The fixes beyond the paper (``FIXES``) of a trial's params as a row-label suffix:
+    `` +costdofs``, `` +mureset``; '' for the paper's rule."""
+    return "".join(f" +{name}" for name, f in FIXES.items() if p.get(f))
 
 
 @dataclass(frozen=True)
@@ -212,6 +236,9 @@ class SVRMPCSettings:
         executor: ``alg1`` (the paper's Alg. 1: pad with the last control, land shifted by
             the lag) or ``authors`` (their data generator's: hold after 80 controls, land at
             the nearest nominal state; ``dopt.mpc``).
+        keep_costed, mu_reset: fixes beyond the paper (rows ``+costdofs``, ``+mureset``,
+            ``FIXES``): the cost's DoFs always in C (``SelectionConfig.keep_costed``); mu reset
+            at every MPC call (``ILQRConfig.mu_reset``).
     """
 
     task: str = "clutter"
@@ -239,6 +266,8 @@ class SVRMPCSettings:
     push_tail: bool = True
     clock_ms: float | None = None
     executor: str = "alg1"
+    keep_costed: bool = False
+    mu_reset: bool = False
 
     def __post_init__(self):
         get_task(self.task)                       # ValueError naming the known tasks
@@ -322,16 +351,18 @@ class SVRMPCSettings:
 
     @property
     def ilqr(self) -> ILQRConfig:
-        """iLQR's config: the finite differences, their key timesteps, the box QP."""
+        """iLQR's config: the finite differences, their key timesteps, the box QP, mu's
+        reset."""
         return ILQRConfig(fd=FDConfig(eps=float(self.fd_eps), centered=bool(self.fd_centered)),
                           keypoints=KeypointConfig(self.keypoints, skip=int(self.fd_skip)),
-                          box_qp=bool(self.box_qp))
+                          box_qp=bool(self.box_qp), mu_reset=bool(self.mu_reset))
 
     @property
     def selection(self) -> SelectionConfig:
         """The DoF selector's config (theta None -> the paper's for the method)."""
         theta = paper_theta(self.method) if self.theta is None else self.theta
-        return SelectionConfig(self.method, rho=float(self.rho), theta=int(theta))
+        return SelectionConfig(self.method, rho=float(self.rho), theta=int(theta),
+                               keep_costed=bool(self.keep_costed))
 
 
 @functools.cache
@@ -400,6 +431,7 @@ def trial_key(p: dict) -> str:
         parts.append("noislands")
     if not p.get("push_tail", True):
         parts.append("notail")
+    parts += [f"fix{name}" for name, f in FIXES.items() if p.get(f)]
     if p.get("optimiser", DEFAULT_OPTIMISER) != DEFAULT_OPTIMISER:
         parts.append(f"opt{p['optimiser']}")
     return "-".join(parts)
@@ -412,4 +444,4 @@ def row_label(p: dict) -> str:
     name = row_name(p["method"], p["theta"], p["rho"])
     if (opt := p.get("optimiser", DEFAULT_OPTIMISER)) != DEFAULT_OPTIMISER:
         name = opt if p["method"] == "baseline" else f"{opt}:{name}"
-    return name + derivatives_tag(p) + (" +fb" if p.get("feedback") else "")
+    return name + derivatives_tag(p) + fixes_tag(p) + (" +fb" if p.get("feedback") else "")

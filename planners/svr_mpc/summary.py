@@ -234,8 +234,8 @@ def feedback_effect(records: list[dict], level: float = 0.90) -> dict:
 
 def derivatives_effect(records: list[dict], level: float = 0.90) -> dict:
     """Per row run with a derivative variant (``derivatives_tag``: central differences, key
-    timesteps, box QP) and without it: the variant's MPC cost over the plain row's on the
-    same seeds.
+    timesteps, box QP) or a fix beyond the paper (``fixes_tag``) and without it: the
+    variant's MPC cost over the plain row's on the same seeds.
 
     Returns {row label: {"versus": the plain row's label, "ratio_geomean", "ratio_ci90",
     "better", "pairs" (``paired_ratio``; "better": pairs where the variant cost less),
@@ -244,7 +244,8 @@ def derivatives_effect(records: list[dict], level: float = 0.90) -> dict:
     """
     def plain(p):
         return row_label({**p, "keypoints": "every", "fd_skip": 1, "box_qp": False,
-                          "fd_centered": False, "fd_eps": 1e-3})
+                          "fd_centered": False, "fd_eps": 1e-3, "keep_costed": False,
+                          "mu_reset": False})
 
     def mean(results, field):
         return float(np.mean([v[field] for v in results.values()]))
@@ -259,7 +260,8 @@ def derivatives_effect(records: list[dict], level: float = 0.90) -> dict:
 def table1_fields(records: list[dict], baseline: str = "baseline") -> dict:
     """Everything a Table 1 summary computes from its trials: "methods" (``summarize``, rows
     in ``TABLE1_ROWS`` order, variants after their row), "paired", "authors_statistic",
-    "versus", and where the trials hold them "feedback_effect" (both feedback settings ran)
+    "versus", "lag_cost_tau" (``lag_cost_tau``), and where the trials hold them
+    "feedback_effect" (both feedback settings ran)
     and "derivatives_effect" (a derivative variant ran)."""
     order = {name: i for i, name in enumerate(TABLE1_ROWS)}
     rows = dict(sorted(summarize(records, baseline=baseline).items(),
@@ -267,6 +269,7 @@ def table1_fields(records: list[dict], baseline: str = "baseline") -> dict:
     out = {"methods": rows, "paired": paired(records, baseline=baseline),
            "authors_statistic": authors_statistic(records, baseline=baseline),
            "versus": versus(records)}
+    out["lag_cost_tau"] = lag_cost_tau(rows)
     if len({bool(r["params"].get("feedback")) for r in records}) == 2:
         out["feedback_effect"] = feedback_effect(records)
     if variants := derivatives_effect(records):
@@ -274,11 +277,24 @@ def table1_fields(records: list[dict], baseline: str = "baseline") -> dict:
     return out
 
 
+def lag_cost_tau(rows: dict) -> dict:
+    """Do the rows' costs order by their lag? Kendall's tau (and its p) between the rows' mean
+    lag (steps) and mean normalised cost, over the rows of ``summarize`` that optimise (not
+    ``unoptimised``) and have a cost; None for fewer than 3 rows."""
+    pts = [(v["lag_steps_mean"], v["mpc_cost_normalised_mean"]) for k, v in rows.items()
+           if not k.startswith("unoptimised") and np.isfinite(v["mpc_cost_normalised_mean"])]
+    if len(pts) < 3:
+        return {"tau": None, "p": None, "rows": len(pts)}
+    tau, p = stats.kendalltau(*zip(*pts, strict=True))
+    return {"tau": float(tau), "p": float(p), "rows": len(pts)}
+
+
 def fig4_fields(records: list[dict], method: str, baseline: str = "baseline") -> dict:
     """Everything a Fig. 4 summary computes from its trials: "points", one per (theta, rho)
     of ``method``'s trials in that order, each {"rho", "theta", **``summarize``'s row
     normalised by ``baseline``'s trials}; "versus", every point's row against ``baseline``
-    paired by seed, one Holm family over the grid (``versus``)."""
+    paired by seed, one Holm family over the grid (``versus``); "cost_dofs_r", Pearson's r of
+    the points' mean |C| and mean normalised cost (the authors' data: -0.70)."""
     base = [r for r in records if r["params"]["method"] == "baseline"]
     mine = [r for r in records if r["params"]["method"] == method]
     points = []
@@ -286,4 +302,8 @@ def fig4_fields(records: list[dict], method: str, baseline: str = "baseline") ->
         group = [r for r in mine if r["params"]["rho"] == rho and r["params"]["theta"] == theta]
         points.append(dict(rho=rho, theta=theta, **summarize(base + group, baseline=baseline)[
             row_label(group[0]["params"])]))
-    return {"points": points, "versus": versus(base + mine, references=(baseline,))}
+    pts = [(p["n_dofs_mean"], p["mpc_cost_normalised_mean"]) for p in points
+           if np.isfinite(p["mpc_cost_normalised_mean"])]
+    r = (float(stats.pearsonr(*zip(*pts, strict=True))[0]) if len(pts) >= 3 else None)
+    return {"points": points, "versus": versus(base + mine, references=(baseline,)),
+            "cost_dofs_r": r}

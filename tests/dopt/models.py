@@ -76,3 +76,12 @@ ACTUATED_ARENA = """<mujoco><size memory="9K"/><option gravity="0 0 0"/><worldbo
 <body pos=".2 0 .06"><joint name="x" type="slide" axis="1 0 0"/>
 <geom type="box" size=".05 .05 .05"/></body></worldbody>
 <actuator><position joint="x" kp="200" ctrlrange="-1 1"/></actuator></mujoco>"""
+
+#: two sliders in a row, the first actuated, no gravity: a scene whose rest is exact
+SLIDER = """<mujoco><option timestep="0.005" gravity="0 0 0"/><worldbody>
+  <body name="a"><joint name="ax" type="slide" axis="1 0 0" damping=".5"/>
+  <geom size=".05" mass="1"/></body>
+  <body name="b" pos=".11 0 0"><joint name="bx" type="slide" axis="1 0 0" damping=".5"/>
+  <geom size=".05" mass=".5"/></body></worldbody>
+  <actuator><motor joint="ax" ctrlrange="-100000 100000" ctrllimited="true"/></actuator>
+</mujoco>"""

@@ -57,3 +57,33 @@ def warn(params):
     logging.getLogger("tests.sweep_trials").warning("warned by trial %s", params["x"])
     warnings.warn(f"python warning of trial {params['x']}", UserWarning, stacklevel=1)
     return {"ok": True}
+
+
+def linger(params, checkpoint=None):
+    """Marks its start (an empty file <params['calls']>/<key>-<pid>), then counts to
+    params['n'], params['sleep'] s a step, saving {"i"} to its checkpoint after each. At step
+    params['die_at'] its process dies: killed by the signal params['signal'], or exiting with
+    params['exit']. Returns {"i", "pid"}."""
+    open(os.path.join(params["calls"], f"{params['key']}-{os.getpid()}"), "w").close()
+    progress = checkpoint.load() if checkpoint is not None else None
+    i = progress["i"] if progress else 0
+    while i < params["n"]:
+        time.sleep(params.get("sleep", 0.0))
+        i += 1
+        if checkpoint is not None:
+            checkpoint.save({"i": i})
+        if i == params.get("die_at"):
+            if params.get("signal"):
+                os.kill(os.getpid(), params["signal"])
+                time.sleep(10)                   # (the signal lands first)
+            os._exit(params.get("exit", 1))
+    return {"i": i, "pid": os.getpid()}
+
+
+def lock_workers(params):
+    """The pid of its process and the worker pids its sweep's lock file (params['lock'])
+    names."""
+    import json
+    with open(params["lock"]) as f:
+        held = json.load(f)
+    return {"pid": os.getpid(), "workers": held.get("workers"), "holder": held["pid"]}

@@ -7,27 +7,11 @@ import mujoco
 import numpy as np
 import pytest
 
-from dopt import RolloutService, Scene
+from dopt import RolloutService
 from dopt.costs import QuadraticCost
 from dopt.mpc import MPC, MPCConfig, Plan, mpc_cost
 from planners.ilqr import ILQR
 from planners.svr import DofSelector, SelectionConfig, SVROptimiser
-
-SLIDER = """<mujoco><option timestep="0.005" gravity="0 0 0"/><worldbody>
-  <body name="a"><joint name="ax" type="slide" axis="1 0 0" damping=".5"/>
-  <geom size=".05" mass="1"/></body>
-  <body name="b" pos=".11 0 0"><joint name="bx" type="slide" axis="1 0 0" damping=".5"/>
-  <geom size=".05" mass=".5"/></body></worldbody>
-  <actuator><motor joint="ax" ctrlrange="-100000 100000" ctrllimited="true"/></actuator>
-</mujoco>"""
-
-
-@pytest.fixture(scope="module")
-def slider():
-    scene = Scene.from_xml(SLIDER)
-    d = mujoco.MjData(scene.model)
-    mujoco.mj_forward(scene.model, d)
-    return scene, scene.state_of(d)
 
 
 class StampingOptimiser:

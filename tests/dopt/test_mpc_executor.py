@@ -7,19 +7,7 @@ exactly at rest and the state at landing is known in advance."""
 import numpy as np
 import pytest
 
-from dopt import Scene
 from dopt.mpc import MPC, NEAREST_MAX_L1, MPCConfig, Plan
-
-from .test_mpc import SLIDER
-
-
-@pytest.fixture(scope="module")
-def slider():
-    import mujoco
-    scene = Scene.from_xml(SLIDER)
-    d = mujoco.MjData(scene.model)
-    mujoco.mj_forward(scene.model, d)
-    return scene, scene.state_of(d)
 
 
 class Scripted:

@@ -292,3 +292,25 @@ def test_a_registered_optimiser_is_a_row_of_the_command_line(tmp_path, monkeypat
     with pytest.raises(SystemExit) as e:
         mpc.parse_args(["--rows", "baseline,theirs", "--out", str(tmp_path / "p")])
     assert e.value.code == 2
+
+
+def test_the_authors_preset_runs_their_executor_and_clock_and_the_summary_names_both(tmp_path):
+    """--preset authors: the authors' executor and clock, named in the summary's protocol and
+    in the trial keys; --executor alg1 --clock virtual is the paper's Alg. 1 on the host's
+    clock (the keys of the records made before), and only those flags differ."""
+    import mpc
+
+    args = mpc.parse_args(["--task", "soft", "--preset", "authors", "--rows", "baseline",
+                           "--trials", "1", "--out", str(tmp_path / "a")])
+    (t,) = mpc.make_trials(args)
+    proto = mpc.protocol(args, t.params)
+    assert (proto["executor"], proto["clock"]) == ("authors", "authors")
+    assert t.key.endswith("-ws-clockauthors-execauthors-authors")
+    args = mpc.parse_args(["--task", "soft", "--preset", "authors", "--rows", "baseline",
+                           "--executor", "alg1", "--clock", "virtual", "--trials", "1",
+                           "--out", str(tmp_path / "b")])
+    (old,) = mpc.make_trials(args)
+    assert (mpc.protocol(args, old.params)["executor"], old.params["clock"]) == \
+        ("alg1", "virtual")
+    assert old.key.endswith("-ws-clockvirtual2-authors")
+    assert {k for k in t.params if t.params[k] != old.params[k]} == {"executor", "clock"}

@@ -9,17 +9,17 @@ the flange (Franka's hand). It stands on the floor at ``base``, facing +x, besid
 
 One action (i, d) becomes a pinch-site path (``PandaExecutor``): above particle i
 (``approach`` m), down to it (both following the particle, which may still be settling from
-the previous release), close the fingers and grasp, carry it by d along the picker's
-smooth profile in the picker's move time, release and open, lift, and wait the picker's
-settle time. The pinch target keeps the picker's limits: not below one particle radius (the
-picker's floor stop) and inside its workspace box (C(a_t)). Every step, damped-least-squares
-IK of the path point (hand pointing down, warm started) gives the joint reference, and
-computed-torque control (the arm's mass matrix times the reference acceleration plus PD, the
-joints' own damping cancelled) gives the torques, clipped to the datasheet's. The grasp
-itself is a connect equality between the hand and the particle, switched on when the pinch
-site is within ``grasp_tolerance`` of it: the same hold the picker has, so that a comparison
-with the picker measures the arm's motion, not a grasp model. The fingers close for the
-picture and do not collide with anything.
+the previous release), close the fingers and grasp, carry it by d along the picker's smooth
+profile in the picker's move time for d (``Picker.moves``), release and open, lift, and wait
+the picker's settle time. The pinch target keeps the picker's limits: not below one particle
+radius (the picker's floor stop) and inside its workspace box (C(a_t)). Every step,
+damped-least-squares IK of the path point (hand pointing down, warm started) gives the joint
+reference, and computed-torque control (the arm's mass matrix times the reference
+acceleration plus PD, the joints' own damping cancelled) gives the torques, clipped to the
+datasheet's. The grasp itself is a connect equality between the hand and the particle,
+switched on when the pinch site is within ``grasp_tolerance`` of it: the same hold the
+picker has, so that a comparison with the picker measures the arm's motion, not a grasp
+model. The fingers close for the picture and do not collide with anything.
 
 The replay is judged by the scene's stability bounds and MuJoCo's warnings after every step;
 ``execute(..., blowup_out=OUT)`` writes a blow-up capture of its first failure (the last
@@ -200,8 +200,7 @@ class PandaExecutor:
         self.kd = np.where(np.arange(7) < 4, config.kd[0], config.kd[1])
         self.dt = float(m.opt.timestep)
         pk = scene.picker
-        self.move_steps, self.settle_steps = pk.move_steps, pk.settle_steps
-        self._profile = smooth_profile(pk.move_steps)[1:]
+        self.settle_steps = pk.settle_steps
         self._scratch = mujoco.MjData(m)               # kinematics of reference poses
         self._vert = {i: m.body(f"{scene.flex}_{i}").id for i in self.grip}
         combined = Scene(m)
@@ -365,7 +364,7 @@ class PandaExecutor:
         snap()
         for k, (i, dv) in enumerate(zip(idx, disp, strict=True)):
             if i == -1:
-                self._hold(self.move_steps + self.settle_steps)
+                self._hold(int(self.scene.picker.moves(dv)) + self.settle_steps)
                 continue
             # free moves to above the particle and down to it, each followed by as long a
             # hold; the targets follow the particle, which may still be moving (the cloth
@@ -388,7 +387,7 @@ class PandaExecutor:
             self._hold(cfg.grasp_steps)
             snap()
             start = self._target_now()
-            out.carry_error.append(self._move(start + dv, self.move_steps, self._profile))
+            out.carry_error.append(self._move(start + dv, int(self.scene.picker.moves(dv))))
             snap()
             self.data.eq_active[self.grip[int(i)]] = 0
             self.data.ctrl[self.fingers] = 0.04

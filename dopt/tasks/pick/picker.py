@@ -15,7 +15,18 @@ One action ``(i, dx, dy, dz)`` is K = nsnap + nhold + nmove + nsettle steps:
 4. settle (nsettle): equality off, servo on with v = 0; the object comes to rest.
 
 The ``None`` action holds nothing for K steps. Particle index ``NONE = -1`` encodes it.
-Shapes: P population, H actions per sequence, K steps per action, N particles.
+
+How long the move lasts is ``PickerConfig.move``: "fixed" (the default), every move as long
+as the bound box's diagonal takes at ``speed``, so K is the same for every action; "sized",
+each action's move as long as its own displacement takes at that speed, at least
+``min_move`` seconds, so each action has its own K (at most the fixed one). A sequence is
+then its actions' rows back to back; a batch of them is padded to the longest with idle rows
+that are never simulated: ``Picker.schedule`` gives each sequence's own length, which
+``RolloutService.rollout(..., lengths=...)`` stops it at, so a sample's trajectory does not
+depend on the others in its batch.
+
+Shapes: P population, H actions per sequence, K steps per action, T steps of a batch (the
+longest sequence's), N particles.
 """
 
 from __future__ import annotations
@@ -38,6 +49,8 @@ _AXES = "xyz"
 #: most simulation steps one action may take (``PickerConfig.steps``): 500 s at dt 5 ms; a
 #: slower picker or a longer bound is refused before any array of them is allocated
 MAX_STEPS_PER_ACTION = 100_000
+#: the rules of an action's move length (``PickerConfig.move``)
+MOVE_RULES = ("fixed", "sized")
 
 
 @dataclass(frozen=True)
@@ -46,8 +59,9 @@ class PickerConfig:
 
     Attributes:
         bound: largest displacement per axis (m), |dx| <= bound[0], ... (the paper's Delta x,y,z).
-        speed: average picker speed (m/s) of the longest move (the diagonal of the bound box);
-            about 0.5 m/s keeps the cloth from being flung.
+        speed: average picker speed (m/s) of the longest move (the diagonal of the bound box),
+            and with sized moves of every move longer than ``min_move``; about 0.5 m/s keeps
+            the cloth from being flung.
         settle: seconds of settling after each release.
         snap: seconds for the picker to snap onto the particle, rounded to whole steps of the
             scene's dt (0.06 s: 3 steps at dt 0.02, 12 at 5 ms). A fixed step count is not
@@ -61,6 +75,16 @@ class PickerConfig:
         workspace: the action constraint whose box limits the picker's slide joints (every
             step of every rollout keeps the grasped particle inside it, as SoftGym clips its
             pickers; ``dopt.tasks.pick.constraints``); None: no box, only the floor stop.
+        move: how long a move lasts (``MOVE_RULES``): "fixed", as long as the bound box's
+            diagonal at ``speed`` for every action; "sized", as long as the action's own
+            displacement |d| at ``speed`` (the same average, so the same peak speed, pi / 2
+            times it, as a fixed move of that length), at least ``min_move`` and at most the
+            fixed length (``move_steps``).
+        min_move: seconds of the shortest "sized" move (the None action's and a zero
+            displacement's). The smooth profile's peak acceleration is pi^2 |d| / (2 T^2), so
+            a sized move's is at most pi^2 speed / (2 min_move): 9.9 m/s^2, about g, at the
+            defaults (0.5 m/s, 0.25 s), where the fixed move's longest reaches 2.4 m/s^2
+            (0.52 m in 1.04 s). Unused by "fixed".
     """
 
     bound: tuple[float, float, float] = (0.1, 0.1, 0.1)
@@ -73,10 +97,13 @@ class PickerConfig:
     solref: tuple[float, float] = (0.002, 1.0)
     start: tuple[float, float, float] = (0.0, 0.0, 0.3)
     workspace: ActionConstraint | None = None
+    move: str = "fixed"
+    min_move: float = 0.25
 
     def __post_init__(self):
-        check_config(self, positive=("bound", "speed", "settle", "kv", "mass", "snap"),
-                     minimum={"hold_steps": 0})
+        check_config(self, positive=("bound", "speed", "settle", "kv", "mass", "snap",
+                                     "min_move"),
+                     minimum={"hold_steps": 0}, choices={"move": MOVE_RULES})
         if self.workspace is not None:
             if not isinstance(self.workspace, ActionConstraint):
                 raise TypeError(f"PickerConfig.workspace must be an ActionConstraint or None, "
@@ -111,6 +138,19 @@ class PickerConfig:
                              f"the speed or lower the bound")
         return (max(1, int(round(self.snap / dt))), self.hold_steps,
                 max(2, int(np.ceil(move_s / dt))), int(np.ceil(self.settle / dt)))
+
+    def move_steps(self, dt: float, displacements) -> np.ndarray:
+        """Move steps of actions of displacements (..., 3) m at the timestep ``dt`` (s):
+        (...) ints. "fixed": the fixed move of ``steps`` for each; "sized": |d| / speed in
+        whole steps (rounded up), at least ``min_move`` (and 2 steps), at most the fixed move.
+        A None action's displacement is zero: it gets the shortest move."""
+        d = np.asarray(displacements, dtype=float)
+        longest = self.steps(dt)[2]
+        if self.move == "fixed":
+            return np.full(d.shape[:-1], longest, dtype=np.int64)
+        shortest = min(longest, max(2, int(np.ceil(self.min_move / dt))))
+        own = np.ceil(np.linalg.norm(d, axis=-1) / self.speed / dt)
+        return np.clip(own, shortest, longest).astype(np.int64)
 
 
 def picker_mjcf(flex_name: str, particles: Iterable[int],
@@ -191,7 +231,8 @@ class Picker:
         config: the picker config the model was built with.
 
     Attributes:
-        steps_per_action: K.
+        steps_per_action: K, the steps of an action with the fixed move (the most any action
+            takes; with ``PickerConfig.move`` "sized", ``schedule`` gives each its own).
         ncontrol: length of one control row (nu + neq).
         bound: (3,) displacement bound per axis.
         pickable: sorted particles that have a grasp equality.
@@ -238,8 +279,6 @@ class Picker:
             config.steps(self.dt)
         self.steps_per_action = (self.snap_steps + self.hold_steps + self.move_steps
                                  + self.settle_steps)
-        s = smooth_profile(self.move_steps)
-        self._profile = np.diff(s) / self.dt                             # sum * dt == 1
 
     @property
     def idle_row(self) -> np.ndarray:
@@ -306,36 +345,98 @@ class Picker:
         disp = np.where((idx == NONE)[..., None], 0.0, disp)
         return idx, disp
 
-    def encode(self, particles, displacements) -> np.ndarray:
-        """Control rows of a batch of action sequences: (P, H), (P, H, 3) -> (P, H*K, ncontrol).
+    def moves(self, displacements) -> np.ndarray:
+        """Move steps of actions of displacements (..., 3) m: (...) ints
+        (``PickerConfig.move_steps`` at this model's dt; ``move_steps`` each with the fixed
+        move)."""
+        return self.config.move_steps(self.dt, displacements)
 
-        The rows are for ``RolloutService.rollout(..., control_spec=CONTROL_SPEC)``.
+    def schedule(self, particles, displacements) -> Schedule:
+        """The control rows of a batch of action sequences, (P, H), (P, H, 3), and how many
+        steps of them each sequence simulates (module docstring): a ``Schedule``.
+
+        Each sequence's rows are its actions' back to back; a sequence shorter than the
+        batch's longest is padded with idle rows (``idle_row``) that are not its own. The
+        rows of a sequence do not depend on the others in the batch. Raises as ``check``.
         """
         idx, disp = self.check(particles, displacements)
         P, H = idx.shape
-        K, ns = self.steps_per_action, self.snap_steps
-        grasped = ns + self.hold_steps + self.move_steps   # steps with the equality on
-        U = np.empty((P, H, K, self.ncontrol))
+        ns, nh, nset = self.snap_steps, self.hold_steps, self.settle_steps
+        move = self.moves(disp)                                           # (P, H)
+        steps = ns + nh + move + nset
+        start = np.cumsum(steps, axis=1) - steps                          # (P, H)
+        lengths = steps.sum(axis=1)
+        U = np.empty((P, int(lengths.max()), self.ncontrol))
         U[:] = self._base
-        p, h = np.nonzero(idx != NONE)
-        cols = self._column[idx[p, h]]
-        U[p[:, None], h[:, None], np.arange(grasped)[None, :], cols[:, None]] = 1.0
-        U[p[:, None, None], h[:, None, None], np.arange(ns)[None, :, None],
-          self._damp[None, None, :]] = 0.0                                 # servo off: snap
-        moving = U[:, :, ns + self.hold_steps:grasped]                     # a view
-        moving[..., self._vel] = disp[:, :, None, :] * self._profile[:, None]
-        return U.reshape(P, H * K, self.ncontrol)
+        for n in np.unique(move):
+            profile = np.diff(smooth_profile(int(n))) / self.dt          # (n,), sum * dt == 1
+            p, h = np.nonzero(move == n)
+            t0 = start[p, h][:, None]                                     # (a, 1)
+            held = idx[p, h] != NONE
+            grasped = t0[held] + np.arange(ns + nh + n)                   # equality on
+            U[p[held][:, None], grasped, self._column[idx[p, h][held]][:, None]] = 1.0
+            snap = (t0[held] + np.arange(ns))[:, :, None]                 # servo off: snap
+            U[p[held][:, None, None], snap, self._damp] = 0.0
+            moving = (t0 + ns + nh + np.arange(n))[:, :, None]            # (a, n, 1)
+            U[p[:, None, None], moving, self._vel] = \
+                disp[p, h][:, None, :] * profile[None, :, None]
+        return Schedule(U, lengths, steps)
 
-    def decode(self, controls) -> tuple[np.ndarray, np.ndarray]:
-        """Inverse of :meth:`encode`: (P, H*K, ncontrol) -> particles (P, H), displacements
-        (P, H, 3)."""
+    def encode(self, particles, displacements) -> np.ndarray:
+        """Control rows of a batch of action sequences: (P, H), (P, H, 3) -> (P, T, ncontrol),
+        T = H*K with the fixed move; with sized moves the longest sequence's steps, the others
+        padded (``schedule``: simulate each only for its own ``lengths``).
+
+        The rows are for ``RolloutService.rollout(..., control_spec=CONTROL_SPEC)``.
+        """
+        return self.schedule(particles, displacements).controls
+
+    def decode(self, controls, horizon: int | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """Inverse of :meth:`encode`: (P, T, ncontrol) -> particles (P, H), displacements
+        (P, H, 3). With sized moves the actions' lengths are read from the rows and the
+        horizon H must be given (the padding of a short sequence is idle rows, as a None
+        action is); with fixed moves H = T / K when not given."""
         U = float_array(controls, "controls", finite=False)
         K = self.steps_per_action
-        if U.ndim != 3 or U.shape[2] != self.ncontrol or U.shape[1] % K:
-            raise ValueError(f"controls must have shape (P, H*{K}, {self.ncontrol}), "
-                             f"got {U.shape}")
-        U = U.reshape(U.shape[0], -1, K, self.ncontrol)
-        grasp = U[:, :, 0, self._grasp_cols] > 0.5                        # (P, H, npick)
-        idx = np.where(grasp.any(-1), self.pickable[np.argmax(grasp, axis=-1)], NONE)
-        disp = U[:, :, :, self._vel].sum(axis=2) * self.dt
-        return idx.astype(np.int64), disp
+        if U.ndim != 3 or U.shape[2] != self.ncontrol or not U.shape[1]:
+            raise ValueError(f"controls must have shape (P, T, {self.ncontrol}), got {U.shape}")
+        if horizon is None:
+            if self.config.move != "fixed" or U.shape[1] % K:
+                raise ValueError(f"controls of shape {U.shape} need the horizon: with sized "
+                                 f"moves always, with fixed moves T must be H*{K}")
+            horizon = U.shape[1] // K
+        H = check_int(horizon, "horizon", minimum=1)
+        idx = np.full((len(U), H), NONE, dtype=np.int64)
+        disp = np.zeros((len(U), H, 3))
+        ns, nh = self.snap_steps, self.hold_steps
+        for p in range(len(U)):
+            t = 0
+            for h in range(H):
+                grasp = U[p, t, self._grasp_cols] > 0.5
+                n = self.moves(np.zeros(3))
+                if grasp.any():
+                    idx[p, h] = self.pickable[np.argmax(grasp)]
+                    on = U[p, t:, self._column[idx[p, h]]] > 0.5
+                    n = (np.argmin(on) if not on.all() else len(on)) - ns - nh
+                k = ns + nh + int(n) + self.settle_steps
+                if t + k > U.shape[1]:
+                    raise ValueError(f"controls of sequence {p} end inside action {h} of "
+                                     f"{H}: not {H} encoded actions")
+                disp[p, h] = U[p, t:t + k][:, self._vel].sum(axis=0) * self.dt
+                t += k
+        return idx, disp
+
+
+@dataclass(frozen=True)
+class Schedule:
+    """A batch of action sequences as control rows (``Picker.schedule``).
+
+    Attributes:
+        controls: (P, T, ncontrol) rows of ``CONTROL_SPEC``, T the longest sequence's steps.
+        lengths: (P,) steps of each sequence (its rows after that are padding).
+        steps: (P, H) steps of each action (K each with the fixed move).
+    """
+
+    controls: np.ndarray
+    lengths: np.ndarray
+    steps: np.ndarray

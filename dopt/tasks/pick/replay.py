@@ -54,19 +54,21 @@ def replay(scene, start_state: np.ndarray, actions: Sequence[dict],
     start_state = check_states(m, start_state, spec, batched=False, name="start_state")
     if isinstance(actions, (str, Mapping)) or not isinstance(actions, Sequence):
         raise TypeError(f"actions must be a sequence of per-stage dicts, got {actions!r}")
-    rows = []
+    rows, ends = [], []
     for k, a in enumerate(actions):
         if not isinstance(a, Mapping) or not {"particles", "displacements"} <= set(a):
             raise ValueError(f"actions[{k}] must be a dict with 'particles' (H,) and "
                              f"'displacements' (H, 3), got {a!r}")
         if not np.size(a["particles"]):                  # a stage that took no action
             rows.append(np.empty((0, scene.picker.ncontrol)))
+            ends.append(np.zeros(0, dtype=int))
             continue
-        rows.append(scene.picker.encode(np.asarray(a["particles"])[None],
-                                        np.asarray(a["displacements"])[None])[0])  # (H*K, nc)
+        plan = scene.picker.schedule(np.asarray(a["particles"])[None],
+                                     np.asarray(a["displacements"])[None])
+        rows.append(plan.controls[0])                    # (T, nc): the picker's own steps
+        ends.append(np.cumsum(plan.steps[0]))            # (H,) where each action ends
     total = sum(len(r) for r in rows)
     every = max(1, int(np.ceil(total / (max_frames - 1))))
-    K = scene.picker.steps_per_action
     data = mujoco.MjData(m)
     mujoco.mj_setState(m, data, start_state, spec)
     size = mujoco.mj_stateSize(m, spec)
@@ -86,6 +88,6 @@ def replay(scene, start_state: np.ndarray, actions: Sequence[dict],
             mujoco.mj_step(m, data)
             step += 1
             if step % every == 0 or step == total:
-                keep(step, k, t // K)
+                keep(step, k, int(np.searchsorted(ends[k], t, side="right")))
     info = np.array(info, dtype=int).reshape(-1, 3)
     return Replay(np.array(states), info[:, 0], info[:, 1], info[:, 2], every)

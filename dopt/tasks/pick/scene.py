@@ -264,7 +264,8 @@ class PickPlaceTask:
             rollout's settle ends once its object is at rest; ``execute`` and ``step`` keep
             the picker's full settle, so an executed plan replays unchanged. None: every
             sample simulates every step. ``n_steps`` and ``n_full_steps`` count the steps
-            ``evaluate`` simulated and those a full settle would have.
+            ``evaluate`` simulated and those a full settle would have (and, with sized moves,
+            ``PickerConfig.move``, those fixed moves would have).
     """
 
     def __init__(self, scene: DeformableScene, goal: np.ndarray,
@@ -286,6 +287,9 @@ class PickPlaceTask:
             raise TypeError(f"blowup_label must be a string, got {type(blowup_label).__name__}")
         if rest is not None and not isinstance(rest, RestTest):
             raise TypeError(f"rest must be a RestTest or None, got {type(rest).__name__}")
+        if rest is not None and scene.picker.config.move != "fixed":
+            raise ValueError(f"rest: the rest test needs the fixed move (PickerConfig.move "
+                             f"'fixed'), the picker's is {scene.picker.config.move!r}")
         self.blowup_out, self.blowup_label, self.blowups = blowup_out, blowup_label, []
         self.rest = rest
         self.n_steps = self.n_full_steps = 0
@@ -331,14 +335,21 @@ class PickPlaceTask:
                 ) -> RolloutResult:
         """A population of action sequences, (P, H), (P, H, 3), simulated from ``start`` (ns,)
         (default: the task's start state): final states (P, ns) and the stability verdict.
+        Each sequence takes its own steps (``Picker.schedule``).
 
         Raises:
             ValueError: a bad action (see ``Picker.check``).
         """
-        U = self.picker.encode(_numpy(particles), _numpy(displacements))
+        return self._simulate(particles, displacements, start)[0]
+
+    def _simulate(self, particles, displacements, start: np.ndarray | None = None
+                  ) -> tuple[RolloutResult, np.ndarray]:
+        """``rollout`` and the steps (P,) each sequence simulated."""
+        plan = self.picker.schedule(_numpy(particles), _numpy(displacements))
         x0 = self.start_state if start is None else check_states(
             self.scene.model, start, batched=False, name="start")
-        return self.service.rollout(x0, U, control_spec=CONTROL_SPEC)
+        return self.service.rollout(x0, plan.controls, control_spec=CONTROL_SPEC,
+                                    lengths=plan.lengths), plan.lengths
 
     def cost(self, states: np.ndarray) -> np.ndarray:
         """Eq. 2 (mean particle distance to the goal, m) of state rows: (..., ns) -> (...)."""
@@ -352,8 +363,9 @@ class PickPlaceTask:
         With a planning scene, the population is simulated there."""
         model = self.planning or self
         if self.rest is None:
-            res = model.rollout(particles, displacements)
-            steps = full = res.final_states.shape[0] * self.picker.steps_per_action \
+            res, lengths = model._simulate(particles, displacements)
+            steps = int(lengths.sum())
+            full = res.final_states.shape[0] * model.picker.steps_per_action \
                 * np.shape(particles)[-1]
         else:
             rested = rollout_until_rest(model.service, model.picker,
