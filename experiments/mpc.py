@@ -19,8 +19,8 @@ blow-up captures, OUT/blowups/<key>, also named on the console], "provenance"}),
 OUT/table1.csv, and the plots of the first seed of each row: OUT/mpc_dofs.png (|C| per optimisation
 over the episode), OUT/mpc_goal_distance.png (the goal object's distance to the goal) and
 OUT/final_<row>.png (the final scene; MUJOCO_GL=egl, skipped with --no-render). summary.json also
-holds "trial_commits" (the code commits of the trial results: more than one when a resumed sweep
-mixes code). Exits 1 if a trial failed (summary.json lists it under "failed") or the run failed
+holds "trial_keys" (its trials: a folder may hold other runs' too) and "trial_commits" (the code
+commits of the trial results: more than one when a resumed sweep mixes code). Exits 1 if a trial failed (summary.json lists it under "failed") or the run failed
 (one line on stderr); 2 on a bad flag. --keep-controls also keeps each trial's start state
 and executed controls (about 280 KB a trial), which dopt-view re-simulates exactly; the keys
 are the same either way, and a stored trial without controls is rerun.
@@ -396,6 +396,7 @@ def _main(args, argv) -> int:
                               "rho": t.params["rho"]}
                         for t in trials for row in [row_label(t.params)]},
                **fields, "failed": failed, "trial_commits": res.commits,
+               "trial_keys": sorted(t.key for t in trials),
                "blowups": blowup_captures(args.out, [t.key for t in trials])}
     if getattr(args, "authors_data", None) is not None:
         summary["authors_rows"] = authors_travel(args.authors_data / TASK_DIRS[args.task],

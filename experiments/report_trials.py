@@ -96,6 +96,9 @@ def _files(folder: Path, r: Result) -> list[StoredTrial]:
         files = [p for sub in ("real", "virtual") for p in stored_trials(folder / sub / "trials")]
         return [p for p in files if (m := SEED.search(p.stem)) and int(m["seed"]) in seeds]
     files = stored_trials(folder / "trials")
+    if isinstance(d.get("trial_keys"), list):      # a run that shares its folder with others
+        keys = set(d["trial_keys"])
+        return [p for p in files if p.stem in keys]
     if r.kind == "fig7":
         held = {m: set(e.get("seeds") or ()) for m, e in (d.get("methods") or {}).items()}
         return [p for p in files if (m := FIG7_KEY.match(p.stem))
