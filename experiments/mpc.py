@@ -21,7 +21,8 @@ over the episode), OUT/mpc_goal_distance.png (the goal object's distance to the 
 OUT/final_<row>.png (the final scene; MUJOCO_GL=egl, skipped with --no-render). summary.json also
 holds "trial_keys" (its trials: a folder may hold other runs' too) and "trial_commits" (the code
 commits of the trial results: more than one when a resumed sweep mixes code). Exits 1 if a
-trial failed (summary.json lists it under "failed") or the run failed (one line on stderr); 2 on a bad flag. --keep-controls also keeps each trial's start state
+trial failed (summary.json lists it under "failed") or the run failed (one line on stderr);
+2 on a bad flag. --keep-controls also keeps each trial's start state
 and executed controls (about 280 KB a trial), which dopt-view re-simulates exactly; the keys
 are the same either way, and a stored trial without controls is rerun.
 
