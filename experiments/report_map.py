@@ -219,7 +219,7 @@ def table1_line(results: list[Result], preset: str = "authors") -> str | None:
     else:
         text = "cheapest reduced row / baseline: " + ", ".join(parts)
     if taus:
-        text += f"; Kendall tau vs the paper {' / '.join(taus)}"
+        text += f"; tau vs paper {' / '.join(taus)}"
     return text
 
 
