@@ -47,12 +47,11 @@ from cli_args import (
     settings_dict,
     write_summary,
 )
-from pick_sweep import SCHEMA, cem_trial, iterations_held
+from pick_sweep import SCHEMA, add_move_argument, cem_trial, iterations_held
 from sweep_console import out_lock, run_with_console
 
 from dopt import atomic
 from dopt.rollout import share_cores
-from dopt.tasks.pick.picker import MOVE_RULES
 from dopt.trialpack import is_stored_trial, read_trial_text
 from planners.pick_place.scaling import (
     COMPARED,
@@ -86,10 +85,7 @@ def parser() -> argparse.ArgumentParser:
     ap.add_argument("--workers", type=positive_int, default=1,
                     help="trials at once (processes; default 1); the cores are shared out "
                          "over them as simulation threads")
-    ap.add_argument("--move", choices=MOVE_RULES, default=None,
-                    help="how long each action's move lasts: fixed (the default) or sized "
-                         "(as long as its own displacement takes; PickPlaceSettings."
-                         "picker_move)")
+    add_move_argument(ap)
     ap.add_argument("--out", type=output_dir, default=None,
                     help="the run's folder (default results/fig7_scaling_<goal>)")
     ap.add_argument("--record", type=output_file, default=None,

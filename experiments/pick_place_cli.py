@@ -38,7 +38,7 @@ from cli_args import (
     positive_int,
     write_summary,
 )
-from pick_sweep import BUDGET_FLAGS, SCHEMA
+from pick_sweep import BUDGET_FLAGS, SCHEMA, add_move_argument
 from pick_sweep import iterations_held as _iterations_held
 from pick_sweep import run_trials as _run
 from sweep_console import out_lock
@@ -48,7 +48,6 @@ from dopt.rollout import share_cores
 from dopt.stats import mean_ci
 from dopt.sweep import Trial, is_finished
 from dopt.tasks.pick.cloth_scene import PHYSICS_PRESETS
-from dopt.tasks.pick.picker import MOVE_RULES
 from planners.pick_budget import budget_problem
 from planners.pick_place import (
     GOALS,
@@ -129,11 +128,7 @@ def parser(task: str, doc: str, help_: dict) -> argparse.ArgumentParser:
                     help="settle CEM's sampled rollouts until the particles' RMS speed is below "
                          "this (default: every sample settles the picker's full time; "
                          "executed plans always do)")
-    ap.add_argument("--move", choices=MOVE_RULES, default=None,
-                    help="how long each action's move lasts: fixed (the default), as long as "
-                         "the bound box's diagonal takes at the picker's speed; sized, as long "
-                         "as the action's own displacement takes (fewer steps; not with "
-                         "--rest-speed)")
+    add_move_argument(ap)
     ap.add_argument("--threads", type=nonneg_int, default=0,
                     help="simulation threads per trial (0, the default: the cores shared out "
                          "over the trials that run at once: all of them for one, one each "

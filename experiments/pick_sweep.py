@@ -65,3 +65,14 @@ def iterations_held(trials: list[Trial], iterations_per_trial: int, out: Path) -
         elif (progress := Checkpoint(out, t.key, schema=SCHEMA).peek()) is not None:
             held += iterations_done(progress)
     return held
+
+
+def add_move_argument(ap) -> None:
+    """--move: how long each pick-and-place action's move lasts (``PickerConfig.move``)."""
+    from dopt.tasks.pick.picker import MOVE_RULES
+
+    ap.add_argument("--move", choices=MOVE_RULES, default=None,
+                    help="how long each action's move lasts: fixed (the default), as long as "
+                         "the bound box's diagonal takes at the picker's speed; sized, as long "
+                         "as the action's own displacement takes (fewer steps; not with "
+                         "--rest-speed; PickPlaceSettings.picker_move)")
