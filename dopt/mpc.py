@@ -386,12 +386,7 @@ class MPC:
         T = len(new.controls)
         row = min(lag, T - 1)
         if new.states is not None and T > 1:
-            lay, x = self.scene.layout, self._states[-1]
-            C = np.arange(self.scene.nv) if new.dofs is None else np.asarray(new.dofs)
-            nominal = new.states[:T - 1]
-            dq = self.scene.tangent.difference(nominal[:, lay["qpos"]], x[lay["qpos"]], 1.0, C)
-            err = (np.abs(dq).sum(1)
-                   + np.abs(x[lay["qvel"]][C] - nominal[:, lay["qvel"]][:, C]).sum(1))
+            err = np.abs(self._deviation(new.states[:T - 1], new.dofs)).sum(axis=1)
             best = int(np.argmin(err))            # the first of equal errors, as theirs
             if err[best] < NEAREST_MAX_L1:
                 row = best
@@ -418,7 +413,7 @@ class MPC:
                 plan = self._plan
                 u = plan.controls[0].copy()
                 if self.config.feedback and plan.K is not None and plan.states is not None:
-                    u += plan.K[0] @ self._deviation(plan)
+                    u += plan.K[0] @ self._deviation(plan.states[0], plan.dofs)
                 self._plan = plan.shifted(1)
             self._consumed += 1
         if u is None:                          # the authors' hold: gravity compensation only
@@ -462,7 +457,7 @@ class MPC:
         self._cursor += 1
         u = buf.controls[i].copy()
         if self.config.feedback and buf.K is not None and buf.states is not None:
-            u += buf.K[i] @ self._deviation(buf.shifted(i))
+            u += buf.K[i] @ self._deviation(buf.states[i], buf.dofs)
         return u
 
     def _capture(self, row: np.ndarray, nxt: np.ndarray, reason: str) -> str | None:
@@ -486,13 +481,14 @@ class MPC:
         self._blowups.append(str(out))
         return str(out)
 
-    def _deviation(self, plan: Plan) -> np.ndarray:
-        """[q_C (-) q_nom_C ; v_C - v_nom_C] of the agent's state against plan row 0: (2c,)."""
+    def _deviation(self, ref: np.ndarray, dofs) -> np.ndarray:
+        """[q_C (-) q_ref_C ; v_C - v_ref_C] of the agent's state against nominal rows ref
+        (..., ns) over the DoFs ``dofs`` (None: all): (..., 2c)."""
         lay = self.scene.layout
-        C = np.arange(self.scene.nv) if plan.dofs is None else np.asarray(plan.dofs)
-        x, ref = self._states[-1], plan.states[0]
-        dq = self.scene.tangent.difference(ref[lay["qpos"]], x[lay["qpos"]], 1.0, C)
-        return np.concatenate([dq, x[lay["qvel"]][C] - ref[lay["qvel"]][C]])
+        C = np.arange(self.scene.nv) if dofs is None else np.asarray(dofs)
+        x = self._states[-1]
+        dq = self.scene.tangent.difference(ref[..., lay["qpos"]], x[lay["qpos"]], 1.0, C)
+        return np.concatenate([dq, x[lay["qvel"]][C] - ref[..., lay["qvel"]][..., C]], axis=-1)
 
     @property
     def _period(self) -> float:
