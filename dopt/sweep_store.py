@@ -145,7 +145,7 @@ class Schema:
         if theirs == mine:
             return None
         return (f"its params are another trial's "
-                f"({_difference(json.loads(theirs), json.loads(mine))})")
+                f"({_difference(json.loads(theirs), json.loads(mine), stored, params)})")
 
     def _identity(self, params) -> str:
         """The identity of ``params`` as canonical JSON text (tuples as lists, keys sorted)."""
@@ -190,19 +190,33 @@ def _finite_problem(result: dict, keys: tuple[str, ...]) -> str | None:
     return None
 
 
-def _difference(theirs, mine) -> str:
-    """A few words on how the identity ``theirs`` (of a stored record) differs from ``mine``
-    (of the trial it is stored for)."""
+def _difference(theirs, mine, stored, params) -> str:
+    """A few words on how the identity ``theirs`` of a stored record (its params ``stored``)
+    differs from ``mine`` (of the trial it is stored for, of ``params``): the differing
+    fields (nested ones dotted, the first three), of the identities where they are objects,
+    else of the params."""
+    def flat(d, prefix="") -> dict:
+        out = {}
+        for k, v in d.items():
+            out.update(flat(v, f"{prefix}{k}.") if isinstance(v, dict) and v else
+                       {f"{prefix}{k}": v})
+        return out
+
     def short(v) -> str:
-        text = json.dumps(v, sort_keys=True)
+        text = json.dumps(v, sort_keys=True, default=repr)
         return text if len(text) <= 60 else text[:57] + "..."
-    if isinstance(theirs, dict) and isinstance(mine, dict):
-        keys = sorted(k for k in theirs.keys() | mine.keys() if theirs.get(k, ...) !=
-                      mine.get(k, ...))
-        parts = [f"{k!r}: stored {short(theirs[k]) if k in theirs else '(none)'}, this "
-                 f"trial's {short(mine[k]) if k in mine else '(none)'}" for k in keys[:3]]
-        return "; ".join(parts) + (f"; {len(keys) - 3} more" if len(keys) > 3 else "")
-    return f"stored {short(theirs)}, this trial's {short(mine)}"
+    head = ""
+    if not (isinstance(theirs, dict) and isinstance(mine, dict)):
+        head = f"it names {short(theirs)}, this trial {short(mine)}"
+        theirs, mine = stored, json.loads(json.dumps(params, default=repr))
+        if not (isinstance(theirs, dict) and isinstance(mine, dict)):
+            return head
+    a, b = flat(theirs), flat(mine)
+    keys = sorted(k for k in a.keys() | b.keys() if a.get(k, ...) != b.get(k, ...))
+    parts = [f"{k!r}: stored {short(a[k]) if k in a else '(none)'}, this trial's "
+             f"{short(b[k]) if k in b else '(none)'}" for k in keys[:3]]
+    tail = "; ".join(parts) + (f"; {len(keys) - 3} more" if len(keys) > 3 else "")
+    return "; ".join(x for x in (head, tail) if x)
 
 
 def trial_path(out_dir: Path | str, key: str) -> Path:
