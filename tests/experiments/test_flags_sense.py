@@ -15,6 +15,19 @@ import rope
 
 from tests.dopt.tasks.test_authors_layout_sense import CYLINDER_XY, _layout
 
+REAL_MAKE_PROBLEM = pick_place_cli.make_problem
+
+
+@pytest.fixture(autouse=True)
+def no_run(monkeypatch):
+    """What follows the flag checks fails loudly: a flag accepted by mistake gives exit 1
+    (the test, expecting 2, fails) instead of running a sweep."""
+    def stop(*args, **kwargs):
+        raise AssertionError("the arguments were accepted")
+    monkeypatch.setattr(pick_place_cli, "make_problem", stop)
+    monkeypatch.setattr(mpc, "run", stop)
+    monkeypatch.setattr(panda_execute, "run_sweep", stop)
+
 
 def usage_error(capsys, main, argv) -> str:
     with pytest.raises(SystemExit) as exc:
@@ -68,21 +81,47 @@ def test_a_senseless_layout_is_refused_before_any_trial(tmp_path, capsys):
     assert f"argument --layouts: no {layouts / '2.csv'}" in err
 
 
-def test_quick_keeps_an_explicit_trial_count(tmp_path):
+class Trials(SystemExit):
+    """Raised in place of the sweep (past the scripts' one-line error handler, as an exit
+    is): the trials the run would run."""
+
+    def __init__(self, trials):
+        super().__init__(0)
+        self.trials = trials
+
+
+def _seeds(trials) -> list:
+    return sorted({t.params["seed"] for t in trials})
+
+
+def test_quick_keeps_an_explicit_trial_count(tmp_path, monkeypatch):
     out = str(tmp_path / "o")
     assert mpc.parse_args(["--quick", "--trials", "3", "--out", out]).trials == 3
     assert mpc.parse_args(["--quick", "--out", out]).trials == 1
     assert mpc.parse_args(["--out", out]).trials == mpc.DEFAULT_TRIALS
-    assert panda_execute.parse_args(["--quick", "--seeds", "2", "--out", out]).seeds == 2
-    assert panda_execute.parse_args(["--quick", "--out", out]).seeds == 1
+
+    def capture(fn, trials, *args, **kwargs):
+        raise Trials(trials)
+    monkeypatch.setattr(panda_execute, "run_sweep", capture)
+    for flags, seeds in [(["--seeds", "2"], [0, 1]), ([], [0])]:
+        with pytest.raises(Trials) as run:
+            panda_execute.main(["--quick", "--goals", "diagonal", *flags, "--out", out])
+        assert _seeds(run.value.trials) == seeds
 
 
-@pytest.mark.parametrize("flags, seeds", [(["--quick", "--seeds", "2"], 2), (["--quick"], 1),
-                                          (["--quick", "--preset", "ours", "--seeds", "3"], 3)])
-def test_quick_keeps_explicit_seeds(tmp_path, flags, seeds):
-    ap = pick_place_cli.parser("rope", "doc", rope.HELP)
-    args, _ = pick_place_cli.parse(ap, "rope", [*flags, "--out", str(tmp_path / "o")])
-    assert args.seeds == seeds
+@pytest.mark.parametrize("flags, seeds", [(["--quick", "--seeds", "2"], [0, 1]),
+                                          (["--quick"], [0]),
+                                          (["--quick", "--preset", "ours", "--seeds", "3"],
+                                           [0, 1, 2])])
+def test_quick_keeps_explicit_seeds(tmp_path, monkeypatch, flags, seeds):
+    """The seeds the run's trials have (the sweep stopped just before it starts)."""
+    def capture(problem, settings, trials, *args):
+        raise Trials(trials)
+    monkeypatch.setattr(pick_place_cli, "make_problem", REAL_MAKE_PROBLEM)
+    monkeypatch.setattr(pick_place_cli, "estimate_line", capture)
+    with pytest.raises(Trials) as run:
+        rope.main([*flags, "--methods", "scripted", "--out", str(tmp_path / "o")])
+    assert _seeds(run.value.trials) == seeds
 
 
 @pytest.mark.parametrize("main, argv", [
