@@ -185,37 +185,39 @@ def table1_line(results: list[Result], preset: str = "authors") -> str | None:
     many SVR rows Holm finds cheaper than baseline and than rand; and Kendall's tau of our
     order against the paper's printed one. A task whose baseline is kept (neither outlier
     nor unstable) in fewer than ``MIN_KEPT_BASELINE`` of its episodes says so instead of
-    means over the few seeds left ("-" for its tau)."""
+    means over the few seeds left ("n/a" against baseline, "-" for its tau); its verdicts
+    against rand stand."""
     _, published = paper_table1(results)
-    parts, taus, tasks, versus, few = [], [], [], {}, []
+    parts, taus, counts = [], [], {}
     for task in ("clutter", "soft", "soft_rigid"):
         r = paper_preset_table1(results, task, (preset,))
         if r is None:
             continue
         kept = kept_baseline(r.data)
-        if kept and kept[0] < MIN_KEPT_BASELINE * kept[1]:
-            few.append(f"{task} n/a (baseline kept {kept[0]}/{kept[1]})")
-            parts.append(few[-1])
-            if task in published:
-                taus.append("-")
-            continue
-        tasks.append(task)
-        for ref, count in versus_counts(r.data.get("versus")).items():
-            versus.setdefault(ref, []).append(count)
+        few = bool(kept and kept[0] < MIN_KEPT_BASELINE * kept[1])
+        verdicts = versus_counts(r.data.get("versus"))
+        if few and verdicts:          # no baseline to compare with; the verdicts vs rand stand
+            verdicts = {**verdicts, "baseline": f"n/a (kept {kept[0]}/{kept[1]})"}
+        counts[task] = verdicts
         rows = {k: m["mpc_cost_normalised_mean"] for k, m in r.data["methods"].items()
                 if k != "baseline" and isinstance(m.get("mpc_cost_normalised_mean"),
                                                   (int, float))}
-        if rows:
+        if few:
+            parts.append(f"{task} n/a (baseline kept {kept[0]}/{kept[1]})")
+        elif rows:
             best = min(rows, key=rows.get)
             parts.append(f"{task} {best} {num(rows[best])}")
         if task in published:
-            taus.append(num(orderings(*_table1_columns(published[task], r.data))["kendall_tau"]))
+            taus.append("-" if few else
+                        num(orderings(*_table1_columns(published[task], r.data))["kendall_tau"]))
     if not parts:
         return None
-    if versus and all(len(v) == len(tasks) for v in versus.values()):
-        text = (f"SVR cheaper:dearer/n vs {', '.join(versus)} (Holm): "
-                + "; ".join([f"{task} {', '.join(v[i] for v in versus.values())}"
-                             for i, task in enumerate(tasks)] + few))
+    refs = [ref for ref in ("baseline", "rand-t5")
+            if counts and all(ref in v for v in counts.values())]
+    if refs:
+        text = (f"SVR cheaper:dearer/n vs {', '.join(refs)} (Holm): "
+                + "; ".join(f"{task} {', '.join(v[ref] for ref in refs)}"
+                            for task, v in counts.items()))
     else:
         text = "cheapest reduced row / baseline: " + ", ".join(parts)
     if taus:

@@ -67,6 +67,10 @@ def table1_section(results: list[Result], page: Path) -> list[str]:
             lines += ["", f"Kendall tau of the rows' mean lag and mean normalised cost: "
                           f"{num(tau)} (1: the less a row lags, the less it costs)."]
         lines += versus_lines(d.get("versus"))
+        if d.get("versus_unstable_kept"):
+            lines += ["", "The same with the episodes flagged unstable kept (how much the "
+                      "verdicts owe to the stability bounds):"]
+            lines += versus_lines(d["versus_unstable_kept"])[3:]
         fb = d.get("feedback_effect")
         if fb:
             lines += ["", "Feedback vs open loop, paired by seed (MPC cost ratio: geometric mean "
