@@ -13,6 +13,7 @@ from scipy import stats
 from dopt.multiple import holm
 from dopt.stats import mean_ci
 from planners.svr_mpc.authors_data import authors_statistic
+from planners.svr_mpc.choice import choice_fields
 from planners.svr_mpc.settings import TABLE1_ROWS, row_label
 
 #: a goal object that ends farther than this from the goal (m) was knocked over and rolled away;
@@ -264,9 +265,10 @@ def table1_fields(records: list[dict], baseline: str = "baseline") -> dict:
     """Everything a Table 1 summary computes from its trials: "methods" (``summarize``, rows
     in ``TABLE1_ROWS`` order, variants after their row), "paired", "authors_statistic",
     "versus", "lag_cost_tau" (``lag_cost_tau``), "versus_unstable_kept" (``versus`` with the
-    episodes flagged unstable kept) where any is, and where the trials hold them
-    "feedback_effect" (both feedback settings ran)
-    and "derivatives_effect" (a derivative variant ran)."""
+    episodes flagged unstable kept) where any is, "choice" (``choice.choice_fields``: how
+    often each row's C held the goal object) where the trials have active sets, and where
+    the trials hold them "feedback_effect" (both feedback settings ran) and
+    "derivatives_effect" (a derivative variant ran)."""
     order = {name: i for i, name in enumerate(TABLE1_ROWS)}
     rows = dict(sorted(summarize(records, baseline=baseline).items(),
                        key=lambda kv: (order.get(kv[0].split()[0], 99), kv[0])))
@@ -274,6 +276,8 @@ def table1_fields(records: list[dict], baseline: str = "baseline") -> dict:
            "authors_statistic": authors_statistic(records, baseline=baseline),
            "versus": versus(records)}
     out["lag_cost_tau"] = lag_cost_tau(rows)
+    if choice := choice_fields(records, baseline=baseline):
+        out["choice"] = choice
     if any(r["result"].get("unstable") for r in records):
         out["versus_unstable_kept"] = versus(records, keep_unstable=True)
     if len({bool(r["params"].get("feedback")) for r in records}) == 2:
