@@ -17,8 +17,8 @@
 Every file is written atomically and as strict JSON (``dopt.jsonio``: no bare NaN).
 Standard library only (with ``dopt.provenance``, ``dopt.jsonio``, ``dopt.sweep_lock`` and
 ``dopt.trialpack``).
-Packing itself (``pack_trials``, ``PackResult``) lives in ``dopt.sweep_pack``; both names are
-still importable from here.
+Packing itself (``pack_trials``, ``PackResult``) lives in ``dopt.sweep_pack``, which imports
+this module (``dopt.sweep`` re-exports both).
 """
 
 from __future__ import annotations
@@ -402,15 +402,6 @@ class Report:
             self.path.unlink()
         except FileNotFoundError:
             pass
-
-
-def __getattr__(name: str):
-    """``PackResult`` and ``pack_trials``, importable from here as before: they live in
-    ``dopt.sweep_pack``, which imports this module, so they are loaded on first use."""
-    if name in ("PackResult", "pack_trials"):
-        from dopt import sweep_pack
-        return getattr(sweep_pack, name)
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 __all__ = ["ANY", "CHECKPOINT_DIR", "CORRUPT_DIR", "LOCK_NAME", "OUTDATED_DIR", "PROGRESS_DIR",

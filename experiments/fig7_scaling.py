@@ -19,7 +19,7 @@ the gaps against the particle count, 95 % bars; only where matplotlib is install
 Exits 1 if a trial failed, 2 on bad flags (one line).
 
     python experiments/fig7_scaling.py --goal diagonal --sizes 10,15,20,30 --seeds 5 \\
-        --out /tmp/scaling-diagonal --reuse-from docs/results/runs/fig7-cloth-diagonal
+        --out results/scaling-diagonal --reuse-from docs/results/runs/fig7-cloth-diagonal
 """
 
 from __future__ import annotations

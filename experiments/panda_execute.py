@@ -48,9 +48,9 @@ from cli_args import (
 )
 
 from dopt import atomic
+from dopt.blowup import retire_captures
 from dopt.stats import mean_ci
 from dopt.sweep import Trial, run_sweep
-from dopt.view.blowup import retire_captures
 from planners.pick_place import PickPlaceSettings, make_planner, make_problem, run_problem
 
 GOALS = ("diagonal", "side")

@@ -48,7 +48,6 @@ from dopt.rollout import share_cores
 from dopt.stats import mean_ci
 from dopt.sweep import Trial, is_finished
 from dopt.tasks.pick.cloth_scene import PHYSICS_PRESETS
-from planners.pick_budget import budget_problem
 from planners.pick_place import (
     GOALS,
     LABELS,
@@ -62,6 +61,7 @@ from planners.pick_place import (
     summarize,
     trial_key,
 )
+from planners.pick_place.budget import budget_problem
 
 log = logging.getLogger(__name__)
 COLOURS = {"simple": "tab:blue", "original": "tab:red", "random": "tab:green",

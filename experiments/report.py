@@ -38,8 +38,9 @@ A result file that cannot be read exits 2 naming it; one whose provenance lacks 
 the git commit or the versions of dopt, mujoco and torch is named in a note on stderr.
 Standard library only (with dopt.cli, the command-line types, dopt.multiple, Holm's
 correction, dopt.trialpack, the reader of committed trials, loose or packed, with
-dopt.jsonio, and planners.trial_progress, the reader of a trial's checkpoint, all standard
-library themselves), so it runs without torch, numpy or MuJoCo. Its sections live in
+dopt.jsonio, dopt.provenance, which shows a recorded command without its machine's folders,
+and planners.trial_progress, the reader of a trial's checkpoint, all standard library
+themselves), so it runs without torch, numpy or MuJoCo. Its sections live in
 report_base.py, report_fig7.py, report_kp.py, report_svr.py, report_sweeps.py and
 report_clock.py (the MPC clocks and the machine speed behind the virtual clock's sweeps), the
 README's map in report_map.py.

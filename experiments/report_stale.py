@@ -71,7 +71,8 @@ SVR_COMPUTE_PATHS = ("dopt", "planners/ilqr.py", "planners/svr.py", "planners/ke
                      "planners/svr_mpc/authors_clock.py",
                      *(f":(exclude)dopt/{f}" for f in (
                          "sweep*.py", "trialpack.py", "jsonio.py", "atomic.py", "provenance.py",
-                         "stats.py", "multiple.py", "cli.py", "bench", "render.py", "view")))
+                         "stats.py", "multiple.py", "cli.py", "bench", "render.py", "view",
+                         "blowup.py")))
 
 
 def load_snapshot(results_dir: Path) -> dict | None:

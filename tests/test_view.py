@@ -235,8 +235,8 @@ def violent_rope():
 
 
 def test_forced_blowup_is_captured_and_opens_at_the_failing_step(tmp_path):
+    from dopt.blowup import capture_blowup, capture_dir
     from dopt.tasks.pick.picker import CONTROL_SPEC
-    from dopt.view.blowup import capture_blowup, capture_dir
     from dopt.view.episode import collect
 
     scene, service, done, U = violent_rope()
@@ -265,7 +265,7 @@ def test_forced_blowup_is_captured_and_opens_at_the_failing_step(tmp_path):
 def test_save_blowup_names_bad_input(tmp_path):
     import mujoco
 
-    from dopt.view.blowup import save_blowup
+    from dopt.blowup import save_blowup
 
     model = mujoco.MjModel.from_xml_string("<mujoco><worldbody><body><freejoint/>"
                                            "<geom size='.1'/></body></worldbody></mujoco>")
@@ -317,8 +317,8 @@ def test_cli_bad_input_is_one_line_and_exit_1(tmp_path):
 def test_cli_still_of_a_blowup_opens_at_the_failing_step(tmp_path):
     from PIL import Image
 
+    from dopt.blowup import capture_blowup, capture_dir
     from dopt.tasks.pick.picker import CONTROL_SPEC
-    from dopt.view.blowup import capture_blowup, capture_dir
 
     scene, service, done, U = violent_rope()
     service.close()

@@ -5,13 +5,15 @@ A *source* knows one kind of record: ``claims(path, record)`` says whether a fil
 ``record``, or None for a folder) is one of its, ``load(path, max_frames)`` builds the
 ``Episode``. dopt knows no planner: the pick-and-place and MPC trial sources live in
 ``planners.view`` and are found through the ``dopt.view.sources`` entry points of the installed
-distribution (pyproject.toml); the blow-up capture source (``dopt.view.blowup``) is built in.
+distribution (pyproject.toml); the blow-up capture source (``BLOWUP_SOURCE``, ``load_blowup``:
+the captures ``dopt.blowup`` writes) is built in.
 
 Shapes: F frames, ns state row, M markers, V ghost vertices, nbody bodies.
 """
 
 from __future__ import annotations
 
+import json
 import logging
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -21,7 +23,8 @@ import mujoco
 import numpy as np
 
 from dopt import jsonio
-from dopt.state import INTEGRATION, check_model, check_spec, check_states
+from dopt.blowup import FORMAT
+from dopt.state import INTEGRATION, StateLayout, check_model, check_spec, check_states
 from dopt.trialpack import is_stored_trial, read_pack, read_trial_text
 from dopt.validation import check_int, float_array
 
@@ -226,8 +229,6 @@ def sources() -> list:
     entry point of the installed distributions (``planners.view``: pick and MPC trials)."""
     from importlib.metadata import entry_points
 
-    from dopt.view.blowup import BLOWUP_SOURCE
-
     found = [BLOWUP_SOURCE]
     for ep in sorted(entry_points(group=ENTRY_POINTS), key=lambda e: e.name):
         try:
@@ -290,3 +291,53 @@ def collect(path, source_list: Sequence | None = None) -> dict[str, tuple[object
                          f"(sources: {names}; the pick and MPC trial sources need the "
                          f"package installed: pip install -e .)")
     return out
+
+
+# ------------------------------------------------------------------------------ blow-ups
+def load_blowup(path, max_frames: int = 400):
+    """A capture folder as a ``dopt.view.episode.Episode`` opening at the state after the
+    failing step, the offending body marked.
+
+    Raises:
+        FileNotFoundError / ValueError: no capture there, or one of another format.
+    """
+    path = Path(path)
+    meta_file = path / "blowup.json"
+    if not meta_file.is_file():
+        raise FileNotFoundError(f"{path} holds no blowup.json")
+    meta = json.loads(meta_file.read_text())
+    if meta.get("format") != FORMAT:
+        raise ValueError(f"{meta_file}: format {meta.get('format')!r}, expected {FORMAT!r}")
+    model = mujoco.MjModel.from_binary_path(str(path / "model.mjb"))
+    rows = np.load(path / "states.npy")
+    first, step = int(meta["first_row"]), int(meta["step"])
+    failing = min(max(step + 1 - first, 0), len(rows) - 1)
+    keep = frame_rows(len(rows), max_frames, must=[failing])
+    layout = StateLayout.of(model, int(meta["spec"]))
+    times = (rows[keep, layout["time"]].ravel() if "time" in layout.slices
+             else (first + keep) * model.opt.timestep)
+    captions = [f"rollout row {first + r} (after step {first + r - 1})"
+                + ("  <- the verdict flagged this step" if r == failing else "")
+                for r in keep]
+    body = meta.get("body_id")
+    summary = (f"**Blow-up** {meta.get('label') or path.name}  \n"
+               f"step {step}: {meta['reason']}  \nbody: {meta.get('body')}  \n"
+               f"{len(rows)} states kept (rows {first}..{first + len(rows) - 1})")
+    return Episode(path.name, model, rows[keep], np.nan_to_num(times), captions, summary,
+                   spec=int(meta["spec"]), marked_body=None if body is None else int(body),
+                   start_frame=int(np.searchsorted(keep, failing)))
+
+
+class BlowupSource:
+    """The episode source of capture folders (``dopt.view.episode.sources``)."""
+
+    name = "blowup"
+
+    def claims(self, path: Path, record: dict | None) -> bool:
+        return record is None and Path(path).is_dir() and (Path(path) / "blowup.json").is_file()
+
+    def load(self, path: Path, max_frames: int = 400):
+        return load_blowup(path, max_frames)
+
+
+BLOWUP_SOURCE = BlowupSource()

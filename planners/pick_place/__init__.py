@@ -29,6 +29,8 @@ Modules, one job each (every name is re-exported here):
     settings.py  PickPlaceSettings: presets, scene and picker configs, a trial's identity
                  and name (trial_key)
     problem.py   Problem and make_problem
+    budget.py    the sizes a setting implies, checked before anything is allocated
+                 (check_budget, budget_problem, BudgetError)
     planners.py  StagePlan, PickPlanner, CEMPlanner, ScriptedPlanner, make_planner, METHODS
     run.py       run_problem (with checkpoints and blow-up captures: capture_label), solve,
                  run_trial, PickPlaceResult

@@ -1,7 +1,7 @@
 """The pick-and-place presets, ours and the key-particle paper's protocol, in one table.
 
 Every number says where it comes from: the paper (Sec. IV-C.2, the text in
-``/work/shared/seeds/action_space_reduction_deformables.txt``), the authors' code
+``../shared/seeds/action_space_reduction_deformables.txt``), the authors' code
 (``shengyin-git/ac_softagent``) or ours (chosen or measured; docs/DESIGN-NOTES.md and
 docs/RESULTS.md give the measurements). ``PickPlaceSettings.preset(task, goal, quick,
 protocol)`` reads them: ``PRESETS`` is the protocol "ours", one row per goal; the paper's

@@ -60,8 +60,8 @@ def make_problem(settings: PickPlaceSettings, seed: int = 0,
     crumpled rope of rope straightening; every other start is deterministic).
     ``scene_overrides``: scene-config fields set on top of the physics preset (what ``python
     -m planners.bench cloth`` sweeps). The sizes the settings imply are checked first
-    (``planners.pick_budget``: a ``BudgetError``, a ValueError, naming the setting)."""
-    from planners.pick_budget import check_budget
+    (``planners.pick_place.budget``: a ``BudgetError``, a ValueError, naming the setting)."""
+    from planners.pick_place.budget import check_budget
 
     check_settings(settings)
     check_budget(settings)
