@@ -187,3 +187,27 @@ class DragPlanner:
                          res.seconds_per_iteration.tolist(), res.n_evaluated + 1,
                          res.n_nonfinite + int(st.unstable[0]), bool(st.unstable[0]),
                          st.reason[0], n_steps=dtask.n_steps, n_full_steps=dtask.n_steps)
+
+
+def speed_check(task: PickPlaceTask, drag: DragSettings, substeps, samples: int,
+                generator: torch.Generator) -> dict:
+    """Whether the sheet tolerates the drag speed: ``samples`` plans from the authors' first
+    CEM distribution (``GaussianCEMConfig.init_std`` about the box's centre, clipped) over
+    CEM(Original)'s grid, simulated from ``task``'s start at each substep count in
+    ``substeps``. Returns {str(k): {"speed_m_per_s" (the fastest substep's per axis),
+    "n_unstable", "reasons", "max_strain" (p50, p90, max), "max_speed" (p50, max)}}."""
+    planner = DragPlanner(drag, "all", 0)
+    points = planner.candidate_points(task, [])
+    D = 4 * drag.horizon
+    x = torch.randn((samples, D), generator=generator, dtype=torch.float64)
+    x = (x * GaussianCEMConfig().init_std * 2).clamp(-1.0, 1.0).numpy()
+    out = {}
+    for k in substeps:
+        dtask = DragTask(task, points, DragSettings(**{**drag.to_dict(), "substeps": int(k)}))
+        st = dtask.rollout(x)[0].stability
+        out[str(int(k))] = {
+            "speed_m_per_s": drag.step / (int(k) * float(task.scene.model.opt.timestep)),
+            "n_unstable": st.n_unstable, "reasons": sorted(set(r for r in st.reason if r)),
+            "max_strain": [float(np.percentile(st.max_strain, q)) for q in (50, 90, 100)],
+            "max_speed": [float(np.percentile(st.max_speed, q)) for q in (50, 100)]}
+    return out

@@ -171,7 +171,9 @@ class DragSimulator:
         joints = [m.joint(f"picker_{a}") for a in "xyz"]
         self._picker_qpos = np.array([int(j.qposadr[0]) for j in joints])
         self._picker_dof = np.array([int(j.dofadr[0]) for j in joints])
-        self._picker_range = np.array([j.range for j in joints])
+        self._picker_range = np.array([j.range if j.limited[0] else (-np.inf, np.inf)
+                                       for j in joints], dtype=float)
+        self._picker_joint = np.array([j.id for j in joints])
         self._picker_origin = np.asarray(scene.picker.config.start, dtype=float)
         self.decision_steps, self.settle_steps = config.steps(float(m.opt.timestep))
 
@@ -231,6 +233,7 @@ class DragSimulator:
         offsets); the control row of the decision (``NONE``: the idle row, nothing held)."""
         picker = self.scene.picker
         if pick == NONE:
+            self.model.jnt_range[self._picker_joint[2], 0] = self._picker_range[2, 0]
             return picker.idle_row
         tri = points.triangles[pick]
         x = self.scene.positions(self.scene.scene.state_of(data))[tri]      # (3, 3)
@@ -239,6 +242,10 @@ class DragSimulator:
         data.qpos[self._picker_qpos] = q
         data.qvel[self._picker_dof] = 0.0
         held = self._picker_origin + q
+        # the held patch stays above the floor: the picker stops where the lowest held
+        # vertex would reach the picker's own floor limit (SoftGym clips the picked particle)
+        zlow = self._picker_range[2, 0] - min(0.0, float((x[:, 2] - held[2]).min()))
+        self.model.jnt_range[self._picker_joint[2], 0] = min(zlow, q[2])
         self.model.eq_data[self._grasp[tri], 0:3] = x - held
         self.model.eq_data[self._grasp[tri], 3:6] = 0.0
         mujoco.mj_forward(self.model, data)
@@ -250,6 +257,8 @@ class DragSimulator:
         step count after them (a rollout already unstable keeps stepping, unjudged)."""
         m, mon = self.model, self.scene.scene.monitor
         mujoco.mj_setState(m, data, row, CONTROL_SPEC)
+        if n == 0:
+            return step
         fields = {name: [] for name in mon.record}
         for _ in range(n):
             mujoco.mj_step(m, data)
