@@ -28,7 +28,8 @@ from planners.scripted import ScriptedConfig, scripted
 #: planner names (the paper's methods), in the order of its figures
 METHODS = ("simple", "original", "random", "scripted")
 LABELS = {"simple": "CEM(Simple)", "original": "CEM(Original)", "random": "CEM(Random)",
-          "scripted": "Scripted"}
+          "scripted": "Scripted", "simple-drag": "CEM(Simple), drags",
+          "original-drag": "CEM(Original), drags", "random-drag": "CEM(Random), drags"}
 #: the CEM methods' candidate sets (``CEMPlanner.CANDIDATES``)
 CEM_CANDIDATES = {"simple": "keys", "original": "all", "random": "random"}
 
@@ -183,12 +184,21 @@ class ScriptedPlanner:
 
 
 def make_planner(method: str, settings: PickPlaceSettings, seed: int = 0) -> PickPlanner:
-    """The planner of a method name (``METHODS``) with the settings' configs; ``seed`` an
-    int >= 0."""
-    if not isinstance(method, str) or method not in METHODS:
-        raise ValueError(f"unknown method {method!r}; choose from {', '.join(METHODS)}")
+    """The planner of a method name (``METHODS``, or the drag encoding's
+    ``planners.pick_place.drag.DRAG_METHODS``, which need ``settings.drag``) with the
+    settings' configs; ``seed`` an int >= 0."""
+    from planners.pick_place.drag import DRAG_METHODS, DragPlanner
+
+    if not isinstance(method, str) or method not in METHODS + tuple(DRAG_METHODS):
+        raise ValueError(f"unknown method {method!r}; choose from "
+                         f"{', '.join(METHODS + tuple(DRAG_METHODS))}")
     check_settings(settings)
     check_seed(seed)
+    if method in DRAG_METHODS:
+        if settings.drag is None:
+            raise ValueError(f"method {method!r} plans in the drag encoding: settings.drag "
+                             f"must be DragSettings, not None")
+        return DragPlanner(settings.drag, DRAG_METHODS[method], seed)
     if method == "scripted":
         return ScriptedPlanner(settings.scripted)
     return CEMPlanner(settings.cem, CEM_CANDIDATES[method], seed)

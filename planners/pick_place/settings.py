@@ -25,6 +25,7 @@ from dopt.tasks.pick.scene import PICK_BOUNDS
 from dopt.tasks.pick.settle import RestTest
 from dopt.validation import check_config, check_int
 from planners.cem import CEMConfig
+from planners.pick_place.drag_settings import DragSettings
 from planners.pick_place.presets import PROTOCOLS, quick_preset
 from planners.pick_place.tasks import GOALS, PICK_TASKS, pick_task
 from planners.scripted import ScriptedConfig
@@ -33,7 +34,7 @@ from planners.trial_progress import RUN_ONLY_SETTINGS
 #: optional settings ``PickPlaceSettings.identity`` leaves out at None: options whose unset
 #: value is what every trial ran before they existed, so those trials stay valid
 UNSET_SETTINGS = ("planning_physics", "max_stretch", "picker_speed", "rest_speed",
-                  "picker_move")
+                  "picker_move", "drag")
 #: scene-config fields a trial's identity leaves out at these values, for the same reason
 UNSET_SCENE_FIELDS = {"passive": False}
 #: picker-config fields a trial's identity leaves out while the move is the fixed one (they
@@ -73,6 +74,8 @@ class PickPlaceSettings:
             default) or "fixed", as long as the bound box's diagonal takes; "sized", as long
             as the action's own displacement takes at the same speed (fewer steps; not with
             ``rest_speed``). "fixed" is stored as None, so that a trial keeps its key.
+        drag: the authors' drag encoding (``DragSettings``) that the drag methods plan in
+            (``planners.pick_place.drag``); None: none (the macro methods ignore it).
     """
 
     task: str
@@ -91,6 +94,7 @@ class PickPlaceSettings:
     picker_speed: float | None = None
     rest_speed: float | None = None
     picker_move: str | None = None
+    drag: DragSettings | None = None
 
     def __post_init__(self):
         pick_task(self.task).goal(self.goal)      # ValueError naming an unknown task or goal
@@ -108,6 +112,9 @@ class PickPlaceSettings:
         if self.picker_move not in (None, *MOVE_RULES):
             raise ValueError(f"PickPlaceSettings.picker_move must be None or one of "
                              f"{list(MOVE_RULES)}, got {self.picker_move!r}")
+        if self.drag is not None and not isinstance(self.drag, DragSettings):
+            raise TypeError(f"PickPlaceSettings.drag must be DragSettings or None, got "
+                            f"{self.drag!r}")
         if self.picker_move == "fixed":        # the default's own name: the same trial
             object.__setattr__(self, "picker_move", None)
         if self.picker_move is not None and self.rest_speed is not None:
@@ -216,8 +223,9 @@ class PickPlaceSettings:
         they did before the field existed (in its record, the sweep's params, the presets'
         snapshot)."""
         out = asdict(self)
-        if out["picker_move"] is None:
-            del out["picker_move"]
+        for name in ("picker_move", "drag"):
+            if out[name] is None:
+                del out[name]
         return out
 
     @classmethod
@@ -226,7 +234,8 @@ class PickPlaceSettings:
         if not isinstance(d, dict):
             raise TypeError(f"PickPlaceSettings.from_dict needs a dict, got {type(d).__name__}")
         d = dict(d)
-        for name, config in (("cem", CEMConfig), ("scripted", ScriptedConfig)):
+        for name, config in (("cem", CEMConfig), ("scripted", ScriptedConfig),
+                             ("drag", DragSettings)):
             if isinstance(d.get(name), dict):
                 check_fields(config, d[name], f"settings[{name!r}]")
                 d[name] = config(**d[name])
