@@ -213,7 +213,7 @@ def test_nothing_of_the_runtime_imports_the_viewer():
 # -------------------------------------------------------------------- inside planners
 #: the algorithm modules (they know no paper) and the checks they share
 ALGORITHMS = ("planners.cem", "planners.ilqr", "planners.svr", "planners.scripted",
-              "planners.keypoints", "planners._checks")
+              "planners.keypoints", "planners.gaussian_cem", "planners._checks")
 #: the paper slices, each a room of its own
 SLICES = ("planners.pick_place", "planners.svr_mpc")
 #: the rest of planners: the front, what the slices share (a saved trial's progress), the

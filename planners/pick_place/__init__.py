@@ -45,6 +45,7 @@ Modules, one job each (every name is re-exported here):
 Shapes: N particles, K key particles, H actions per plan, ns state row.
 """
 
+from planners.pick_place import drag as _drag  # noqa: F401  (registers the drag planners)
 from planners.pick_place.calibration import seconds_per_action
 from planners.pick_place.planners import (
     CEM_CANDIDATES,
@@ -55,6 +56,7 @@ from planners.pick_place.planners import (
     ScriptedPlanner,
     StagePlan,
     make_planner,
+    register_planner,
 )
 from planners.pick_place.presets import (
     PAPER_CHANGES,
@@ -106,6 +108,6 @@ __all__ = [
     "PickPlaceResult", "PickPlaceSettings", "PickPlanner", "PickTaskSpec", "Preset", "Problem",
     "ScriptedPlanner", "Stage", "StagePlan", "TrialProgress", "capture_label", "cloth_sequence",
     "last_improvement", "make_planner", "make_problem", "metric_names", "paper_preset",
-    "pick_task", "quick_preset", "register_goal", "register_task", "rope_stage", "run_problem",
+    "pick_task", "quick_preset", "register_goal", "register_planner", "register_task", "rope_stage", "run_problem",
     "run_trial", "seconds_per_action", "solve", "summarize", "trial_key",
 ]

@@ -35,7 +35,7 @@ from dopt.tasks.pick.picker import NONE
 from dopt.tasks.pick.scene import mean_distance
 from planners.gaussian_cem import GaussianCEM, GaussianCEMConfig
 from planners.pick_place.drag_settings import DragSettings
-from planners.pick_place.planners import StagePlan
+from planners.pick_place.planners import StagePlan, register_planner
 
 log = logging.getLogger(__name__)
 
@@ -211,3 +211,18 @@ def speed_check(task: PickPlaceTask, drag: DragSettings, substeps, samples: int,
             "max_strain": [float(np.percentile(st.max_strain, q)) for q in (50, 90, 100)],
             "max_speed": [float(np.percentile(st.max_speed, q)) for q in (50, 100)]}
     return out
+
+
+def _drag_planner(candidates: str):
+    def build(settings, seed: int) -> DragPlanner:
+        if settings.drag is None:
+            raise ValueError(f"the {candidates!r} drag planner plans in the drag encoding: "
+                             f"settings.drag must be DragSettings, not None")
+        return DragPlanner(settings.drag, candidates, seed)
+    return build
+
+
+for _name, _label in (("simple-drag", "CEM(Simple), drags"),
+                      ("original-drag", "CEM(Original), drags"),
+                      ("random-drag", "CEM(Random), drags")):
+    register_planner(_name, _drag_planner(DRAG_METHODS[_name]), _label)

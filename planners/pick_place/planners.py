@@ -28,8 +28,7 @@ from planners.scripted import ScriptedConfig, scripted
 #: planner names (the paper's methods), in the order of its figures
 METHODS = ("simple", "original", "random", "scripted")
 LABELS = {"simple": "CEM(Simple)", "original": "CEM(Original)", "random": "CEM(Random)",
-          "scripted": "Scripted", "simple-drag": "CEM(Simple), drags",
-          "original-drag": "CEM(Original), drags", "random-drag": "CEM(Random), drags"}
+          "scripted": "Scripted"}
 #: the CEM methods' candidate sets (``CEMPlanner.CANDIDATES``)
 CEM_CANDIDATES = {"simple": "keys", "original": "all", "random": "random"}
 
@@ -183,23 +182,32 @@ class ScriptedPlanner:
                          unstable=res.unstable, unstable_reason=res.reason)
 
 
-def make_planner(method: str, settings: PickPlaceSettings, seed: int = 0) -> PickPlanner:
-    """The planner of a method name (``METHODS``, or the drag encoding's
-    ``planners.pick_place.drag.DRAG_METHODS``, which need ``settings.drag``) with the
-    settings' configs; ``seed`` an int >= 0."""
-    from planners.pick_place.drag import DRAG_METHODS, DragPlanner
+#: planners beyond ``METHODS``, by name: ``(settings, seed) -> PickPlanner``
+#: (``register_planner``; the drag encoding's, ``planners.pick_place.drag``, register there)
+REGISTERED: dict[str, Callable[[PickPlaceSettings, int], PickPlanner]] = {}
 
-    if not isinstance(method, str) or method not in METHODS + tuple(DRAG_METHODS):
+
+def register_planner(name: str, factory: Callable[[PickPlaceSettings, int], PickPlanner],
+                     label: str) -> None:
+    """Make ``make_planner(name, ...)`` build ``factory(settings, seed)``; ``label`` names it
+    in figures and tables (``LABELS``). ValueError for a name already taken."""
+    if not isinstance(name, str) or not name or name in METHODS or name in REGISTERED:
+        raise ValueError(f"planner name {name!r} is empty or already taken")
+    REGISTERED[name] = factory
+    LABELS[name] = label
+
+
+def make_planner(method: str, settings: PickPlaceSettings, seed: int = 0) -> PickPlanner:
+    """The planner of a method name (``METHODS``, or one of ``REGISTERED``, such as the drag
+    encoding's, which need ``settings.drag``) with the settings' configs; ``seed`` an int
+    >= 0."""
+    if not isinstance(method, str) or method not in METHODS + tuple(REGISTERED):
         raise ValueError(f"unknown method {method!r}; choose from "
-                         f"{', '.join(METHODS + tuple(DRAG_METHODS))}")
+                         f"{', '.join(METHODS + tuple(REGISTERED))}")
     check_settings(settings)
     check_seed(seed)
-    if method in DRAG_METHODS:
-        if settings.drag is None:
-            raise ValueError(f"method {method!r} plans in the drag encoding: settings.drag "
-                             f"must be DragSettings, not None")
-        return DragPlanner(settings.drag, DRAG_METHODS[method], seed)
+    if method in REGISTERED:
+        return REGISTERED[method](settings, seed)
     if method == "scripted":
         return ScriptedPlanner(settings.scripted)
     return CEMPlanner(settings.cem, CEM_CANDIDATES[method], seed)
-
