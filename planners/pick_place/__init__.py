@@ -108,6 +108,6 @@ __all__ = [
     "PickPlaceResult", "PickPlaceSettings", "PickPlanner", "PickTaskSpec", "Preset", "Problem",
     "ScriptedPlanner", "Stage", "StagePlan", "TrialProgress", "capture_label", "cloth_sequence",
     "last_improvement", "make_planner", "make_problem", "metric_names", "paper_preset",
-    "pick_task", "quick_preset", "register_goal", "register_planner", "register_task", "rope_stage", "run_problem",
-    "run_trial", "seconds_per_action", "solve", "summarize", "trial_key",
+    "pick_task", "quick_preset", "register_goal", "register_planner", "register_task",
+    "rope_stage", "run_problem", "run_trial", "seconds_per_action", "solve", "summarize", "trial_key",
 ]
