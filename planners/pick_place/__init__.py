@@ -109,5 +109,6 @@ __all__ = [
     "ScriptedPlanner", "Stage", "StagePlan", "TrialProgress", "capture_label", "cloth_sequence",
     "last_improvement", "make_planner", "make_problem", "metric_names", "paper_preset",
     "pick_task", "quick_preset", "register_goal", "register_planner", "register_task",
-    "rope_stage", "run_problem", "run_trial", "seconds_per_action", "solve", "summarize", "trial_key",
+    "rope_stage", "run_problem", "run_trial", "seconds_per_action", "solve", "summarize",
+    "trial_key",
 ]
