@@ -20,6 +20,9 @@ then pinned (``dopt.tasks.pick.pinned``) and relaxed to static equilibrium:
   cosseratbench's elastic catenary of the strip it is (weight of the free rows, EA = E t W;
   the sheet's bending neglected, as the reference neglects the rod's).
 
+- **rope-actions** (no reference): the cost of the planners' own workload, random
+  pick-and-place actions on the rope (``pick_cost``).
+
 Cost: the relaxation's steps and simulated seconds per CPU second of its thread (one thread;
 CPU time, which a busy machine inflates less than wall time), each preset against
 ``default``. Each row also gives its residual speed (m/s), near zero once it has settled.
@@ -30,11 +33,14 @@ Shapes: N particles.
 
 from __future__ import annotations
 
+import time
+
+import mujoco
 import numpy as np
 from scipy.optimize import brentq
 
 from dopt.provenance import provenance
-from dopt.tasks.pick.picker import PickerConfig
+from dopt.tasks.pick.picker import CONTROL_SPEC, PickerConfig
 from dopt.tasks.pick.pinned import PinnedScene, Relaxed
 from planners.bench.physics import differing_fields
 from planners.pick_place import pick_task
@@ -257,9 +263,41 @@ def cloth_sheet(preset: str, **fields) -> dict:
             **_cost(relaxed, scene.model.opt.timestep)}
 
 
-#: the references the bench runs: name -> (task, function of (preset, **config fields))
+def pick_cost(task: str, preset: str, actions: int = 64, seed: int = 0, **fields) -> dict:
+    """The planners' workload under ``preset`` (``fields`` on top): ``actions`` random
+    pick-and-place actions, two per sequence from the settled start, displacements within the
+    task's first goal's bound, stepped with mj_step on one thread: steps and simulated seconds
+    per CPU second."""
+    from planners.pick_place import GOALS, PickPlaceSettings
+
+    bound = PickPlaceSettings.preset(task, GOALS[task][0]).bound
+    spec = pick_task(task)
+    scene = spec.build(spec.config.preset(preset, **fields), PickerConfig(bound=(bound,) * 3))
+    rng = np.random.default_rng(seed)
+    P = max(1, actions // 2)
+    U = scene.picker.encode(rng.integers(0, scene.n_particles, (P, 2)),
+                            rng.uniform(-bound, bound, (P, 2, 3)))
+    m = scene.model
+    data = mujoco.MjData(m)
+    cpu = 0.0
+    for controls in U:
+        mujoco.mj_setState(m, data, scene.initial_state, scene.scene.layout.spec)
+        start = time.thread_time()
+        for row in controls:
+            mujoco.mj_setState(m, data, row, CONTROL_SPEC)
+            mujoco.mj_step(m, data)
+        cpu += time.thread_time() - start
+    steps = U.shape[0] * U.shape[1]
+    return {"preset": preset, "n": scene.n_particles, "actions": 2 * P, "steps": steps,
+            "cpu_s": cpu, "steps_per_cpu_s": steps / cpu,
+            "sim_s_per_cpu_s": steps * m.opt.timestep / cpu}
+
+
+#: the references the bench runs: name -> (task, function of (preset, **config fields)); and
+#: "rope-actions", the cost of the planners' random pick-and-place actions on the rope
 CHECKS = {"catenary": ("rope", rope_catenary), "cantilever": ("rope", rope_cantilever),
-          "sheet": ("cloth", cloth_sheet)}
+          "sheet": ("cloth", cloth_sheet),
+          "rope-actions": ("rope", lambda preset, **fields: pick_cost("rope", preset, **fields))}
 
 
 def bench_reference(presets=PRESETS, checks=tuple(CHECKS), rope_n: int | None = None,

@@ -15,6 +15,7 @@ from planners.bench.reference import (  # noqa: E402
     catenary_curve,
     cloth_sheet,
     hanging_chain,
+    pick_cost,
     rope_cantilever,
     rope_catenary,
 )
@@ -94,6 +95,20 @@ def test_hanging_chain_is_a_chain_and_tends_to_the_catenary(links, span):
     np.testing.assert_allclose(nodes[::-1, 2], nodes[:, 2], atol=1e-9)
     sag = -nodes[:, 2].min() / -catenary_curve(length, span * length)[:, 2].min() - 1
     assert abs(sag) < 4 / links ** 2
+
+
+def test_pick_cost_counts_the_actions_steps():
+    """The rope-actions row: two actions per sequence, each the picker's fixed K steps."""
+    from dopt.tasks.pick.picker import PickerConfig
+    from dopt.tasks.pick.rope_scene import RopeSceneConfig
+    from planners.pick_place import GOALS, PickPlaceSettings
+
+    row = pick_cost("rope", "accurate", actions=4)
+    dt = RopeSceneConfig.preset("accurate").timestep
+    bound = PickPlaceSettings.preset("rope", GOALS["rope"][0]).bound
+    snap, hold, move, settle = PickerConfig(bound=(bound,) * 3).steps(dt)
+    assert row["actions"] == 4 and row["steps"] == 4 * (snap + hold + move + settle)
+    assert row["sim_s_per_cpu_s"] == pytest.approx(row["steps_per_cpu_s"] * dt)
 
 
 def test_bad_requests_are_named():
