@@ -14,7 +14,7 @@ statistics, the failures, the provenance), OUT/encoding.png where matplotlib is 
 (with --record also copied beside the record). Exits 1 if a trial failed, 2 on bad flags.
 
     python experiments/fig7_encoding.py --goal diagonal --points 100,400,1600,10000 \\
-        --seeds 5 --out /tmp/encoding-diagonal \\
+        --seeds 5 --out docs/results/runs/fig7-encoding-diagonal \\
         --record docs/results/fig7-encoding-diagonal.json
 """
 
