@@ -33,7 +33,11 @@ from planners.trial_progress import RUN_ONLY_SETTINGS
 #: optional settings ``PickPlaceSettings.identity`` leaves out at None: options whose unset
 #: value is what every trial ran before they existed, so those trials stay valid
 UNSET_SETTINGS = ("planning_physics", "max_stretch", "picker_speed", "rest_speed",
-                  "picker_move")
+                  "picker_move", "fold_start")
+#: the name of each optional setting whose unset value (None) has one (``departures``)
+UNSET_NAMES = {"picker_move": "fixed", "fold_start": "chained"}
+#: where a goal of several stages starts (``PickPlaceSettings.fold_start``)
+FOLD_STARTS = ("chained", "prepared")
 #: scene-config fields a trial's identity leaves out at these values, for the same reason
 UNSET_SCENE_FIELDS = {"passive": False}
 #: picker-config fields a trial's identity leaves out while the move is the fixed one (they
@@ -73,6 +77,13 @@ class PickPlaceSettings:
             default) or "fixed", as long as the bound box's diagonal takes; "sized", as long
             as the action's own displacement takes at the same speed (fewer steps; not with
             ``rest_speed``). "fixed" is stored as None, so that a trial keeps its key.
+        fold_start: where a goal of several stages (the reflective and underneath folds)
+            starts (``FOLD_STARTS``): None or "chained" (the default), every stage planned in
+            turn from the goal's start (the flat sheet), each from where the one before
+            ended; "prepared", from the fold before the last prepared in place as the paper's
+            authors do (``PickGoal.prepared``: its layers dropped and settled), only the last
+            stage planned. On a goal of one stage both are its one start: "prepared" is
+            stored as None there, and "chained" everywhere, so that a trial keeps its key.
     """
 
     task: str
@@ -91,6 +102,7 @@ class PickPlaceSettings:
     picker_speed: float | None = None
     rest_speed: float | None = None
     picker_move: str | None = None
+    fold_start: str | None = None
 
     def __post_init__(self):
         pick_task(self.task).goal(self.goal)      # ValueError naming an unknown task or goal
@@ -113,6 +125,11 @@ class PickPlaceSettings:
         if self.picker_move is not None and self.rest_speed is not None:
             raise ValueError(f"PickPlaceSettings.picker_move {self.picker_move!r} cannot go "
                              f"with rest_speed (the rest test needs the fixed move)")
+        if self.fold_start not in (None, *FOLD_STARTS):
+            raise ValueError(f"PickPlaceSettings.fold_start must be None or one of "
+                             f"{list(FOLD_STARTS)}, got {self.fold_start!r}")
+        if self.fold_start == "chained" or pick_task(self.task).goal(self.goal).prepared is None:
+            object.__setattr__(self, "fold_start", None)     # the same trial as the default's
         if self.planning_physics is not None and self.planning_physics not in PHYSICS_PRESETS:
             raise ValueError(f"PickPlaceSettings.planning_physics must be None or one of "
                              f"{sorted(PHYSICS_PRESETS)}, got {self.planning_physics!r}")
@@ -140,15 +157,19 @@ class PickPlaceSettings:
         cem = CEMConfig(horizon=p.horizon, iterations=p.iterations, population=p.population,
                         elites=p.elites)
         return cls(task, goal, p.n, p.bound, cem, ScriptedConfig(), p.selfcollide,
-                   physics=p.physics, planning_physics=p.planning_physics)
+                   physics=p.physics, planning_physics=p.planning_physics,
+                   fold_start=p.fold_start)
 
     def departures(self, protocol: str = "ours", quick: bool = False) -> dict:
         """{field: value} of these settings that differ from ``preset(task, goal, quick,
         protocol)``, nested configs as dotted names ("cem.population"); the thread count is
-        not a setting of the experiment and is left out. Empty: the protocol as it stands."""
+        not a setting of the experiment and is left out; an optional setting the preset sets
+        and these leave unset is named by its unset value (``UNSET_NAMES``: "fold_start":
+        "chained"). Empty: the protocol as it stands."""
         base = flatten(type(self).preset(self.task, self.goal, quick, protocol).to_dict())
         mine = flatten(self.to_dict())
-        return {k: v for k, v in mine.items()
+        unset = {k: UNSET_NAMES.get(k) for k in base if k not in mine}
+        return {k: v for k, v in {**mine, **unset}.items()
                 if k not in RUN_ONLY_SETTINGS and base.get(k) != v}
 
     def constraint(self) -> ActionConstraint:
@@ -212,12 +233,13 @@ class PickPlaceSettings:
 
     def to_dict(self) -> dict:
         """JSON-able form (nested configs as dicts); ``from_dict`` inverts it. ``picker_move``
-        appears only when set, so that the settings of a trial with the fixed move read as
-        they did before the field existed (in its record, the sweep's params, the presets'
-        snapshot)."""
+        and ``fold_start`` appear only when set, so that the settings of a trial with the
+        fixed move and the chained start read as they did before the fields existed (in its
+        record, the sweep's params, the presets' snapshot)."""
         out = asdict(self)
-        if out["picker_move"] is None:
-            del out["picker_move"]
+        for name in ("picker_move", "fold_start"):
+            if out[name] is None:
+                del out[name]
         return out
 
     @classmethod
