@@ -375,7 +375,8 @@ def lift_layers(goal: ClothGoal, lift: float) -> np.ndarray:
 
     The start the key-particle authors prepare for a multi-layer fold (SoftGym's
     ``_set_to_folded``: each folded layer placed over the one below it, lifted 5 cm a layer,
-    and dropped) is this with their lift; ``planners.pick_place`` drops it in the simulator.
+    and dropped) is this with their lift; ``planners.pick_place.problem.drop_fold`` drops it
+    in the simulator.
     """
     if not isinstance(goal, ClothGoal):
         raise TypeError(f"goal must be a ClothGoal, got {type(goal).__name__}")

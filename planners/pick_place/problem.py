@@ -2,7 +2,7 @@
 ``make_problem``, which builds it from the settings through the task's and goal's
 registrations (``planners.pick_place.tasks``): the goal's start, or its prepared start
 (``PickPlaceSettings.fold_start`` "prepared": the fold before the last dropped in place and
-settled, ``dopt.tasks.pick.fold_goals.drop_fold``; only the last stage is planned from it).
+settled, ``drop_fold``; only the last stage is planned from it).
 
 Shapes: N particles, ns state row.
 """
@@ -16,8 +16,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from dopt.errors import UnstableRolloutError
+from dopt.rollout import RolloutConfig, RolloutService
+from dopt.stability import Stability
 from dopt.tasks import DeformableScene, mean_distance
-from dopt.tasks.pick.fold_goals import drop_fold
+from dopt.tasks.pick.picker import CONTROL_SPEC
+from dopt.validation import check_real
 from planners.pick_place.settings import PickPlaceSettings, check_seed, check_settings
 from planners.pick_place.tasks import PICK_METRICS, PICK_TASKS, PREPARED_SETTLE, PickGoal, Stage
 
@@ -113,3 +116,45 @@ def prepared_start(settings: PickPlaceSettings, goal: PickGoal, scene: Deformabl
     log.info("%s %s: prepared start %.1f mm from the %s goal", settings.task, settings.goal,
              distance * 1e3, stages[-2].name)
     return dropped.state
+
+
+@dataclass(frozen=True)
+class DroppedFold:
+    """A sheet dropped in place (``drop_fold``): its state (ns,) after the settle and the
+    verdict of the drop and settle (``dopt.stability.Stability`` of one rollout)."""
+
+    state: np.ndarray
+    stability: Stability
+
+    @property
+    def unstable(self) -> bool:
+        return bool(self.stability.unstable[0])
+
+    @property
+    def reason(self) -> str:
+        return self.stability.reason[0]
+
+
+def drop_fold(scene: DeformableScene, positions: np.ndarray, settle: float) -> DroppedFold:
+    """Place the particles of ``scene`` at ``positions`` (N, 3), at rest, with the rest of its
+    ``initial_state`` (the picker idle above), and let them fall and settle ``settle`` seconds,
+    judged by the scene's stability bounds. The key-particle authors prepare a multi-layer
+    fold's start so (SoftGym's ``_set_to_folded``: each layer over the one below, 5 cm up, 15
+    steps); here from ``PickGoal.prepared`` positions (``deformables.goals.lift_layers``).
+
+    Raises:
+        TypeError: a scene that is not a DeformableScene.
+        ValueError: positions that are not (N, 3) finite, a settle shorter than one step.
+    """
+    if not isinstance(scene, DeformableScene):
+        raise TypeError(f"scene must be a DeformableScene, got {type(scene).__name__}")
+    settle = check_real(settle, "settle", positive=True)
+    steps = int(round(settle / scene.model.opt.timestep))
+    if steps < 1:
+        raise ValueError(f"settle must be at least one step ({scene.model.opt.timestep} s), "
+                         f"got {settle}")
+    start = scene.with_positions(scene.initial_state, positions)
+    idle = np.repeat(scene.picker.idle_row[None, None], steps, axis=1)        # (1, T, nc)
+    with RolloutService(scene.scene, RolloutConfig(threads=1)) as service:
+        res = service.rollout(start[None], idle, control_spec=CONTROL_SPEC)
+    return DroppedFold(res.final_states[0], res.stability)

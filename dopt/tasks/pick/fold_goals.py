@@ -17,10 +17,6 @@ grasp from above a floor cannot do without lifting the stack; its creases make t
 (the same layers in the same order joined by the same creases) as an accordion of three folds on
 top: the paper's goal reflected in x, the same shape to the key-particle reduction.
 
-``drop_fold`` is the other way to a folded sheet, the key-particle authors' way to the start of
-a multi-layer fold: place the particles where the fold puts them, layers pulled apart, and let
-the sheet fall onto itself and settle (``planners.pick_place``'s prepared start).
-
 Shapes: N particles, ns state size.
 """
 
@@ -33,8 +29,7 @@ from dataclasses import dataclass, replace
 import mujoco
 import numpy as np
 
-from dopt.rollout import RolloutConfig, RolloutService
-from dopt.stability import Monitor, Stability
+from dopt.stability import Monitor
 from dopt.state import INTEGRATION
 from dopt.tasks.pick.picker import CONTROL_SPEC, fix_grasp_anchors
 from dopt.tasks.pick.scene import DeformableScene
@@ -204,48 +199,6 @@ def fold_goal(scene: DeformableScene, creases: Sequence[Crease], start: np.ndarr
         log.warning("fold goal: %s", reason)
     return FoldGoal(scene.positions(final), final, tuple(h for _, _, h in plan), bool(reason),
                     reason)
-
-
-@dataclass(frozen=True)
-class DroppedFold:
-    """A sheet dropped in place (``drop_fold``): its state (ns,) after the settle and the
-    verdict of the drop and settle (``dopt.stability.Stability`` of one rollout)."""
-
-    state: np.ndarray
-    stability: Stability
-
-    @property
-    def unstable(self) -> bool:
-        return bool(self.stability.unstable[0])
-
-    @property
-    def reason(self) -> str:
-        return self.stability.reason[0]
-
-
-def drop_fold(scene: DeformableScene, positions: np.ndarray, settle: float) -> DroppedFold:
-    """Place the particles of ``scene`` at ``positions`` (N, 3), at rest, with the rest of its
-    ``initial_state`` (the picker idle above), and let them fall and settle ``settle`` seconds,
-    judged by the scene's stability bounds. The key-particle authors prepare a multi-layer
-    fold's start so (SoftGym's ``_set_to_folded``: each layer over the one below, 5 cm up, 15
-    steps): positions from ``deformables.goals.lift_layers``.
-
-    Raises:
-        TypeError: a scene that is not a DeformableScene.
-        ValueError: positions that are not (N, 3) finite, a settle < one step.
-    """
-    if not isinstance(scene, DeformableScene):
-        raise TypeError(f"scene must be a DeformableScene, got {type(scene).__name__}")
-    settle = check_real(settle, "settle", positive=True)
-    steps = int(round(settle / scene.model.opt.timestep))
-    if steps < 1:
-        raise ValueError(f"settle must be at least one step ({scene.model.opt.timestep} s), "
-                         f"got {settle}")
-    start = scene.with_positions(scene.initial_state, positions)
-    idle = np.repeat(scene.picker.idle_row[None, None], steps, axis=1)        # (1, T, nc)
-    with RolloutService(scene.scene, RolloutConfig(threads=1)) as service:
-        res = service.rollout(start[None], idle, control_spec=CONTROL_SPEC)
-    return DroppedFold(res.final_states[0], res.stability)
 
 
 def _fold_plan(creases: tuple[Crease, ...], rest: np.ndarray, spacing: float
