@@ -74,7 +74,7 @@ PRESETS: dict[tuple[str, str], Preset] = {
 #:           cloth_underneath_fold.py: ``_reset`` -> ``_set_to_folded``) starts the reflective
 #:           and underneath folds from the fold before prepared in place and plans only the
 #:           last; ours differs in the lift and the settle (``tasks.PREPARED_LIFT``,
-#:           ``PREPARED_SETTLE``; DESIGN-NOTES, "Multi-layer folds from a prepared start").
+#:           ``PREPARED_SETTLE``, which say why).
 #:           The goals of one stage keep their one start (the settings store it as unset)
 #: Population, elites and horizon stay ours: the authors' population comes from a step budget
 #: (ac_softagent: timestep_per_decision / max_iters, 6000 / 30 = 200 rope, 10000 / 30 = 333
