@@ -26,7 +26,13 @@ from dopt.tasks.pick.settle import RestTest
 from dopt.validation import check_config, check_int
 from planners.cem import CEMConfig
 from planners.pick_place.presets import PROTOCOLS, quick_preset
-from planners.pick_place.tasks import GOALS, PICK_TASKS, pick_task
+from planners.pick_place.tasks import (
+    GOALS,
+    PICK_TASKS,
+    PREPARED_LIFT,
+    PREPARED_SETTLE,
+    pick_task,
+)
 from planners.scripted import ScriptedConfig
 from planners.trial_progress import RUN_ONLY_SETTINGS
 
@@ -210,10 +216,14 @@ class PickPlaceSettings:
         """JSON-able scene and picker configs these settings run (what a preset name means
         today) and the stability bounds their rollouts are judged by (CEM scores an unstable
         sample +inf): a trial's identity, so that a changed preset, picker or verdict is not
-        reused. Scene fields in ``UNSET_SCENE_FIELDS`` appear only when set."""
+        reused. Scene fields in ``UNSET_SCENE_FIELDS`` appear only when set; a prepared start
+        (``fold_start``) adds its lift and settle (m, s; ``tasks.PREPARED_LIFT``,
+        ``PREPARED_SETTLE``)."""
         out = {"scene": _scene_identity(self.scene_config()),
                "picker": _picker_identity(self.picker()),
                "stability": asdict(PICK_BOUNDS)}
+        if self.fold_start == "prepared":
+            out["prepared_start"] = {"lift": PREPARED_LIFT, "settle": PREPARED_SETTLE}
         planning = self.planning_scene_config()
         if planning is not None:
             out["planning_scene"] = _scene_identity(planning)

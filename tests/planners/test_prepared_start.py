@@ -20,7 +20,15 @@ from deformables.goals import ClothGoal, goal_sequence, lift_layers, make_goal
 from dopt.errors import UnstableRolloutError
 from dopt.trialpack import stored_trials
 from planners.cem import CEMConfig
-from planners.pick_place import GOALS, PickPlaceSettings, make_problem, solve, trial_key
+from planners.pick_place import (
+    GOALS,
+    PREPARED_LIFT,
+    PREPARED_SETTLE,
+    PickPlaceSettings,
+    make_problem,
+    solve,
+    trial_key,
+)
 
 ROOT = Path(__file__).resolve().parents[2]
 #: the prepared start's mean particle distance to the previous fold's goal (m)
@@ -97,6 +105,9 @@ def test_the_paper_protocol_prepares_and_the_chained_start_keeps_its_trials():
     assert chained.departures("paper") == {"fold_start": "chained"}
     assert reflective.departures("paper") == {}
     assert trial_key("simple", 0, chained) != trial_key("simple", 0, reflective)
+    assert "prepared_start" not in chained.identity()["resolved"]
+    assert reflective.identity()["resolved"]["prepared_start"] == {"lift": PREPARED_LIFT,
+                                                                   "settle": PREPARED_SETTLE}
     # a goal of one stage: "prepared" is its one start, the same trial
     diagonal = PickPlaceSettings.preset("cloth", "diagonal", protocol="paper")
     assert replace(diagonal, fold_start="prepared") == diagonal
