@@ -39,7 +39,7 @@ from planners.trial_progress import RUN_ONLY_SETTINGS
 #: optional settings ``PickPlaceSettings.identity`` leaves out at None: options whose unset
 #: value is what every trial ran before they existed, so those trials stay valid
 UNSET_SETTINGS = ("planning_physics", "max_stretch", "picker_speed", "rest_speed",
-                  "picker_move", "fold_start")
+                  "picker_move", "fold_start", "mass")
 #: the name of each optional setting whose unset value (None) has one (``departures``)
 UNSET_NAMES = {"picker_move": "fixed", "fold_start": "chained"}
 #: where a goal of several stages starts (``PickPlaceSettings.fold_start``)
@@ -90,6 +90,8 @@ class PickPlaceSettings:
             authors do (``PickGoal.prepared``: its layers dropped and settled), only the last
             stage planned. On a goal of one stage both are its one start: "prepared" is
             stored as None there, and "chained" everywhere, so that a trial keeps its key.
+        mass: the object's mass (kg; its scene config's ``mass``), for a task whose scene
+            fields name it (the cloth); None: the physics preset's.
     """
 
     task: str
@@ -109,6 +111,7 @@ class PickPlaceSettings:
     rest_speed: float | None = None
     picker_move: str | None = None
     fold_start: str | None = None
+    mass: float | None = None
 
     def __post_init__(self):
         pick_task(self.task).goal(self.goal)      # ValueError naming an unknown task or goal
@@ -120,7 +123,7 @@ class PickPlaceSettings:
         # n an int >= 3, bound / side / length finite > 0 (m), threads an int >= 0 (0: one
         # per core), selfcollide a bool; TypeError or ValueError naming the field
         check_config(self, positive=("bound", "side", "length", "max_stretch", "picker_speed",
-                               "rest_speed"),
+                               "rest_speed", "mass"),
                      minimum={"n": 3, "threads": 0},
                      choices={"physics": tuple(PHYSICS_PRESETS)})
         if self.picker_move not in (None, *MOVE_RULES):
@@ -131,6 +134,9 @@ class PickPlaceSettings:
         if self.picker_move is not None and self.rest_speed is not None:
             raise ValueError(f"PickPlaceSettings.picker_move {self.picker_move!r} cannot go "
                              f"with rest_speed (the rest test needs the fixed move)")
+        if self.mass is not None and "mass" not in PICK_TASKS[self.task].scene_fields:
+            raise ValueError(f"PickPlaceSettings.mass: the {self.task} scene takes no mass "
+                             f"from the settings (its physics preset sets it)")
         if self.fold_start not in (None, *FOLD_STARTS):
             raise ValueError(f"PickPlaceSettings.fold_start must be None or one of "
                              f"{list(FOLD_STARTS)}, got {self.fold_start!r}")
@@ -143,6 +149,8 @@ class PickPlaceSettings:
             object.__setattr__(self, name, int(getattr(self, name)))
         for name in ("bound", "side", "length"):
             object.__setattr__(self, name, float(getattr(self, name)))
+        if self.mass is not None:
+            object.__setattr__(self, "mass", float(self.mass))
         object.__setattr__(self, "selfcollide", bool(self.selfcollide))
 
     @classmethod
@@ -199,10 +207,12 @@ class PickPlaceSettings:
     def scene_config(self, physics: str | None = None, overrides: dict | None = None):
         """The task's scene config (``ClothSceneConfig`` / ``RopeSceneConfig``) of the preset
         ``physics`` (None: ``self.physics``) with the settings' own fields (the task's
-        ``scene_fields``: n, side or length, selfcollide) and ``overrides`` on top."""
+        ``scene_fields``: n, side or length, selfcollide, a cloth's mass where set) and
+        ``overrides`` on top."""
         physics = self.physics if physics is None else physics
         spec = PICK_TASKS[self.task]
-        fields = {name: getattr(self, name) for name in spec.scene_fields}
+        fields = {name: getattr(self, name) for name in spec.scene_fields
+                  if getattr(self, name) is not None}
         return spec.config.preset(physics, **{**fields, **(overrides or {})})
 
     def planning_scene_config(self, overrides: dict | None = None):

@@ -332,7 +332,8 @@ class GoalNames(Mapping):
 GOALS = GoalNames()
 
 register_task(PickTaskSpec(
-    "cloth", scene="cloth", config=ClothSceneConfig, scene_fields=("n", "side", "selfcollide"),
+    "cloth", scene="cloth", config=ClothSceneConfig,
+    scene_fields=("n", "side", "selfcollide", "mass"),
     extent="side", dims=2,
     goals={**{name: PickGoal(name, cloth_sequence(f"cloth_{name}"))
               for name in ("diagonal", "side")},
