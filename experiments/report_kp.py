@@ -534,13 +534,33 @@ def random_reach_section(results: list[Result], page: Path) -> list[str]:
 
 
 # -------------------------------------------------------- the gain against the cloth's size
+def scaling_key(r: Result) -> str:
+    """A scaling file's name among the others: its fold, and "at fixed spacing" for a sweep
+    that grows the sheet (``fig7_scaling.py --mode size``; a file without a mode refined the
+    fixed sheet)."""
+    return r.data.get("goal") + (" at fixed spacing" if r.data.get("mode") == "size" else "")
+
+
+def scaling_families(results: list[Result]) -> tuple[dict, dict]:
+    """({scaling_key: file} of the scaling files, {(key, test): Holm over the trend tests of
+    the files of one mode together, ``holm_slopes``, with "folds": how many files}); a mode
+    with one file has no family."""
+    files = {scaling_key(r): r for r in results if r.kind == "fig7_scaling"}
+    family = {}
+    for mode in {r.data.get("mode", "resolution") for r in files.values()}:
+        group = {k: r.data["trend"] for k, r in files.items()
+                 if r.data.get("mode", "resolution") == mode}
+        if len(group) > 1:
+            family.update({k: {**v, "folds": len(group)} for k, v in holm_slopes(group).items()})
+    return files, family
+
+
 def scaling_section(results: list[Result], page: Path) -> list[str]:
-    files = {r.data.get("goal"): r.data["trend"] for r in results if r.kind == "fig7_scaling"}
-    family = holm_slopes(files) if len(files) > 1 else {}
+    files, family = scaling_families(results)
 
     def across(goal: str, key: str) -> str:   # the verdict of every fold's tests together
         f = family.get((goal, key))
-        return (f"; Holm p over the {f['m']} tests of the {len(files)} folds "
+        return (f"; Holm p over the {f['m']} tests of the {f['folds']} folds "
                 f"{num(f['p_holm'], 3)}: **{f['verdict']}**") if f else ""
 
     def body(r: Result) -> list[str]:
@@ -561,13 +581,18 @@ def scaling_section(results: list[Result], page: Path) -> list[str]:
                   f"{pm(mm(t['slope']), mm(t.get('slope_ci95')))} mm per unit of log N "
                   f"(95 % interval), Holm p "
                   f"{num(t.get('p_holm'), 3)}, {t['n_points']} paired seeds over "
-                  f"{t['n_sizes']} sizes: **{t['verdict']}**{across(d['goal'], key)}"
+                  f"{t['n_sizes']} sizes: **{t['verdict']}**{across(scaling_key(r), key)}"
                   for key, t in d["trend"].items()]
+        trends += [f"- normalised by the flat sheet's cost, {key.replace('_minus_simple', '')}"
+                   f" - simple: slope {pm(num(t['slope'], 3), num(t.get('slope_ci95'), 3))} "
+                   f"per unit of log N, Holm p {num(t.get('p_holm'), 3)}: **{t['verdict']}**"
+                   for key, t in (d.get("trend_normalised") or {}).items()
+                   if t.get("slope") is not None]
         image = page.parent / "images" / f"{r.path.stem}.png"
         figure = ([f"![Final cost and the gaps to CEM(Simple) against the particle count, "
                    f"{d['goal']} fold, 95 % intervals](images/{image.name})", ""]
                   if image.exists() else [])   # the experiment's scaling.png, beside the docs
-        return [f"### {d['goal']}: `{r.name}`", "", *figure,
+        return [f"### {scaling_key(r)}: `{r.name}`", "", *figure,
                 f"Protocol {d.get('protocol')}, physics preset `{d.get('physics_preset')}` at "
                 f"every size; final cost (mm) mean ± 95 % CI (seeds).", "",
                 *table(["cloth", "particles N", "CEM(Simple)", "CEM(Original)", "CEM(Random)",
