@@ -10,8 +10,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from report_base import Result, _finite, cell, clip, mm, num, pm, sci, section, table
-
-from dopt.multiple import holm_slopes
+from report_stats import scaling_families, scaling_key
 
 
 # ------------------------------------------------------------------------ physics presets
@@ -534,27 +533,6 @@ def random_reach_section(results: list[Result], page: Path) -> list[str]:
 
 
 # -------------------------------------------------------- the gain against the cloth's size
-def scaling_key(r: Result) -> str:
-    """A scaling file's name among the others: its fold, and "at fixed spacing" for a sweep
-    that grows the sheet (``fig7_scaling.py --mode size``; a file without a mode refined the
-    fixed sheet)."""
-    return r.data.get("goal") + (" at fixed spacing" if r.data.get("mode") == "size" else "")
-
-
-def scaling_families(results: list[Result]) -> tuple[dict, dict]:
-    """({scaling_key: file} of the scaling files, {(key, test): Holm over the trend tests of
-    the files of one mode together, ``holm_slopes``, with "folds": how many files}); a mode
-    with one file has no family."""
-    files = {scaling_key(r): r for r in results if r.kind == "fig7_scaling"}
-    family = {}
-    for mode in {r.data.get("mode", "resolution") for r in files.values()}:
-        group = {k: r.data["trend"] for k, r in files.items()
-                 if r.data.get("mode", "resolution") == mode}
-        if len(group) > 1:
-            family.update({k: {**v, "folds": len(group)} for k, v in holm_slopes(group).items()})
-    return files, family
-
-
 def scaling_section(results: list[Result], page: Path) -> list[str]:
     files, family = scaling_families(results)
 

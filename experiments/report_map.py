@@ -17,7 +17,7 @@ from pathlib import Path
 
 from report_base import KP, REGENERATE, SVR, Result, _label, cell, mm, num, pm, table
 from report_fig7 import CLOTH_DIFFICULTY, _departs, fig7_claims
-from report_kp import scaling_families
+from report_stats import scaling_families
 from report_svr import (
     MIN_KEPT_BASELINE,
     _table1_columns,

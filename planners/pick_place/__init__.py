@@ -37,7 +37,9 @@ Modules, one job each (every name is re-exported here):
     calibration.py  seconds_per_action: what one simulated action costs on this machine now
                  (a command line's estimate of a run's time)
     scaling.py   the gain against the particle count: scaling_trials (Fig. 7's trials at
-                 several cloth sizes), scaling_summary (intervals, the trend test on log N)
+                 several cloth sizes: a finer sheet, or a bigger one at fixed spacing),
+                 scaling_summary (intervals, the trend test on log N, in m and normalised
+                 by the flat sheet's cost)
     random_reach.py  why CEM(Random) lands where it does: each trial's candidates re-drawn
                  from its seed and what they can reach (``random_reach``, ``reach_summary``)
 
