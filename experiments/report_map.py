@@ -17,6 +17,7 @@ from pathlib import Path
 
 from report_base import KP, REGENERATE, SVR, Result, _label, cell, mm, num, pm, table
 from report_fig7 import CLOTH_DIFFICULTY, _departs, fig7_claims
+from report_stats import scaling_families
 from report_svr import (
     MIN_KEPT_BASELINE,
     _table1_columns,
@@ -26,8 +27,6 @@ from report_svr import (
     paper_table1,
     verdict_counts,
 )
-
-from dopt.multiple import holm_slopes
 
 #: the longest cell the map may have (characters, Markdown included)
 MAX_CELL = 160
@@ -135,12 +134,12 @@ def scaling_line(results: list[Result]) -> str | None:
     its slope per unit of log N with the 95 % interval), over which particle counts N and
     seeds (said once where every fold has the same). With several folds the verdicts are
     Holm's over all their trend tests together (``holm_slopes``); the line says so."""
-    files = {r.data.get("goal"): r for r in results if r.kind == "fig7_scaling"}
-    family = holm_slopes({g: r.data["trend"] for g, r in files.items()})
+    files, family = scaling_families(results)
     sizes, seeds, verdicts = [], [], []
     for goal, r in sorted(files.items(), key=lambda kv: str(kv[0])):
         d = r.data
-        t = {**d["trend"]["original_minus_simple"], **family[(goal, "original_minus_simple")]}
+        t = {**d["trend"]["original_minus_simple"],
+             **family.get((goal, "original_minus_simple"), {})}
         counts = sorted({e["methods"].get(m, {}).get("n", 0) for e in d["per_size"].values()
                          for m in ("simple", "original")})
         seeds.append(str(counts[0]) if len(counts) == 1 else f"{counts[0]}-{counts[-1]}")
@@ -158,7 +157,7 @@ def scaling_line(results: list[Result]) -> str | None:
     for (goal, v), z, n in zip(verdicts, sizes, seeds, strict=True):
         own = [x for x, same in ((z, same_sizes), (f"{n} seeds", same_seeds)) if not same]
         parts.append(f"{goal} ({', '.join(own)}) {v}" if own else f"{goal} {v}")
-    m = next(iter(family.values()))["m"]
+    m = next(iter(family.values()))["m"] if family else 0
     tail = f"; Holm over {m} tests" if len(files) > 1 and m else ""
     return ("Original - Simple gap per log N" + (f" ({', '.join(shared)})" if shared else "")
             + ": " + ", ".join(parts) + tail)

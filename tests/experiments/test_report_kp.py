@@ -548,6 +548,32 @@ def test_scaling_study_renders_sizes_and_the_trend(site):
             f"{'grows' if adjusted[0] <= 0.05 else 'no trend detected at 95 %'}**") in md
 
 
+def test_a_fixed_spacing_scaling_file_stands_beside_the_resolution_one(site):
+    """``fig7_scaling.py --mode size`` on the fold of a resolution file: both sections render,
+    each fold's Holm family is its own mode's, and the normalised trend is shown."""
+    from planners.pick_place.scaling import scaling_summary
+
+    records = [{"params": {"settings": {"n": n}, "method": m, "seed": seed},
+                "result": {"final_cost": 0.01 + (0.002 * n if m == "original" else 0.0)
+                           + 0.0001 * seed, "unstable": False}}
+               for n in (10, 20) for seed in range(3) for m in ("simple", "original", "random")]
+    plain = scaling_summary(records)
+    grown = scaling_summary(records, {10: 0.04, 20: 0.08})
+    for name, mode, stats in (("fig7-scaling-side.json", None, plain),
+                              ("fig7-scaling-spacing-side.json", "size", grown)):
+        write(site["results"], name,
+              {"experiment": "fig7_scaling", "task": "cloth", "goal": "side",
+               "protocol": "paper", "physics_preset": "default", **stats, "failed": {},
+               **({"mode": mode} if mode else {}),
+               "provenance": provenance("python experiments/fig7_scaling.py --goal side")})
+    assert run(site) == 0
+    md = site["md"].read_text()
+    assert "### side: `fig7-scaling-side.json`" in md
+    assert "### side at fixed spacing: `fig7-scaling-spacing-side.json`" in md
+    assert "normalised by the flat sheet's cost, original - simple: slope" in md
+    assert "tests of the 2 folds" not in md          # one file per mode: no shared family
+
+
 def test_a_run_that_departs_from_its_protocol_is_judged_apart_and_seed_by_seed(site):
     """Two protocols and a run with changed flags on one panel: three setups, each panel
     claim and cloth trend within one setup; the departing run is compared with its protocol's
