@@ -5,6 +5,7 @@ The algorithm modules know no paper; the pipelines hold each paper's settings, p
 loop and summaries. Modules:
 
     cem.py            torch-batched CEM over pick-and-place action sequences
+    gaussian_cem.py   the plain diagonal-Gaussian CEM of the key-particle authors' code
     scripted.py       the key-particle paper's scripted policy
     ilqr.py           iLQR with state-vector reduction (reduced backward, full forward pass);
                       keypoints.py: derivatives at key timesteps only

@@ -32,7 +32,10 @@ Modules, one job each (every name is re-exported here):
     problem.py   Problem and make_problem (a goal's start, or its prepared start)
     budget.py    the sizes a setting implies, checked before anything is allocated
                  (check_budget, budget_problem, BudgetError)
-    planners.py  StagePlan, PickPlanner, CEMPlanner, ScriptedPlanner, make_planner, METHODS
+    planners.py  StagePlan, PickPlanner, CEMPlanner, ScriptedPlanner, make_planner, METHODS,
+                 register_planner
+    drag.py      the authors' drag encoding as planners (original-, simple-, random-drag;
+                 drag_settings.py: DragSettings; encoding.py: its sweep against N)
     run.py       run_problem (with checkpoints and blow-up captures: capture_label), solve,
                  run_trial, PickPlaceResult
     summary.py   summarize, last_improvement
