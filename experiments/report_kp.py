@@ -532,7 +532,7 @@ def random_reach_section(results: list[Result], page: Path) -> list[str]:
                    results, page, body)
 
 
-# -------------------------------------------------------- the gain against the cloth's size
+# ----------------------------------------------------- the gain against the particle count
 def scaling_section(results: list[Result], page: Path) -> list[str]:
     files, family = scaling_families(results)
 
@@ -577,10 +577,15 @@ def scaling_section(results: list[Result], page: Path) -> list[str]:
                         "Original - Simple", "Random - Simple"], rows),
                 "", *trends]
 
-    return section("Key particles: the gain against the cloth's size",
+    return section("Key particles: the gain against the particle count",
                    "`python experiments/fig7_scaling.py`: CEM(Simple), CEM(Original) and "
-                   "CEM(Random) on one fold at several cloth sizes, the paper's CEM budget "
-                   "and one physics preset throughout. Trend: the least-squares slope of "
+                   "CEM(Random) on one fold at several particle counts N, the paper's CEM "
+                   "budget and one physics preset throughout. What varies: by default the "
+                   "resolution of a sheet of one size (a finer sheet: a uniform particle is "
+                   "a uniform point at any N under our pick-and-place macros); with `--mode "
+                   "size` the sheet grows at the 20 x 20 preset's spacing, as SoftGym's does "
+                   "(files marked \"at fixed spacing\"); the drag encoding, where N enters the "
+                   "action itself, is `fig7_encoding.py`. Trend: the least-squares slope of "
                    "each seed's paired difference (method - Simple) against log N, its 95 % "
                    "interval, and the p-value Holm-adjusted over the two comparisons (with "
                    "several folds recorded, also over all their tests as one family); a "

@@ -508,7 +508,7 @@ def test_scaling_study_renders_sizes_and_the_trend(site):
            "provenance": provenance("python experiments/fig7_scaling.py --goal diagonal")})
     assert run(site) == 0
     md = site["md"].read_text()
-    assert "## Key particles: the gain against the cloth's size" in md
+    assert "## Key particles: the gain against the particle count" in md
     assert "| 10 x 10 | 100 | 10.1 ± " in md
     assert f"**{stats['trend']['original_minus_simple']['verdict']}**" in md
     assert stats["trend"]["original_minus_simple"]["verdict"] == "grows"
@@ -518,7 +518,8 @@ def test_scaling_study_renders_sizes_and_the_trend(site):
     assert run(site) == 0
     assert "](images/fig7-scaling-diagonal.png)" in site["md"].read_text()
     t = stats["trend"]["original_minus_simple"]
-    assert (f"| Sec. V: the gain against the cloth's size | `python experiments/fig7_scaling.py "
+    assert (f"| Sec. V: the gain against the particle count (a finer sheet of one size; a bigger "
+            f"sheet at fixed spacing) | `python experiments/fig7_scaling.py "
             f"--goal diagonal` | Original - Simple gap per log N (N 100-400, 3 seeds): "
             f"diagonal grows ({t['slope'] * 1e3:.1f} ± {t['slope_ci95'] * 1e3:.1f} mm) |") \
         in block(site["readme"])
