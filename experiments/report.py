@@ -106,6 +106,7 @@ from report_kp import (
     settle_rest_section,
 )
 from report_map import HEADLINES_TITLE, map_block
+from report_physics import physics_reference_section
 from report_stale import (
     SNAPSHOT,
     SVR_KINDS,
@@ -238,7 +239,8 @@ SECTIONS = {"key_particles": kp_section, "kp_compare": kp_compare_section,
             "cloth_steps": cloth_steps_section, "cem_limit": cem_limit_section,
             "settle_rest": settle_rest_section,
             "cloth_warp": cloth_warp_section,
-            "random_reach": random_reach_section, "fig7_scaling": scaling_section}
+            "random_reach": random_reach_section, "fig7_scaling": scaling_section,
+            "physics_reference": physics_reference_section}
 HEADLINES = {"key_particles": kp_headline, "fig7": fig7_headline, "table1": table1_headline,
              "fig4": fig4_headline, "panda_execute": panda_headline,
              "clock_check": clock_check_headline}
