@@ -12,7 +12,8 @@ from report_stats import pval
 
 #: the fields ``choice_fields`` ranks against the rows' cost, with their words
 FIELDS = {"goal_held_share": "share of optimisations whose C held the goal object",
-          "held_steps_mean": "steps the arm stood still", "lag_steps_mean": "lag"}
+          "held_steps_mean": "steps the arm stood still", "lag_steps_mean": "lag",
+          "landing_offset_mean": "landing row's distance from the lag"}
 
 
 def choice_lines(choice: dict | None) -> list[str]:
@@ -26,9 +27,11 @@ def choice_lines(choice: dict | None) -> list[str]:
             "first; the goal object's planar DoFs), beside the steps the executor held the arm "
             "and the lag:", "",
             *table(["row", "C held the goal", "held steps (mean)", "lag (steps)",
-                    "cost / baseline (median per seed)", "trials"],
+                    "landing row - lag (mean abs.)", "cost / baseline (median per seed)",
+                    "trials"],
                    [[row, num(v["goal_held_share"]), num(v["held_steps_mean"], 0),
-                     num(v["lag_steps_mean"], 1), num(v["cost_ratio_median"]),
-                     str(v["n_trials"])] for row, v in choice["rows"].items()]),
+                     num(v["lag_steps_mean"], 1), num(v.get("landing_offset_mean"), 1),
+                     num(v["cost_ratio_median"]), str(v["n_trials"])]
+                    for row, v in choice["rows"].items()]),
             *(["", "Kendall tau against the rows' cost (baseline aside): " + "; ".join(taus)
                + "."] if taus else [])]

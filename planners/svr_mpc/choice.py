@@ -4,8 +4,10 @@ The paper's argument is about the choice of C: an SVR row should keep the DoFs t
 (the pushed object's) and drop the rest. ``goal_held`` measures whether it does: per
 optimisation after an episode's first (which every row runs over every DoF), whether C held
 every planar DoF (world x and y, ``dopt.tasks.push.task_model.planar_dofs``) of the task's goal
-objects. ``choice_fields`` sets that beside what else orders the rows, the lag and the steps
-the authors' executor held the arm, as Kendall's tau against the rows' median cost ratio.
+objects. ``choice_fields`` sets that beside what else orders the rows: the lag, the steps the
+authors' executor held the arm, and how far its nearest-state landing strays from the lag
+(a C that holds moving objects can match a row far from where the arm is in time), each as
+Kendall's tau against the rows' median cost ratio.
 """
 
 from __future__ import annotations
@@ -45,7 +47,9 @@ def choice_fields(records: list[dict], baseline: str = "baseline",
                   goal_of=goal_dofs) -> dict:
     """Per row (``row_label``; the ``unoptimised`` trials, whose C is empty, left out), over
     the trials that have active sets: "goal_held_share" (``goal_held`` pooled over every
-    optimisation after the first), "held_steps_mean", "lag_steps_mean", and
+    optimisation after the first), "held_steps_mean", "lag_steps_mean",
+    "landing_offset_mean" (|landed row - lag| over the optimisations after the first, where
+    the trials store landings; None elsewhere), and
     "cost_ratio_median" (the median over seeds of the row's MPC cost over ``baseline``'s on
     the same seed); then Kendall's tau (and p) of each of those three against
     "cost_ratio_median" over the rows other than ``baseline`` ("tau": {field: {"tau", "p"}};
@@ -71,11 +75,12 @@ def choice_fields(records: list[dict], baseline: str = "baseline",
                                                        for r in group])),
                      "lag_steps_mean": float(np.mean([r["result"]["lag_steps_mean"]
                                                       for r in group])),
+                     "landing_offset_mean": _landing_offset(group),
                      "cost_ratio_median": float(np.median(ratios)) if ratios else None,
                      "n_trials": len(group)}
     tau = {}
     others = [v for k, v in rows.items() if k != baseline and v["cost_ratio_median"] is not None]
-    for field in ("goal_held_share", "held_steps_mean", "lag_steps_mean"):
+    for field in ("goal_held_share", "held_steps_mean", "lag_steps_mean", "landing_offset_mean"):
         pts = [(v[field], v["cost_ratio_median"]) for v in others if v[field] is not None]
         if len(pts) < 3:
             tau[field] = None
@@ -83,3 +88,12 @@ def choice_fields(records: list[dict], baseline: str = "baseline",
         t, p = stats.kendalltau(*zip(*pts, strict=True))
         tau[field] = {"tau": float(t), "p": float(p), "rows": len(pts)}
     return {"rows": rows, "tau": tau}
+
+
+def _landing_offset(group: list[dict]) -> float | None:
+    """Mean |landed row - lag steps| over the optimisations after each trial's first, pooled
+    over ``group``'s trials that store both (None: none does)."""
+    offs = [abs(a - b) for r in group if "landed_at" in r["result"]
+            for a, b in zip(r["result"]["landed_at"][1:], r["result"]["lag_steps"][1:],
+                            strict=True)]
+    return float(np.mean(offs)) if offs else None

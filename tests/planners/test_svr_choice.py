@@ -18,11 +18,15 @@ def mask(dofs) -> str:
     return dofs_mask(np.array(sorted(dofs), dtype=int))
 
 
-def trial(row: str, seed: int, cost: float, sets: list, held: int = 0, lag: float = 10.0):
+def trial(row: str, seed: int, cost: float, sets: list, held: int = 0, lag: float = 10.0,
+          landed=None):
     method, theta, rho = ROWS[row]
+    result = {"mpc_cost": cost, "active_sets": [mask(s) for s in sets], "held_steps": held,
+              "lag_steps_mean": lag, "goal_distance_end": 0.0}
+    if landed is not None:                        # every optimisation lagging `lag` steps
+        result.update(landed_at=landed, lag_steps=[int(lag)] * len(landed))
     return {"params": {"method": method, "theta": theta, "rho": rho, "seed": seed},
-            "result": {"mpc_cost": cost, "active_sets": [mask(s) for s in sets],
-                       "held_steps": held, "lag_steps_mean": lag, "goal_distance_end": 0.0}}
+            "result": result}
 
 
 def test_goal_held_counts_optimisations_after_the_first_holding_every_goal_dof():
@@ -38,7 +42,8 @@ def test_choice_fields_pool_shares_and_order_rows_by_kendall_tau():
     recs = []
     for seed in range(3):
         recs.append(trial("baseline", seed, 100.0, [every, every], held=50, lag=40))
-        recs.append(trial("naive", seed, 70.0, [every, [0, 3, 4]], held=30, lag=20))
+        recs.append(trial("naive", seed, 70.0, [every, [0, 3, 4]], held=30, lag=20,
+                          landed=[0, 20 + 4 * seed]))
         # rand holds the goal in one optimisation of three per episode
         recs.append(trial("rand-t5", seed, 80.0, [every, [0, 3, 4], [0, 1], [0, 4]],
                           held=20 + seed, lag=15))
@@ -52,6 +57,10 @@ def test_choice_fields_pool_shares_and_order_rows_by_kendall_tau():
     assert rows["sum-t10-r1"]["cost_ratio_median"] == pytest.approx(0.91)
     assert rows["rand-t5"]["held_steps_mean"] == pytest.approx(21.0)
     others = ("naive", "rand-t5", "sum-t10-r1")
+    # naive's landings after the first: 20, 24, 28 against a lag of 20
+    assert rows["naive"]["landing_offset_mean"] == pytest.approx(4.0)
+    assert rows["rand-t5"]["landing_offset_mean"] is None       # no landings stored
+    assert out["tau"]["landing_offset_mean"] is None            # one row has them: no tau
     for field in ("goal_held_share", "held_steps_mean", "lag_steps_mean"):
         expected = stats.kendalltau([rows[r][field] for r in others],
                                     [rows[r]["cost_ratio_median"] for r in others])
