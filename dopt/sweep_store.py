@@ -3,10 +3,10 @@
 - ``OUT/trials/<key>.json``: a finished trial's record {"key", "params", "result", "code"}
   (``check_record``: a file that is not one, or whose result does not fit the sweep's
   ``Schema``, is named in a logged warning, moved to ``OUT/trials/corrupt/`` and recomputed);
-- ``OUT/trials/pack.jsonl.gz``: finished trials packed, one record a line (``dopt.trialpack``;
-  ``dopt.sweep_pack.pack_trials`` merges the loose files into it); a loose file overrides the
-  packed record of its key, and a packed record that does not fit stays in the pack and is
-  recomputed;
+- ``OUT/trials/pack.jsonl``: finished trials packed, one record a line, append-only
+  (``dopt.trialpack``; ``dopt.sweep_pack.pack_trials`` appends the loose files to it), over
+  the read-only ``pack.jsonl.gz`` of earlier packs; a loose file overrides the packed record of
+  its key, and a packed record that does not fit stays in the pack and is recomputed;
 - ``OUT/trials/checkpoints/<key>.json``: an unfinished trial's saved progress
   (``Checkpoint``; its progress is checked against the ``Schema`` too);
 - ``OUT/trials/.progress/<key>.json``: how far a running trial has got (``Report``: what a

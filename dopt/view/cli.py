@@ -27,8 +27,8 @@ def parser() -> argparse.ArgumentParser:
         description="Replay pick-and-place trials, MPC episodes and blow-up captures in the "
                     "browser (viser, on 127.0.0.1), or write one frame as a PNG.")
     p.add_argument("path", help="a trial file (or the path of a trial packed in its folder's "
-                                "pack.jsonl.gz), a result or trial folder, a blow-up capture "
-                                "or a folder of them")
+                                "pack.jsonl or pack.jsonl.gz), a result or trial folder, a "
+                                "blow-up capture or a folder of them")
     p.add_argument("--trial", help="the episode to open first (its label: the trial file's "
                                    "name without .json, or the capture's folder)")
     p.add_argument("--frame", type=int, default=None,

@@ -386,9 +386,9 @@ def test_packed_trials_are_reported_as_their_files_were(site, capsys):
         assert not list((runs / sweep / "trials").glob("*.json"))
     assert run(site) == 0
     assert (site["md"].read_text(), site["readme"].read_text()) == before
-    pack_path(runs / "t1" / "trials").write_bytes(b"not gzip")
+    pack_path(runs / "t1" / "trials").write_bytes(b"not json\n")
     assert run(site) == 2
-    assert "pack.jsonl.gz cannot be read" in capsys.readouterr().err
+    assert "pack.jsonl line 1: not valid JSON" in capsys.readouterr().err
 
 
 def test_a_result_whose_preset_was_redefined_is_shown_stale(site):
