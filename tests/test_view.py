@@ -303,7 +303,7 @@ def run_cli(*args, timeout: int = 300) -> subprocess.CompletedProcess:
 
 def test_cli_bad_input_is_one_line_and_exit_1(tmp_path):
     for args, words in [((tmp_path / "missing",), "does not exist"),
-                        ((tmp_path,), "no trial file, trial folder or blow-up capture"),
+                        ((tmp_path,), "no trial file, trial folder, pack, summary or blow-up capture"),
                         ((tmp_path, "--frame", "x"), None)]:
         r = run_cli(*args)
         if words is None:                               # argparse: usage error, status 2
