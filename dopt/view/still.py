@@ -96,7 +96,7 @@ def _label_bar(image: np.ndarray, px: np.ndarray, text: str) -> np.ndarray:
     out = Image.fromarray(image)
     centre = px.mean(axis=0)
     ImageDraw.Draw(out).text((float(centre[0]), float(centre[1]) + 6), text,
-                             fill=BAR_COLOUR, font=_font(13), anchor="mt")
+                             fill=BAR_COLOUR, font=font(13), anchor="mt")
     return np.asarray(out)
 
 
@@ -107,10 +107,10 @@ def annotate(image: np.ndarray, lines, items) -> np.ndarray:
     from PIL import Image, ImageDraw
 
     H, W = image.shape[:2]
-    font, pad, row = _font(13), 8, 18
+    face, pad, row = font(13), 8, 18
     draw = ImageDraw.Draw(Image.new("RGB", (1, 1)))
-    wrapped = [w for line in lines for w in _wrap(draw, line, font, W - 2 * pad)]
-    widths = [26 + draw.textlength(i.name, font=font) for i in items]
+    wrapped = [w for line in lines for w in _wrap(draw, line, face, W - 2 * pad)]
+    widths = [26 + draw.textlength(i.name, font=face) for i in items]
     col = int(max(widths, default=0)) + 16
     per_row = max(1, (W - 2 * pad) // max(col, 1))
     n_rows = -(-len(items) // per_row)
@@ -119,12 +119,12 @@ def annotate(image: np.ndarray, lines, items) -> np.ndarray:
     draw = ImageDraw.Draw(out)
     y = H + pad
     for text in wrapped:
-        draw.text((pad, y), text, fill=(0, 0, 0), font=font)
+        draw.text((pad, y), text, fill=(0, 0, 0), font=face)
         y += row
     for k, item in enumerate(items):
         x, yy = pad + (k % per_row) * col, y + (k // per_row) * row
         _swatch(draw, item, x, yy + 3)
-        draw.text((x + 26, yy), item.name, fill=(0, 0, 0), font=font)
+        draw.text((x + 26, yy), item.name, fill=(0, 0, 0), font=face)
     return np.asarray(out)
 
 
@@ -156,7 +156,8 @@ def _wrap(draw, text: str, font, width: int) -> list[str]:
     return lines
 
 
-def _font(size: int):
+def font(size: int):
+    """A PIL font of ``size`` px: DejaVu Sans where installed, else PIL's own."""
     from PIL import ImageFont
 
     for name in FONTS:
