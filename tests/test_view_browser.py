@@ -159,7 +159,12 @@ def _cursor_columns(browser) -> list[int]:
     for canvas in browser.find_elements(By.CSS_SELECTOR, ".uplot canvas"):
         browser.execute_script("arguments[0].scrollIntoView({block: 'center'});", canvas)
         time.sleep(0.5)
-        image = np.asarray(Image.open(io.BytesIO(canvas.screenshot_as_png)).convert("RGB"))
+        box = browser.execute_script(
+            "const r = arguments[0].getBoundingClientRect();"
+            "return [r.left, r.top, r.right, r.bottom, window.devicePixelRatio];", canvas)
+        shot = Image.open(io.BytesIO(browser.get_screenshot_as_png())).convert("RGB")
+        left, top, right, bottom = (int(round(v * box[4])) for v in box[:4])
+        image = np.asarray(shot.crop((left, top, right, bottom)))
         dark = (image.astype(int).max(axis=-1) < 90)
         runs = np.zeros(dark.shape[1], dtype=int)
         for c in range(dark.shape[1]):

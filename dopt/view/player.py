@@ -39,8 +39,8 @@ log = logging.getLogger(__name__)
 SPEEDS = ("0.25x", "0.5x", "1x", "2x", "4x", "8x")
 #: playback loop period (s)
 TICK = 1 / 30
-#: the plots' cursor colour and its series' name
-CURSOR_COLOUR, CURSOR_NAME = "black", "current frame"
+#: the plots' cursor colour, its series' name and its scale (fixed: it spans the plot)
+CURSOR_COLOUR, CURSOR_NAME, CURSOR_SCALE = "black", "current frame", "cursor"
 
 
 def edges(faces: np.ndarray) -> np.ndarray:
@@ -54,17 +54,16 @@ def edges(faces: np.ndarray) -> np.ndarray:
 
 def cursor_data(curve: Curve, at: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """A curve's plot data with a vertical cursor at x = ``at``: x (n + 2,) with ``at``
-    inserted twice, y (n + 2,) interpolated there, and the cursor series (n + 2,), NaN but
-    at the two inserted points, where it spans the curve's y range (uPlot draws it as a
-    vertical segment)."""
+    inserted twice, y (n + 2,) interpolated there, and the cursor series (n + 2,) on its own
+    fixed 0..1 scale (``CURSOR_SCALE``), NaN but 0 and 1 at the two inserted points: uPlot
+    draws it as a vertical segment over the plot's height (the canvas skips the NaN points;
+    on the curve's own scale they would spoil its range)."""
     x, y = np.asarray(curve.x, dtype=float), np.asarray(curve.y, dtype=float)
     at = float(np.clip(at, x[0], x[-1]))
     i = int(np.searchsorted(x, at, side="right"))
     value = float(np.interp(at, x, y))
-    finite = y[np.isfinite(y)]
-    lo, hi = (float(finite.min()), float(finite.max())) if len(finite) else (0.0, 1.0)
     cursor = np.full(len(x) + 2, np.nan)
-    cursor[i:i + 2] = lo, hi
+    cursor[i:i + 2] = 0.0, 1.0
     return (np.concatenate([x[:i], [at, at], x[i:]]),
             np.concatenate([y[:i], [value, value], y[i:]]), cursor)
 
@@ -250,11 +249,16 @@ class Viewer:
             series = (up.Series(label=c.x_label),
                       up.Series(label=f"{c.name} ({c.unit})", stroke="red", width=2),
                       up.Series(label=CURSOR_NAME, stroke=CURSOR_COLOUR, width=1.5,
-                                spanGaps=False, points={"show": False}))
+                                scale=CURSOR_SCALE, spanGaps=False, points={"show": False}))
+            # the cursor stands at an end at the first and last frames: keep it inside
+            x = np.asarray(c.x, dtype=float)
+            pad = max(0.5 * float(np.median(np.diff(x))), 0.02 * float(x[-1] - x[0]))
+            x_scale = {"time": False, "auto": False,
+                       "range": (float(x[0]) - pad, float(x[-1]) + pad)}
             handle = self.server.gui.add_uplot(
                 cursor_data(c, c.cursor_x(ep, 0)), series, title=c.name, aspect=1.6,
-                scales={"x": {"time": False}},
-                axes=({"label": c.x_label}, {"label": f"{c.name} ({c.unit})"}))
+                scales={"x": x_scale, CURSOR_SCALE: {"auto": False, "range": (0.0, 1.0)}},
+                axes=({"label": c.x_label}, {"label": c.unit}))
             self._plots.append((handle, c))
 
     def _aim_camera(self, ep: Episode) -> None:
