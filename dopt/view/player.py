@@ -262,13 +262,19 @@ class Viewer:
             self._plots.append((handle, c))
 
     def _aim_camera(self, ep: Episode) -> None:
-        pts = [d for d in (self._scene_points(),) if len(d)]
-        if not pts:
+        """Frame the objects: where the episode shades bodies (MPC), those bodies and the
+        goal regions (not the arm); else the flexes and the moving bodies."""
+        p = self._scene_points()
+        if ep.shade is not None:
+            objects = np.flatnonzero(np.isfinite(ep.shade).any(axis=0))
+            p = np.concatenate([self.view.data.xpos[objects].reshape(-1, 3),
+                                *[np.asarray(r.centre, dtype=float)[None] for r in ep.regions]])
+        if not len(p):
             return
-        p = np.concatenate(pts)
         lo, hi = np.percentile(p, 2, axis=0), np.percentile(p, 98, axis=0)
         centre, extent = 0.5 * (lo + hi), float(np.max(hi - lo))
-        distance = 0.9 * max(extent, 0.2) + 0.1
+        # a few objects' centres span less than the objects do: step back further
+        distance = (0.9 if ep.shade is None else 1.8) * max(extent, 0.2) + 0.1
         cam = self.server.initial_camera
         cam.look_at = tuple(centre)
         cam.position = tuple(centre + distance * np.array([0.0, -0.75, 0.9]))
