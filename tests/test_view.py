@@ -518,3 +518,21 @@ def test_ghost_edges_and_cloth_face_against_trimesh():
         assert len(edges(faces)) == len(mesh.edges_unique)
         assert face_up(verts, faces) == (mesh.face_normals[:, 2].sum() >= 0)
         assert face_up(verts, faces[:, ::-1]) != face_up(verts, faces)
+
+
+def test_offscreen_gl_keeps_a_set_choice_and_matches_pyopengl(monkeypatch):
+    """MUJOCO_GL set: untouched; PYOPENGL_PLATFORM naming a backend: that one (mujoco.egl
+    refuses a mismatch); neither: EGL where libEGL is found, else OSMesa where libOSMesa is,
+    PYOPENGL_PLATFORM set to match."""
+    from dopt.view import cli
+
+    env = {"MUJOCO_GL": "glfw"}
+    assert cli.offscreen_gl(env) is None and env == {"MUJOCO_GL": "glfw"}
+    env = {"PYOPENGL_PLATFORM": "osmesa"}
+    assert cli.offscreen_gl(env) == "osmesa" and env["MUJOCO_GL"] == "osmesa"
+    for found, expected in [({"EGL", "OSMesa"}, "egl"), ({"OSMesa"}, "osmesa"),
+                            ({"EGL"}, "egl"), (set(), "egl")]:
+        monkeypatch.setattr(cli, "_has_library", lambda name, found=found: name in found)
+        env = {}
+        assert cli.offscreen_gl(env) == expected
+        assert env == {"MUJOCO_GL": expected, "PYOPENGL_PLATFORM": expected}

@@ -88,18 +88,25 @@ def main(argv=None) -> int:
 
 
 def offscreen_gl(env=None) -> str | None:
-    """Choose MuJoCo's offscreen OpenGL backend before MuJoCo is imported: ``MUJOCO_GL=egl``
-    where libEGL is found, else ``osmesa`` where libOSMesa is, with ``PYOPENGL_PLATFORM`` to
-    match; returns what it set, or None when ``MUJOCO_GL`` was already set (the user's choice
-    stands) or MuJoCo was imported already (it read the variable then; logged)."""
-    env = os.environ if env is None else env
+    """Choose MuJoCo's offscreen OpenGL backend before MuJoCo is imported, in ``env`` (a
+    mapping; None: this process's environment): the one ``PYOPENGL_PLATFORM`` names (egl,
+    osmesa), else ``MUJOCO_GL=egl`` where libEGL is found, else ``osmesa`` where libOSMesa
+    is, with ``PYOPENGL_PLATFORM`` to match; returns what it set, or None when ``MUJOCO_GL``
+    was already set (the user's choice stands) or this process imported MuJoCo already (it
+    read the variable then; logged)."""
+    if env is None:
+        env = os.environ
+        if not env.get("MUJOCO_GL") and "mujoco" in sys.modules:
+            log.warning("MuJoCo was imported before the offscreen context was chosen; set "
+                        "MUJOCO_GL=egl for a still")
+            return None
     if env.get("MUJOCO_GL"):
         return None
-    if "mujoco" in sys.modules:
-        log.warning("MuJoCo was imported before the offscreen context was chosen; set "
-                    "MUJOCO_GL=egl for a still")
-        return None
-    backend = "egl" if _has_library("EGL") or not _has_library("OSMesa") else "osmesa"
+    platform = env.get("PYOPENGL_PLATFORM", "").lower()
+    if platform in ("egl", "osmesa"):
+        backend = platform
+    else:
+        backend = "egl" if _has_library("EGL") or not _has_library("OSMesa") else "osmesa"
     env["MUJOCO_GL"] = backend
     env.setdefault("PYOPENGL_PLATFORM", backend)
     return backend
