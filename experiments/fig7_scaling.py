@@ -233,11 +233,19 @@ def plot(path: Path, stats: dict, goal: str) -> bool:
                        yerr=[(r["ci95"] or 0) * 1e3 for _, r in rows], color=COLOURS[m],
                        marker="o", capsize=3, label=f"{m} - simple")
     b.axhline(0, color="k", lw=0.5)
-    for ax, ylabel in ((a, "final cost (mm)"), (b, "paired difference (mm)")):
+    from matplotlib.ticker import FixedLocator, NullLocator, ScalarFormatter
+
+    sizes = sorted(int(k) ** 2 for k in stats["per_size"])
+    for ax, ylabel in ((a, "final cost (mm), mean and 95 % CI"),
+                       (b, "paired difference (mm), mean and 95 % CI")):
         ax.set_xscale("log")
-        ax.set_xlabel("particles N")
+        # a tick at every size run (log decades alone showed only 10^2 and 10^3)
+        ax.xaxis.set_major_locator(FixedLocator(sizes))
+        ax.xaxis.set_major_formatter(ScalarFormatter())
+        ax.xaxis.set_minor_locator(NullLocator())
+        ax.set_xlabel("particles N = n x n (log scale)")
         ax.set_ylabel(ylabel)
-        ax.legend()
+        ax.legend(title="method")
     # the verdict line is longer than the figure is wide: one line per compared method
     fig.suptitle(f"{goal}: " + "\n".join(stats["verdict"].split("; ")), fontsize=8)
     fig.tight_layout()

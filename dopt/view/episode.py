@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import json
 import logging
+import shlex
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -25,7 +26,7 @@ import numpy as np
 from dopt import jsonio
 from dopt.blowup import FORMAT
 from dopt.state import INTEGRATION, StateLayout, check_model, check_spec, check_states
-from dopt.trialpack import is_stored_trial, read_pack, read_trial_text
+from dopt.trialpack import PACK_NAMES, is_stored_trial, read_pack, read_trial_text
 from dopt.validation import check_int, float_array
 
 log = logging.getLogger(__name__)
@@ -39,36 +40,47 @@ SKIPPED_FOLDERS = ("checkpoints", "corrupt", "outdated")
 @dataclass(frozen=True)
 class Curve:
     """A time series beside the scene: x (n,) (seconds, or iterations when ``x_label`` says
-    so) and y (n,) in ``unit``."""
+    so) and y (n,) in ``unit``. The plot's cursor marks the current frame: at the frame's
+    time (``Episode.times``), or at ``cursor[f]`` (F,) where x is not time (e.g. the CEM
+    iteration whose plan is being executed)."""
 
     name: str
     x: np.ndarray
     y: np.ndarray
     unit: str = ""
     x_label: str = "time (s)"
+    cursor: np.ndarray | None = None
+
+    def cursor_x(self, ep: Episode, frame: int) -> float:
+        """Where the cursor stands at ``frame`` of ``ep``, in this curve's x."""
+        return float(ep.times[frame] if self.cursor is None else self.cursor[frame])
 
 
 @dataclass(frozen=True)
 class Markers:
     """Points drawn over the scene: positions (F, M, 3) per frame (NaN rows hidden), an RGB
-    colour (0-255) and a diameter (m)."""
+    colour (0-255) and a diameter (m); ``tag``: a text written beside the first point in the
+    scene (e.g. "goal object"), none when empty."""
 
     name: str
     positions: np.ndarray
     colour: tuple[int, int, int]
     size: float = 0.012
+    tag: str = ""
 
 
 @dataclass(frozen=True)
 class Ghost:
-    """The goal drawn as a translucent copy of the object: shapes (G, V, 3), which[f] the
-    shape of frame f (-1: none), and its triangles (E, 3) or segments (E, 2)."""
+    """The goal drawn as a wire copy of the object (its edges, so that it never blends with
+    the object where they overlap): shapes (G, V, 3), which[f] the shape of frame f (-1:
+    none), and its triangles (E, 3) or segments (E, 2)."""
 
     shapes: np.ndarray
     which: np.ndarray
     faces: np.ndarray
     colour: tuple[int, int, int] = (40, 160, 230)
     opacity: float = 0.35
+    name: str = "goal shape"
 
 
 @dataclass(frozen=True)
@@ -79,6 +91,7 @@ class Region:
     radius: float
     height: float = 0.002
     colour: tuple[int, int, int] = (50, 220, 50)
+    name: str = "goal region"
 
 
 @dataclass(frozen=True)
@@ -137,6 +150,10 @@ class Episode:
         if self.shade is not None and np.shape(self.shade) != (F, self.model.nbody):
             raise ValueError(f"shade must have shape ({F}, {self.model.nbody}), got "
                              f"{np.shape(self.shade)}")
+        for c in self.curves:
+            if c.cursor is not None and np.shape(c.cursor) != (F,):
+                raise ValueError(f"curve {c.name!r}: cursor must have shape ({F},), got "
+                                 f"{np.shape(c.cursor)}")
         if self.ghost is not None and np.shape(self.ghost.which) != (F,):
             raise ValueError(f"ghost.which must have shape ({F},), got "
                              f"{np.shape(self.ghost.which)}")
@@ -243,8 +260,15 @@ def candidates(path: Path) -> list[Path]:
     file, a packed trial (its loose file's path) or a blow-up capture; for a folder its JSON
     files, those of its ``trials/`` (not checkpoints, corrupt or outdated ones) and the trials
     packed there (``dopt.trialpack``: each as the path its loose file would have), its
-    sub-folders and those of its ``blowups/``, in name order."""
+    sub-folders and those of its ``blowups/``, in name order. A pack file
+    (``trials/pack.jsonl`` or ``.gz``) stands for its folder, a summary (``summary_folder``) for the
+    sweep folder it summarises."""
     path = Path(path)
+    if path.name in PACK_NAMES and path.is_file():
+        return candidates(path.parent)
+    folder = summary_folder(path)
+    if folder is not None:
+        return candidates(folder)
     if is_stored_trial(path) or (path / "blowup.json").is_file():
         return [path]
     found: list[Path] = []
@@ -263,9 +287,42 @@ def candidates(path: Path) -> list[Path]:
     return found
 
 
+def summary_folder(path: Path) -> Path | None:
+    """The sweep folder a summary file summarises, or None when ``path`` is not a summary (a
+    JSON object with "provenance" and no "result"): its own folder when that holds
+    ``trials/`` (``OUT/summary.json``), else the ``--out`` of the command that wrote it (a
+    recorded ``docs/results/NAME.json``), found from the working folder or from any folder
+    above the summary. The folder holds the trials of every summary written into it.
+
+    Raises:
+        ValueError: a summary whose trials folder cannot be found (named in the message).
+    """
+    path = Path(path)
+    if not (path.is_file() and path.suffix == ".json"):
+        return None
+    record = read_record(path)
+    if not isinstance(record, dict) or "provenance" not in record or "result" in record:
+        return None
+    if (path.parent / "trials").is_dir():
+        return path.parent
+    provenance = record.get("provenance")
+    command = provenance.get("command", "") if isinstance(provenance, dict) else ""
+    words = shlex.split(command) if isinstance(command, str) else []
+    out = next((w.split("=", 1)[1] for w in words if w.startswith("--out=")), None)
+    if out is None and "--out" in words[:-1]:
+        out = words[words.index("--out") + 1]
+    if out is not None:
+        for base in (Path.cwd(), *path.resolve().parents):
+            if (base / out).is_dir():
+                return base / out
+    raise ValueError(f"{path} is a summary, but its trials folder was not found "
+                     f"(its command's --out: {out!r}); open that folder instead")
+
+
 def collect(path, source_list: Sequence | None = None) -> dict[str, tuple[object, Path]]:
     """{label: (source, path)} of every episode under ``path`` (a trial file, a trial or result
-    folder, a blow-up capture or a folder of them), labels in file order.
+    folder, a trial pack, a summary, a blow-up capture or a folder of them), labels in file
+    order.
 
     Raises:
         FileNotFoundError: ``path`` does not exist.
@@ -286,10 +343,11 @@ def collect(path, source_list: Sequence | None = None) -> dict[str, tuple[object
                 out[label if label not in out else str(p)] = (src, p)
                 break
     if not out:
-        names = ", ".join(getattr(s, "name", type(s).__name__) for s in srcs)
-        raise ValueError(f"{path}: no trial file, trial folder or blow-up capture found "
-                         f"(sources: {names}; the pick and MPC trial sources need the "
-                         f"package installed: pip install -e .)")
+        names = [getattr(s, "name", type(s).__name__) for s in srcs]
+        hint = ("" if len(names) > 1 else "; the pick and MPC trial sources need the package "
+                "installed: pip install -e .")
+        raise ValueError(f"{path}: no trial file, trial folder, pack, summary or blow-up "
+                         f"capture found (sources: {', '.join(names)}{hint})")
     return out
 
 
