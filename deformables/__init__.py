@@ -12,7 +12,8 @@ dopt.provenance and dopt.cli. Modules:
                      decimation.py (pymeshlab QECD with restarts), distance.py (exact symmetric
                      Hausdorff), mesh.py (canonical triangulation, geodesic dedupe),
                      layers.py (stacking axis and layer gap), panels.py (rigid panels of noisy
-                     folds), frame.py (the goal's own frame)
+                     folds), frame.py (the goal's own frame), remesh.py (a rectangular
+                     goal resampled on a grid of its rest sheet: keys free of triangulation)
     validation.py    goal checks and repairs
     authors.py       the paper authors' own cloth goals (their SoftGym / FleX files, read from
                      outside the project) and their key particles beside ours

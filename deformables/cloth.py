@@ -57,6 +57,7 @@ from .layers import estimate_layer_gap, stacking_axis
 from .mesh import canonical_triangulation, edges
 from .panels import project_on_panels
 from .reduction import KeyParticles, grow_until_below
+from .remesh import nearest_particles, resample_on_grid
 from .validation import (
     check_areas,
     check_faces,
@@ -160,6 +161,11 @@ class ClothConfig:
             stops as soon as it reaches the threshold, so the errors recorded for rejected
             sizes are lower bounds (at least the threshold); the accepted model and its error
             are the same either way. The error-vs-NS curves (Fig. 4) need it.
+        resample: with rest positions, first resample a rectangular sheet's goal on the
+            regular grid of its rest sheet (:func:`deformables.remesh.resample_on_grid`) and
+            give each key node back as its nearest particle: the keys of an irregular mesh
+            are then those of the same surface on a grid (docs/DESIGN-NOTES.md, "Key
+            particles on any triangulation").
         canonical_triangulation: with rest positions, first set every grid-square diagonal to
             the one whose length the fold changes least
             (:func:`deformables.mesh.canonical_triangulation`), so the result does not depend
@@ -207,6 +213,7 @@ class ClothConfig:
     coarse_faces: int | None = 200
     shared_faces: int | None = 2000
     exact_errors: bool = False
+    resample: bool = True
     canonical_triangulation: bool = True
     panels: str = "on"
     panel_noise_floor: float = 5e-5
@@ -252,7 +259,8 @@ class ClothConfig:
         nearest-particle extraction and the geodesic filter, which the paper describes
         without their parameters. ``overrides`` replace any field."""
         fields = dict(error="one-sided", z_scale=1.0, restarts=1, coarse_faces=None,
-                      shared_faces=None, panels="off", canonical_triangulation=False)
+                      shared_faces=None, panels="off", canonical_triangulation=False,
+                      resample=False)
         fields.update(overrides)
         return cls(**fields)
 
@@ -378,12 +386,15 @@ def _cloth_frame(positions, faces, rest_positions):
 
 
 def _projected_goal_and_gap(goal: np.ndarray, rest: np.ndarray | None, tri: np.ndarray,
-                            spacing: float, metres: float,
-                            config: ClothConfig) -> tuple[np.ndarray, float]:
+                            spacing: float, metres: float, config: ClothConfig,
+                            resampled: float = 0.0) -> tuple[np.ndarray, float]:
     """The goal ``(N, 3)`` projected on its panels (``config.panels``, with rest positions
     ``(N, 3)``) and its layer gap, both in the working frame's units (``metres`` per unit):
     ``config.layer_gap``, else estimated from the goal (again after the projection), else
-    ``config.flat_gap_spacings`` spacings. ``tri`` ``(F, 3)``; ``spacing`` in units."""
+    ``config.flat_gap_spacings`` spacings. ``tri`` ``(F, 3)``; ``spacing`` in units. A goal
+    resampled on a grid moves up to ``resampled`` (its round-trip error,
+    :attr:`deformables.remesh.SheetGrid.error`) farther onto its panels than the default
+    tolerance allows."""
 
     def layer_gap(points: np.ndarray) -> float | None:
         found = estimate_layer_gap(points, tri, spacing)          # on its own stacking axis
@@ -400,7 +411,7 @@ def _projected_goal_and_gap(goal: np.ndarray, rest: np.ndarray | None, tri: np.n
         floor = config.panel_noise_floor / metres if config.panels == "auto" else None
         fold = config.panels == "fold"
         panel_gap = gap or config.flat_gap_spacings * spacing
-        fit = project_on_panels(goal, rest, tri, panel_gap, min_noise=floor,
+        fit = project_on_panels(goal, rest, tri, panel_gap + resampled, min_noise=floor,
                                 tolerance=np.inf if fold else None,
                                 merge_deg=config.fold_merge_deg if fold else None)
         if fold and fit.n_panels > 1:      # the boundaries again, fitted on the panel model
@@ -466,7 +477,12 @@ def cloth_key_particles(positions, faces, threshold: float | None = None,
         raise ValueError("ClothConfig(panels='fold') needs rest_positions: the panels are "
                          "rigid maps of regions of the rest sheet")
 
-    goal, gap = _projected_goal_and_gap(goal, rest, tri, spacing, metres, config)
+    particles = rest
+    grid = resample_on_grid(goal, rest, tri) if rest is not None and config.resample else None
+    if grid is not None:
+        goal, rest, tri, spacing = grid.goal, grid.rest, grid.faces, grid.spacing
+    goal, gap = _projected_goal_and_gap(goal, rest, tri, spacing, metres, config,
+                                        0.0 if grid is None else grid.error)
     if rest is not None and config.canonical_triangulation:
         tri = canonical_triangulation(goal, tri, rest)
     axis = stacking_axis(goal, tri)
@@ -478,6 +494,8 @@ def cloth_key_particles(positions, faces, threshold: float | None = None,
     radius = max(config.geodesic_radius * extent,
                  min(config.geodesic_spacings * spacing, config.geodesic_cap * extent))
     keys = extract_keys(goal, tri, rest, scaled, mesh.vertices, radius)
+    if grid is not None:
+        keys = nearest_particles(rest[keys], particles)
     result = KeyParticles(
         indices=keys, n_elements=len(mesh.faces),
         vertices=frame.to_metres(_stretch(mesh.vertices, axis, 1.0 / z_scale)),

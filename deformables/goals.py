@@ -367,6 +367,25 @@ def cloth_underneath(n: int = CLOTH_PARTICLES_PER_SIDE, side: float = CLOTH_SIDE
     return ClothGoal("cloth_underneath", goal, faces, rest, gap)
 
 
+def lift_layers(goal: ClothGoal, lift: float) -> np.ndarray:
+    """A folded cloth goal with its layers pulled apart: ``(N, 3)`` positions, each particle
+    raised ``lift`` (m) per layer gap of its height above the floor (``z / goal.layer_gap``),
+    so the layer k gaps up rises ``k * lift`` and a crease between two layers is drawn out
+    between them; the bottom layer stays.
+
+    The start the key-particle authors prepare for a multi-layer fold (SoftGym's
+    ``_set_to_folded``: each folded layer placed over the one below it, lifted 5 cm a layer,
+    and dropped) is this with their lift; ``planners.pick_place.problem.drop_fold`` drops it
+    in the simulator.
+    """
+    if not isinstance(goal, ClothGoal):
+        raise TypeError(f"goal must be a ClothGoal, got {type(goal).__name__}")
+    lift = check_real(lift, "lift", minimum=0)
+    out = np.array(goal.positions, dtype=float)
+    out[:, 2] += lift * out[:, 2] / goal.layer_gap
+    return out
+
+
 GoalFactory = Callable[..., "RopeGoal | ClothGoal"]
 
 #: goals by CLI name; rope factories take (n, length), cloth factories (n, side, triangulation,

@@ -8,6 +8,8 @@ It knows MuJoCo and no planner (docs/ARCHITECTURE.md has the map and the rule). 
                             derivatives; its routes rollout_batch.py (mujoco.batch) and
                             rollout_c.py over kernels.py (the C loops of _rollout_kernels.c)
     stability.py, errors.py the verdict every rollout gets; RolloutError, UnstableRolloutError
+    blowup.py               blow-up captures: the last states of a flagged executed rollout,
+                            written for dopt-view (which reads them; the runtime no viewer)
     costs.py, mpc.py        QuadraticCost + residual terms (Eq. 2-3); asynchronous MPC (Alg. 1)
                             with its real, virtual and model clocks, mpc_cost (Eq. 5)
     sweep.py                resumable trial sweeps (inline, process pool, Ray), checkpoints,

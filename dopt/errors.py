@@ -34,7 +34,7 @@ class UnstableRolloutError(RolloutError):
             with that warning), or "non-finite state".
         what: which call ran it ("rollout", "rollout_feedback", "mpc agent", or
             "derivatives t=.. perturbation=..").
-        capture: the folder of the blow-up capture written of it (``dopt.view.blowup``; an
+        capture: the folder of the blow-up capture written of it (``dopt.blowup``; an
             MPC agent given ``blowup_out``), else None.
     """
 

@@ -43,9 +43,9 @@ dopt knows no planner: the optimiser is any object with ``optimise(state, plan) 
 
 Blow-up captures (``MPC(..., blowup_out=OUT)``, opt-in): when the executed episode first breaks
 a stability bound, and when a step makes MuJoCo warn or leaves no valid state (which raises
-``UnstableRolloutError``), the agent writes the last ``dopt.view.blowup.KEEP`` executed state
+``UnstableRolloutError``), the agent writes the last ``dopt.blowup.KEEP`` executed state
 rows up to the one after the failing step, the model and the reason to
-``OUT/blowups/<blowup_label>`` (``dopt.view.blowup``; ``dopt-view`` opens it at that step).
+``OUT/blowups/<blowup_label>`` (``dopt.blowup``; ``dopt-view`` opens it at that step).
 ``MPCResult.blowups`` and ``UnstableRolloutError.capture`` name them (after a warning the last
 row is the state MuJoCo reset the data to; the reason names the body the warning points at).
 Writing one holds up the agent (on the real clock: late steps), once per failure.
@@ -65,12 +65,12 @@ from typing import Protocol
 import mujoco
 import numpy as np
 
+from dopt.blowup import KEEP, capture_dir, save_blowup, warning_body
 from dopt.errors import UnstableRolloutError
 from dopt.scene import Scene
 from dopt.stability import Stability
 from dopt.state import INTEGRATION, check_states, fault
 from dopt.validation import check_config, check_int, float_array, index_array
-from dopt.view.blowup import KEEP, capture_dir, save_blowup, warning_body
 
 log = logging.getLogger(__name__)
 CLOCKS = ("real", "virtual", "model")

@@ -4,7 +4,10 @@ one rule, asked of git itself, that says whether a stored result may stand for t
 Every experiment stores ``provenance()`` in its summary, so a number in the docs can be traced
 to the code and libraries that produced it; ``CodeState.stamp()`` (dopt's version, the git
 commit and, for uncommitted code, a fingerprint of it) is what a resumable sweep stores with
-each trial (``dopt.sweep``).
+each trial (``dopt.sweep``). A result names no folder of the machine it ran on: the command
+(``command_line``) and the settings (``root_relative``, read back by ``rooted``) record paths
+relative to the checkout's root, or its sibling ``../shared``; ``recorded_command`` shows an
+older record's command so.
 
 The rules, exactly:
 
@@ -69,6 +72,14 @@ DIRTY = "-dirty"
 NO_GIT = "no git"
 #: how many changed files a one-line message names before "and N more"
 NAMED_FILES = 12
+#: the folder beside the checkout's root that holds what is not committed (the papers, the
+#: authors' code and data): a path into it is recorded as ``../shared/...``
+SHARED = "shared"
+#: the committed folders of a checkout, by which ``recorded_command`` finds where an older
+#: record's checkout lay
+CHECKOUT_DIRS = (*PACKAGE_DIRS, "docs", "tests")
+#: what a recorded path outside the checkout and its shared folder shows for its folders
+OUTSIDE = "<outside>"
 _ROOT = Path(__file__).resolve().parents[1]
 
 
@@ -329,27 +340,93 @@ def _machine() -> dict:
     return {"platform": platform.platform(), "cpu": cpu or platform.processor(), "cpus": _cpus()}
 
 
-def command_line(argv: list[str]) -> str:
-    """The command a user types to rerun ``argv`` from the checkout's root: a module that
-    ``python -m`` ran (this process's ``__main__``, when ``argv[0]`` is its file) or a
-    package's ``__main__.py`` by its module name, another script inside the checkout by its
-    relative path, anything else as given. (A module inside a package, such as
-    ``deformables/bench.py``, only runs with ``-m``: its relative imports fail as a script.)"""
+def command_line(argv: list[str], root: Path | str | None = None) -> str:
+    """The command a user types to rerun ``argv`` from the checkout's root, naming no folder of
+    this machine: a module that ``python -m`` ran (this process's ``__main__``, when
+    ``argv[0]`` is its file) or a package's ``__main__.py`` by its module name, another script
+    inside the checkout by its relative path, anything else as given; every argument that is
+    an absolute path (alone or as ``--flag=PATH``) as ``portable_path`` writes it. (A module
+    inside a package, such as ``deformables/bench.py``, only runs with ``-m``: its relative
+    imports fail as a script.)"""
     if not argv:
         return "python"
+    args = [_portable_argument(a, root) for a in argv[1:]]
     module = _module_run_as_main(argv[0])
     if module is not None:
-        return shlex.join(["python", "-m", module, *argv[1:]])
-    script = Path(argv[0])
+        return shlex.join(["python", "-m", module, *args])
+    script = argv[0]
+    if os.path.isabs(script):
+        script = portable_path(script, root)
+        rel = Path(script)
+        if rel.name == "__main__.py" and len(rel.parts) > 1 and ".." not in rel.parts \
+                and not script.startswith(OUTSIDE):
+            return shlex.join(["python", "-m", ".".join(rel.parts[:-1]), *args])
+    return shlex.join(["python", script, *args])
+
+
+def recorded_command(command: str, root: Path | str | None = None) -> str:
+    """A recorded command line as ``command_line`` writes it today, for a record written before
+    it named no folder of its machine: its absolute paths made relative to the checkout of the
+    machine that recorded it, taken to be the folder above the first part of such a path that
+    names a folder of the checkout (``CHECKOUT_DIRS``), or the folder beside one named
+    ``shared``. A command that does not parse, or names no absolute path, is returned as it
+    is."""
     try:
-        rel = script.resolve().relative_to(_ROOT) if script.is_absolute() else None
+        words = shlex.split(command)
     except ValueError:
-        rel = None
-    if rel is not None:
-        if rel.name == "__main__.py" and len(rel.parts) > 1:
-            return shlex.join(["python", "-m", ".".join(rel.parts[:-1]), *argv[1:]])
-        return shlex.join(["python", rel.as_posix(), *argv[1:]])
-    return shlex.join(["python", *argv])
+        return command
+    if len(words) < 2 or words[0] != "python" or not any(
+            os.path.isabs(_path_of(w)) for w in words[1:]):
+        return command
+    recorder = None
+    for word in words[1:]:
+        parts = Path(_path_of(word)).parts if os.path.isabs(_path_of(word)) else ()
+        at = next((i for i, part in enumerate(parts) if part in (*CHECKOUT_DIRS, SHARED)), None)
+        if at:
+            base = Path(*parts[:at])
+            recorder = base / "checkout" if parts[at] == SHARED else base
+            break
+    return command_line(words[1:], repo_root(root) if recorder is None else recorder)
+
+
+def root_relative(path: str | os.PathLike, root: Path | str | None = None) -> str:
+    """``path`` (a relative one taken from the current folder) relative to the checkout's root,
+    with / between its parts: what a setting records, so that a result names no folder of
+    this machine (``rooted`` reads it back). A path on another drive stays absolute."""
+    full = os.path.abspath(os.fspath(path))
+    try:
+        return Path(os.path.relpath(full, repo_root(root))).as_posix()
+    except ValueError:                               # another drive (Windows)
+        return full
+
+
+def rooted(path: str | os.PathLike, root: Path | str | None = None) -> Path:
+    """A recorded path (``root_relative``) on this machine: a relative one from the checkout's
+    root, an absolute one (an older record's) as it is; normalised."""
+    return Path(os.path.normpath(repo_root(root) / path))
+
+
+def portable_path(path: str | os.PathLike, root: Path | str | None = None) -> str:
+    """``path`` as a recorded command shows it: relative to the checkout's root
+    (``root_relative``) where it lies inside it or inside the shared folder beside it
+    (``../shared/...``), else ``<outside>/NAME``: a folder of this machine means nothing to a
+    reader of the result."""
+    rel = root_relative(path, root)
+    if os.path.isabs(rel) or (rel.split("/")[0] == ".." and rel.split("/")[1:2] != [SHARED]):
+        return f"{OUTSIDE}/{Path(os.fspath(path)).name}"
+    return rel
+
+
+def _path_of(word: str) -> str:
+    """The path an argument names: itself, or the value of ``--flag=PATH``."""
+    return word.split("=", 1)[1] if word.startswith("-") and "=" in word else word
+
+
+def _portable_argument(word: str, root) -> str:
+    path = _path_of(word)
+    if not os.path.isabs(path):
+        return word
+    return word[:len(word) - len(path)] + portable_path(path, root)
 
 
 def _module_run_as_main(script: str) -> str | None:

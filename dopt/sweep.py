@@ -8,15 +8,22 @@ on a local process pool, or on Ray (``ray_address``: "local" starts a local inst
 else is passed to ``ray.init``), so a sweep of thousands of trials goes to many machines without
 code changes.
 
-**Packed trials.** A finished sweep's trials can be packed into one file,
-``OUT/trials/pack.jsonl.gz`` (``pack_trials``; ``python -m dopt.sweep pack OUT [OUT ...]``:
-one record a line, sorted by key, gzip without a timestamp, so the same records give the same
-bytes; each loose file is deleted once its line reads back as the same record). Everything
-below reads packed and loose trials alike (``dopt.trialpack``, the one reader): a resume reuses
-a packed trial as it would its file, a loose file overrides the packed record of its key (a
-trial recomputed since), and new trials are written loose. A pack that cannot be read (not
-gzip, a line that is not a record with a key, a key twice) raises ``PackError``, a ValueError
-naming the pack and the line, rather than having its trials recomputed.
+**Packed trials.** A finished sweep's trials are packed into one file,
+``OUT/trials/pack.jsonl`` (``pack_trials``; ``python -m dopt.sweep pack [--repair] OUT
+[OUT ...]``): one record a line, uncompressed and append-only (each pack appends the new
+records, sorted by key, after the lines already there, and never rewrites one), so that
+committing a re-packed sweep grows git's history by the delta of its new lines, not by the
+whole file as a compressed pack did; each loose file is deleted once the pack reads back its
+record. Everything below reads packed and loose trials alike (``dopt.trialpack``, the one
+reader), and for one key a later source overrides an earlier one: the read-only
+``pack.jsonl.gz`` of earlier packs (never rewritten), then ``pack.jsonl`` (a later line over an
+earlier one), then the loose file (a trial recomputed since). A resume reuses a packed trial as
+it would its file, and new trials are written loose. A pack that cannot be read (not gzip, a
+line that is not a record with a key, a gzip pack's key twice) raises ``PackError``, a
+ValueError naming the pack and the line, rather than having its trials recomputed; a
+``pack.jsonl`` whose last line has no newline (a write or a copy cut short) raises
+``CutPackError``, which ``pack --repair`` repairs (the whole lines kept, the cut one moved to
+``OUT/trials/corrupt/``).
 
 Trial files are checked when read: a file that is not a trial record (truncated or invalid
 JSON, not an object, without "key", "params", "result" or the "code" stamp, or whose key is
@@ -36,7 +43,7 @@ key names its settings) and ``dopt.provenance.reuse_problem`` finds nothing that
 result between its commit and HEAD (``git diff X HEAD -- dopt deformables planners experiments
 pyproject.toml setup.py`` empty, X an ancestor of HEAD, the working tree clean there). Anything
 else is recomputed and its old file moved to ``OUT/trials/outdated/`` (never deleted; a
-packed record stays in the pack, shadowed by the new file, until ``pack_trials`` moves it
+packed record stays in its pack, shadowed by the new file, also once ``pack_trials`` appends it
 there): a record of an unknown commit, of no commit ("no git"), of another branch, or marked
 "-dirty" (except in the very tree it was written from, so that a killed run resumes before its
 code is committed). The dopt version is recorded but decides nothing. Each record also names
@@ -130,7 +137,7 @@ from dopt.sweep_store import (  # noqa: F401  (the public names of dopt.sweep)
     stored_record,
     trial_path,
 )
-from dopt.trialpack import PACK_NAME, PackError  # noqa: F401
+from dopt.trialpack import GZIP_PACK_NAME, PACK_NAME, CutPackError, PackError  # noqa: F401
 
 log = logging.getLogger(__name__)
 
@@ -337,7 +344,7 @@ def _sort_stored(trials, out_dir, state, *, fresh, reuse, root, schema
         del done[t.key]
         path = trial_path(out_dir, t.key)
         old = (f"old file moved to {move_aside(path, OUTDATED_DIR)}" if path.is_file() else
-               f"its packed record stays in trials/{PACK_NAME}, overridden by the new file")
+               "its packed record stays in its pack, overridden by the new file")
         log.log(logging.INFO if fresh else logging.WARNING, "trial %s is recomputed: %s (%s)",
                 t.key, reason, old)
     return done, recomputed, corrupt, across
@@ -519,8 +526,8 @@ def _execute(fn, todo, out_dir, code, checkpoints, records, progress, tick, sche
 
 # ----------------------------------------------------------------------- command line
 def main(argv=None) -> int:
-    """``python -m dopt.sweep pack OUT [OUT ...]``: pack each finished sweep's loose trial
-    files (``pack_trials``), one line per folder; exit 1 when a file was left loose."""
+    """``python -m dopt.sweep pack [--repair] OUT [OUT ...]``: pack each finished sweep's loose
+    trial files (``pack_trials``), one line per folder; exit 1 when a file was left loose."""
     from dopt.cli import EPILOG, existing_dir, guarded
 
     @guarded("python -m dopt.sweep")
@@ -532,16 +539,21 @@ def main(argv=None) -> int:
         pk = sub.add_parser(
             "pack", epilog=EPILOG,
             help="pack a finished sweep's trial files into OUT/trials/" + PACK_NAME,
-            description="Merge each OUT/trials/*.json into OUT/trials/" + PACK_NAME + " (one "
-                        "record a line; a sweep and the report read it as they read the "
-                        "files) and delete each file once its line reads back the same.")
+            description="Append each OUT/trials/*.json to OUT/trials/" + PACK_NAME + " (one "
+                        "record a line, never rewriting a line; a sweep and the report read it "
+                        "as they read the files, as they read an earlier " + GZIP_PACK_NAME +
+                        ", which is left as it is) and delete each file once its line reads "
+                        "back the same.")
         pk.add_argument("out", nargs="+", type=existing_dir,
                         help="a sweep's folder (holding trials/)")
+        pk.add_argument("--repair", action="store_true",
+                        help="first repair a " + PACK_NAME + " whose last line was cut (the "
+                             "whole lines kept, the cut one moved to OUT/trials/corrupt/)")
         args = p.parse_args(argv)
         logging.basicConfig(level=logging.WARNING, format="%(levelname)s %(name)s: %(message)s")
         left = 0
         for out in args.out:
-            r = pack_trials(out)
+            r = pack_trials(out, repair=args.repair)
             print(r.line(), flush=True)
             left += len(r.left)
         return 1 if left else 0

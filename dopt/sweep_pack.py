@@ -1,11 +1,15 @@
 """Packing a sweep's loose trial files into its pack: ``pack_trials`` and its ``PackResult``.
 
-``pack_trials`` merges the loose ``OUT/trials/<key>.json`` files of a sweep folder
-(``dopt.sweep_store``) into ``OUT/trials/pack.jsonl.gz`` (``dopt.trialpack``, the one reader
-and writer of packs), holding the folder's ``OutLock``; ``python -m dopt.sweep pack OUT`` runs
-it. A loose file is deleted only once its packed line reads back as the same record; a packed
-record a newer loose file replaces is kept under ``OUT/trials/outdated/``. ``dopt.sweep`` and
-``dopt.sweep_store`` re-export both names.
+``pack_trials`` appends the loose ``OUT/trials/<key>.json`` files of a sweep folder
+(``dopt.sweep_store``) to ``OUT/trials/pack.jsonl`` (``dopt.trialpack``, the one reader and
+writer of packs: uncompressed and append-only, so that git stores a re-pack as the delta of its
+new lines), holding the folder's ``OutLock``; ``python -m dopt.sweep pack OUT`` runs it. An
+earlier ``pack.jsonl.gz`` is read and left as it is: a loose file whose record it already holds
+is not packed again, a newer one is appended to ``pack.jsonl`` and overrides it. A loose file
+is deleted only once the packs read back its record. A packed record that a newer loose file
+replaces stays on its line (``PackResult.replaced`` names it). ``repair=True`` first repairs a
+``pack.jsonl`` whose last line was cut (``dopt.trialpack.repair_pack``; the cut line goes to
+``OUT/trials/corrupt/``). ``dopt.sweep`` and ``dopt.sweep_store`` re-export both names.
 
 Standard library only (with ``dopt.jsonio``, ``dopt.sweep_store`` and ``dopt.trialpack``).
 """
@@ -18,8 +22,8 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from dopt import jsonio
-from dopt.sweep_store import OUTDATED_DIR, OutLock, check_record
-from dopt.trialpack import loose_files, read_pack, write_pack
+from dopt.sweep_store import CORRUPT_DIR, OutLock, check_record
+from dopt.trialpack import append_pack, loose_files, pack_path, read_pack, repair_pack
 
 log = logging.getLogger("dopt.sweep")
 
@@ -29,13 +33,18 @@ class PackResult:
     """What ``pack_trials`` did to one sweep folder.
 
     Attributes:
-        pack: the pack (``OUT/trials/pack.jsonl.gz``; None when there was nothing to pack).
-        n: records in the pack now; size: its bytes.
-        added: keys of the loose files packed (their files deleted).
-        replaced: {key: where its old packed record went} of the packed records a newer loose
-            file replaced (kept under OUT/trials/outdated/, never deleted).
+        pack: the folder's ``pack.jsonl`` (None when it has none: nothing was ever appended).
+        n: records in the folder's packs now (``pack.jsonl`` and ``pack.jsonl.gz`` together);
+            size: ``pack.jsonl``'s bytes.
+        added: keys of the loose files packed (their files deleted; a file whose record the
+            packs held already is deleted without being appended).
+        replaced: {key: where its old packed record stays (pack and line)} of the packed
+            records a newer loose file replaced (appended after them: packs are never
+            rewritten).
         left: {file name: why} of the loose files not packed (not trial records: left where
             they are; a sweep moves them aside when it reads them).
+        repaired: where the cut last line of ``pack.jsonl`` went (``repair=True``; the pack
+            itself when only its newline was missing), else None.
     """
 
     out_dir: Path
@@ -45,13 +54,16 @@ class PackResult:
     added: list
     replaced: dict
     left: dict
+    repaired: Path | None = None
 
     def line(self) -> str:
         """One line: the folder, records packed, loose files added and left."""
-        return (f"{self.out_dir}: {self.n} trials in {self.pack or 'no pack'} "
-                f"({self.size / 1e6:.2f} MB); {len(self.added)} loose files packed and deleted"
-                + (f", {len(self.replaced)} packed records replaced (old ones under "
-                   f"trials/{OUTDATED_DIR}/)" if self.replaced else "")
+        return (f"{self.out_dir}: {self.n} trials packed"
+                + (f", {self.pack} holds {self.size / 1e6:.2f} MB" if self.pack else "")
+                + (f"; its cut last line repaired ({self.repaired})" if self.repaired else "")
+                + f"; {len(self.added)} loose files packed and deleted"
+                + (f", {len(self.replaced)} packed records replaced (the old lines stay)"
+                   if self.replaced else "")
                 + (f"; {len(self.left)} files left loose (not trial records): "
                    + "; ".join(f"{k}: {v}" for k, v in self.left.items()) if self.left else ""))
 
@@ -71,29 +83,34 @@ def _same(text_a: str, text_b: str) -> bool:
     return load(text_a) == load(text_b)
 
 
-def _keep_outdated(folder: Path, key: str, text: str) -> Path:
-    """Write a replaced packed record to OUT/trials/outdated/ under a free name."""
-    dest_dir = folder / OUTDATED_DIR
-    dest, n = dest_dir / f"{key}.json", 0
-    while dest.exists():
-        n += 1
-        dest = dest_dir / f"{key}.{n}.json"
-    jsonio.write_atomic(dest, json.loads(text))
-    return dest
+def _packable(path: Path) -> tuple[str | None, str | None]:
+    """(its line, None) of a loose trial file that can be packed, else (None, why not)."""
+    _, problem = check_record(path)
+    if problem is not None:
+        return None, problem
+    try:
+        line = _one_line(path)
+    except (OSError, ValueError, TypeError) as e:
+        return None, f"cannot be written as one line ({type(e).__name__}: {e})"
+    if not _same(line, path.read_text()):
+        return None, "its record does not survive re-serialising"
+    return line, None
 
 
-def pack_trials(out_dir: Path | str) -> PackResult:
-    """Merge the loose trial files of a sweep folder into its pack (``dopt.trialpack``):
-    every valid record (``check_record``, any schema) joins the pack, a loose file replacing
-    the packed record of its key (the old one is written to OUT/trials/outdated/); the pack is
-    written (only when its records change: the same records give the same bytes) and read
-    back, and each loose file is deleted only once its line in the pack loads as the same
-    record as the file. Checkpoints, corrupt/ and outdated/ are left alone. Holds the folder's
-    lock (``OutLock``): a sweep running on it refuses, and packing waits for none.
+def pack_trials(out_dir: Path | str, *, repair: bool = False) -> PackResult:
+    """Append the loose trial files of a sweep folder to its pack (``dopt.trialpack``): every
+    valid record (``check_record``, any schema) the packs do not hold already (as the same
+    record) is appended to ``pack.jsonl``, in key order, replacing the packed record of its
+    key (the old line stays); the pack is read back, and each loose file is deleted only once
+    the packs give the same record as the file. Checkpoints, corrupt/ and outdated/ are left
+    alone. Holds the folder's lock (``OutLock``): a sweep running on it refuses, and packing
+    waits for none. ``repair``: repair a cut last line of ``pack.jsonl`` first
+    (``dopt.trialpack.repair_pack``, the cut line kept under OUT/trials/corrupt/).
 
     Raises:
         FileNotFoundError: ``out_dir`` has no trials/ folder.
-        dopt.trialpack.PackError: the existing pack cannot be read (nothing is changed).
+        dopt.trialpack.PackError: a pack cannot be read (nothing is changed;
+            ``CutPackError``: a cut last line, without ``repair``).
         SweepLockedError: a sweep runs on ``out_dir``.
         RuntimeError: the pack does not read back as written (no loose file is deleted).
     """
@@ -102,40 +119,35 @@ def pack_trials(out_dir: Path | str) -> PackResult:
     if not folder.is_dir():
         raise FileNotFoundError(f"{out_dir} has no trials/ folder (not a sweep's folder)")
     with OutLock(out_dir):
-        lines = {k: t.text for k, t in read_pack(folder).items()}
+        repaired = repair_pack(folder, folder / CORRUPT_DIR) if repair else None
+        packed = read_pack(folder)
+        new: dict[str, str] = {}
         taken: dict[str, Path] = {}
         replaced: dict[str, str] = {}
         left: dict[str, str] = {}
         for key, path in loose_files(folder).items():
-            rec, problem = check_record(path)
-            if problem is None:
-                try:
-                    line = _one_line(path)
-                    if not _same(line, path.read_text()):
-                        problem = "its record does not survive re-serialising"
-                except (OSError, ValueError, TypeError) as e:
-                    problem = f"cannot be written as one line ({type(e).__name__}: {e})"
+            line, problem = _packable(path)
             if problem is not None:
                 left[path.name] = problem
                 continue
-            if key in lines and not _same(lines[key], line):
-                replaced[key] = lines[key]
-            lines[key] = line
+            old = packed.get(key)
+            if old is None or not _same(old.text, line):
+                new[key] = line
+                if old is not None:
+                    replaced[key] = f"{old.pack} line {old.line}"
             taken[key] = path
-        if not lines:
-            return PackResult(out_dir, None, 0, 0, [], {}, left)
-        kept = {k: _keep_outdated(folder, k, text) for k, text in replaced.items()}
-        pack = write_pack(folder, lines)
+        pack = append_pack(folder, new)
         back = read_pack(folder)
         for key, path in taken.items():
             if key not in back or not _same(back[key].text, path.read_text()):
-                raise RuntimeError(f"{pack}: the record of {key} does not read back as "
-                                   f"{path} holds it; no loose file was deleted")
+                raise RuntimeError(f"{pack_path(folder)}: the record of {key} does not read "
+                                   f"back as {path} holds it; no loose file was deleted")
         for path in taken.values():
             path.unlink()
-        log.info("%s: %d trials packed in %s (%d loose files added)", out_dir, len(lines),
-                 pack, len(taken))
-        return PackResult(out_dir, pack, len(lines), pack.stat().st_size, sorted(taken),
-                          {k: str(v) for k, v in kept.items()}, left)
+        log.info("%s: %d trials packed (%d loose files added, %d appended to %s)", out_dir,
+                 len(back), len(taken), len(new), pack)
+        return PackResult(out_dir, pack, len(back), pack.stat().st_size if pack else 0,
+                          sorted(taken), replaced, left, repaired)
+
 
 __all__ = ["PackResult", "pack_trials"]

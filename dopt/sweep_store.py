@@ -5,10 +5,10 @@
   ``Schema`` (a key missing, a number that must be finite and is not), or whose params are
   another trial's (``Schema.params_problem``), is named in a logged warning, moved to
   ``OUT/trials/corrupt/`` with its reason beside it (``<stem>.reason.txt``) and recomputed);
-- ``OUT/trials/pack.jsonl.gz``: finished trials packed, one record a line (``dopt.trialpack``;
-  ``dopt.sweep_pack.pack_trials`` merges the loose files into it); a loose file overrides the
-  packed record of its key, and a packed record that does not fit stays in the pack and is
-  recomputed;
+- ``OUT/trials/pack.jsonl``: finished trials packed, one record a line, append-only
+  (``dopt.trialpack``; ``dopt.sweep_pack.pack_trials`` appends the loose files to it), over
+  the read-only ``pack.jsonl.gz`` of earlier packs; a loose file overrides the packed record of
+  its key, and a packed record that does not fit stays in the pack and is recomputed;
 - ``OUT/trials/checkpoints/<key>.json``: an unfinished trial's saved progress
   (``Checkpoint``; its progress is checked against the ``Schema`` too);
 - ``OUT/trials/.progress/<key>.json``: how far a running trial has got (``Report``: what a
@@ -19,8 +19,8 @@
 Every file is written atomically and as strict JSON (``dopt.jsonio``: no bare NaN).
 Standard library only (with ``dopt.atomic``, ``dopt.provenance``, ``dopt.jsonio``,
 ``dopt.sweep_lock`` and ``dopt.trialpack``).
-Packing itself (``pack_trials``, ``PackResult``) lives in ``dopt.sweep_pack``; both names are
-still importable from here.
+Packing itself (``pack_trials``, ``PackResult``) lives in ``dopt.sweep_pack``, which imports
+this module (``dopt.sweep`` re-exports both).
 """
 
 from __future__ import annotations
@@ -506,15 +506,6 @@ class Report:
             self.path.unlink()
         except FileNotFoundError:
             pass
-
-
-def __getattr__(name: str):
-    """``PackResult`` and ``pack_trials``, importable from here as before: they live in
-    ``dopt.sweep_pack``, which imports this module, so they are loaded on first use."""
-    if name in ("PackResult", "pack_trials"):
-        from dopt import sweep_pack
-        return getattr(sweep_pack, name)
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 __all__ = ["ANY", "CHECKPOINT_DIR", "CORRUPT_DIR", "LOCK_NAME", "OUTDATED_DIR", "PROGRESS_DIR",

@@ -1,25 +1,33 @@
-"""A sweep's finished trials packed into one compressed file, and the one reader of them all.
+"""A sweep's finished trials packed in one append-only file, and the one reader of them all.
 
-A trial folder (``OUT/trials``, ``dopt.sweep``) holds its finished trials two ways:
+A trial folder (``OUT/trials``, ``dopt.sweep``) holds its finished trials three ways, each
+overriding the one before it for the same key:
 
-- loose, one file per trial, ``<key>.json`` (what a running sweep writes);
-- packed, ``PACK_NAME`` (``pack.jsonl.gz``): one line per trial, the JSON record its loose file
-  held (strict JSON, ``json.dumps`` of it, so the line is the file's text), lines sorted by
-  key, gzip-compressed with a fixed level and no timestamp or name, so packing the same
-  records gives the same bytes (``pack_bytes``).
+1. ``GZIP_PACK_NAME`` (``pack.jsonl.gz``), the earlier packs: one line per trial, sorted by key,
+   gzip-compressed. Read only: nothing writes them any more, and they are never rewritten or
+   deleted (git keeps every copy anyway).
+2. ``PACK_NAME`` (``pack.jsonl``), the pack written now: one line per trial, the JSON record
+   its loose file held (strict JSON, so the line is the file's text), uncompressed and
+   append-only: ``append_pack`` writes the old bytes and then the new lines (sorted by key),
+   never changing a line written before, so that git stores a re-pack as a delta of the new
+   lines (a compressed pack differs everywhere and costs its full size in history each time).
+   A key may recur: a later line replaces an earlier one (a trial recomputed since), and the
+   earlier line stays where it was.
+3. loose, one file per trial, ``<key>.json`` (what a running sweep writes).
 
-A loose file overrides the packed record of the same key: it is newer (a trial recomputed
-since the pack was written). ``stored_trials`` lists a folder's trials both ways, as
-``StoredTrial`` (read like a file: ``name``, ``stem``, ``parent``, ``read_text()``), and
-``read_trial_text`` reads one by its loose file's path, packed or not; every reader of trial
-records (``dopt.sweep``, ``experiments/report*.py``, ``experiments/resummarize.py``,
-``dopt-view``) goes through them. ``write_pack`` writes a pack and reads it back;
-``dopt.sweep.pack_trials`` (``python -m dopt.sweep pack OUT``) merges loose files into it.
+``stored_trials`` lists a folder's trials all three ways, as ``StoredTrial`` (read like a file:
+``name``, ``stem``, ``parent``, ``read_text()``), and ``read_trial_text`` reads one by its loose
+file's path, packed or not; every reader of trial records (``dopt.sweep``,
+``experiments/report*.py``, ``experiments/resummarize.py``, ``dopt-view``) goes through them.
+``dopt.sweep.pack_trials`` (``python -m dopt.sweep pack OUT``) appends the loose files to the
+pack.
 
-A pack is written only by ``write_pack`` and checked when it is written, so a pack that cannot
-be read (not gzip, truncated, a line that is not a JSON object with a valid "key", a key twice)
-is a ``PackError`` (a ValueError) naming the pack and the line, never skipped: its trials are
-committed results, and recomputing thousands of them silently is worse than stopping.
+A pack that cannot be read (not gzip, not UTF-8, a line that is not a JSON object with a valid
+"key", a key twice in a gzip pack) is a ``PackError`` (a ValueError) naming the pack and the
+line, never skipped: its trials are committed results, and recomputing thousands of them
+silently is worse than stopping. A ``pack.jsonl`` whose last line has no newline (a copy or a
+write that stopped midway: ``append_pack`` itself writes atomically) is a ``CutPackError``
+that says how to repair it (``repair_pack``: the whole lines before it are kept).
 
 Standard library only (``experiments/report.py`` reads trials through it).
 """
@@ -27,7 +35,6 @@ Standard library only (``experiments/report.py`` reads trials through it).
 from __future__ import annotations
 
 import gzip
-import io
 import json
 import zlib
 from dataclasses import dataclass
@@ -35,10 +42,12 @@ from pathlib import Path
 
 from dopt.jsonio import replace_atomic
 
-#: the pack's file name inside a trial folder
-PACK_NAME = "pack.jsonl.gz"
-#: gzip's compression level of a pack (fixed: the same records give the same bytes)
-COMPRESS_LEVEL = 9
+#: the pack written now, inside a trial folder: uncompressed, append-only
+PACK_NAME = "pack.jsonl"
+#: the earlier packs' name (gzip): read, never written
+GZIP_PACK_NAME = "pack.jsonl.gz"
+#: every pack's name, lowest precedence first (a loose file overrides them all)
+PACK_NAMES = (GZIP_PACK_NAME, PACK_NAME)
 
 #: {pack path: ((mtime_ns, size, inode), {key: StoredTrial})}: a pack is read once per change
 _CACHE: dict[str, tuple[tuple, dict]] = {}
@@ -46,6 +55,20 @@ _CACHE: dict[str, tuple[tuple, dict]] = {}
 
 class PackError(ValueError):
     """A pack that cannot be read; the message names the pack (and the line)."""
+
+
+class CutPackError(PackError):
+    """A ``pack.jsonl`` whose last line has no newline (a write or a copy that stopped
+    midway). ``path``: the pack; ``whole``: the bytes of its whole lines (kept by
+    ``repair_pack``); ``line``: the cut line's number (1-based)."""
+
+    def __init__(self, path: Path | str, whole: int, line: int):
+        self.path, self.whole, self.line = Path(path), whole, line
+        super().__init__(
+            f"trial pack {path} line {line} is cut short (no newline ends it: a write or a "
+            f"copy stopped midway); the {line - 1} lines before it are whole. Run "
+            f"`python -m dopt.sweep pack --repair OUT` to keep them and move the cut line to "
+            f"trials/corrupt/, or restore the pack from git (git checkout -- {path})")
 
 
 @dataclass(frozen=True)
@@ -93,7 +116,8 @@ class StoredTrial:
 
 
 def pack_path(folder: Path | str) -> Path:
-    """The pack of the trial folder ``folder`` (``<folder>/pack.jsonl.gz``)."""
+    """The pack ``append_pack`` writes in the trial folder ``folder`` (``<folder>/pack.jsonl``;
+    it need not exist)."""
     return Path(folder) / PACK_NAME
 
 
@@ -105,21 +129,33 @@ def _key_problem(key) -> str | None:
     return None
 
 
-def parse_pack(data: bytes, where: Path | str) -> dict[str, tuple[int, str]]:
-    """{key: (line number, line text)} of a pack's compressed bytes ``data`` (``where`` names it
-    in errors), in line order.
-
-    Raises:
-        PackError: not gzip, truncated, not UTF-8, a line that is not a JSON object with a
-            valid "key", or a key twice.
-    """
+def _decode(data: bytes, where: Path | str) -> str:
+    """The text of a pack's bytes (gunzipped when ``where`` names a gzip pack)."""
     try:
-        text = gzip.decompress(data).decode("utf-8")
+        if Path(where).name.endswith(".gz"):
+            data = gzip.decompress(data)
+        return data.decode("utf-8")
     except (OSError, EOFError, zlib.error, UnicodeDecodeError) as e:
         raise PackError(f"trial pack {where} cannot be read ({type(e).__name__}: {e}); "
                         f"restore it from git (git checkout -- {where})") from None
+
+
+def parse_pack(data: bytes, where: Path | str) -> dict[str, tuple[int, str]]:
+    """{key: (line number, line text)} of a pack's bytes ``data``, ordered by line. ``where``
+    names the pack in errors and gives its format: a name ending in ``.gz`` is a gzip pack
+    (each key once), any other an append-only ``pack.jsonl`` (a key's last line counts).
+
+    Raises:
+        CutPackError: a ``pack.jsonl`` whose last line has no newline.
+        PackError: not gzip, truncated gzip, not UTF-8, a line that is not a JSON object with
+            a valid "key", or a key twice in a gzip pack.
+    """
+    appended = not Path(where).name.endswith(".gz")
+    if appended and data and not data.endswith(b"\n"):
+        whole = data.rfind(b"\n") + 1
+        raise CutPackError(where, whole, data.count(b"\n", 0, whole) + 1)
     out: dict[str, tuple[int, str]] = {}
-    for n, line in enumerate(text.split("\n"), 1):
+    for n, line in enumerate(_decode(data, where).split("\n"), 1):
         if not line:
             continue
         try:
@@ -131,21 +167,16 @@ def parse_pack(data: bytes, where: Path | str) -> dict[str, tuple[int, str]]:
                             f"{type(rec).__name__}, not an object)")
         if (problem := _key_problem(rec.get("key"))) is not None:
             raise PackError(f"trial pack {where} line {n}: {problem}")
-        if rec["key"] in out:
+        if rec["key"] in out and not appended:
             raise PackError(f"trial pack {where} line {n}: key {rec['key']!r} is packed "
                             f"twice (first on line {out[rec['key']][0]})")
+        out.pop(rec["key"], None)                   # an appended line replaces an earlier one
         out[rec["key"]] = (n, line)
     return out
 
 
-def read_pack(folder: Path | str) -> dict[str, StoredTrial]:
-    """{key: StoredTrial} of the records packed in the trial folder ``folder`` (in line order;
-    {} when it has no pack). Read once per change of the file.
-
-    Raises:
-        PackError: the pack cannot be read (``parse_pack``).
-    """
-    path = pack_path(folder)
+def _read_one(path: Path) -> dict[str, StoredTrial]:
+    """{key: StoredTrial} of one pack file ({} when there is none), read once per change."""
     try:
         st = path.stat()
     except (FileNotFoundError, NotADirectoryError):
@@ -153,12 +184,27 @@ def read_pack(folder: Path | str) -> dict[str, StoredTrial]:
     stamp = (st.st_mtime_ns, st.st_size, st.st_ino)
     cached = _CACHE.get(str(path))
     if cached is not None and cached[0] == stamp:
-        return dict(cached[1])
+        return cached[1]
     lines = parse_pack(path.read_bytes(), path)
-    trials = {k: StoredTrial(Path(folder) / f"{k}.json", text, path, n)
+    trials = {k: StoredTrial(path.parent / f"{k}.json", text, path, n)
               for k, (n, text) in lines.items()}
     _CACHE[str(path)] = (stamp, trials)
-    return dict(trials)
+    return trials
+
+
+def read_pack(folder: Path | str, names=PACK_NAMES) -> dict[str, StoredTrial]:
+    """{key: StoredTrial} of the records packed in the trial folder ``folder``: those of its
+    packs ``names`` (default: both, ``PACK_NAMES``), a ``pack.jsonl`` record overriding the
+    ``pack.jsonl.gz`` one of its key; {} when it has none.
+
+    Raises:
+        PackError: a pack cannot be read (``parse_pack``; CutPackError: a cut last line).
+    """
+    merged: dict[str, StoredTrial] = {}
+    for name in PACK_NAMES:
+        if name in names:
+            merged.update(_read_one(Path(folder) / name))
+    return merged
 
 
 def loose_files(folder: Path | str) -> dict[str, Path]:
@@ -174,10 +220,10 @@ def loose_files(folder: Path | str) -> dict[str, Path]:
 def stored_trials(folder: Path | str) -> list[StoredTrial]:
     """Every finished trial of the trial folder ``folder``: its loose files, and its packed
     records whose key has no loose file (a loose file overrides the packed record), in file
-    name order. Nothing is checked beyond the pack's lines (``read_pack``).
+    name order. Nothing is checked beyond the packs' lines (``read_pack``).
 
     Raises:
-        PackError: the pack cannot be read.
+        PackError: a pack cannot be read.
     """
     packed = read_pack(folder)
     loose = {k: StoredTrial(p) for k, p in loose_files(folder).items()}
@@ -187,10 +233,10 @@ def stored_trials(folder: Path | str) -> list[StoredTrial]:
 
 def read_trial_text(path: Path | str) -> str:
     """The JSON text of the trial whose loose file is ``path`` (``<folder>/<key>.json``): the
-    file when it exists, else the record packed under that key in the folder's pack.
+    file when it exists, else the record packed under that key in the folder's packs.
 
     Raises:
-        FileNotFoundError: neither exists. PackError: the pack cannot be read.
+        FileNotFoundError: neither exists. PackError: a pack cannot be read.
     """
     path = Path(path)
     if path.is_file():
@@ -198,7 +244,7 @@ def read_trial_text(path: Path | str) -> str:
     found = read_pack(path.parent).get(path.stem) if path.suffix == ".json" else None
     if found is None:
         raise FileNotFoundError(f"{path}: no such trial file, nor packed in "
-                                f"{pack_path(path.parent)}")
+                                f"{path.parent}/{{{','.join(PACK_NAMES)}}}")
     return found.text
 
 
@@ -214,43 +260,82 @@ def is_stored_trial(path: Path | str) -> bool:
 
 
 def pack_bytes(lines: dict[str, str]) -> bytes:
-    """The pack of {key: record's JSON text on one line}: the lines sorted by key, each ended
-    by a newline, gzip at ``COMPRESS_LEVEL`` without name or timestamp (the same records give
-    the same bytes)."""
+    """The lines ``append_pack`` adds for {key: record's JSON text on one line}: sorted by key,
+    each ended by a newline, UTF-8 (the same records give the same bytes)."""
     for k, line in lines.items():
         if "\n" in line or "\r" in line:
             raise ValueError(f"the record of {k!r} is not one line")
-    text = "".join(lines[k] + "\n" for k in sorted(lines))
-    buf = io.BytesIO()
-    with gzip.GzipFile(filename="", mode="wb", compresslevel=COMPRESS_LEVEL, fileobj=buf,
-                       mtime=0) as f:
-        f.write(text.encode("utf-8"))
-    return buf.getvalue()
+    return "".join(lines[k] + "\n" for k in sorted(lines)).encode("utf-8")
 
 
-def write_pack(folder: Path | str, lines: dict[str, str]) -> Path:
-    """Write the pack of {key: JSON text} into the trial folder ``folder`` atomically (a
-    temporary file, then renamed over the pack) unless the pack holds exactly these lines
-    already (it is then left as it is), and read it back.
+def append_pack(folder: Path | str, lines: dict[str, str]) -> Path | None:
+    """Append to the trial folder's ``pack.jsonl`` the records of {key: JSON text} that its
+    packs do not hold as they are (new keys, and new texts of packed keys, which then replace
+    the old lines: those stay), sorted by key, and read it back. The file is written whole and
+    atomically (its old bytes, then the new lines: a temporary file renamed over it), and left
+    as it is when there is nothing to add. Returns the pack (None: there is none).
 
     Raises:
-        RuntimeError: the pack read back does not hold exactly ``lines`` (the old pack is
-            put back when there was one).
+        PackError: a pack cannot be read (nothing is written).
+        RuntimeError: the pack does not read back as the old bytes followed by the new
+            records (the old pack is put back).
     """
     path = pack_path(folder)
-    if path.is_file() and {k: t.text for k, t in read_pack(folder).items()} == lines:
-        return path
-    data = pack_bytes(lines)
+    held = {k: t.text for k, t in read_pack(folder).items()}
+    new = {k: text for k, text in lines.items() if held.get(k) != text}
+    if not new:
+        return path if path.is_file() else None
     old = path.read_bytes() if path.is_file() else None
-    replace_atomic(path, data, suffix=".jsonl.gz", fsync=True)
+    data = (old or b"") + pack_bytes(new)
+    replace_atomic(path, data, fsync=True)
     back = {k: t.text for k, t in read_pack(folder).items()}
-    if back != lines:
+    if back != {**held, **new} or not path.read_bytes().startswith(old or b""):
         if old is not None:
-            replace_atomic(path, old, suffix=".jsonl.gz", fsync=True)
+            replace_atomic(path, old, fsync=True)
+        else:
+            path.unlink()
         raise RuntimeError(f"trial pack {path} does not read back as written")
     return path
 
 
-__all__ = ["COMPRESS_LEVEL", "PACK_NAME", "PackError", "StoredTrial", "is_stored_trial",
-           "loose_files", "pack_bytes", "pack_path", "parse_pack", "read_pack",
-           "read_trial_text", "stored_trials", "write_pack"]
+def repair_pack(folder: Path | str, keep_dir: Path | str) -> Path | None:
+    """Repair a ``pack.jsonl`` whose last line has no newline (``CutPackError``), atomically.
+    A last line that is a whole record (only its newline missing) gets its newline; any other
+    is written to a free name ``pack.jsonl.cut[.N]`` in ``keep_dir`` (never deleted) and the
+    pack cut back to its whole lines. Returns the pack when a newline was added, where the
+    cut line went when it was cut, None when the pack was whole (or absent).
+
+    Raises:
+        PackError: the pack cannot be read for another reason (it is left as it is).
+    """
+    path = pack_path(folder)
+    if not path.is_file():
+        return None
+    data = path.read_bytes()
+    try:
+        parse_pack(data, path)
+        return None
+    except CutPackError as e:
+        whole = e.whole
+    parse_pack(data[:whole], path)                  # the whole lines must read: else refused
+    try:
+        parse_pack(data + b"\n", path)
+    except PackError:
+        pass
+    else:
+        replace_atomic(path, data + b"\n", fsync=True)
+        return path
+    keep_dir = Path(keep_dir)
+    dest, n = keep_dir / f"{PACK_NAME}.cut", 0
+    while dest.exists():
+        n += 1
+        dest = keep_dir / f"{PACK_NAME}.cut.{n}"
+    replace_atomic(dest, data[whole:], fsync=True)
+    replace_atomic(path, data[:whole], fsync=True)
+    return dest
+
+
+__all__ = ["GZIP_PACK_NAME", "PACK_NAME", "PACK_NAMES", "CutPackError", "PackError",
+           "StoredTrial", "append_pack", "is_stored_trial", "loose_files", "pack_bytes",
+           "pack_path", "parse_pack", "read_pack", "read_trial_text", "repair_pack",
+           "stored_trials"]

@@ -24,7 +24,7 @@ Strict JSON: ``write_summary`` writes with ``dopt.jsonio`` (a value that is not 
 is ``null`` with its reason beside it under "<field>_undefined"; no bare NaN).
 
 Blow-up captures: ``blowup_captures`` names the captures of a run's trials (OUT/blowups,
-``dopt.view.blowup``) on the console and for its summary's "blowups".
+``dopt.blowup``) on the console and for its summary's "blowups".
 
 Standard library and ``dopt.cli`` / ``dopt.provenance`` / ``dopt.sweep`` only (all pure Python),
 so the MuJoCo-free key-particle experiment can use them without importing torch or MuJoCo
@@ -169,12 +169,12 @@ def reuse_mode(args) -> str:
 
 def blowup_captures(out: Path, labels) -> list[dict]:
     """The blow-up captures under OUT/blowups of the trials ``labels`` (their capture labels,
-    ``dopt.view.blowup``), one console line each: a summary's "blowups", each {"trial",
+    ``dopt.blowup``), one console line each: a summary's "blowups", each {"trial",
     "path" (relative to OUT), "step", "reason", "body"}. Loads MuJoCo: only the experiments
     that write captures call it."""
     import os
 
-    from dopt.view.blowup import list_captures
+    from dopt.blowup import list_captures
 
     labels = set(labels)
     found = [{"trial": c["label"], "path": os.path.relpath(c["path"], out), "step": c["step"],

@@ -7,7 +7,11 @@ per method, a first answer in minutes, and says before it starts how long it wil
 by a short calibration rollout); ``--preset ours`` runs the experiments' three seeds,
 ``--preset paper`` the paper's protocol (ten seeds on a 20 x 20 cloth), ``--seeds N`` any.
 Multi-step folds (reflective: side -> reflective; underneath: side -> reflective ->
-underneath) plan to each intermediate goal in turn with that goal's key particles (Sec. III-D).
+underneath) plan to each intermediate goal in turn with that goal's key particles (Sec. III-D),
+from the flat sheet (``--fold-start chained``, the default of ``--preset ours``), or, as the
+paper's authors run them, from the fold before the last prepared in place, planning only the
+last with the final goal's key particles (``--fold-start prepared``, the default of ``--preset
+paper``).
 The pipeline is ``planners.pick_place``; the defaults are its ``PRESETS`` (12 x 12 cloth,
 0.3 m; CEM population 32, 6 elites, horizon 2 (side 3), 15 iterations per stage; the
 self-colliding multi-layer folds population 16, 4 elites, 8 (reflective) and 5 (underneath)
@@ -26,6 +30,7 @@ stderr).
 
     python experiments/cloth_fold.py --goal diagonal                  # one seed: a first answer
     python experiments/cloth_fold.py --goal diagonal --preset ours    # the experiments' 3 seeds
+    python experiments/cloth_fold.py --goal reflective --preset paper --fold-start chained
 """
 
 from __future__ import annotations

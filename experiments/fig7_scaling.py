@@ -1,25 +1,33 @@
-"""The gain of key particles against the particle count (issue #60, item 2): the Fig. 7 cloth
-folds at several sizes.
+"""The gain of key particles against the particle count (issue #60, item 2; issue 89, item 1):
+the Fig. 7 cloth folds at several sizes.
 
 Every (size, seed, method) trial of one cloth goal at the paper protocol's settings
 (``PickPlaceSettings.preset("cloth", goal, protocol="paper")``: 30 CEM iterations per stage,
-population 32, 6 elites, the physics preset "default" at every size) with only n, the
-particles per side, changed (``planners.pick_place.scaling``). The trials run through
+population 32, 6 elites, the physics preset "default" at every size) with n, the particles
+per side, changed (``planners.pick_place.scaling``) by ``--mode``: resolution (the default),
+only n, on the preset's 0.3 m sheet; size, the sheet grown at the preset's spacing, the
+picker's bound, the workspace and the mass scaled with its side (the paper's regime: SoftGym's
+cloths keep their spacing and grow with N). The trials run through
 ``dopt.sweep`` into OUT/trials (a rerun resumes); ``--reuse-from`` first copies the matching
 finished trials of a Fig. 7 sweep folder (docs/results/runs/fig7-cloth-<goal>: its 20 x 20
 trials, loose or packed) into OUT/trials, so they count. The statistics are the library's
 (``scaling_summary``): per size and method the mean final cost with its 95 % interval, the
 paired Original - Simple and Random - Simple differences, and the trend test (the OLS slope of
-the paired difference against log N, Holm over the two comparisons), whose verdict is printed.
+the paired difference against log N, Holm over the two comparisons), whose verdict is printed;
+the same on the costs normalised by the flat sheet's cost to the goal (SoftGym's normalised
+performance: ``flat_cost``).
 
-Writes OUT/summary.json (experiment "fig7_scaling": the settings of every size in full, the
-physics preset, the statistics, the failures, the provenance), OUT/scaling.png (final cost and
+Writes OUT/summary.json (experiment "fig7_scaling": the mode, the settings of every size in
+full, the physics preset, the flat sheet's cost per size, the statistics, the failures, the
+provenance), OUT/scaling.png (final cost and
 the gaps against the particle count, 95 % bars; only where matplotlib is installed; with
 --record also copied to docs/images/<record's name>.png, which RESULTS.md shows beside it).
 Exits 1 if a trial failed, 2 on bad flags (one line).
 
     python experiments/fig7_scaling.py --goal diagonal --sizes 10,15,20,30 --seeds 5 \\
-        --out /tmp/scaling-diagonal --reuse-from docs/results/runs/fig7-cloth-diagonal
+        --out results/scaling-diagonal --reuse-from docs/results/runs/fig7-cloth-diagonal
+    python experiments/fig7_scaling.py --goal side --mode size --seeds 5 \\
+        --out results/scaling-spacing-side --reuse-from docs/results/runs/fig7-cloth-side
 """
 
 from __future__ import annotations
@@ -55,6 +63,8 @@ from dopt.rollout import share_cores
 from dopt.trialpack import is_stored_trial, read_trial_text
 from planners.pick_place.scaling import (
     COMPARED,
+    SCALING_MODES,
+    flat_cost,
     scaling_settings,
     scaling_summary,
     scaling_trials,
@@ -66,6 +76,9 @@ SCALING_GOALS = ("diagonal", "side")
 #: the CEM methods compared (the scripted policy has no gain to scale)
 SCALING_METHODS = ("simple", "original", "random")
 COLOURS = {"simple": "tab:blue", "original": "tab:red", "random": "tab:green"}
+#: the sizes of each mode by default (n per side): the size mode's are 0.14-0.38 m at the
+#: 20 x 20 preset's spacing (issue 89; 30, 0.46 m, where the budget allows)
+DEFAULT_SIZES = {"resolution": "10,15,20,30", "size": "10,15,20,25"}
 
 
 def parser() -> argparse.ArgumentParser:
@@ -74,9 +87,13 @@ def parser() -> argparse.ArgumentParser:
                         formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--goal", choices=[g for g in SCALING_GOALS if g in GOALS["cloth"]],
                     required=True, help="the cloth fold")
-    ap.add_argument("--sizes", type=number_list(int, 3, "sizes"),
-                    default="10,15,20,30", help="particles per side, comma-separated "
-                                                "(default %(default)s)")
+    ap.add_argument("--mode", choices=SCALING_MODES, default="resolution",
+                    help="what grows with n: resolution (default), the 0.3 m sheet refined; "
+                         "size, the sheet at the 20 x 20 preset's spacing, with the picker's "
+                         "bound, the workspace and the mass scaled with its side")
+    ap.add_argument("--sizes", type=number_list(int, 3, "sizes"), default=None,
+                    help="particles per side, comma-separated (default: "
+                         + "; ".join(f"{k} {v}" for k, v in DEFAULT_SIZES.items()) + ")")
     ap.add_argument("--seeds", type=positive_int, default=5,
                     help="seeds 0 .. SEEDS-1 per method and size (default %(default)s)")
     ap.add_argument("--methods", type=choices_type(SCALING_METHODS, "methods"),
@@ -103,6 +120,8 @@ def parse(argv=None) -> argparse.Namespace:
     """Parsed flags; exit 2 with one line on a bad one."""
     ap = parser()
     args = ap.parse_args(argv)
+    if args.sizes is None:
+        args.sizes = number_list(int, 3, "sizes")(DEFAULT_SIZES[args.mode])
     if "simple" not in args.methods:
         ap.error("argument --methods: the gains are against simple, which it must name")
     if args.reuse_from is not None and not (args.reuse_from / "trials").is_dir():
@@ -149,11 +168,13 @@ def _experiment(args, argv) -> int:
     n_trials = len(args.sizes) * args.seeds * len(args.methods)
     threads = share_cores(min(args.workers, n_trials))
     trials = scaling_trials(args.goal, args.sizes, range(args.seeds), args.methods, threads,
-                            args.move)
+                            args.move, args.mode)
     if args.reuse_from is not None:
         print(f"copied {copy_finished(trials, args.reuse_from, out)} finished trials from "
               f"{args.reuse_from}")
-    settings = {n: scaling_settings(args.goal, n, threads, args.move) for n in args.sizes}
+    settings = {n: scaling_settings(args.goal, n, threads, args.move, args.mode)
+                for n in args.sizes}
+    flat = {n: flat_cost(s) for n, s in settings.items()}
     per_trial = next(iter(settings.values())).cem.iterations   # one stage: diagonal, side
     res = run_with_console(
         functools.partial(cem_trial, blowup_out=str(out)), trials, out, unit="it",
@@ -162,20 +183,25 @@ def _experiment(args, argv) -> int:
         held=lambda t: iterations_held([t], per_trial, out))
     keys = {t.key for t in trials}
     records = [r for k, r in res.records.items() if k in keys]
-    stats = scaling_summary(records)
+    stats = scaling_summary(records, {n: flat[n] for n in
+                                      {int(r["params"]["settings"]["n"]) for r in records}})
     any_settings = next(iter(settings.values()))
     summary = {"experiment": "fig7_scaling", "task": "cloth", "goal": args.goal,
-               "protocol": "paper", "physics_preset": any_settings.physics,
+               "protocol": "paper", "mode": args.mode,
+               "physics_preset": any_settings.physics,
                "sizes": list(args.sizes), "seeds": list(range(args.seeds)),
                "methods_run": list(args.methods),
                "settings": {str(n): settings_dict(s) for n, s in settings.items()},
                "physics": {str(n): s.resolved_physics() for n, s in settings.items()},
+               "flat_costs": {str(n): c for n, c in flat.items()},
                **stats, "failed": res.failed, "trial_commits": res.commits,
                "wall_s": time.perf_counter() - start}
     write_summary(summary, out, args.record, "experiments/fig7_scaling.py", argv)
     if plot(out / "scaling.png", stats, args.goal):        # never an older run's figure
         record_figure(out / "scaling.png", args.record)
-    print(f"{args.goal}, physics preset {any_settings.physics!r}: {stats['verdict']}")
+    print(f"{args.goal} ({args.mode}), physics preset {any_settings.physics!r}: "
+          f"{stats['verdict']}")
+    print(f"normalised by the flat sheet's cost: {stats['verdict_normalised']}")
     print(f"wrote {out}/summary.json")
     for key, err in res.failed.items():
         print(f"FAILED {key}: {err}", file=sys.stderr)
@@ -207,11 +233,19 @@ def plot(path: Path, stats: dict, goal: str) -> bool:
                        yerr=[(r["ci95"] or 0) * 1e3 for _, r in rows], color=COLOURS[m],
                        marker="o", capsize=3, label=f"{m} - simple")
     b.axhline(0, color="k", lw=0.5)
-    for ax, ylabel in ((a, "final cost (mm)"), (b, "paired difference (mm)")):
+    from matplotlib.ticker import FixedLocator, NullLocator, ScalarFormatter
+
+    sizes = sorted(int(k) ** 2 for k in stats["per_size"])
+    for ax, ylabel in ((a, "final cost (mm), mean and 95 % CI"),
+                       (b, "paired difference (mm), mean and 95 % CI")):
         ax.set_xscale("log")
-        ax.set_xlabel("particles N")
+        # a tick at every size run (log decades alone showed only 10^2 and 10^3)
+        ax.xaxis.set_major_locator(FixedLocator(sizes))
+        ax.xaxis.set_major_formatter(ScalarFormatter())
+        ax.xaxis.set_minor_locator(NullLocator())
+        ax.set_xlabel("particles N = n x n (log scale)")
         ax.set_ylabel(ylabel)
-        ax.legend()
+        ax.legend(title="method")
     # the verdict line is longer than the figure is wide: one line per compared method
     fig.suptitle(f"{goal}: " + "\n".join(stats["verdict"].split("; ")), fontsize=8)
     fig.tight_layout()

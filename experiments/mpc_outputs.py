@@ -174,9 +174,32 @@ def final_panels(params: dict, final_state, size=(640, 480)):
     return np.stack([top, render.render(m, final_state, spec, whole, w, h)])
 
 
+#: a goal object tilted this far (degrees) from upright is said to be tipped over
+TIPPED_DEG = 30.0
+
+
+def goal_tilt(params: dict, final_state) -> float | None:
+    """The angle (degrees) between a rigid goal object's z axis in ``final_state`` and the
+    world's (a success counts the distance in the table's plane only, so a picture says
+    whether the object stands); None for a soft goal object."""
+    import mujoco
+
+    from dopt.scene import Scene
+    settings, seed, _ = split_params(params)
+    tm = settings.build_task(seed)
+    if tm.soft_body is not None and tm.soft_body == tm.goal_object:
+        return None
+    m = tm.model
+    data = mujoco.MjData(m)
+    mujoco.mj_setState(m, data, np.asarray(final_state, dtype=float), Scene(m).layout.spec)
+    mujoco.mj_kinematics(m, data)
+    zz = float(data.body(tm.goal_object).xmat[8])
+    return float(np.degrees(np.arccos(np.clip(zz, -1.0, 1.0))))
+
+
 def write_final(path: Path, task: str, row: str, r: dict) -> None:
     """final_<row>.png: ``final_panels`` side by side, titled with the method, seed, MPC cost,
-    success and the final goal distance."""
+    success, the final goal distance and whether the goal object stands (``goal_tilt``)."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -192,12 +215,17 @@ def write_final(path: Path, task: str, row: str, r: dict) -> None:
         ax.set_xticks([])
         ax.set_yticks([])
         ax.set_title(title, fontsize=11, pad=3)
+    tilt = goal_tilt(r["params"], r["final_state"])
+    upright = "" if tilt is None else (
+        f", goal object {'upright' if tilt < TIPPED_DEG else 'TIPPED OVER'} "
+        f"(tilt {tilt:.0f} deg)")
     fig.suptitle(f"{task}: {row}, seed {r['seed']}, MPC cost {r['mpc_cost']:.3g}, "
                  f"{'success' if r['success'] else 'no success'}, goal distance "
                  f"{r['goal_distance_start']:.3f} -> {r['goal_distance_end']:.3f} m "
-                 f"({r['steps']} steps)", y=1 - 6 / H, fontsize=12, fontweight="bold")
-    fig.text(0.25, 6 / H, "ring: start of each object (black: the goal object), line: to its "
-             "end; x: the goal", ha="center", fontsize=10)
+                 f"({r['steps']} steps){upright}", y=1 - 6 / H, fontsize=11,
+                 fontweight="bold")
+    fig.text(0.01, 6 / H, "ring: start of each object (black: the goal object, green), line: "
+             "to its end; x and pale green disc: the goal region", ha="left", fontsize=10)
     with atomic.writing(path) as tmp:
         fig.savefig(tmp, dpi=100)
     plt.close(fig)

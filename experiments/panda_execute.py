@@ -14,7 +14,8 @@ not reach the particle; per trial the same; and "blowups", the blow-up captures 
 replays that failed the stability verdict (OUT/blowups/<trial key>, each also named on the
 console; ``dopt-view`` opens them at the failing step). And OUT/panda_<goal>.png, the
 first seed's execution as a strip (start, then grasp / carry / release of each action;
-MUJOCO_GL=egl, skipped with --no-render). Exits 1 if a trial failed, 2 on a bad flag.
+each panel labelled, the goal shape as blue dots, the final costs below; MUJOCO_GL=egl,
+skipped with --no-render). Exits 1 if a trial failed, 2 on a bad flag.
 
     python experiments/panda_execute.py --seeds 3 --out results/panda \\
         --record docs/results/panda-execute.json
@@ -48,9 +49,9 @@ from cli_args import (
 )
 
 from dopt import atomic
+from dopt.blowup import retire_captures
 from dopt.stats import mean_ci
 from dopt.sweep import Schema, Trial, run_sweep
-from dopt.view.blowup import retire_captures
 from planners.pick_place import PickPlaceSettings, make_planner, make_problem, run_problem
 
 GOALS = ("diagonal", "side")
@@ -178,18 +179,58 @@ def _mean_ci(values) -> tuple[float | None, float | None]:
     return tuple(float(v) if np.isfinite(v) else None for v in mean_ci(values, 0.95))
 
 
-def render_strip(path, arm, states) -> None:
-    """The snapshots side by side, from one oblique camera framing the cloth and the hand."""
+#: colours of the strip's goal dots and of the cloth's legend swatch (its flex_rgba)
+GOAL_DOTS, CLOTH = (0, 90, 255), (204, 77, 51)
+#: what each snapshot of an executed action shows (``PandaExecutor.execute``)
+PHASES = ("grasped", "carried", "released")
+
+
+def strip_labels(n_snapshots: int) -> list[str]:
+    """The label of each snapshot: "start", then per executed action its grasp, carry and
+    release."""
+    return ["start"] + [f"action {k // 3 + 1}: {PHASES[k % 3]}"
+                        for k in range(n_snapshots - 1)]
+
+
+def render_strip(path, arm, done, goal_positions, title: str) -> None:
+    """The snapshots side by side from one oblique camera framing the cloth and the hand,
+    each labelled (``strip_labels``), the goal shape (N, 3) as blue dots in every panel (the
+    picker, parked above, hidden), and below them ``title`` and the legend."""
     import imageio.v3 as iio
+    from PIL import Image, ImageDraw
 
-    from dopt.render import fit_camera, render_states
+    from dopt.render import draw_markers, fit_camera, project, render_states
     from dopt.tasks.pick.panda_gripper import SNAPSHOT_SPEC
+    from dopt.view.legend import LegendItem
+    from dopt.view.still import annotate, font
 
+    model, width, height = arm.model, 320, 240
     points = np.concatenate([arm.positions(), arm.positions() + [0, 0, 0.25]])
     cam = fit_camera(points, azimuth=200.0, elevation=-35.0, fill=0.8)
-    frames = render_states(arm.model, np.asarray(states), SNAPSHOT_SPEC, cam, 320, 240)
+    picker = [g for g in range(model.ngeom) if model.geom_bodyid[g]
+              and model.body(int(model.geom_bodyid[g])).name == "picker"]
+    frames = render_states(model, np.asarray(done.snapshots), SNAPSHOT_SPEC, cam, width,
+                           height, hide_geoms=picker)
+    goal_px = project(np.asarray(goal_positions), cam, width, height,
+                      float(model.vis.global_.fovy))
+    panels = []
+    for frame, label in zip(frames, strip_labels(len(frames)), strict=True):
+        image = Image.fromarray(draw_markers(frame, goal_px, GOAL_DOTS, radius=3.0,
+                                             outline=None))
+        ImageDraw.Draw(image).text((6, 4), label, fill=(0, 0, 0), font=font(14))
+        panels.append(np.asarray(image))
+    legend = [LegendItem("cloth", CLOTH, "patch"),
+              LegendItem("goal shape (the cloth's particles at the goal)", GOAL_DOTS, "dot")]
     with atomic.writing(path) as tmp:
-        iio.imwrite(tmp, np.concatenate(list(frames), axis=1))
+        iio.imwrite(tmp, annotate(np.concatenate(panels, axis=1), [title], legend),
+                    extension=".png")
+
+
+def strip_title(goal: str, seed: int, result: dict) -> str:
+    """The strip's caption: the goal, the seed and both final costs."""
+    return (f"{goal}, seed {seed}: CEM(Simple)'s plan executed by the Panda; final cost "
+            f"{result['panda_final_cost'] * 1e3:.1f} mm (the floating picker's: "
+            f"{result['picker_final_cost'] * 1e3:.1f} mm)")
 
 
 def parse_args(argv=None) -> argparse.Namespace:
@@ -240,9 +281,10 @@ def main(argv=None) -> int:
             if first is not None and first.key in res.records:
                 problem = make_problem(PickPlaceSettings.from_dict(first.params["settings"]),
                                        first.params["seed"])
-                arm, done = replay(problem, res.records[first.key]["result"]["actions"],
-                                   snapshots=True)
-                render_strip(args.out / f"panda_{goal}.png", arm, done.snapshots)
+                result = res.records[first.key]["result"]
+                arm, done = replay(problem, result["actions"], snapshots=True)
+                render_strip(args.out / f"panda_{goal}.png", arm, done, problem.final_goal,
+                             strip_title(goal, first.params["seed"], result))
     return 1 if res.failed else 0
 
 

@@ -48,8 +48,8 @@ from dopt.rollout import share_cores
 from dopt.stats import mean_ci
 from dopt.sweep import Trial, is_finished
 from dopt.tasks.pick.cloth_scene import PHYSICS_PRESETS
-from planners.pick_budget import budget_problem
 from planners.pick_place import (
+    FOLD_STARTS,
     GOALS,
     LABELS,
     METHODS,
@@ -62,6 +62,7 @@ from planners.pick_place import (
     summarize,
     trial_key,
 )
+from planners.pick_place.budget import budget_problem
 
 log = logging.getLogger(__name__)
 COLOURS = {"simple": "tab:blue", "original": "tab:red", "random": "tab:green",
@@ -131,6 +132,13 @@ def parser(task: str, doc: str, help_: dict) -> argparse.ArgumentParser:
                          "this (default: every sample settles the picker's full time; "
                          "executed plans always do)")
     add_move_argument(ap)
+    if task == "cloth":
+        ap.add_argument("--fold-start", choices=FOLD_STARTS, default=None,
+                        help="where the reflective and underneath folds start: chained, every "
+                             "stage planned in turn from the flat sheet; prepared, the fold "
+                             "before the last dropped in place as the paper's authors do, only "
+                             "the last planned (default: the protocol's, prepared for paper, "
+                             "chained for ours)")
     ap.add_argument("--threads", type=nonneg_int, default=0,
                     help="simulation threads per trial (0, the default: the cores shared out "
                          "over the trials that run at once: all of them for one, one each "
@@ -167,7 +175,8 @@ def parse(ap: argparse.ArgumentParser, task: str, argv) -> tuple[argparse.Namesp
                     planning_physics=args.planning_physics or s.planning_physics,
                     max_stretch=args.max_stretch,
                     picker_speed=args.picker_speed or s.picker_speed,
-                    rest_speed=args.rest_speed, picker_move=args.move)
+                    rest_speed=args.rest_speed, picker_move=args.move,
+                    fold_start=getattr(args, "fold_start", None) or s.fold_start)
     except (ValueError, TypeError) as e:
         ap.error(str(e))
     if (too_big := budget_problem(s)) is not None:   # what the sizes need, before any is made

@@ -1,7 +1,7 @@
 """The sweep of the key-particle experiments (cloth_fold.py, rope.py): their trials run through
 ``dopt.sweep`` with the sweep's console (``sweep_console``), their schema (what a stored
 result and checkpoint must hold to be reused or resumed), the CEM iterations a folder already
-holds, and the flags ``planners.pick_budget`` may name. ``pick_place_cli`` is the command line
+holds, and the flags ``planners.pick_place.budget`` may name. ``pick_place_cli`` is the command line
 around it. The trials write their blow-up captures under the sweep's folder
 (``planners.pick_place.run_trial``'s ``blowup_out``)."""
 
@@ -22,7 +22,7 @@ from planners.trial_progress import (
     result_problem,
 )
 
-#: the flag of each setting ``planners.pick_budget`` may name
+#: the flag of each setting ``planners.pick_place.budget`` may name
 BUDGET_FLAGS = {"n": "--n", "bound": "--bound", "picker_speed": "--picker-speed",
                 "cem.population": "--population", "cem.horizon": "--horizon"}
 #: what a stored trial and its checkpoint must hold to be reused or resumed (``dopt.sweep``):

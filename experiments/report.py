@@ -38,8 +38,9 @@ A result file that cannot be read exits 2 naming it; one whose provenance lacks 
 the git commit or the versions of dopt, mujoco and torch is named in a note on stderr.
 Standard library only (with dopt.cli, the command-line types, dopt.multiple, Holm's
 correction, dopt.trialpack, the reader of committed trials, loose or packed, with
-dopt.jsonio, and planners.trial_progress, the reader of a trial's checkpoint, all standard
-library themselves), so it runs without torch, numpy or MuJoCo. Its sections live in
+dopt.jsonio, dopt.provenance, which shows a recorded command without its machine's folders,
+and planners.trial_progress, the reader of a trial's checkpoint, all standard library
+themselves), so it runs without torch, numpy or MuJoCo. Its sections live in
 report_base.py, report_fig7.py, report_kp.py, report_svr.py, report_sweeps.py and
 report_clock.py (the MPC clocks and the machine speed behind the virtual clock's sweeps), the
 README's map in report_map.py.
@@ -105,6 +106,7 @@ from report_kp import (
     settle_rest_section,
 )
 from report_map import HEADLINES_TITLE, map_block
+from report_physics import physics_reference_section
 from report_stale import (
     SNAPSHOT,
     SVR_KINDS,
@@ -237,7 +239,8 @@ SECTIONS = {"key_particles": kp_section, "kp_compare": kp_compare_section,
             "cloth_steps": cloth_steps_section, "cem_limit": cem_limit_section,
             "settle_rest": settle_rest_section,
             "cloth_warp": cloth_warp_section,
-            "random_reach": random_reach_section, "fig7_scaling": scaling_section}
+            "random_reach": random_reach_section, "fig7_scaling": scaling_section,
+            "physics_reference": physics_reference_section}
 HEADLINES = {"key_particles": kp_headline, "fig7": fig7_headline, "table1": table1_headline,
              "fig4": fig4_headline, "panda_execute": panda_headline,
              "clock_check": clock_check_headline}

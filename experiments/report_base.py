@@ -1,7 +1,9 @@
 """The common part of experiments/report.py: the result files (``Result``, ``load_results``),
 the Markdown helpers every section uses, and the Fig. 7 labels and panels.
 
-Standard library only (report.py's rule: it runs without torch, numpy or MuJoCo).
+Standard library only (report.py's rule: it runs without torch, numpy or MuJoCo), with
+``dopt.provenance.recorded_command``: a recorded command is shown naming no folder of the
+machine that recorded it.
 """
 
 from __future__ import annotations
@@ -12,6 +14,8 @@ import os
 import statistics
 from dataclasses import dataclass, field
 from pathlib import Path
+
+from dopt.provenance import recorded_command
 
 ROOT = Path(__file__).resolve().parents[1]
 BEGIN, END = "<!-- results:begin -->", "<!-- results:end -->"
@@ -83,8 +87,9 @@ class Result:
     @property
     def command(self) -> str:
         """The experiment's command line (the one that reruns it, also for a re-summarised
-        file)."""
-        return str(self.origin.get("command") or "(no provenance: command unknown)")
+        file), its absolute paths shown relative (``recorded_command``)."""
+        command = self.origin.get("command")
+        return recorded_command(str(command)) if command else "(no provenance: command unknown)"
 
     @property
     def commit(self) -> str:
@@ -205,7 +210,8 @@ def source_lines(results: list[Result], page: Path) -> list[str]:
         if "resummarized_from" in r.data:
             o = r.origin
             lines[-1] = (f"Source: {link(r, page)}, re-summarised from its committed trials at "
-                         f"commit `{r.commit}`, {r.date}, by `{r.provenance.get('command')}`; "
+                         f"commit `{r.commit}`, {r.date}, by "
+                         f"`{recorded_command(str(r.provenance.get('command')))}`; "
                          f"the experiment ran at `{short_commit(o.get('git_commit'))}`, "
                          f"{o.get('date') or 'unknown date'}:  ")
         notes = [n for n in (r.notes.get("trials_line"), r.notes.get("stale_line")) if n]

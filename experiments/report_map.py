@@ -17,6 +17,7 @@ from pathlib import Path
 
 from report_base import KP, REGENERATE, SVR, Result, _label, cell, mm, num, pm, table
 from report_fig7 import CLOTH_DIFFICULTY, _departs, fig7_claims
+from report_stats import scaling_families
 from report_svr import (
     MIN_KEPT_BASELINE,
     _table1_columns,
@@ -26,8 +27,6 @@ from report_svr import (
     paper_table1,
     verdict_counts,
 )
-
-from dopt.multiple import holm_slopes
 
 #: the longest cell the map may have (characters, Markdown included)
 MAX_CELL = 160
@@ -135,12 +134,12 @@ def scaling_line(results: list[Result]) -> str | None:
     its slope per unit of log N with the 95 % interval), over which particle counts N and
     seeds (said once where every fold has the same). With several folds the verdicts are
     Holm's over all their trend tests together (``holm_slopes``); the line says so."""
-    files = {r.data.get("goal"): r for r in results if r.kind == "fig7_scaling"}
-    family = holm_slopes({g: r.data["trend"] for g, r in files.items()})
+    files, family = scaling_families(results)
     sizes, seeds, verdicts = [], [], []
     for goal, r in sorted(files.items(), key=lambda kv: str(kv[0])):
         d = r.data
-        t = {**d["trend"]["original_minus_simple"], **family[(goal, "original_minus_simple")]}
+        t = {**d["trend"]["original_minus_simple"],
+             **family.get((goal, "original_minus_simple"), {})}
         counts = sorted({e["methods"].get(m, {}).get("n", 0) for e in d["per_size"].values()
                          for m in ("simple", "original")})
         seeds.append(str(counts[0]) if len(counts) == 1 else f"{counts[0]}-{counts[-1]}")
@@ -158,7 +157,7 @@ def scaling_line(results: list[Result]) -> str | None:
     for (goal, v), z, n in zip(verdicts, sizes, seeds, strict=True):
         own = [x for x, same in ((z, same_sizes), (f"{n} seeds", same_seeds)) if not same]
         parts.append(f"{goal} ({', '.join(own)}) {v}" if own else f"{goal} {v}")
-    m = next(iter(family.values()))["m"]
+    m = next(iter(family.values()))["m"] if family else 0
     tail = f"; Holm over {m} tests" if len(files) > 1 and m else ""
     return ("Original - Simple gap per log N" + (f" ({', '.join(shared)})" if shared else "")
             + ": " + ", ".join(parts) + tail)
@@ -185,37 +184,39 @@ def table1_line(results: list[Result], preset: str = "authors") -> str | None:
     many SVR rows Holm finds cheaper than baseline and than rand; and Kendall's tau of our
     order against the paper's printed one. A task whose baseline is kept (neither outlier
     nor unstable) in fewer than ``MIN_KEPT_BASELINE`` of its episodes says so instead of
-    means over the few seeds left ("-" for its tau)."""
+    means over the few seeds left ("n/a" against baseline, "-" for its tau); its verdicts
+    against rand stand."""
     _, published = paper_table1(results)
-    parts, taus, tasks, versus, few = [], [], [], {}, []
+    parts, taus, counts = [], [], {}
     for task in ("clutter", "soft", "soft_rigid"):
         r = paper_preset_table1(results, task, (preset,))
         if r is None:
             continue
         kept = kept_baseline(r.data)
-        if kept and kept[0] < MIN_KEPT_BASELINE * kept[1]:
-            few.append(f"{task} n/a (baseline kept {kept[0]}/{kept[1]})")
-            parts.append(few[-1])
-            if task in published:
-                taus.append("-")
-            continue
-        tasks.append(task)
-        for ref, count in versus_counts(r.data.get("versus")).items():
-            versus.setdefault(ref, []).append(count)
+        few = bool(kept and kept[0] < MIN_KEPT_BASELINE * kept[1])
+        verdicts = versus_counts(r.data.get("versus"))
+        if few and verdicts:          # no baseline to compare with; the verdicts vs rand stand
+            verdicts = {**verdicts, "baseline": f"n/a (kept {kept[0]}/{kept[1]})"}
+        counts[task] = verdicts
         rows = {k: m["mpc_cost_normalised_mean"] for k, m in r.data["methods"].items()
                 if k != "baseline" and isinstance(m.get("mpc_cost_normalised_mean"),
                                                   (int, float))}
-        if rows:
+        if few:
+            parts.append(f"{task} n/a (baseline kept {kept[0]}/{kept[1]})")
+        elif rows:
             best = min(rows, key=rows.get)
             parts.append(f"{task} {best} {num(rows[best])}")
         if task in published:
-            taus.append(num(orderings(*_table1_columns(published[task], r.data))["kendall_tau"]))
+            taus.append("-" if few else
+                        num(orderings(*_table1_columns(published[task], r.data))["kendall_tau"]))
     if not parts:
         return None
-    if versus and all(len(v) == len(tasks) for v in versus.values()):
-        text = (f"SVR cheaper:dearer/n vs {', '.join(versus)} (Holm): "
-                + "; ".join([f"{task} {', '.join(v[i] for v in versus.values())}"
-                             for i, task in enumerate(tasks)] + few))
+    refs = [ref for ref in ("baseline", "rand-t5")
+            if counts and all(ref in v for v in counts.values())]
+    if refs:
+        text = (f"SVR cheaper:dearer/n vs {', '.join(refs)} (Holm): "
+                + "; ".join(f"{task} {', '.join(v[ref] for ref in refs)}"
+                            for task, v in counts.items()))
     else:
         text = "cheapest reduced row / baseline: " + ", ".join(parts)
     if taus:
@@ -331,9 +332,10 @@ ROWS = (
     MapRow(KP, "Fig. 7 (c-f): cloth diagonal, side, reflective, underneath folds",
            "python experiments/cloth_fold.py --preset paper --goal diagonal",
            "Key particles, Fig. 7: final cost of pick-and-place", cloth_line, _fig7("cloth")),
-    MapRow(KP, "Sec. V: the gain against the cloth's size",
+    MapRow(KP, "Sec. V: the gain against the particle count (a finer sheet of one size; a "
+               "bigger sheet at fixed spacing)",
            "python experiments/fig7_scaling.py --goal diagonal",
-           "Key particles: the gain against the cloth's size", scaling_line,
+           "Key particles: the gain against the particle count", scaling_line,
            lambda r: r.kind == "fig7_scaling" and not r.quick),
     MapRow(KP, "Sec. IV-D: a Panda executes the plans",
            "python experiments/panda_execute.py --seeds 3",

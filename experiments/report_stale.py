@@ -45,7 +45,7 @@ from planners.trial_progress import RUN_ONLY_SETTINGS
 #: where the snapshot lies under the results folder
 SNAPSHOT = Path("presets") / "resolved.json"
 #: scene-config fields a pick-and-place trial's own settings set (not the physics preset's)
-OWN_SCENE_FIELDS = ("n", "side", "length", "selfcollide")
+OWN_SCENE_FIELDS = ("n", "side", "length", "selfcollide", "mass")
 #: picker fields its settings set (bound, workspace from the side and the stretch limit)
 OWN_PICKER_FIELDS = ("bound", "workspace")
 #: the SVRMPCSettings fields a Table 1 protocol sets (the rest are the row's and the run's)
@@ -71,7 +71,8 @@ SVR_COMPUTE_PATHS = ("dopt", "planners/ilqr.py", "planners/svr.py", "planners/ke
                      "planners/svr_mpc/authors_clock.py",
                      *(f":(exclude)dopt/{f}" for f in (
                          "sweep*.py", "trialpack.py", "jsonio.py", "atomic.py", "provenance.py",
-                         "stats.py", "multiple.py", "cli.py", "bench", "render.py", "view")))
+                         "stats.py", "multiple.py", "cli.py", "bench", "render.py", "view",
+                         "blowup.py")))
 
 
 def load_snapshot(results_dir: Path) -> dict | None:

@@ -14,7 +14,8 @@ The report is standard library only, so the distributions are here in pure Pytho
   Table 1 statistic, 1.645 std / sqrt(n)).
 
 ``kendall_tau_b(x, y)``: Kendall's tau-b rank correlation (how two columns order the same
-rows). ``holm_family`` applies ``dopt.multiple.holm`` (pure Python) to a family of p-values.
+rows). ``holm_family`` applies ``dopt.multiple.holm`` (pure Python) to a family of p-values;
+``scaling_families`` groups the scaling studies' trend tests into families by what they vary.
 The tests check every function against scipy.
 """
 
@@ -23,7 +24,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 
-from dopt.multiple import holm
+from dopt.multiple import holm, holm_slopes
 
 #: the family-wise error rate the report's families are judged at
 FAMILY_ALPHA = 0.05
@@ -185,3 +186,25 @@ def kendall_tau_b(x: list[float], y: list[float]) -> float | None:
     pairs = n * (n - 1) // 2
     denom = math.sqrt((pairs - tx) * (pairs - ty))
     return (c - d) / denom if denom else None
+
+
+# ------------------------------------------------------------- the scaling studies
+def scaling_key(r) -> str:
+    """A scaling file's name among the others: its fold, and "at fixed spacing" for a sweep
+    that grows the sheet (``fig7_scaling.py --mode size``; a file without a mode refined the
+    fixed sheet)."""
+    return r.data.get("goal") + (" at fixed spacing" if r.data.get("mode") == "size" else "")
+
+
+def scaling_families(results: list) -> tuple[dict, dict]:
+    """({scaling_key: file} of the scaling files, {(key, test): Holm over the trend tests of
+    the files of one mode together, ``holm_slopes``, with "folds": how many files}); a mode
+    with one file has no family."""
+    files = {scaling_key(r): r for r in results if r.kind == "fig7_scaling"}
+    family = {}
+    for mode in {r.data.get("mode", "resolution") for r in files.values()}:
+        group = {k: r.data["trend"] for k, r in files.items()
+                 if r.data.get("mode", "resolution") == mode}
+        if len(group) > 1:
+            family.update({k: {**v, "folds": len(group)} for k, v in holm_slopes(group).items()})
+    return files, family

@@ -1,9 +1,6 @@
 """The state-vector-reduction sections of experiments/report.py: Table 1 (and beside the
 paper's, its pairwise orderings judged with Holm's correction), Fig. 4, the SVR explanation, the
-iLQR bench and the authors' data (the clocks: report_clock.py).
-
-Standard library only (and ``dopt.multiple``, pure Python).
-"""
+iLQR bench and the authors' data (the clocks: report_clock.py). Standard library only."""
 
 from __future__ import annotations
 
@@ -23,6 +20,7 @@ from report_base import (
     table,
     travel_cell,
 )
+from report_choice import choice_lines
 from report_stats import (
     CORRECTION,
     FAMILY_ALPHA,
@@ -66,7 +64,11 @@ def table1_section(results: list[Result], page: Path) -> list[str]:
             tau = kendall_tau_b([p[0] for p in pairs], [p[1] for p in pairs])
             lines += ["", f"Kendall tau of the rows' mean lag and mean normalised cost: "
                           f"{num(tau)} (1: the less a row lags, the less it costs)."]
-        lines += versus_lines(d.get("versus"))
+        lines += versus_lines(d.get("versus")) + choice_lines(d.get("choice"))
+        if d.get("versus_unstable_kept"):
+            lines += ["", "The same with the episodes flagged unstable kept (how much the "
+                      "verdicts owe to the stability bounds):"]
+            lines += versus_lines(d["versus_unstable_kept"])[3:]
         fb = d.get("feedback_effect")
         if fb:
             lines += ["", "Feedback vs open loop, paired by seed (MPC cost ratio: geometric mean "

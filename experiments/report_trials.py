@@ -3,8 +3,8 @@ summary holds, the commits they were written at, and how many came from uncommit
 
 A summary's trials lie in the folder its command wrote them to (``--out
 docs/results/runs/<sweep>``, read from the command of the run whose trials it holds, also for a
-re-summarised file): ``trials/*.json`` there and the records packed in ``trials/pack.jsonl.gz``
-(``dopt.trialpack``, the one reader: a loose file overrides the packed record of its key), and
+re-summarised file): ``trials/*.json`` there and the records packed in ``trials/pack.jsonl``
+and ``pack.jsonl.gz`` (``dopt.trialpack``, the one reader: a loose file overrides them), and
 ``real/`` and ``virtual/`` below it for the clock check. Where several summaries share a
 folder, or a folder holds more than one summary used, only the summary's own are taken: a
 Fig. 7 summary's methods and seeds (the trial key is ``<method>-seed<seed>-<settings hash>``),

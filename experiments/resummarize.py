@@ -21,7 +21,7 @@ departures, the resolved physics) is the committed summary's. The comparison cov
 field of the committed summary among those: a number that differs beyond rounding (relative
 1e-9), a field the rebuild lacks (a summary of an older format), other values that differ.
 
-    python experiments/resummarize.py --out /tmp/resummarized     # rebuild, compare, write
+    python experiments/resummarize.py --out results/resummarized     # rebuild, compare, write
     python experiments/resummarize.py --check     # exit 1 on a mismatch or a failed rebuild
     python experiments/resummarize.py --in-place [--only A.json,B.json]
 

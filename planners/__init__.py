@@ -5,18 +5,19 @@ The algorithm modules know no paper; the pipelines hold each paper's settings, p
 loop and summaries. Modules:
 
     cem.py            torch-batched CEM over pick-and-place action sequences
+    gaussian_cem.py   the plain diagonal-Gaussian CEM of the key-particle authors' code
     scripted.py       the key-particle paper's scripted policy
     ilqr.py           iLQR with state-vector reduction (reduced backward, full forward pass);
                       keypoints.py: derivatives at key timesteps only
     svr.py            DoF importance from the gains K, the DoF selectors, SVROptimiser
     pick_place/       the key-particle pipeline: the tasks and goals registered once, the
                       presets of both protocols, settings, problems, planners by name,
-                      run_problem / solve / run_trial, summarize
+                      run_problem / solve / run_trial, summarize, the sizes a setting
+                      implies (budget.py)
     svr_mpc/          the state-vector-reduction pipeline: settings and presets, run_svr_mpc,
                       summaries, the authors' statistic
     trial_progress.py the CEM iterations a saved trial holds, the fields of a trial's result and
                       progress (standard library only)
-    pick_budget.py    the sizes a pick-and-place setting implies, checked before allocating
     view.py           dopt-view's sources of pick-and-place and MPC trial files
     _checks.py        input checks the planners share (particle indices, a picker bound)
     bench/            python -m planners.bench: CEM, iLQR, the model clock, physics sweeps

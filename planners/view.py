@@ -11,7 +11,8 @@
 - ``MPC``: an MPC trial file (``experiments/mpc.py``, ``planners.svr_mpc.run_trial``): the task
   rebuilt (``split_params(params)[0].build_task(seed)``), each object shaded by the share of
   its DoFs in the active set C of the optimisation under way (the SVR paper's Fig. 1), the goal
-  region; the goal distance and |C| over time. The recorded controls (optional fields
+  region, the goal object's centre and its target marked and tagged (``mpc_goal_markers``);
+  the goal distance and |C| over time. The recorded controls (optional fields
   ``start_state`` and ``controls`` of the result: ``run_trial(..., keep_controls=True)``,
   ``experiments/mpc.py --keep-controls``) are re-simulated exactly; a trial without them shows
   its start and its recorded final state only, and its summary says how to get them
@@ -101,8 +102,9 @@ def load_pick(path, max_frames: int = 300) -> Episode:
     curves = [Curve("distance to the goal", states[rows, 0], dist, "mm")]
     history = np.asarray(res.get("cost_history", []), dtype=float) * 1e3
     if len(history) > 1:
+        # the plan being executed is the last iteration's: the cursor stays there
         curves.append(Curve("CEM best cost", np.arange(1, len(history) + 1), history, "mm",
-                            "CEM iteration"))
+                            "CEM iteration", np.full(len(rows), float(len(history)))))
     ghost = Ghost(np.stack([s.goal for s in problem.stages]), stage_of.copy(),
                   np.asarray(scene.elements))
     captions = [_pick_caption(problem, res["actions"], step_info[f], d, len(info) > 0)
@@ -234,6 +236,7 @@ def load_mpc(path, max_frames: int = 300) -> Episode:
     site = model.site("goal")
     region = Region(np.asarray(task.goal_position, dtype=float), float(site.size[0]),
                     2 * float(site.size[1]))
+    markers = mpc_goal_markers(model, states[rows], task)
     replay = (NO_CONTROLS if error is None else
               f"replay of {len(states) - 1} steps ends {error:.1e} from the recorded final state")
     summary = (f"**{settings.method}** seed {seed} · {settings.task} ({settings.problem}) · "
@@ -241,7 +244,30 @@ def load_mpc(path, max_frames: int = 300) -> Episode:
                f"{res.get('success')}  \n{replay}  \nshade: share of each object's DoFs in C "
                f"(grey none, red all)")
     return Episode(Path(path).stem, model, states[rows], steps * task.dt, captions, summary,
-                   curves=curves, regions=[region], shade=shade, replay_error=error)
+                   curves=curves, regions=[region], shade=shade, replay_error=error,
+                   markers=markers)
+
+
+#: colours of the MPC goal object's marker and of its target
+GOAL_OBJECT_COLOUR, TARGET_COLOUR = (255, 140, 0), (0, 110, 0)
+
+
+def mpc_goal_markers(model: mujoco.MjModel, states: np.ndarray, task) -> list[Markers]:
+    """The goal object's centre at each of the frames states (F, ns) (the mean position of
+    ``task.goal_bodies``: its body, or a soft body's vertex bodies) and its target
+    (``task.goal_position``), tagged in the scene."""
+    bodies = np.asarray(task.goal_bodies, dtype=int)
+    data = mujoco.MjData(model)
+    centre = np.empty((len(states), 1, 3))
+    for f, row in enumerate(states):
+        mujoco.mj_setState(model, data, row, mujoco.mjtState.mjSTATE_INTEGRATION)
+        mujoco.mj_kinematics(model, data)
+        centre[f, 0] = data.xpos[bodies].mean(axis=0)
+    target = np.broadcast_to(np.asarray(task.goal_position, dtype=float), (len(states), 1, 3))
+    return [Markers("goal object (its centre)", centre, GOAL_OBJECT_COLOUR, 0.02,
+                    "goal object"),
+            Markers("goal target (the goal region's centre)", target.copy(), TARGET_COLOUR,
+                    0.02, "target")]
 
 
 def _mpc_caption(res: dict, step: int, i: int, model, goal_body: int | None) -> str:

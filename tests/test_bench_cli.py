@@ -21,6 +21,7 @@ import planners.bench.cem
 import planners.bench.clock
 import planners.bench.ilqr
 import planners.bench.physics
+import planners.bench.reference
 import planners.bench.settle
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -43,6 +44,7 @@ def no_run(monkeypatch):
                          (planners.bench.cem, "bench_cem_limit"),
                          (planners.bench.budget, "bench_cloth_budget"),
                          (planners.bench.physics, "bench_physics"),
+                         (planners.bench.reference, "bench_reference"),
                          (planners.bench.settle, "bench_settle"),
                          (deformables_bench, "bench"), (deformables_bench, "paper_scale"),
                          (deformables_bench, "compare")]:
@@ -82,6 +84,10 @@ BAD = [
     ("planners", ["rope", "--picker-speeds", "0.5,0"], "argument --picker-speeds: picker "
                                                        "speeds must be finite and > 0, got 0"),
     ("planners", ["rope", "--actions", "-3"], "argument --actions: must be >= 1, got -3"),
+    ("planners", ["reference", "--presets", "fast,exact"], "argument --presets: unknown "
+                                                          "presets"),
+    ("planners", ["reference", "--checks", "pendulum"], "argument --checks: unknown checks"),
+    ("planners", ["reference", "--rope-n", "2"], "argument --rope-n: must be >= 3, got 2"),
     ("deformables", ["compare", "--resolutions", "16,x"], "argument --resolutions: 'x' in "
                                                           "'16,x' is not an integer"),
     ("deformables", ["--cloth-n", "1"], "argument --cloth-n: must be >= 2, got 1"),
@@ -106,6 +112,7 @@ def test_a_bad_flag_is_a_usage_error_naming_it(capsys, no_run, package, argv, me
                                             ("planners", ["ilqr"]),
                                             ("planners", ["cem-limit"]),
                                             ("planners", ["cloth-budget"]),
+                                            ("planners", ["reference"]),
                                             ("deformables", ["tasks"])])
 def test_an_unwritable_record_is_a_usage_error(tmp_path, capsys, no_run, package, argv):
     flag = "--out" if package == "deformables" else "--record"

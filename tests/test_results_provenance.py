@@ -1,6 +1,6 @@
 """Every committed result names code anyone can check out: no summary under docs/results/ (its
 provenance's "git_commit" and its "trial_commits") and no committed trial under
-docs/results/runs/ (a file, or a record packed in a sweep's ``trials/pack.jsonl.gz``) comes
+docs/results/runs/ (a file, or a record packed in a sweep's ``trials/pack.jsonl[.gz]``) comes
 from uncommitted code ("-dirty") or names a commit that is not an ancestor of HEAD (issue 57).
 
 It fails on main today: summaries and trial files from runs made before issue 57's rule
@@ -19,7 +19,7 @@ from pathlib import Path
 
 import pytest
 
-from dopt.trialpack import PACK_NAME, StoredTrial, pack_path, read_pack
+from dopt.trialpack import PACK_NAMES, StoredTrial, read_pack
 
 ROOT = Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "docs" / "results"
@@ -71,14 +71,14 @@ def committed_trials():
         listed = _git("ls-files", "-z", "--", str(runs.relative_to(ROOT))).stdout.split("\0")
         files = [ROOT / p for p in listed if p]
     else:
-        files = [*runs.rglob("*.json"), *runs.rglob(PACK_NAME)]
+        files = [*runs.rglob("*.json"), *(f for n in PACK_NAMES for f in runs.rglob(n))]
     by_folder: dict = {}
     for f in files:
-        if f.suffix == ".json" or f.name == PACK_NAME:
+        if f.suffix == ".json" or f.name in PACK_NAMES:
             by_folder.setdefault(f.parent, set()).add(f)
     for folder in sorted(by_folder):
         loose = {f.stem: StoredTrial(f) for f in by_folder[folder] if f.suffix == ".json"}
-        packed = read_pack(folder) if pack_path(folder) in by_folder[folder] else {}
+        packed = read_pack(folder, names={f.name for f in by_folder[folder]})
         merged = {**{k: t for k, t in packed.items() if k not in loose}, **loose}
         for key in sorted(merged, key=lambda k: f"{k}.json"):
             yield merged[key].path, merged[key].read_bytes()

@@ -235,8 +235,8 @@ def violent_rope():
 
 
 def test_forced_blowup_is_captured_and_opens_at_the_failing_step(tmp_path):
+    from dopt.blowup import capture_blowup, capture_dir
     from dopt.tasks.pick.picker import CONTROL_SPEC
-    from dopt.view.blowup import capture_blowup, capture_dir
     from dopt.view.episode import collect
 
     scene, service, done, U = violent_rope()
@@ -265,7 +265,7 @@ def test_forced_blowup_is_captured_and_opens_at_the_failing_step(tmp_path):
 def test_save_blowup_names_bad_input(tmp_path):
     import mujoco
 
-    from dopt.view.blowup import save_blowup
+    from dopt.blowup import save_blowup
 
     model = mujoco.MjModel.from_xml_string("<mujoco><worldbody><body><freejoint/>"
                                            "<geom size='.1'/></body></worldbody></mujoco>")
@@ -303,7 +303,7 @@ def run_cli(*args, timeout: int = 300) -> subprocess.CompletedProcess:
 
 def test_cli_bad_input_is_one_line_and_exit_1(tmp_path):
     for args, words in [((tmp_path / "missing",), "does not exist"),
-                        ((tmp_path,), "no trial file, trial folder or blow-up capture"),
+                        ((tmp_path,), "no trial file, trial folder, pack, summary"),
                         ((tmp_path, "--frame", "x"), None)]:
         r = run_cli(*args)
         if words is None:                               # argparse: usage error, status 2
@@ -317,8 +317,8 @@ def test_cli_bad_input_is_one_line_and_exit_1(tmp_path):
 def test_cli_still_of_a_blowup_opens_at_the_failing_step(tmp_path):
     from PIL import Image
 
+    from dopt.blowup import capture_blowup, capture_dir
     from dopt.tasks.pick.picker import CONTROL_SPEC
-    from dopt.view.blowup import capture_blowup, capture_dir
 
     scene, service, done, U = violent_rope()
     service.close()
@@ -332,7 +332,8 @@ def test_cli_still_of_a_blowup_opens_at_the_failing_step(tmp_path):
     assert r.returncode == 0, r.stderr
     assert f"frame {done.step + 1} of {done.step + 2}" in r.stdout       # the failing step
     image = np.asarray(Image.open(tmp_path / "still.png").convert("RGB")).astype(int)
-    assert image.shape == (240, 320, 3)
+    assert image.shape[1:] == (320, 3) and image.shape[0] > 240     # the caption band below
+    image = image[:240]
     ring = (image[..., 0] > 200) & (image[..., 1] < 40) & (image[..., 2] < 40)
     assert ring.sum() > 20, "the offending body is not marked"
 
@@ -364,3 +365,174 @@ def test_console_scripts_are_the_experiment_scripts(name):
                              "--help"], capture_output=True, text=True, timeout=120)
     assert mine.returncode == script.returncode == 0, mine.stderr + script.stderr
     assert mine.stdout == script.stdout
+
+
+# ------------------------------------------------------------------------ legibility
+def test_a_pack_file_and_a_summary_open_their_sweeps_trials(tmp_path):
+    """The pack and the recorded summary of a committed sweep list the same trials as its
+    folder, all of them (the pack's records: dopt.trialpack); an OUT/summary.json opens the
+    trials beside it; a summary whose folder is gone says so."""
+    from dopt.trialpack import stored_trials
+    from dopt.view.episode import collect
+
+    run = RUNS / "fig7-cloth-diagonal"
+    if not (run / "trials" / "pack.jsonl.gz").is_file():
+        pytest.skip("no committed pack of fig7-cloth-diagonal")
+    folder = list(collect(run))
+    assert folder == sorted(t.stem for t in stored_trials(run / "trials"))
+    assert list(collect(run / "trials" / "pack.jsonl.gz")) == folder
+    assert list(collect(ROOT / "docs" / "results" / "fig7-cloth-diagonal.json")) == folder
+    out = tmp_path / "out"
+    (out / "trials").mkdir(parents=True)
+    trial = committed_trial("fig7-ours-cloth-diagonal", "simple-seed0-*.json")
+    (out / "trials" / trial.name).write_text(read_trial_text(trial))
+    (out / "summary.json").write_text(json.dumps({"provenance": {"command": "x"}}))
+    assert list(collect(out / "summary.json")) == [trial.stem]
+    (tmp_path / "lost.json").write_text(json.dumps(
+        {"provenance": {"command": "python x.py --out nowhere/at/all"}}))
+    with pytest.raises(ValueError, match="trials folder was not found"):
+        collect(tmp_path / "lost.json")
+
+
+def test_cli_still_of_a_pack_works_without_mujoco_gl_and_carries_caption_and_legend(tmp_path):
+    """``dopt-view PACK --png`` with MUJOCO_GL (and PYOPENGL_PLATFORM) unset: it chooses the
+    offscreen context itself; the PNG is the requested image with a white band below it
+    holding text (the caption and the legend's swatches: the cloth's colour among them)."""
+    from PIL import Image
+
+    pack = RUNS / "fig7-cloth-diagonal" / "trials" / "pack.jsonl.gz"
+    if not pack.is_file():
+        pytest.skip("no committed pack of fig7-cloth-diagonal")
+    env = {k: v for k, v in os.environ.items() if k not in ("MUJOCO_GL", "PYOPENGL_PLATFORM")}
+    out = tmp_path / "still.png"
+    r = subprocess.run([sys.executable, "-m", "dopt.view", str(pack), "--png", str(out),
+                        "--width", "400", "--height", "300", "--frame", "-1"], cwd=ROOT,
+                       capture_output=True, text=True, timeout=300, env=env)
+    assert r.returncode == 0, r.stderr
+    image = np.asarray(Image.open(out).convert("RGB")).astype(int)
+    assert image.shape[1] == 400 and image.shape[0] > 300 + 60       # the band below
+    band = image[300:]
+    assert (band.max(axis=-1) < 80).mean() > 0.01, "no text in the band"
+    cloth = (np.abs(band - [204, 77, 51]).max(axis=-1) <= 2).sum()  # flex_rgba .8 .3 .2
+    assert cloth >= 100, "the legend's cloth swatch is missing"
+
+
+def test_legend_names_every_marker_ghost_region_and_shade(mpc_trial):
+    from html import escape
+
+    from dopt.view.legend import legend_html, legend_items
+    from planners.view import load_mpc, load_pick
+
+    ep = load_pick(committed_trial("fig7-ours-cloth-diagonal", "scripted-seed0-*.json"), 10)
+    names = [i.name for i in legend_items(ep)]
+    assert all(m.name in names for m in ep.markers)
+    assert any(ep.ghost.name in n for n in names)
+    assert {"cloth, top face", "cloth, underside"} <= set(names)
+    assert "cloth" in [i.name for i in legend_items(ep, browser=False)]
+    mpc = load_mpc(mpc_trial["path"], max_frames=10)
+    items = legend_items(mpc)
+    assert [i.name for i in items if i.kind == "ramp"] and \
+        all(r.name in [i.name for i in items] for r in mpc.regions)
+    text = legend_html(items)
+    assert all(escape(i.name) in text for i in items) and text.count("<span") == 2 * len(items)
+
+
+def test_mpc_goal_object_and_target_are_marked(mpc_trial):
+    """The goal object's marker is its body's position at every frame (MuJoCo's own
+    kinematics, here mj_forward), the target the task's goal position."""
+    import mujoco
+
+    from planners.svr_mpc import SVRMPCSettings
+    from planners.view import load_mpc
+
+    ep = load_mpc(mpc_trial["path"], max_frames=10)
+    obj, target = ep.markers
+    assert (obj.tag, target.tag) == ("goal object", "target")
+    task = SVRMPCSettings(**MPC_SETTINGS).build_task(0)
+    body = ep.model.body(task.goal_object).id
+    d = mujoco.MjData(ep.model)
+    for f in (0, ep.n_frames - 1):
+        mujoco.mj_setState(ep.model, d, ep.states[f], mujoco.mjtState.mjSTATE_INTEGRATION)
+        mujoco.mj_forward(ep.model, d)
+        assert np.allclose(obj.positions[f, 0], d.xpos[body], atol=1e-12)
+    assert np.allclose(target.positions[:, 0], task.goal_position)
+    assert obj.positions[0, 0, 0] != obj.positions[-1, 0, 0] or ep.n_frames == 1
+
+
+def _seeded_curves(n_cases: int = 40):
+    rng = np.random.default_rng(91)
+    for _ in range(n_cases):
+        n = int(rng.integers(2, 30))
+        x = np.cumsum(rng.uniform(0.01, 1.0, n))
+        yield x, rng.normal(size=n), float(rng.uniform(x[0] - 1, x[-1] + 1))
+
+
+def test_plot_cursor_is_a_vertical_segment_at_the_frame():
+    from dopt.view.episode import Curve
+    from dopt.view.player import cursor_data
+
+    for x, y, at in _seeded_curves():
+        xs, ys, cur = cursor_data(Curve("c", x, y), at)
+        assert len(xs) == len(ys) == len(cur) == len(x) + 2
+        assert np.all(np.diff(xs) >= 0)
+        where = np.flatnonzero(np.isfinite(cur))
+        assert len(where) == 2 and where[1] == where[0] + 1
+        clipped = min(max(at, x[0]), x[-1])
+        assert xs[where[0]] == xs[where[1]] == clipped
+        assert list(cur[where]) == [0.0, 1.0]
+        assert np.allclose(ys[where], np.interp(clipped, x, y))
+        keep = np.ones(len(xs), dtype=bool)
+        keep[where] = False
+        assert np.array_equal(xs[keep], x) and np.array_equal(ys[keep], y)
+
+
+def test_nice_length_is_round_and_near_a_quarter():
+    from dopt.view.legend import length_text, nice_length
+
+    rng = np.random.default_rng(5)
+    for extent in np.exp(rng.uniform(np.log(0.01), np.log(50), 200)):
+        L = nice_length(extent)
+        mantissa = L / 10 ** np.floor(np.log10(L) + 1e-9)
+        assert np.isclose(mantissa, [1, 2, 5]).any(), (extent, L)
+        assert L <= extent / 4 + 1e-12 < 2.5 * L
+    assert [length_text(v) for v in (0.05, 0.1, 0.002, 2.0)] == ["5 cm", "10 cm", "2 mm",
+                                                                "2 m"]
+
+
+def test_ghost_edges_and_cloth_face_against_trimesh():
+    import trimesh
+
+    from dopt.view.mjscene import face_up
+    from dopt.view.player import edges
+
+    rng = np.random.default_rng(3)
+    for _ in range(10):
+        a, b = (int(v) for v in rng.integers(2, 9, 2))
+        grid = trimesh.creation.box()           # closed surface: trimesh's own edge count
+        assert len(edges(grid.faces)) == len(grid.edges_unique)
+        xs, ys = np.meshgrid(np.arange(a), np.arange(b), indexing="ij")
+        verts = np.c_[xs.ravel(), ys.ravel(), np.zeros(a * b)]
+        i = (np.arange(a - 1)[:, None] * b + np.arange(b - 1)[None]).ravel()
+        faces = np.r_[np.c_[i, i + b, i + 1], np.c_[i + 1, i + b, i + b + 1]]
+        mesh = trimesh.Trimesh(verts, faces, process=False)
+        assert len(edges(faces)) == len(mesh.edges_unique)
+        assert face_up(verts, faces) == (mesh.face_normals[:, 2].sum() >= 0)
+        assert face_up(verts, faces[:, ::-1]) != face_up(verts, faces)
+
+
+def test_offscreen_gl_keeps_a_set_choice_and_matches_pyopengl(monkeypatch):
+    """MUJOCO_GL set: untouched; PYOPENGL_PLATFORM naming a backend: that one (mujoco.egl
+    refuses a mismatch); neither: EGL where libEGL is found, else OSMesa where libOSMesa is,
+    PYOPENGL_PLATFORM set to match."""
+    from dopt.view import cli
+
+    env = {"MUJOCO_GL": "glfw"}
+    assert cli.offscreen_gl(env) is None and env == {"MUJOCO_GL": "glfw"}
+    env = {"PYOPENGL_PLATFORM": "osmesa"}
+    assert cli.offscreen_gl(env) == "osmesa" and env["MUJOCO_GL"] == "osmesa"
+    for found, expected in [({"EGL", "OSMesa"}, "egl"), ({"OSMesa"}, "osmesa"),
+                            ({"EGL"}, "egl"), (set(), "egl")]:
+        monkeypatch.setattr(cli, "_has_library", lambda name, found=found: name in found)
+        env = {}
+        assert cli.offscreen_gl(env) == expected
+        assert env == {"MUJOCO_GL": expected, "PYOPENGL_PLATFORM": expected}

@@ -2,7 +2,10 @@
 trial and an MPC episode, a real headless Chromium (the distribution's ``chromium`` and
 ``chromium-driver``, driven by selenium) loads the page, and screenshots show that the scene is
 drawn (the cloth's colour, or the shaded objects' red, covers a stated share of the scene's
-part of the frame) and that clicking Next changes it. Skips, with the reason, where no
+part of the frame) and that clicking Next changes it; the page shows the legend (every marker
+of the episode by name), the goal (the pick goal's ghost in the legend, the MPC goal object's
+and target's tags in the scene), the floor's scale bar, and on every plot a dark vertical
+cursor that moves right when Next is clicked. Skips, with the reason, where no
 browser, driver, selenium or viser is installed (CI installs them: .ci/run, Makefile)."""
 
 from __future__ import annotations
@@ -141,12 +144,50 @@ def _click_next(browser, times: int) -> None:
         time.sleep(0.2)
 
 
+def _page_text(browser) -> str:
+    return browser.find_element("tag name", "body").text
+
+
+def _cursor_columns(browser) -> list[int]:
+    """Per plot (uPlot canvas) the column of its cursor: the column holding the longest run
+    of dark pixels (the cursor spans the curve's range; text and grid lines do not), -1
+    where no column holds a run of a third of the canvas's height."""
+    from PIL import Image
+    from selenium.webdriver.common.by import By
+
+    found = []
+    for canvas in browser.find_elements(By.CSS_SELECTOR, ".uplot canvas"):
+        browser.execute_script("arguments[0].scrollIntoView({block: 'center'});", canvas)
+        time.sleep(0.5)
+        box = browser.execute_script(
+            "const r = arguments[0].getBoundingClientRect();"
+            "return [r.left, r.top, r.right, r.bottom, window.devicePixelRatio];", canvas)
+        shot = Image.open(io.BytesIO(browser.get_screenshot_as_png())).convert("RGB")
+        left, top, right, bottom = (int(round(v * box[4])) for v in box[:4])
+        image = np.asarray(shot.crop((left, top, right, bottom)))
+        dark = (image.astype(int).max(axis=-1) < 90)
+        runs = np.zeros(dark.shape[1], dtype=int)
+        for c in range(dark.shape[1]):
+            col, best, cur = dark[:, c], 0, 0
+            for v in col:
+                cur = cur + 1 if v else 0
+                best = max(best, cur)
+            runs[c] = best
+        c = int(np.argmax(runs))
+        found.append(c if runs[c] >= dark.shape[0] / 3 else -1)
+    return found
+
+
 def _caption(browser) -> str:
     m = re.search(r"frame \d+/\d+", browser.find_element("tag name", "body").text)
     return m.group(0) if m else ""
 
 
-def _check(path: Path, share: float, next_clicks: int, *args: str) -> None:
+def _check(path: Path, share: float, next_clicks: int, *args: str,
+           words: tuple[str, ...] = ()) -> None:
+    """Serve ``path``, check the drawing, the legend and ``words`` (the goal's names and
+    tags, the scale bar's length) on the page, and that Next moves the frame, the scene and
+    every plot's cursor."""
     chromium, driver = _need_browser()
     served = Served(path, *args)
     browser = _browser(chromium, driver)
@@ -154,6 +195,13 @@ def _check(path: Path, share: float, next_clicks: int, *args: str) -> None:
         browser.get(served.url)
         before, s0 = _wait_for(browser, share)
         assert s0 >= share, f"the scene is not drawn: red share {s0:.4f} < {share}"
+        text = _page_text(browser)
+        missing = [w for w in ("legend", "scale bar", *words) if w not in text]
+        assert not missing, f"the page does not show {missing}:\n{text}"
+        assert re.search(r"\b\d+ (cm|mm|m)\b", text), "no scale bar length on the page"
+        cursors = _cursor_columns(browser)
+        assert cursors and min(cursors) >= 0, f"a plot without its cursor: {cursors}"
+        browser.execute_script("window.scrollTo(0, 0);")
         caption = _caption(browser)
         _click_next(browser, next_clicks)
         deadline = time.monotonic() + 30
@@ -167,6 +215,10 @@ def _check(path: Path, share: float, next_clicks: int, *args: str) -> None:
               file=sys.stderr)
         assert _caption(browser) != caption, "Next did not move the frame"
         assert changed >= CHANGED_SHARE, f"stepping changed only {changed:.4f} of the scene"
+        moved = _cursor_columns(browser)
+        print(f"cursor columns {cursors} -> {moved}", file=sys.stderr)
+        assert moved[0] > cursors[0], f"the time plot's cursor did not move right: " \
+                                      f"{cursors} -> {moved}"
     finally:
         browser.quit()
         served.close()
@@ -175,7 +227,9 @@ def _check(path: Path, share: float, next_clicks: int, *args: str) -> None:
 @pytest.mark.slow
 def test_browser_draws_and_steps_a_committed_cloth_trial():
     path = committed_trial("fig7-ours-cloth-diagonal", "simple-seed0-*.json")
-    _check(path, CLOTH_SHARE, 15, "--frame", "20")
+    _check(path, CLOTH_SHARE, 15, "--frame", "20",
+           words=("key particles", "key particles on the goal", "picked particle",
+                  "place target", "goal shape", "cloth, top face", "cloth, underside"))
 
 
 @pytest.mark.slow
@@ -183,4 +237,6 @@ def test_browser_draws_and_steps_an_mpc_episode(tmp_path):
     _need_browser()
     trial = write_mpc_trial(tmp_path / "clutter-baseline-seed0.json")
     # from the first optimisation (frame 0 comes before it, unshaded) to the end
-    _check(trial["path"], OBJECT_SHARE, 39, "--frame", "1")
+    _check(trial["path"], OBJECT_SHARE, 39, "--frame", "1",
+           words=("goal region", "goal object (its centre)", "goal target", "object shade",
+                  "goal object", "target"))

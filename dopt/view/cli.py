@@ -5,20 +5,27 @@ blow-up captures in the browser, or write one frame as a PNG.
     dopt-view OUT/trials/simple-seed0-ab12cd34.json --frame 40   # a file, or a packed trial
     dopt-view OUT/blowups/original-seed3 --png blowup.png    # a still, no server
 
-Serving needs the ``viz`` extra (viser); the still needs an offscreen OpenGL context
-(``MUJOCO_GL=egl``). Bad input is one line "dopt-view: error: ..." and exit status 1.
+PATH may be a run folder, its ``trials/pack.jsonl.gz``, one trial file (loose or packed), a
+summary (``OUT/summary.json`` or a recorded ``docs/results/NAME.json``: the trials of its
+sweep folder) or blow-up captures. Serving needs the ``viz`` extra (viser); ``--png`` sets up
+offscreen OpenGL itself (``offscreen_gl``: EGL, else OSMesa) unless ``MUJOCO_GL`` is set.
+Bad input is one line "dopt-view: error: ..." and exit status 1.
 """
 
 from __future__ import annotations
 
 import argparse
+import ctypes.util
 import logging
+import os
+import subprocess
 import sys
 import time
 
 from dopt.cli import EPILOG, ArgumentParser, guarded, int_at_least, output_file, positive_int
 
 PROG = "dopt-view"
+log = logging.getLogger(__name__)
 
 
 def parser() -> argparse.ArgumentParser:
@@ -27,15 +34,17 @@ def parser() -> argparse.ArgumentParser:
         description="Replay pick-and-place trials, MPC episodes and blow-up captures in the "
                     "browser (viser, on 127.0.0.1), or write one frame as a PNG.")
     p.add_argument("path", help="a trial file (or the path of a trial packed in its folder's "
-                                "pack.jsonl.gz), a result or trial folder, a blow-up capture "
+                                "pack.jsonl or pack.jsonl.gz), a result or trial folder, a "
+                                "pack file, a summary (its sweep's trials), a blow-up capture "
                                 "or a folder of them")
     p.add_argument("--trial", help="the episode to open first (its label: the trial file's "
                                    "name without .json, or the capture's folder)")
     p.add_argument("--frame", type=int, default=None,
                    help="the frame to open at (0-based, as the slider counts; -1: the last); "
                         "default: the episode's own (a blow-up's failing step, else 0)")
-    p.add_argument("--png", type=output_file, help="write the frame as a PNG and exit "
-                                                   "(MuJoCo's offscreen renderer)")
+    p.add_argument("--png", type=output_file,
+                   help="write the frame as a PNG, its caption and legend below it, and exit "
+                        "(MuJoCo's offscreen renderer; MUJOCO_GL=egl, else osmesa, unless set)")
     p.add_argument("--width", type=positive_int, default=800, help="PNG width (px)")
     p.add_argument("--height", type=positive_int, default=600, help="PNG height (px)")
     p.add_argument("--max-frames", type=int_at_least(2), default=300,
@@ -53,6 +62,7 @@ def main(argv=None) -> int:
     args = parser().parse_args(argv)
     logging.basicConfig(level=logging.INFO if args.verbose else logging.WARNING,
                         format="%(levelname)s %(name)s: %(message)s")
+    chosen = offscreen_gl() if args.png is not None else None
     from dopt.view.episode import collect
 
     entries = collect(args.path)
@@ -65,8 +75,53 @@ def main(argv=None) -> int:
         return 0
     first = args.trial or next(iter(entries))
     if args.png is not None:
-        return _still(entries, first, args)
+        try:
+            return _still(entries, first, args)
+        except Exception as e:
+            if chosen != "egl" or not _gl_failure(e) or not _has_library("OSMesa"):
+                raise
+            log.warning("EGL failed (%s); rendering with OSMesa", e)
+            env = {**os.environ, "MUJOCO_GL": "osmesa", "PYOPENGL_PLATFORM": "osmesa"}
+            return subprocess.run([sys.executable, "-m", "dopt.view", *_argv(argv)],
+                                  env=env, check=False).returncode
     return _serve(entries, first, args)
+
+
+def offscreen_gl(env=None) -> str | None:
+    """Choose MuJoCo's offscreen OpenGL backend before MuJoCo is imported, in ``env`` (a
+    mapping; None: this process's environment): the one ``PYOPENGL_PLATFORM`` names (egl,
+    osmesa), else ``MUJOCO_GL=egl`` where libEGL is found, else ``osmesa`` where libOSMesa
+    is, with ``PYOPENGL_PLATFORM`` to match; returns what it set, or None when ``MUJOCO_GL``
+    was already set (the user's choice stands) or this process imported MuJoCo already (it
+    read the variable then; logged)."""
+    if env is None:
+        env = os.environ
+        if not env.get("MUJOCO_GL") and "mujoco" in sys.modules:
+            log.warning("MuJoCo was imported before the offscreen context was chosen; set "
+                        "MUJOCO_GL=egl for a still")
+            return None
+    if env.get("MUJOCO_GL"):
+        return None
+    platform = env.get("PYOPENGL_PLATFORM", "").lower()
+    if platform in ("egl", "osmesa"):
+        backend = platform
+    else:
+        backend = "egl" if _has_library("EGL") or not _has_library("OSMesa") else "osmesa"
+    env["MUJOCO_GL"] = backend
+    env.setdefault("PYOPENGL_PLATFORM", backend)
+    return backend
+
+
+def _has_library(name: str) -> bool:
+    return ctypes.util.find_library(name) is not None
+
+
+def _gl_failure(e: BaseException) -> bool:
+    return any(w in f"{type(e).__name__} {e}" for w in ("EGL", "OpenGL", "gladLoadGL", "GL"))
+
+
+def _argv(argv) -> list[str]:
+    return list(sys.argv[1:] if argv is None else argv)
 
 
 def _frame(frame: int | None, n_frames: int, default: int) -> int:

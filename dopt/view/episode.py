@@ -5,14 +5,17 @@ A *source* knows one kind of record: ``claims(path, record)`` says whether a fil
 ``record``, or None for a folder) is one of its, ``load(path, max_frames)`` builds the
 ``Episode``. dopt knows no planner: the pick-and-place and MPC trial sources live in
 ``planners.view`` and are found through the ``dopt.view.sources`` entry points of the installed
-distribution (pyproject.toml); the blow-up capture source (``dopt.view.blowup``) is built in.
+distribution (pyproject.toml); the blow-up capture source (``BLOWUP_SOURCE``, ``load_blowup``:
+the captures ``dopt.blowup`` writes) is built in.
 
 Shapes: F frames, ns state row, M markers, V ghost vertices, nbody bodies.
 """
 
 from __future__ import annotations
 
+import json
 import logging
+import shlex
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -21,8 +24,9 @@ import mujoco
 import numpy as np
 
 from dopt import jsonio
-from dopt.state import INTEGRATION, check_model, check_spec, check_states
-from dopt.trialpack import is_stored_trial, read_pack, read_trial_text
+from dopt.blowup import FORMAT
+from dopt.state import INTEGRATION, StateLayout, check_model, check_spec, check_states
+from dopt.trialpack import PACK_NAMES, is_stored_trial, read_pack, read_trial_text
 from dopt.validation import check_int, float_array
 
 log = logging.getLogger(__name__)
@@ -36,36 +40,47 @@ SKIPPED_FOLDERS = ("checkpoints", "corrupt", "outdated")
 @dataclass(frozen=True)
 class Curve:
     """A time series beside the scene: x (n,) (seconds, or iterations when ``x_label`` says
-    so) and y (n,) in ``unit``."""
+    so) and y (n,) in ``unit``. The plot's cursor marks the current frame: at the frame's
+    time (``Episode.times``), or at ``cursor[f]`` (F,) where x is not time (e.g. the CEM
+    iteration whose plan is being executed)."""
 
     name: str
     x: np.ndarray
     y: np.ndarray
     unit: str = ""
     x_label: str = "time (s)"
+    cursor: np.ndarray | None = None
+
+    def cursor_x(self, ep: Episode, frame: int) -> float:
+        """Where the cursor stands at ``frame`` of ``ep``, in this curve's x."""
+        return float(ep.times[frame] if self.cursor is None else self.cursor[frame])
 
 
 @dataclass(frozen=True)
 class Markers:
     """Points drawn over the scene: positions (F, M, 3) per frame (NaN rows hidden), an RGB
-    colour (0-255) and a diameter (m)."""
+    colour (0-255) and a diameter (m); ``tag``: a text written beside the first point in the
+    scene (e.g. "goal object"), none when empty."""
 
     name: str
     positions: np.ndarray
     colour: tuple[int, int, int]
     size: float = 0.012
+    tag: str = ""
 
 
 @dataclass(frozen=True)
 class Ghost:
-    """The goal drawn as a translucent copy of the object: shapes (G, V, 3), which[f] the
-    shape of frame f (-1: none), and its triangles (E, 3) or segments (E, 2)."""
+    """The goal drawn as a wire copy of the object (its edges, so that it never blends with
+    the object where they overlap): shapes (G, V, 3), which[f] the shape of frame f (-1:
+    none), and its triangles (E, 3) or segments (E, 2)."""
 
     shapes: np.ndarray
     which: np.ndarray
     faces: np.ndarray
     colour: tuple[int, int, int] = (40, 160, 230)
     opacity: float = 0.35
+    name: str = "goal shape"
 
 
 @dataclass(frozen=True)
@@ -76,6 +91,7 @@ class Region:
     radius: float
     height: float = 0.002
     colour: tuple[int, int, int] = (50, 220, 50)
+    name: str = "goal region"
 
 
 @dataclass(frozen=True)
@@ -134,6 +150,10 @@ class Episode:
         if self.shade is not None and np.shape(self.shade) != (F, self.model.nbody):
             raise ValueError(f"shade must have shape ({F}, {self.model.nbody}), got "
                              f"{np.shape(self.shade)}")
+        for c in self.curves:
+            if c.cursor is not None and np.shape(c.cursor) != (F,):
+                raise ValueError(f"curve {c.name!r}: cursor must have shape ({F},), got "
+                                 f"{np.shape(c.cursor)}")
         if self.ghost is not None and np.shape(self.ghost.which) != (F,):
             raise ValueError(f"ghost.which must have shape ({F},), got "
                              f"{np.shape(self.ghost.which)}")
@@ -226,8 +246,6 @@ def sources() -> list:
     entry point of the installed distributions (``planners.view``: pick and MPC trials)."""
     from importlib.metadata import entry_points
 
-    from dopt.view.blowup import BLOWUP_SOURCE
-
     found = [BLOWUP_SOURCE]
     for ep in sorted(entry_points(group=ENTRY_POINTS), key=lambda e: e.name):
         try:
@@ -242,8 +260,15 @@ def candidates(path: Path) -> list[Path]:
     file, a packed trial (its loose file's path) or a blow-up capture; for a folder its JSON
     files, those of its ``trials/`` (not checkpoints, corrupt or outdated ones) and the trials
     packed there (``dopt.trialpack``: each as the path its loose file would have), its
-    sub-folders and those of its ``blowups/``, in name order."""
+    sub-folders and those of its ``blowups/``, in name order. A pack file
+    (``trials/pack.jsonl`` or ``.gz``) stands for its folder, a summary (``summary_folder``) for the
+    sweep folder it summarises."""
     path = Path(path)
+    if path.name in PACK_NAMES and path.is_file():
+        return candidates(path.parent)
+    folder = summary_folder(path)
+    if folder is not None:
+        return candidates(folder)
     if is_stored_trial(path) or (path / "blowup.json").is_file():
         return [path]
     found: list[Path] = []
@@ -262,9 +287,42 @@ def candidates(path: Path) -> list[Path]:
     return found
 
 
+def summary_folder(path: Path) -> Path | None:
+    """The sweep folder a summary file summarises, or None when ``path`` is not a summary (a
+    JSON object with "provenance" and no "result"): its own folder when that holds
+    ``trials/`` (``OUT/summary.json``), else the ``--out`` of the command that wrote it (a
+    recorded ``docs/results/NAME.json``), found from the working folder or from any folder
+    above the summary. The folder holds the trials of every summary written into it.
+
+    Raises:
+        ValueError: a summary whose trials folder cannot be found (named in the message).
+    """
+    path = Path(path)
+    if not (path.is_file() and path.suffix == ".json"):
+        return None
+    record = read_record(path)
+    if not isinstance(record, dict) or "provenance" not in record or "result" in record:
+        return None
+    if (path.parent / "trials").is_dir():
+        return path.parent
+    provenance = record.get("provenance")
+    command = provenance.get("command", "") if isinstance(provenance, dict) else ""
+    words = shlex.split(command) if isinstance(command, str) else []
+    out = next((w.split("=", 1)[1] for w in words if w.startswith("--out=")), None)
+    if out is None and "--out" in words[:-1]:
+        out = words[words.index("--out") + 1]
+    if out is not None:
+        for base in (Path.cwd(), *path.resolve().parents):
+            if (base / out).is_dir():
+                return base / out
+    raise ValueError(f"{path} is a summary, but its trials folder was not found "
+                     f"(its command's --out: {out!r}); open that folder instead")
+
+
 def collect(path, source_list: Sequence | None = None) -> dict[str, tuple[object, Path]]:
     """{label: (source, path)} of every episode under ``path`` (a trial file, a trial or result
-    folder, a blow-up capture or a folder of them), labels in file order.
+    folder, a trial pack, a summary, a blow-up capture or a folder of them), labels in file
+    order.
 
     Raises:
         FileNotFoundError: ``path`` does not exist.
@@ -285,8 +343,59 @@ def collect(path, source_list: Sequence | None = None) -> dict[str, tuple[object
                 out[label if label not in out else str(p)] = (src, p)
                 break
     if not out:
-        names = ", ".join(getattr(s, "name", type(s).__name__) for s in srcs)
-        raise ValueError(f"{path}: no trial file, trial folder or blow-up capture found "
-                         f"(sources: {names}; the pick and MPC trial sources need the "
-                         f"package installed: pip install -e .)")
+        names = [getattr(s, "name", type(s).__name__) for s in srcs]
+        hint = ("" if len(names) > 1 else "; the pick and MPC trial sources need the package "
+                "installed: pip install -e .")
+        raise ValueError(f"{path}: no trial file, trial folder, pack, summary or blow-up "
+                         f"capture found (sources: {', '.join(names)}{hint})")
     return out
+
+
+# ------------------------------------------------------------------------------ blow-ups
+def load_blowup(path, max_frames: int = 400):
+    """A capture folder as a ``dopt.view.episode.Episode`` opening at the state after the
+    failing step, the offending body marked.
+
+    Raises:
+        FileNotFoundError / ValueError: no capture there, or one of another format.
+    """
+    path = Path(path)
+    meta_file = path / "blowup.json"
+    if not meta_file.is_file():
+        raise FileNotFoundError(f"{path} holds no blowup.json")
+    meta = json.loads(meta_file.read_text())
+    if meta.get("format") != FORMAT:
+        raise ValueError(f"{meta_file}: format {meta.get('format')!r}, expected {FORMAT!r}")
+    model = mujoco.MjModel.from_binary_path(str(path / "model.mjb"))
+    rows = np.load(path / "states.npy")
+    first, step = int(meta["first_row"]), int(meta["step"])
+    failing = min(max(step + 1 - first, 0), len(rows) - 1)
+    keep = frame_rows(len(rows), max_frames, must=[failing])
+    layout = StateLayout.of(model, int(meta["spec"]))
+    times = (rows[keep, layout["time"]].ravel() if "time" in layout.slices
+             else (first + keep) * model.opt.timestep)
+    captions = [f"rollout row {first + r} (after step {first + r - 1})"
+                + ("  <- the verdict flagged this step" if r == failing else "")
+                for r in keep]
+    body = meta.get("body_id")
+    summary = (f"**Blow-up** {meta.get('label') or path.name}  \n"
+               f"step {step}: {meta['reason']}  \nbody: {meta.get('body')}  \n"
+               f"{len(rows)} states kept (rows {first}..{first + len(rows) - 1})")
+    return Episode(path.name, model, rows[keep], np.nan_to_num(times), captions, summary,
+                   spec=int(meta["spec"]), marked_body=None if body is None else int(body),
+                   start_frame=int(np.searchsorted(keep, failing)))
+
+
+class BlowupSource:
+    """The episode source of capture folders (``dopt.view.episode.sources``)."""
+
+    name = "blowup"
+
+    def claims(self, path: Path, record: dict | None) -> bool:
+        return record is None and Path(path).is_dir() and (Path(path) / "blowup.json").is_file()
+
+    def load(self, path: Path, max_frames: int = 400):
+        return load_blowup(path, max_frames)
+
+
+BLOWUP_SOURCE = BlowupSource()

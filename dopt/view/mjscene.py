@@ -102,6 +102,17 @@ def flex_vertices(model: mujoco.MjModel, data: mujoco.MjData, f: int) -> np.ndar
     return np.array(data.flexvert_xpos[a:a + n])
 
 
+def face_up(verts: np.ndarray, faces: np.ndarray) -> bool:
+    """Whether triangles (E, 3) of vertices (V, 3) face up (+z) on the whole: the z of the
+    sum of their area-weighted normals is >= 0."""
+    a, b, c = (verts[faces[:, k]] for k in range(3))
+    return bool(np.cross(b - a, c - a)[:, 2].sum() >= 0)
+
+
+def _tuple(colour) -> tuple[int, int, int]:
+    return tuple(int(c) for c in colour)
+
+
 def segment_points(verts: np.ndarray, segments: np.ndarray) -> np.ndarray:
     """(E, 2, 3) end points of segments (E, 2) of vertices (V, 3)."""
     return np.stack([verts[segments[:, 0]], verts[segments[:, 1]]], axis=1)
@@ -124,7 +135,8 @@ class SceneView:
         mujoco.mj_forward(model, self.data)
         self.frames: dict[int, object] = {}          # moving body -> frame handle
         self.geoms: dict[int, tuple[object, np.ndarray]] = {}   # geom -> (handle, own colour)
-        self.flexes: dict[int, tuple[object, np.ndarray, int, np.ndarray]] = {}
+        #: flex -> ([(handle, own colour)], dimension, topology)
+        self.flexes: dict[int, tuple[list, int, np.ndarray]] = {}
         self._colours: dict[int, tuple] = {}    # id(handle) -> colour set
         self._build_geoms(set(int(g) for g in hidden_geoms))
         self._build_flexes()
@@ -153,20 +165,40 @@ class SceneView:
             self.geoms[g] = (handle, own)
 
     def _build_flexes(self) -> None:
+        """A 1D flex: line segments; 3D: its surface, both sides; 2D (cloth): two meshes over
+        the same vertices, one per face (the face up at the start in the flex's colour, the
+        other darker, ``underside_colour``), so folded layers read as the
+        two sides of one cloth and each layer hides the one beneath it."""
+
         m, scene = self.model, self.server.scene
         for f in range(m.nflex):
             topo, dim = flex_topology(m, f)
             verts = flex_vertices(m, self.data, f)
             own = np.round(255 * np.asarray(m.flex_rgba[f][:3])).astype(int)
-            colour = tuple(int(c) for c in own)
             name = f"{self.root}/flex{f}"
             if dim == 1:
-                handle = scene.add_line_segments(name, segment_points(verts, topo), colour,
-                                                 thickness=2 * float(m.flex_radius[f]))
+                parts = [(scene.add_line_segments(name, segment_points(verts, topo),
+                                                  _tuple(own),
+                                                  thickness=2 * float(m.flex_radius[f])),
+                          own)]
+            elif dim == 3:
+                parts = [(scene.add_mesh_simple(name, verts, topo, color=_tuple(own),
+                                                side="double", flat_shading=False), own)]
             else:
-                handle = scene.add_mesh_simple(name, verts, topo, color=colour,
-                                               side="double", flat_shading=False)
-            self.flexes[f] = (handle, own, dim, topo)
+                up = face_up(verts, topo)
+                under = np.array(underside_colour(own))
+                parts = [(scene.add_mesh_simple(f"{name}/{side}", verts, topo,
+                                                color=_tuple(c), side=side,
+                                                flat_shading=False), c)
+                         for side, c in (("front", own if up else under),
+                                         ("back", under if up else own))]
+            self.flexes[f] = (parts, dim, topo)
+
+    def handles(self) -> list:
+        """Every scene node this view added (to remove them)."""
+        out = [h for h, _ in self.geoms.values()]
+        out += [h for parts, *_ in self.flexes.values() for h, _ in parts]
+        return out + list(self.frames.values())
 
     def show(self, state: np.ndarray, spec: int, shade: np.ndarray | None = None,
              marked: int | None = None) -> None:
@@ -177,13 +209,15 @@ class SceneView:
         mujoco.mj_forward(m, d)
         for b, frame in self.frames.items():
             frame.position, frame.wxyz = d.xpos[b].copy(), d.xquat[b].copy()
-        for f, (handle, own, dim, topo) in self.flexes.items():
+        for f, (parts, dim, topo) in self.flexes.items():
             verts = flex_vertices(m, d, f)
-            if dim == 1:
-                handle.points = segment_points(verts, topo).astype(np.float32)
-            else:
-                handle.vertices = verts.astype(np.float32)
-            self._recolour(handle, own, self._flex_shade(f, shade))
+            value = self._flex_shade(f, shade)
+            for handle, own in parts:
+                if dim == 1:
+                    handle.points = segment_points(verts, topo).astype(np.float32)
+                else:
+                    handle.vertices = verts.astype(np.float32)
+                self._recolour(handle, own, value)
         for g, (handle, own) in self.geoms.items():
             b = int(m.geom_bodyid[g])
             value = np.nan if shade is None else shade[b]
@@ -215,3 +249,11 @@ class SceneView:
     def body_position(self, body: int) -> np.ndarray:
         """(3,) world position of a body in the state last shown."""
         return np.array(self.data.xpos[body])
+
+#: the underside of a cloth is drawn in its own colour times this
+UNDERSIDE = 0.55
+
+
+def underside_colour(own) -> tuple[int, int, int]:
+    """The colour a cloth's underside is drawn in: its own (3,) darkened."""
+    return tuple(int(round(UNDERSIDE * c)) for c in np.asarray(own, dtype=float)[:3])

@@ -1,10 +1,13 @@
 """The browser viewer: a viser server that plays episodes frame by frame.
 
 ``Viewer(entries)`` serves on 127.0.0.1 (viser; needs the ``viz`` extra): the scene
-(``dopt.view.mjscene``) with the episode's ghost, markers and regions, and a panel with the
-trial dropdown (switching loads the trial, once, without restarting), the frame slider,
-Back / Play / Next buttons, the playback speed, the frame's caption, the episode's summary and
-its curves. Nothing here needs a display; ``url`` is what to open.
+(``dopt.view.mjscene``) with the episode's goal ghost (as wire), markers (spheres, a tag
+beside the tagged ones: the MPC goal object and its target), regions, and the floor's grid
+with a scale bar; and a panel with the trial dropdown (switching loads the trial, once,
+without restarting), the frame slider, Back / Play / Next buttons, the playback speed, the
+frame's caption, the episode's summary, the legend of every marker and shade
+(``dopt.view.legend``) and its curves, each with a cursor at the current frame. Nothing here
+needs a display; ``url`` is what to open.
 
 Shapes: F frames, M markers, ns state row.
 """
@@ -17,7 +20,17 @@ import time
 
 import numpy as np
 
-from dopt.view.episode import Episode, drawable_state
+from dopt.view.episode import Curve, Episode, drawable_state
+from dopt.view.legend import (
+    BAR_COLOUR,
+    GRID_COLOUR,
+    floor_height,
+    floor_items,
+    legend_html,
+    legend_items,
+    length_text,
+    nice_length,
+)
 from dopt.view.mjscene import SceneView, flex_vertices, segment_points
 
 log = logging.getLogger(__name__)
@@ -26,6 +39,33 @@ log = logging.getLogger(__name__)
 SPEEDS = ("0.25x", "0.5x", "1x", "2x", "4x", "8x")
 #: playback loop period (s)
 TICK = 1 / 30
+#: the plots' cursor colour, its series' name and its scale (fixed: it spans the plot)
+CURSOR_COLOUR, CURSOR_NAME, CURSOR_SCALE = "black", "current frame", "cursor"
+
+
+def edges(faces: np.ndarray) -> np.ndarray:
+    """The unique edges (E, 2) of triangles (T, 3), or segments (E, 2) as they are."""
+    faces = np.asarray(faces, dtype=np.int64)
+    if faces.shape[1] == 2:
+        return faces
+    pairs = np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]])
+    return np.unique(np.sort(pairs, axis=1), axis=0)
+
+
+def cursor_data(curve: Curve, at: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """A curve's plot data with a vertical cursor at x = ``at``: x (n + 2,) with ``at``
+    inserted twice, y (n + 2,) interpolated there, and the cursor series (n + 2,) on its own
+    fixed 0..1 scale (``CURSOR_SCALE``), NaN but 0 and 1 at the two inserted points: uPlot
+    draws it as a vertical segment over the plot's height (the canvas skips the NaN points;
+    on the curve's own scale they would spoil its range)."""
+    x, y = np.asarray(curve.x, dtype=float), np.asarray(curve.y, dtype=float)
+    at = float(np.clip(at, x[0], x[-1]))
+    i = int(np.searchsorted(x, at, side="right"))
+    value = float(np.interp(at, x, y))
+    cursor = np.full(len(x) + 2, np.nan)
+    cursor[i:i + 2] = 0.0, 1.0
+    return (np.concatenate([x[:i], [at, at], x[i:]]),
+            np.concatenate([y[:i], [value, value], y[i:]]), cursor)
 
 
 class Viewer:
@@ -82,6 +122,7 @@ class Viewer:
         self.play = gui.add_button("Play")
         self.next = gui.add_button("Next")
         self.speed = gui.add_dropdown("speed", SPEEDS, initial_value="1x")
+        self.legend = gui.add_html("")
         self.trial.on_update(lambda _: self.select(self.trial.value))
         self.slider.on_update(lambda _: self.show(int(self.slider.value)))
         self.back.on_click(lambda _: self.step(-1))
@@ -115,32 +156,62 @@ class Viewer:
             self.frame = int(np.clip(first, 0, ep.n_frames - 1))
             self.slider.max = max(ep.n_frames - 1, 1)
             self._aim_camera(ep)
+            bar = self._add_floor(ep)
+            self.legend.content = legend_html(legend_items(ep) + floor_items(bar))
             if self.trial.value != label:
                 self.trial.value = label
             self.show(self.frame, force=True)
 
     def _clear(self) -> None:
-        for handle in self._nodes + self._plots:
+        plots = [p[0] for p in self._plots]
+        markers = [h for _, nodes, _ in getattr(self, "_markers", []) for h in nodes]
+        for handle in self._nodes + plots + markers:
             handle.remove()
-        self._nodes, self._plots = [], []
+        self._nodes, self._plots, self._markers = [], [], []
         if getattr(self, "view", None) is not None:
-            for handle, *_ in list(self.view.geoms.values()) + list(self.view.flexes.values()):
+            for handle in self.view.handles():
                 handle.remove()
-            for frame in self.view.frames.values():
-                frame.remove()
+
+    def _add_floor(self, ep: Episode) -> float:
+        """The floor's grid under the episode's objects and a scale bar at its near edge;
+        returns the bar's length (m)."""
+        pts = self._all_points(ep)
+        lo, hi = pts.min(axis=0), pts.max(axis=0)
+        length = nice_length(float(np.max(hi[:2] - lo[:2])))
+        z = floor_height(ep.model, pts) + 5e-4
+        cells = 2 * int(np.ceil(0.8 * np.max(hi[:2] - lo[:2]) / length)) + 4
+        centre = np.array([*np.round(0.5 * (lo[:2] + hi[:2]) / length) * length, z])
+        scene = self.server.scene
+        self._nodes.append(scene.add_grid(
+            "/ep/floor", cells * length, cells * length, cell_size=length,
+            section_size=5 * length, cell_color=GRID_COLOUR, section_color=GRID_COLOUR,
+            position=tuple(centre), shadow_opacity=0.0))
+        start = np.array([lo[0], lo[1] - 0.6 * length, z + 5e-4])
+        bar = np.stack([start, start + [length, 0, 0]])[None]
+        self._nodes.append(scene.add_line_segments("/ep/scale_bar", bar, BAR_COLOUR,
+                                                   thickness=4, thickness_units="screen"))
+        self._nodes.append(scene.add_label("/ep/scale_label", length_text(length),
+                                           position=tuple(start + [length / 2, 0, 0]),
+                                           anchor="top-center"))
+        return length
+
+    def _all_points(self, ep: Episode) -> np.ndarray:
+        """Scene points (flex vertices, moving bodies) at the first and last frames."""
+        pts = []
+        for f in (0, ep.n_frames - 1):
+            self.view.show(drawable_state(ep.states, f), ep.spec)
+            pts.append(self._scene_points())
+        pts = np.concatenate(pts)
+        return pts if len(pts) else np.zeros((1, 3))
 
     def _add_overlays(self, ep: Episode) -> None:
         scene = self.server.scene
         if ep.ghost is not None:
             g = ep.ghost
+            self._ghost_edges = edges(g.faces)
             shape = g.shapes[max(int(g.which[0]), 0)]
-            if g.faces.shape[1] == 3:
-                node = scene.add_mesh_simple("/ep/ghost", shape, g.faces, color=g.colour,
-                                             opacity=g.opacity, side="double",
-                                             cast_shadow=False, receive_shadow=False)
-            else:
-                node = scene.add_line_segments("/ep/ghost", segment_points(shape, g.faces),
-                                               g.colour, thickness=0.006)
+            node = scene.add_line_segments("/ep/ghost", segment_points(shape, self._ghost_edges),
+                                           g.colour, thickness=1.5, thickness_units="screen")
             self._nodes.append(node)
             self._ghost, self._ghost_shape = node, -2
         for k, r in enumerate(ep.regions):
@@ -151,11 +222,13 @@ class Viewer:
                 np.asarray(disc.faces), color=r.colour, opacity=0.45, cast_shadow=False))
         self._markers = []
         for k, m in enumerate(ep.markers):
-            node = scene.add_point_cloud(f"/ep/markers{k}", np.zeros((1, 3)), m.colour,
-                                         point_size=m.size, point_shape="circle",
-                                         precision="float32")
-            self._nodes.append(node)
-            self._markers.append((node, m))
+            nodes = [scene.add_icosphere(f"/ep/markers{k}/{j}", m.size / 2, m.colour,
+                                         subdivisions=2, cast_shadow=False)
+                     for j in range(np.shape(m.positions)[1])]
+            if m.tag:
+                nodes.append(scene.add_label(f"/ep/markers{k}/tag", m.tag,
+                                             anchor="bottom-center"))
+            self._markers.append((m, nodes, bool(m.tag)))
         self._mark = None
         if ep.marked_body is not None:
             import mujoco
@@ -173,20 +246,35 @@ class Viewer:
         for c in ep.curves:
             if len(c.x) < 2:
                 continue
-            series = (up.Series(label=c.x_label), up.Series(label=f"{c.name} ({c.unit})",
-                                                           stroke="red", width=2))
-            self._plots.append(self.server.gui.add_uplot(
-                (np.asarray(c.x, dtype=float), np.asarray(c.y, dtype=float)), series,
-                title=c.name, aspect=1.6, scales={"x": {"time": False}}))
+            series = (up.Series(label=c.x_label),
+                      up.Series(label=f"{c.name} ({c.unit})", stroke="red", width=2),
+                      up.Series(label=CURSOR_NAME, stroke=CURSOR_COLOUR, width=1.5,
+                                scale=CURSOR_SCALE, spanGaps=False, points={"show": False}))
+            # the cursor stands at an end at the first and last frames: keep it inside
+            x = np.asarray(c.x, dtype=float)
+            pad = max(0.5 * float(np.median(np.diff(x))), 0.02 * float(x[-1] - x[0]))
+            x_scale = {"time": False, "auto": False,
+                       "range": (float(x[0]) - pad, float(x[-1]) + pad)}
+            handle = self.server.gui.add_uplot(
+                cursor_data(c, c.cursor_x(ep, 0)), series, title=c.name, aspect=1.6,
+                scales={"x": x_scale, CURSOR_SCALE: {"auto": False, "range": (0.0, 1.0)}},
+                axes=({"label": c.x_label}, {"label": c.unit}))
+            self._plots.append((handle, c))
 
     def _aim_camera(self, ep: Episode) -> None:
-        pts = [d for d in (self._scene_points(),) if len(d)]
-        if not pts:
+        """Frame the objects: where the episode shades bodies (MPC), those bodies and the
+        goal regions (not the arm); else the flexes and the moving bodies."""
+        p = self._scene_points()
+        if ep.shade is not None:
+            objects = np.flatnonzero(np.isfinite(ep.shade).any(axis=0))
+            p = np.concatenate([self.view.data.xpos[objects].reshape(-1, 3),
+                                *[np.asarray(r.centre, dtype=float)[None] for r in ep.regions]])
+        if not len(p):
             return
-        p = np.concatenate(pts)
         lo, hi = np.percentile(p, 2, axis=0), np.percentile(p, 98, axis=0)
         centre, extent = 0.5 * (lo + hi), float(np.max(hi - lo))
-        distance = 0.9 * max(extent, 0.2) + 0.1
+        # a few objects' centres span less than the objects do: step back further
+        distance = (0.9 if ep.shade is None else 1.8) * max(extent, 0.2) + 0.1
         cam = self.server.initial_camera
         cam.look_at = tuple(centre)
         cam.position = tuple(centre + distance * np.array([0.0, -0.75, 0.9]))
@@ -223,16 +311,22 @@ class Viewer:
         if g is not None and int(g.which[frame]) != self._ghost_shape:
             self._ghost_shape = k = int(g.which[frame])
             self._ghost.visible = k >= 0
-            if k >= 0 and g.faces.shape[1] == 3:
-                self._ghost.vertices = g.shapes[k].astype(np.float32)
-            elif k >= 0:
-                self._ghost.points = segment_points(g.shapes[k], g.faces).astype(np.float32)
-        for node, m in self._markers:
+            if k >= 0:
+                self._ghost.points = segment_points(g.shapes[k],
+                                                    self._ghost_edges).astype(np.float32)
+        for m, nodes, tagged in self._markers:
             pts = np.asarray(m.positions[frame], dtype=float)
-            pts = pts[np.isfinite(pts).all(axis=1)]
-            node.visible = len(pts) > 0
-            if len(pts):
-                node.points = pts.astype(np.float32)
+            shown = np.isfinite(pts).all(axis=1)
+            for node, p, ok in zip(nodes, pts, shown, strict=False):
+                node.visible = bool(ok)
+                if ok:
+                    node.position = tuple(p)
+            if tagged:
+                nodes[-1].visible = bool(shown.any())
+                if shown.any():
+                    nodes[-1].position = tuple(pts[np.argmax(shown)] + [0, 0, m.size])
+        for handle, curve in self._plots:
+            handle.data = cursor_data(curve, curve.cursor_x(ep, frame))
         if self._mark is not None:
             at = self.view.body_position(ep.marked_body)
             self._mark.position = at + [0, 0, 0.03]

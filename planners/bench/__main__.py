@@ -1,4 +1,4 @@
-"""python -m planners.bench {ilqr,clock,cem,cem-limit,cloth-budget,settle,cloth,rope}
+"""python -m planners.bench {ilqr,clock,cem,cem-limit,cloth-budget,settle,cloth,rope,reference}
 [options]: print timings as JSON (cem-limit: a table, one line per cloth size; --record
 writes its rows as JSON)."""
 
@@ -20,6 +20,7 @@ from dopt.cli import (
     positive_int,
 )
 from planners.bench.budget import FOLDS
+from planners.bench.reference import CHECKS, PRESETS
 
 
 def _add_ilqr(sub) -> None:
@@ -159,6 +160,23 @@ def _add_physics(sub) -> None:
                             "move), a row each (default: the picker's 0.5)")
 
 
+def _add_reference(sub) -> None:
+    """The ``reference`` subcommand's flags."""
+    p = sub.add_parser("reference", help="the rope and cloth physics presets against analytic "
+                                         "references: catenary sag and shape, cantilever "
+                                         "deflection, a hanging sheet's sag; and their cost")
+    p.add_argument("--presets", type=choices_type(PRESETS, "presets"), default=",".join(PRESETS),
+                   help="comma-separated physics presets (default %(default)s)")
+    p.add_argument("--checks", type=choices_type(tuple(CHECKS), "checks"),
+                   default=",".join(CHECKS), help="comma-separated references (default "
+                                                  "%(default)s)")
+    p.add_argument("--rope-n", type=int_at_least(3), default=None,
+                   help="rope particles of the catenary (default: the preset's, 40)")
+    p.add_argument("--cloth-n", type=int_at_least(3), default=None,
+                   help="cloth particles per side of the sheet (default: the preset's, 16)")
+    add_record_arg(p, "physics_reference")
+
+
 def parser() -> argparse.ArgumentParser:
     """The command line: one subcommand per bench."""
     ap = ArgumentParser(prog="python -m planners.bench", description=__doc__,
@@ -166,7 +184,7 @@ def parser() -> argparse.ArgumentParser:
     sub = ap.add_subparsers(dest="bench", required=True)
 
     for add in (_add_ilqr, _add_clock, _add_cem, _add_cem_limit, _add_cloth_budget,
-                _add_settle, _add_physics):
+                _add_settle, _add_physics, _add_reference):
         add(sub)
     return ap
 
@@ -227,6 +245,13 @@ def run(args) -> int:
                             args.settings.split(",") if args.settings else None, args.actions,
                             args.threads, args.seed, scripted=not args.no_scripted,
                             picker_speeds=args.picker_speeds or [None])
+    elif args.bench == "reference":
+        from planners.bench.reference import bench_reference
+        out = bench_reference(args.presets, args.checks, args.rope_n, args.cloth_n)
+        if args.record:
+            write_record(args.record, "physics_reference", out["rows"],
+                         presets=out["presets"])
+        out = out["rows"]
     print_json(out)
     return 0
 

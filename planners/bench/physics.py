@@ -140,7 +140,7 @@ def _config(task: str, name: str, overrides: dict | None, n: int):
     return replace(cls(n=n), **overrides)
 
 
-def _differing_fields(config) -> dict:
+def differing_fields(config) -> dict:
     """The fields of a scene config that differ from its class defaults (a preset row then
     says what the preset was when it was measured), besides the size."""
     default = type(config)(n=config.n)
@@ -244,7 +244,7 @@ def bench_physics(task: str, sizes: list[int] | None, settings: list[str] | None
             for speed in picker_speeds:
                 speed = PickerConfig.speed if speed is None else float(speed)
                 row = {"setting": name, "n": n, "overrides": table[name],
-                       "fields": _differing_fields(config), "picker_speed": speed,
+                       "fields": differing_fields(config), "picker_speed": speed,
                        **random_actions(task, config, actions, threads, seed, bound, speed)}
                 if scripted:
                     row["scripted"] = scripted_goals(task, name, table[name], n, threads,

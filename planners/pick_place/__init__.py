@@ -22,27 +22,36 @@ One call runs a whole trial::
 Modules, one job each (every name is re-exported here):
 
     tasks.py     the tasks and goals, registered once: PICK_TASKS (PickTaskSpec: scene,
-                 sizes, goals), PickGoal (stages, start, metrics), PICK_METRICS,
+                 sizes, goals), PickGoal (stages, start, metrics, prepared start),
+                 PICK_METRICS,
                  register_goal (a new goal and its budget in one call), GOALS
     presets.py   the presets of both protocols with the source of every number: PRESETS
                  (ours), PAPER_PRESETS (the paper's), QUICK_CHANGES, PROTOCOL_SEEDS
     settings.py  PickPlaceSettings: presets, scene and picker configs, a trial's identity
                  and name (trial_key)
-    problem.py   Problem and make_problem
-    planners.py  StagePlan, PickPlanner, CEMPlanner, ScriptedPlanner, make_planner, METHODS
+    problem.py   Problem and make_problem (a goal's start, or its prepared start)
+    budget.py    the sizes a setting implies, checked before anything is allocated
+                 (check_budget, budget_problem, BudgetError)
+    planners.py  StagePlan, PickPlanner, CEMPlanner, ScriptedPlanner, make_planner, METHODS,
+                 register_planner
+    drag.py      the authors' drag encoding as planners (original-, simple-, random-drag;
+                 drag_settings.py: DragSettings; encoding.py: its sweep against N)
     run.py       run_problem (with checkpoints and blow-up captures: capture_label), solve,
                  run_trial, PickPlaceResult
     summary.py   summarize, last_improvement
     calibration.py  seconds_per_action: what one simulated action costs on this machine now
                  (a command line's estimate of a run's time)
     scaling.py   the gain against the particle count: scaling_trials (Fig. 7's trials at
-                 several cloth sizes), scaling_summary (intervals, the trend test on log N)
+                 several cloth sizes: a finer sheet, or a bigger one at fixed spacing),
+                 scaling_summary (intervals, the trend test on log N, in m and normalised
+                 by the flat sheet's cost)
     random_reach.py  why CEM(Random) lands where it does: each trial's candidates re-drawn
                  from its seed and what they can reach (``random_reach``, ``reach_summary``)
 
 Shapes: N particles, K key particles, H actions per plan, ns state row.
 """
 
+from planners.pick_place import drag as _drag  # noqa: F401  (registers the drag planners)
 from planners.pick_place.calibration import seconds_per_action
 from planners.pick_place.planners import (
     CEM_CANDIDATES,
@@ -53,6 +62,7 @@ from planners.pick_place.planners import (
     ScriptedPlanner,
     StagePlan,
     make_planner,
+    register_planner,
 )
 from planners.pick_place.presets import (
     PAPER_CHANGES,
@@ -75,6 +85,7 @@ from planners.pick_place.run import (
     solve,
 )
 from planners.pick_place.settings import (
+    FOLD_STARTS,
     UNSET_SCENE_FIELDS,
     UNSET_SETTINGS,
     PickPlaceSettings,
@@ -86,9 +97,12 @@ from planners.pick_place.tasks import (
     GOALS,
     PICK_METRICS,
     PICK_TASKS,
+    PREPARED_LIFT,
+    PREPARED_SETTLE,
     PickGoal,
     PickTaskSpec,
     Stage,
+    cloth_prepared,
     cloth_sequence,
     metric_names,
     pick_task,
@@ -98,12 +112,14 @@ from planners.pick_place.tasks import (
 )
 
 __all__ = [
-    "CEM_CANDIDATES", "CRUMPLE_TURN", "GOALS", "LABELS", "METHODS", "PAPER_CHANGES",
-    "PAPER_PRESETS", "PICK_METRICS", "PICK_TASKS", "PRESETS", "PROTOCOLS", "PROTOCOL_SEEDS",
-    "QUICK_CHANGES", "UNSET_SCENE_FIELDS", "UNSET_SETTINGS", "CEMPlanner", "PickGoal",
-    "PickPlaceResult", "PickPlaceSettings", "PickPlanner", "PickTaskSpec", "Preset", "Problem",
-    "ScriptedPlanner", "Stage", "StagePlan", "TrialProgress", "capture_label", "cloth_sequence",
-    "last_improvement", "make_planner", "make_problem", "metric_names", "paper_preset",
-    "pick_task", "quick_preset", "register_goal", "register_task", "rope_stage", "run_problem",
-    "run_trial", "seconds_per_action", "solve", "summarize", "trial_key",
+    "CEM_CANDIDATES", "CRUMPLE_TURN", "FOLD_STARTS", "GOALS", "LABELS", "METHODS", "PAPER_CHANGES",
+    "PAPER_PRESETS", "PICK_METRICS", "PICK_TASKS", "PREPARED_LIFT", "PREPARED_SETTLE", "PRESETS",
+    "PROTOCOLS", "PROTOCOL_SEEDS", "QUICK_CHANGES", "UNSET_SCENE_FIELDS", "UNSET_SETTINGS",
+    "CEMPlanner", "PickGoal", "PickPlaceResult", "PickPlaceSettings", "PickPlanner",
+    "PickTaskSpec", "Preset", "Problem", "ScriptedPlanner", "Stage", "StagePlan", "TrialProgress",
+    "capture_label", "cloth_prepared", "cloth_sequence", "last_improvement", "make_planner",
+    "make_problem", "metric_names", "paper_preset", "pick_task", "quick_preset", "register_goal",
+    "register_planner", "register_task",
+    "rope_stage", "run_problem", "run_trial", "seconds_per_action", "solve", "summarize",
+    "trial_key",
 ]

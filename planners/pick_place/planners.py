@@ -182,14 +182,32 @@ class ScriptedPlanner:
                          unstable=res.unstable, unstable_reason=res.reason)
 
 
+#: planners beyond ``METHODS``, by name: ``(settings, seed) -> PickPlanner``
+#: (``register_planner``; the drag encoding's, ``planners.pick_place.drag``, register there)
+REGISTERED: dict[str, Callable[[PickPlaceSettings, int], PickPlanner]] = {}
+
+
+def register_planner(name: str, factory: Callable[[PickPlaceSettings, int], PickPlanner],
+                     label: str) -> None:
+    """Make ``make_planner(name, ...)`` build ``factory(settings, seed)``; ``label`` names it
+    in figures and tables (``LABELS``). ValueError for a name already taken."""
+    if not isinstance(name, str) or not name or name in METHODS or name in REGISTERED:
+        raise ValueError(f"planner name {name!r} is empty or already taken")
+    REGISTERED[name] = factory
+    LABELS[name] = label
+
+
 def make_planner(method: str, settings: PickPlaceSettings, seed: int = 0) -> PickPlanner:
-    """The planner of a method name (``METHODS``) with the settings' configs; ``seed`` an
-    int >= 0."""
-    if not isinstance(method, str) or method not in METHODS:
-        raise ValueError(f"unknown method {method!r}; choose from {', '.join(METHODS)}")
+    """The planner of a method name (``METHODS``, or one of ``REGISTERED``, such as the drag
+    encoding's, which need ``settings.drag``) with the settings' configs; ``seed`` an int
+    >= 0."""
+    if not isinstance(method, str) or method not in METHODS + tuple(REGISTERED):
+        raise ValueError(f"unknown method {method!r}; choose from "
+                         f"{', '.join(METHODS + tuple(REGISTERED))}")
     check_settings(settings)
     check_seed(seed)
+    if method in REGISTERED:
+        return REGISTERED[method](settings, seed)
     if method == "scripted":
         return ScriptedPlanner(settings.scripted)
     return CEMPlanner(settings.cem, CEM_CANDIDATES[method], seed)
-

@@ -4,7 +4,7 @@ to a checkpoint and resumes from it to the result it gives unstopped.
 
 Blow-up captures (``blowup_out``, opt-in): every stage's executed plan that the stability
 verdict flags (``PickPlaceTask``'s, never a CEM sample) is written to
-``blowup_out/blowups/<label>-<stage>`` (``capture_label``; ``dopt.view.blowup``, which
+``blowup_out/blowups/<label>-<stage>`` (``capture_label``; ``dopt.blowup``, which
 ``dopt-view`` opens at the flagged step) and listed in the result.
 
 Shapes: ns state row.
@@ -21,9 +21,9 @@ from dataclasses import asdict, dataclass, field, replace
 
 import numpy as np
 
+from dopt.blowup import retire_captures
 from dopt.rollout import RolloutConfig, RolloutService
 from dopt.tasks import PickPlaceTask
-from dopt.view.blowup import retire_captures
 from planners.pick_place.planners import PickPlanner, StagePlan, make_planner
 from planners.pick_place.problem import Problem, make_problem
 from planners.pick_place.settings import PickPlaceSettings, trial_key
@@ -133,7 +133,7 @@ class TrialProgress:
 
 def capture_label(prefix: str, stage: str) -> str:
     """The label of the blow-up capture of a trial's stage: "<prefix>-<stage name>" (its
-    folder under OUT/blowups, ``dopt.view.blowup.capture_dir``)."""
+    folder under OUT/blowups, ``dopt.blowup.capture_dir``)."""
     return f"{prefix}-{stage}"
 
 

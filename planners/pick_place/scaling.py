@@ -3,9 +3,18 @@ of one cloth goal at several sizes (``scaling_trials``) and their statistics
 (``scaling_summary``).
 
 A size is the paper protocol's settings (``PickPlaceSettings.preset(task="cloth", goal,
-protocol="paper")``: its CEM budget and its physics preset, "default", at every size) with only
-``n`` (particles per side) changed, so the 20 x 20 trials of the Fig. 7 sweep
+protocol="paper")``: its CEM budget and its physics preset, "default", at every size) with
+``n`` (particles per side) changed, in one of two modes (``SCALING_MODES``): "resolution", only
+n, the sheet's side fixed and its spacing shrinking; "size", the preset's spacing kept and the
+sheet grown with n (as SoftGym's cloths, whose particles lie a radius apart at any size), the
+picker's bound, the workspace (the side) and the mass scaled with it, so the areal density
+and the reach relative to the sheet stay those of the preset. Either way the preset's own n
+gives the preset itself, so the 20 x 20 trials of the Fig. 7 sweep
 (docs/results/runs/fig7-cloth-<goal>/) have the same keys and count here.
+
+Costs are in m, and also normalised by the flat sheet's cost to the goal (``flat_cost``:
+the start's cost, what SoftGym's normalised performance divides by), which a sheet's size
+alone does not change; the trend test runs on both.
 
 The trend test: the paired difference of the final cost, method minus CEM(Simple), per seed
 common to both at each size, regressed on log N (N = n * n particles) by ordinary least squares
@@ -31,20 +40,44 @@ from planners.pick_place.settings import PickPlaceSettings, trial_key
 
 #: the methods compared to CEM(Simple) by the trend test
 COMPARED = ("original", "random")
+#: what a sweep varies with n (module docstring): the resolution of a fixed sheet, or the
+#: size of a sheet at a fixed spacing
+SCALING_MODES = ("resolution", "size")
 
 
-def scaling_settings(goal: str, n: int, threads: int = 0,
-                     move: str | None = None) -> PickPlaceSettings:
+def scaling_settings(goal: str, n: int, threads: int = 0, move: str | None = None,
+                     mode: str = "resolution") -> PickPlaceSettings:
     """The paper protocol's cloth settings of ``goal`` with ``n`` particles per side (and the
     simulation ``threads``, not part of a trial's identity; ``move``: the picker's move rule,
-    ``PickPlaceSettings.picker_move``, None the fixed move)."""
-    return replace(PickPlaceSettings.preset("cloth", goal, protocol="paper"), n=int(n),
+    ``PickPlaceSettings.picker_move``, None the fixed move), by ``mode`` (``SCALING_MODES``):
+    "size" scales the side, the bound and the mass with (n - 1) / (n0 - 1), the side in the
+    preset's spacings (n0 the preset's n; at n0 the preset itself)."""
+    if mode not in SCALING_MODES:
+        raise ValueError(f"unknown scaling mode {mode!r}; choose from "
+                         f"{', '.join(SCALING_MODES)}")
+    base = replace(PickPlaceSettings.preset("cloth", goal, protocol="paper"),
                    threads=int(threads), picker_move=move)
+    if mode == "resolution" or int(n) == base.n:
+        return replace(base, n=int(n))
+    scale = (int(n) - 1) / (base.n - 1)
+    return replace(base, n=int(n), side=base.side * scale, bound=base.bound * scale,
+                   mass=base.scene_config().mass * scale ** 2)
+
+
+def flat_cost(settings: PickPlaceSettings) -> float:
+    """The Eq. 2 cost (m) of the flat sheet to the final goal of the cloth ``settings``: the
+    mean distance of the goal's rest shape to the goal (``deformables.goals``), the start's
+    cost that SoftGym's normalised performance divides by (the settled start lies within a
+    fraction of a millimetre of it)."""
+    from deformables.goals import goal_sequence
+
+    goal = goal_sequence(f"cloth_{settings.goal}", n=settings.n, side=settings.side)[-1]
+    return float(np.linalg.norm(goal.positions - goal.rest_positions, axis=1).mean())
 
 
 def scaling_trials(goal: str, sizes: Sequence[int], seeds: Iterable[int],
                    methods: Sequence[str], threads: int = 0,
-                   move: str | None = None) -> list[Trial]:
+                   move: str | None = None, mode: str = "resolution") -> list[Trial]:
     """The ``dopt.sweep`` trials of every (size, seed, method): key ``trial_key(method, seed,
     settings)`` and params {"settings": settings.to_dict(), "method", "seed"}, exactly as the
     Fig. 7 sweep (experiments/pick_place_cli.py) builds them, so ``run_trial`` runs them.
@@ -53,7 +86,7 @@ def scaling_trials(goal: str, sizes: Sequence[int], seeds: Iterable[int],
     out = []
     seeds = [int(s) for s in seeds]
     for n in sizes:
-        settings = scaling_settings(goal, n, threads, move)
+        settings = scaling_settings(goal, n, threads, move, mode)
         out += [Trial(trial_key(m, s, settings),
                       {"settings": settings.to_dict(), "method": m, "seed": s})
                 for s in seeds for m in methods]
@@ -100,7 +133,7 @@ def trend(sizes: Sequence[int], diffs: Sequence[float]) -> dict:
             "intercept": float(fit.intercept), "p": p}
 
 
-def scaling_summary(records: Iterable[dict]) -> dict:
+def scaling_summary(records: Iterable[dict], flat_costs: dict | None = None) -> dict:
     """The statistics of the scaling sweep's records (``dopt.sweep`` records: {"params",
     "result"}).
 
@@ -110,19 +143,49 @@ def scaling_summary(records: Iterable[dict]) -> dict:
     "values"} for m in ``COMPARED`` (paired over the common seeds)}},
     "trend": {"<m>_minus_simple": {"slope", "slope_ci95", "intercept", "p", "p_holm",
     "n_points", "n_sizes", "verdict"}}, "verdict": one line}. Costs in m; keys of "per_size"
-    are str(n) (JSON)."""
+    are str(n) (JSON). With ``flat_costs`` ({n: the flat sheet's cost, m; ``flat_cost``}, every
+    size of the records) the same on the costs divided by it, beside them: per size
+    "flat_cost", per method "final_cost_normalised_mean" / "_ci95", "<m>_minus_simple_normalised",
+    and "trend_normalised", "verdict_normalised" (Holm over their own two tests)."""
     data = _by_size(records)
     sizes = sorted(data)
-    per_size, points = {}, {m: ([], []) for m in COMPARED}
+    per_size, out_trend = _statistics(data, {n: 1.0 for n in sizes})
+    out = {"sizes": sizes, "n_particles": [n * n for n in sizes], "per_size": per_size,
+           "trend": out_trend, "verdict": verdict_line(out_trend)}
+    if flat_costs is None:
+        return out
+    missing = [n for n in sizes if n not in flat_costs]
+    if missing:
+        raise ValueError(f"flat_costs has no cost for the sizes {missing}")
+    normalised, norm_trend = _statistics(data, {n: 1.0 / flat_costs[n] for n in sizes})
     for n in sizes:
+        entry, norm = per_size[str(n)], normalised[str(n)]
+        entry["flat_cost"] = float(flat_costs[n])
+        for m, e in entry["methods"].items():
+            e["final_cost_normalised_mean"] = norm["methods"][m]["final_cost_mean"]
+            e["final_cost_normalised_ci95"] = norm["methods"][m]["final_cost_ci95"]
+        for m in COMPARED:
+            entry[f"{m}_minus_simple_normalised"] = norm[f"{m}_minus_simple"]
+    return {**out, "trend_normalised": norm_trend,
+            "verdict_normalised": verdict_line(norm_trend, unit="of the flat cost",
+                                                      scale=1.0, digits=3)}
+
+
+def _statistics(data: dict, scale: dict) -> tuple[dict, dict]:
+    """(per_size, trend) of ``scaling_summary`` on the costs of ``data`` ({n: {method: {seed:
+    cost}}}) times ``scale[n]``."""
+    per_size, points = {}, {m: ([], []) for m in COMPARED}
+    for n in sorted(data):
+        costs_at = {m: {s: c * scale[n] for s, c in costs.items()}
+                    for m, costs in sorted(data[n].items())}
         entry = {"methods": {}}
-        for m, costs in sorted(data[n].items()):
+        for m, costs in costs_at.items():
             mean, half = _ci(list(costs.values()))
             entry["methods"][m] = {"final_cost_mean": mean, "final_cost_ci95": half,
                                    "seeds": sorted(costs), "n": len(costs)}
-        simple = data[n].get("simple", {})
+        simple = costs_at.get("simple", {})
         for m in COMPARED:
-            other = data[n].get(m, {})
+            other = costs_at.get(m, {})
             seeds = sorted(set(simple) & set(other))
             values = [other[s] - simple[s] for s in seeds]
             mean, half = _ci(values)
@@ -139,19 +202,20 @@ def scaling_summary(records: Iterable[dict]) -> dict:
         p_holm = adjusted.get(m)
         out_trend[f"{m}_minus_simple"] = {**fits[m], "p_holm": p_holm,
                                           "verdict": slope_verdict(fits[m]["slope"], p_holm)}
-    return {"sizes": sizes, "n_particles": [n * n for n in sizes], "per_size": per_size,
-            "trend": out_trend, "verdict": verdict_line(out_trend)}
+    return per_size, out_trend
 
 
-def verdict_line(trends: dict) -> str:
+def verdict_line(trends: dict, unit: str = "mm", scale: float = 1e3, digits: int = 2) -> str:
     """One line: per compared method, whether the gap over CEM(Simple) grows with log N, its
-    slope with the 95 % interval and the Holm-adjusted p."""
+    slope (times ``scale``, in ``unit`` to ``digits`` decimals: mm of a cost in m by default)
+    with the 95 % interval and the Holm-adjusted p."""
     parts = []
     for m in COMPARED:
         t = trends[f"{m}_minus_simple"]
         if t["slope"] is None:
             parts.append(f"{m} - simple: {NO_TREND} (too few sizes or seeds)")
             continue
-        parts.append(f"{m} - simple {t['verdict']} (slope {t['slope'] * 1e3:+.2f} mm per log N"
-                     f" +- {t['slope_ci95'] * 1e3:.2f}, Holm p {t['p_holm']:.3g})")
+        parts.append(f"{m} - simple {t['verdict']} (slope {t['slope'] * scale:+.{digits}f} "
+                     f"{unit} per log N +- {t['slope_ci95'] * scale:.{digits}f}, Holm p "
+                     f"{t['p_holm']:.3g})")
     return "; ".join(parts)

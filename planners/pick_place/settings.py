@@ -25,15 +25,26 @@ from dopt.tasks.pick.scene import PICK_BOUNDS
 from dopt.tasks.pick.settle import RestTest
 from dopt.validation import check_config, check_int
 from planners.cem import CEMConfig
+from planners.pick_place.drag_settings import DragSettings
 from planners.pick_place.presets import PROTOCOLS, quick_preset
-from planners.pick_place.tasks import GOALS, PICK_TASKS, pick_task
+from planners.pick_place.tasks import (
+    GOALS,
+    PICK_TASKS,
+    PREPARED_LIFT,
+    PREPARED_SETTLE,
+    pick_task,
+)
 from planners.scripted import ScriptedConfig
 from planners.trial_progress import RUN_ONLY_SETTINGS
 
 #: optional settings ``PickPlaceSettings.identity`` leaves out at None: options whose unset
 #: value is what every trial ran before they existed, so those trials stay valid
 UNSET_SETTINGS = ("planning_physics", "max_stretch", "picker_speed", "rest_speed",
-                  "picker_move")
+                  "picker_move", "fold_start", "mass", "drag")
+#: the name of each optional setting whose unset value (None) has one (``departures``)
+UNSET_NAMES = {"picker_move": "fixed", "fold_start": "chained"}
+#: where a goal of several stages starts (``PickPlaceSettings.fold_start``)
+FOLD_STARTS = ("chained", "prepared")
 #: scene-config fields a trial's identity leaves out at these values, for the same reason
 UNSET_SCENE_FIELDS = {"passive": False}
 #: picker-config fields a trial's identity leaves out while the move is the fixed one (they
@@ -73,6 +84,17 @@ class PickPlaceSettings:
             default) or "fixed", as long as the bound box's diagonal takes; "sized", as long
             as the action's own displacement takes at the same speed (fewer steps; not with
             ``rest_speed``). "fixed" is stored as None, so that a trial keeps its key.
+        fold_start: where a goal of several stages (the reflective and underneath folds)
+            starts (``FOLD_STARTS``): None or "chained" (the default), every stage planned in
+            turn from the goal's start (the flat sheet), each from where the one before
+            ended; "prepared", from the fold before the last prepared in place as the paper's
+            authors do (``PickGoal.prepared``: its layers dropped and settled), only the last
+            stage planned. On a goal of one stage both are its one start: "prepared" is
+            stored as None there, and "chained" everywhere, so that a trial keeps its key.
+        mass: the object's mass (kg; its scene config's ``mass``), for a task whose scene
+            fields name it (the cloth); None: the physics preset's.
+        drag: the authors' drag encoding (``DragSettings``) that the drag methods plan in
+            (``planners.pick_place.drag``); None: none (the macro methods ignore it).
     """
 
     task: str
@@ -91,6 +113,9 @@ class PickPlaceSettings:
     picker_speed: float | None = None
     rest_speed: float | None = None
     picker_move: str | None = None
+    fold_start: str | None = None
+    mass: float | None = None
+    drag: DragSettings | None = None
 
     def __post_init__(self):
         pick_task(self.task).goal(self.goal)      # ValueError naming an unknown task or goal
@@ -102,17 +127,28 @@ class PickPlaceSettings:
         # n an int >= 3, bound / side / length finite > 0 (m), threads an int >= 0 (0: one
         # per core), selfcollide a bool; TypeError or ValueError naming the field
         check_config(self, positive=("bound", "side", "length", "max_stretch", "picker_speed",
-                               "rest_speed"),
+                               "rest_speed", "mass"),
                      minimum={"n": 3, "threads": 0},
                      choices={"physics": tuple(PHYSICS_PRESETS)})
         if self.picker_move not in (None, *MOVE_RULES):
             raise ValueError(f"PickPlaceSettings.picker_move must be None or one of "
                              f"{list(MOVE_RULES)}, got {self.picker_move!r}")
+        if self.drag is not None and not isinstance(self.drag, DragSettings):
+            raise TypeError(f"PickPlaceSettings.drag must be DragSettings or None, got "
+                            f"{self.drag!r}")
         if self.picker_move == "fixed":        # the default's own name: the same trial
             object.__setattr__(self, "picker_move", None)
         if self.picker_move is not None and self.rest_speed is not None:
             raise ValueError(f"PickPlaceSettings.picker_move {self.picker_move!r} cannot go "
                              f"with rest_speed (the rest test needs the fixed move)")
+        if self.mass is not None and "mass" not in PICK_TASKS[self.task].scene_fields:
+            raise ValueError(f"PickPlaceSettings.mass: the {self.task} scene takes no mass "
+                             f"from the settings (its physics preset sets it)")
+        if self.fold_start not in (None, *FOLD_STARTS):
+            raise ValueError(f"PickPlaceSettings.fold_start must be None or one of "
+                             f"{list(FOLD_STARTS)}, got {self.fold_start!r}")
+        if self.fold_start == "chained" or pick_task(self.task).goal(self.goal).prepared is None:
+            object.__setattr__(self, "fold_start", None)     # the same trial as the default's
         if self.planning_physics is not None and self.planning_physics not in PHYSICS_PRESETS:
             raise ValueError(f"PickPlaceSettings.planning_physics must be None or one of "
                              f"{sorted(PHYSICS_PRESETS)}, got {self.planning_physics!r}")
@@ -120,6 +156,8 @@ class PickPlaceSettings:
             object.__setattr__(self, name, int(getattr(self, name)))
         for name in ("bound", "side", "length"):
             object.__setattr__(self, name, float(getattr(self, name)))
+        if self.mass is not None:
+            object.__setattr__(self, "mass", float(self.mass))
         object.__setattr__(self, "selfcollide", bool(self.selfcollide))
 
     @classmethod
@@ -140,15 +178,19 @@ class PickPlaceSettings:
         cem = CEMConfig(horizon=p.horizon, iterations=p.iterations, population=p.population,
                         elites=p.elites)
         return cls(task, goal, p.n, p.bound, cem, ScriptedConfig(), p.selfcollide,
-                   physics=p.physics, planning_physics=p.planning_physics)
+                   physics=p.physics, planning_physics=p.planning_physics,
+                   fold_start=p.fold_start)
 
     def departures(self, protocol: str = "ours", quick: bool = False) -> dict:
         """{field: value} of these settings that differ from ``preset(task, goal, quick,
         protocol)``, nested configs as dotted names ("cem.population"); the thread count is
-        not a setting of the experiment and is left out. Empty: the protocol as it stands."""
+        not a setting of the experiment and is left out; an optional setting the preset sets
+        and these leave unset is named by its unset value (``UNSET_NAMES``: "fold_start":
+        "chained"). Empty: the protocol as it stands."""
         base = flatten(type(self).preset(self.task, self.goal, quick, protocol).to_dict())
         mine = flatten(self.to_dict())
-        return {k: v for k, v in mine.items()
+        unset = {k: UNSET_NAMES.get(k) for k in base if k not in mine}
+        return {k: v for k, v in {**mine, **unset}.items()
                 if k not in RUN_ONLY_SETTINGS and base.get(k) != v}
 
     def constraint(self) -> ActionConstraint:
@@ -172,10 +214,12 @@ class PickPlaceSettings:
     def scene_config(self, physics: str | None = None, overrides: dict | None = None):
         """The task's scene config (``ClothSceneConfig`` / ``RopeSceneConfig``) of the preset
         ``physics`` (None: ``self.physics``) with the settings' own fields (the task's
-        ``scene_fields``: n, side or length, selfcollide) and ``overrides`` on top."""
+        ``scene_fields``: n, side or length, selfcollide, a cloth's mass where set) and
+        ``overrides`` on top."""
         physics = self.physics if physics is None else physics
         spec = PICK_TASKS[self.task]
-        fields = {name: getattr(self, name) for name in spec.scene_fields}
+        fields = {name: getattr(self, name) for name in spec.scene_fields
+                  if getattr(self, name) is not None}
         return spec.config.preset(physics, **{**fields, **(overrides or {})})
 
     def planning_scene_config(self, overrides: dict | None = None):
@@ -189,10 +233,14 @@ class PickPlaceSettings:
         """JSON-able scene and picker configs these settings run (what a preset name means
         today) and the stability bounds their rollouts are judged by (CEM scores an unstable
         sample +inf): a trial's identity, so that a changed preset, picker or verdict is not
-        reused. Scene fields in ``UNSET_SCENE_FIELDS`` appear only when set."""
+        reused. Scene fields in ``UNSET_SCENE_FIELDS`` appear only when set; a prepared start
+        (``fold_start``) adds its lift and settle (m, s; ``tasks.PREPARED_LIFT``,
+        ``PREPARED_SETTLE``)."""
         out = {"scene": _scene_identity(self.scene_config()),
                "picker": _picker_identity(self.picker()),
                "stability": asdict(PICK_BOUNDS)}
+        if self.fold_start == "prepared":
+            out["prepared_start"] = {"lift": PREPARED_LIFT, "settle": PREPARED_SETTLE}
         planning = self.planning_scene_config()
         if planning is not None:
             out["planning_scene"] = _scene_identity(planning)
@@ -212,12 +260,13 @@ class PickPlaceSettings:
 
     def to_dict(self) -> dict:
         """JSON-able form (nested configs as dicts); ``from_dict`` inverts it. ``picker_move``
-        appears only when set, so that the settings of a trial with the fixed move read as
-        they did before the field existed (in its record, the sweep's params, the presets'
-        snapshot)."""
+        and ``fold_start`` appear only when set, so that the settings of a trial with the
+        fixed move and the chained start read as they did before the fields existed (in its
+        record, the sweep's params, the presets' snapshot)."""
         out = asdict(self)
-        if out["picker_move"] is None:
-            del out["picker_move"]
+        for name in ("picker_move", "fold_start"):
+            if out[name] is None:
+                del out[name]
         return out
 
     @classmethod
@@ -226,7 +275,8 @@ class PickPlaceSettings:
         if not isinstance(d, dict):
             raise TypeError(f"PickPlaceSettings.from_dict needs a dict, got {type(d).__name__}")
         d = dict(d)
-        for name, config in (("cem", CEMConfig), ("scripted", ScriptedConfig)):
+        for name, config in (("cem", CEMConfig), ("scripted", ScriptedConfig),
+                             ("drag", DragSettings)):
             if isinstance(d.get(name), dict):
                 check_fields(config, d[name], f"settings[{name!r}]")
                 d[name] = config(**d[name])

@@ -34,6 +34,8 @@ Shapes: T horizon, nu controls, ns state row, c = |C| active DoFs.
     authors_data.py  the authors' Table 1 statistic on their per-episode files and on ours
     authors_clock.py  the model clock fitted to the authors' optimisation times (clock
                  ``authors``)
+    choice.py    what each row's C held (the goal object's share) beside its lag and held
+                 steps, from stored active sets (choice_fields)
 """
 
 from planners.svr_mpc.episode import (

@@ -16,6 +16,7 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
+from dopt.blowup import retire_captures
 from dopt.mpc import MPC, MPCConfig, Plan, mpc_cost
 from dopt.rollout import RolloutConfig, RolloutService
 from dopt.scene import Scene
@@ -24,7 +25,6 @@ from dopt.tasks.push.contact import robot_contact
 from dopt.tasks.push.costs import COST_PRESETS, PushWeights, goal_distance, push_cost
 from dopt.tasks.push.task_model import TaskModel
 from dopt.validation import check_int
-from dopt.view.blowup import retire_captures
 from planners.ilqr import ILQR, ILQRConfig
 from planners.svr import DofSelector, SelectionConfig, SVROptimiser
 from planners.svr_mpc import authors_clock

@@ -33,7 +33,6 @@ import os
 import re
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -43,9 +42,6 @@ from dopt.scene import Scene
 from dopt.tasks.push.task_model import TaskModel
 from planners.ilqr import ILQR
 from planners.svr import METHODS, DofSelector, SVROptimiser
-
-if TYPE_CHECKING:
-    from planners.svr_mpc.settings import SVRMPCSettings
 
 #: the default optimiser's name: the paper's iLQR-SVR (every Table 1 row)
 DEFAULT_OPTIMISER = "svr"
@@ -60,14 +56,16 @@ class OptimiserContext:
     """What a factory builds an episode's optimiser from: the task instance, its scene, the
     task's cost (``dopt.costs.QuadraticCost``: ``total(states, controls)``, ``derivatives``),
     a rollout service over the scene (``dopt.rollout.RolloutService``; the pipeline closes
-    it after the episode), the trial's settings (``SVRMPCSettings``: ``selection``,
-    ``ilqr``, ...) and the episode's own generator (seeded by the trial's seed)."""
+    it after the episode), the trial's settings (a ``planners.svr_mpc.SVRMPCSettings``:
+    ``selection``, ``ilqr``, ...; typed ``object`` here, since the settings module imports
+    this one for the optimisers' names) and the episode's own generator (seeded by the
+    trial's seed)."""
 
     task: TaskModel
     scene: Scene
     cost: object
     service: RolloutService
-    settings: SVRMPCSettings
+    settings: object
     rng: np.random.Generator
 
 

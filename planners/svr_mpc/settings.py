@@ -14,6 +14,7 @@ import mujoco
 import numpy as np
 
 from dopt.mpc import CLOCKS, EXECUTORS, MAX_CONTROL_NOISE
+from dopt.provenance import root_relative, rooted
 from dopt.rollout import FDConfig
 from dopt.tasks import PUSH_PROBLEMS, build_push_task, get_task
 from dopt.tasks.push.costs import COST_PRESETS
@@ -224,7 +225,10 @@ class SVRMPCSettings:
             together: ``replace(settings, **Derivatives(...).fields())``.
         problem: ``ours`` or ``authors`` (``PROBLEMS``): whose scenes the task builds.
         layouts: the folder of the authors' clutter scenes (``push_mcl_layouts``, one CSV per
-            scene; seed i loads scene i); needed by problem ``authors`` on clutter only.
+            scene; seed i loads scene i); needed by problem ``authors`` on clutter only. A
+            relative path is taken from the checkout's root (``dopt.provenance.rooted``), as
+            ``authors`` and ``preset`` record the folder they are given (relative to the
+            current folder), so that a result names no folder of its machine.
         islands: MuJoCo's constraint islands (its default); False solves all constraints as
             one system (``mjDSBL_ISLAND``), as the authors' MuJoCo did, so that untouched
             objects' derivatives are tiny rather than exactly 0.
@@ -284,8 +288,8 @@ class SVRMPCSettings:
         if self.problem == "authors" and self.task == "clutter" and not self.layouts:
             raise ValueError("problem 'authors' on clutter needs layouts: the folder of the "
                              "authors' scenes (push_mcl_layouts/{0..99}.csv)")
-        if self.layouts is not None and not Path(self.layouts).is_dir():
-            raise ValueError(f"layouts: no folder {self.layouts} (the authors' "
+        if self.layouts is not None and not rooted(self.layouts).is_dir():
+            raise ValueError(f"layouts: no folder {rooted(self.layouts)} (the authors' "
                              f"push_mcl_layouts, one CSV per scene)")
         # rho, control_noise finite >= 0; theta an int >= 0 or None; slowdown finite > 0 or
         # None; timeout an int >= 1 or None; feedback, synchronous bools; threads an int >= 0
@@ -318,7 +322,7 @@ class SVRMPCSettings:
                       "clock": "virtual", **overrides})
 
     @classmethod
-    def authors(cls, task: str, row: str = "sum-t10-r1", layouts: str | None = None,
+    def authors(cls, task: str, row: str = "sum-t10-r1", layouts: str | Path | None = None,
                 **overrides) -> SVRMPCSettings:
         """The authors' regime for ``row`` on their own problem ``task``: their scenes
         (clutter: scene ``seed`` of ``layouts``), objects and contacts, their cost weights
@@ -327,14 +331,17 @@ class SVRMPCSettings:
         records ``controls_noise: 0``), their data generator's executor (``authors``: hold
         after 80 controls, nearest-state landing) and the clock fitted to their times
         (``authors``). Where the paper's text (Alg. 1) and their code differ, this follows
-        the code, which generated their data; ``executor="alg1"`` is the text's reading."""
+        the code, which generated their data; ``executor="alg1"`` is the text's reading.
+        ``layouts`` (relative to the current folder) is recorded relative to the checkout's
+        root (``dopt.provenance.root_relative``)."""
+        layouts = None if layouts is None else root_relative(layouts)
         return cls.paper(task, row, **{"problem": "authors", "layouts": layouts,
                                        "cost": f"authors-{task}", "control_noise": 0.0,
                                        "executor": "authors", "clock": "authors",
                                        **overrides})
 
     @classmethod
-    def preset(cls, name: str, task: str, layouts: str | None = None) -> SVRMPCSettings:
+    def preset(cls, name: str, task: str, layouts: str | Path | None = None) -> SVRMPCSettings:
         """The protocol ``name`` (``PRESETS``) on ``task``: ``ours`` (the defaults), ``paper``
         (``paper``, its default row) or ``authors`` (``authors``, with ``layouts``; only the
         authors' problem reads them: ValueError with another preset)."""
@@ -353,7 +360,7 @@ class SVRMPCSettings:
         """The task instance of ``seed`` under these settings (``problem``, ``layouts``,
         ``islands``): the same for every method, so costs pair up seed by seed."""
         task = build_push_task(self.task, self.problem, int(seed),
-                               Path(self.layouts) if self.layouts else None)
+                               rooted(self.layouts) if self.layouts else None)
         if not self.islands:
             task.model.opt.disableflags |= mujoco.mjtDisableBit.mjDSBL_ISLAND
         return task

@@ -13,6 +13,7 @@ from scipy import stats
 from dopt.multiple import holm
 from dopt.stats import mean_ci
 from planners.svr_mpc.authors_data import authors_statistic
+from planners.svr_mpc.choice import choice_fields
 from planners.svr_mpc.settings import TABLE1_ROWS, row_label
 
 #: a goal object that ends farther than this from the goal (m) was knocked over and rolled away;
@@ -117,12 +118,13 @@ VERSUS_REFERENCES = ("baseline", "rand-t5")
 
 
 def versus(records: list[dict], references: tuple[str, ...] = VERSUS_REFERENCES,
-           alpha: float = 0.05) -> dict:
+           alpha: float = 0.05, keep_unstable: bool = False) -> dict:
     """Does each SVR row (method ``svr-*``) cost less than each of ``references``, seed by seed?
 
     One family: every (SVR row, reference) pair present. Per pair, on the seeds both ran
     where neither trial is an outlier or unstable (as ``summarize``'s mean; counted in
-    "excluded"): the per-seed log cost ratios, their geometric mean, a two-sided one-sample
+    "excluded"; ``keep_unstable``: outliers only, the sensitivity of a verdict to the
+    stability bounds): the per-seed log cost ratios, their geometric mean, a two-sided one-sample
     t-test of mean log ratio 0 (``p``), Holm's adjusted p over the family (``p_holm``), and a
     simultaneous (Bonferroni) interval of the ratio at family-wise level 1 - ``alpha``
     (``ratio_ci_simultaneous``: each pair's t-interval at 1 - alpha / m; it excludes 1 only
@@ -146,7 +148,7 @@ def versus(records: list[dict], references: tuple[str, ...] = VERSUS_REFERENCES,
             raise ValueError(f"versus compares cost ratios: the MPC cost of {row} on seed "
                              f"{seed} is {res['mpc_cost']!r}, not a positive number")
         by.setdefault(row, {})[seed] = res["mpc_cost"]
-        if _excluded(res):
+        if _excluded(res, keep_unstable):
             dropped.setdefault(row, set()).add(seed)
     svr_rows = sorted(row for row in by
                       if any(row.startswith(m) for m in ("sum-", "svd-")))
@@ -181,10 +183,12 @@ def versus(records: list[dict], references: tuple[str, ...] = VERSUS_REFERENCES,
     return {"alpha": alpha, "family_size": m, "references": list(references), "pairs": pairs}
 
 
-def _excluded(result: dict) -> bool:
+def _excluded(result: dict, keep_unstable: bool = False) -> bool:
     """A trial left out of the normalised means and of ``versus``: an outlier (goal object
-    farther than ``OUTLIER_DISTANCE`` from the goal) or an unstable episode."""
-    return result["goal_distance_end"] > OUTLIER_DISTANCE or bool(result.get("unstable", False))
+    farther than ``OUTLIER_DISTANCE`` from the goal) or (unless ``keep_unstable``) an
+    unstable episode."""
+    return (result["goal_distance_end"] > OUTLIER_DISTANCE
+            or (not keep_unstable and bool(result.get("unstable", False))))
 
 
 def _t_test_p(x: np.ndarray) -> float | None:
@@ -260,9 +264,11 @@ def derivatives_effect(records: list[dict], level: float = 0.90) -> dict:
 def table1_fields(records: list[dict], baseline: str = "baseline") -> dict:
     """Everything a Table 1 summary computes from its trials: "methods" (``summarize``, rows
     in ``TABLE1_ROWS`` order, variants after their row), "paired", "authors_statistic",
-    "versus", "lag_cost_tau" (``lag_cost_tau``), and where the trials hold them
-    "feedback_effect" (both feedback settings ran)
-    and "derivatives_effect" (a derivative variant ran)."""
+    "versus", "lag_cost_tau" (``lag_cost_tau``), "versus_unstable_kept" (``versus`` with the
+    episodes flagged unstable kept) where any is, "choice" (``choice.choice_fields``: how
+    often each row's C held the goal object) where the trials have active sets, and where
+    the trials hold them "feedback_effect" (both feedback settings ran) and
+    "derivatives_effect" (a derivative variant ran)."""
     order = {name: i for i, name in enumerate(TABLE1_ROWS)}
     rows = dict(sorted(summarize(records, baseline=baseline).items(),
                        key=lambda kv: (order.get(kv[0].split()[0], 99), kv[0])))
@@ -270,6 +276,10 @@ def table1_fields(records: list[dict], baseline: str = "baseline") -> dict:
            "authors_statistic": authors_statistic(records, baseline=baseline),
            "versus": versus(records)}
     out["lag_cost_tau"] = lag_cost_tau(rows)
+    if choice := choice_fields(records, baseline=baseline):
+        out["choice"] = choice
+    if any(r["result"].get("unstable") for r in records):
+        out["versus_unstable_kept"] = versus(records, keep_unstable=True)
     if len({bool(r["params"].get("feedback")) for r in records}) == 2:
         out["feedback_effect"] = feedback_effect(records)
     if variants := derivatives_effect(records):

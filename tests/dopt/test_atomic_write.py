@@ -57,10 +57,10 @@ def test_an_interrupt_inside_the_write_propagates_and_leaves_one_whole_file(
 ])
 def test_an_interrupt_inside_a_pack_write_leaves_one_whole_pack(
         tmp_path, monkeypatch, replace, expect):
-    trialpack.write_pack(tmp_path, {"k": '{"key": "k", "v": "old"}'})
+    trialpack.append_pack(tmp_path, {"k": '{"key": "k", "v": "old"}'})
     monkeypatch.setattr(jsonio.os, "replace", replace)
     with pytest.raises(Landed):
-        trialpack.write_pack(tmp_path, {"k": '{"key": "k", "v": "new"}'})
+        trialpack.append_pack(tmp_path, {"k": '{"key": "k", "v": "new"}'})
     assert {k: t.text for k, t in trialpack.read_pack(tmp_path).items()} == expect
     assert sorted(p.name for p in tmp_path.iterdir()) == [trialpack.PACK_NAME]
 
@@ -99,7 +99,7 @@ def file_size_limit(nbytes: int):
         resource.setrlimit(resource.RLIMIT_FSIZE, (soft, hard))
 
 
-#: a result of some 40 kB that does not compress to under 4 kB (a pack is gzip)
+#: a result of some 40 kB (a pack is not compressed; the hashes would not compress anyway)
 BIG = {"rows": [{"i": i, "hash": hashlib.sha256(bytes(i)).hexdigest(), "cost": i / 7}
                 for i in range(400)]}
 
@@ -109,7 +109,7 @@ def write_json(path, obj):
 
 
 def write_pack(path, obj):
-    trialpack.write_pack(path.parent, {"k": json.dumps({"key": "k", **obj})})
+    trialpack.append_pack(path.parent, {"k": json.dumps({"key": "k", **obj})})
 
 
 def write_in_pieces(path, obj):

@@ -1,9 +1,19 @@
-"""The command line a result records: what a user types from the checkout's root to rerun it."""
+"""The command line a result records: what a user types from the checkout's root to rerun it,
+naming no folder of the machine it ran on (paths relative to the checkout's root or its sibling
+``../shared``, others as ``<outside>/NAME``); the settings' paths, recorded relative to the
+root; and older records' commands shown so (``recorded_command``)."""
 
+import json
+import os
+import posixpath
+import shlex
 import sys
 import types
+from pathlib import Path
 
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from dopt import provenance
 
@@ -25,12 +35,93 @@ def test_a_script_in_the_checkout_is_recorded_by_its_relative_path(root):
     assert provenance.command_line(argv) == "python experiments/mpc.py --task soft --out 'a b'"
 
 
-def test_relative_and_outside_paths_are_kept_as_given(root, tmp_path_factory):
+def test_relative_paths_are_kept_and_outside_ones_lose_their_folders(root, tmp_path_factory):
     assert provenance.command_line(["experiments/mpc.py", "--quick"]) == \
         "python experiments/mpc.py --quick"
     outside = str(tmp_path_factory.mktemp("elsewhere") / "run.py")
-    assert provenance.command_line([outside, "-x"]) == f"python {outside} -x"
+    assert provenance.command_line([outside, "-x"]) == "python '<outside>/run.py' -x"
     assert provenance.command_line([]) == "python"
+
+
+def test_absolute_arguments_are_recorded_relative_to_the_root_or_its_shared_folder(root):
+    shared = root.parent / "shared" / "external" / "layouts"
+    argv = [str(root / "experiments" / "mpc.py"), "--layouts", str(shared),
+            f"--out={root / 'docs' / 'results' / 'runs' / 'x'}", "--record", "/elsewhere/a.json",
+            "--rho", "0.5", "--name", "docs/notes"]
+    assert provenance.command_line(argv) == (
+        "python experiments/mpc.py --layouts ../shared/external/layouts "
+        "--out=docs/results/runs/x --record '<outside>/a.json' --rho 0.5 --name docs/notes")
+
+
+#: path parts a generator draws (none of them "." or "..")
+PART = st.text("abcxyz_-0123456789", min_size=1, max_size=6)
+
+
+@settings(max_examples=80, deadline=None)
+@given(st.sampled_from(["root", "shared", "sibling", "far"]), st.lists(PART, min_size=1,
+                                                                         max_size=4))
+def test_a_path_is_recorded_relative_exactly_where_it_lies_inside_root_or_shared(where, parts):
+    """Against posixpath on made-up folders (nothing is read): inside the root its parts, in the
+    shared folder beside it ``../shared`` and its parts, elsewhere ``<outside>/`` its name;
+    ``rooted`` reads back every ``root_relative`` path to the same folder."""
+    root = "/m/u/checkout"
+    base = {"root": root, "shared": "/m/u/shared", "sibling": "/m/u/other",
+            "far": "/var"}[where]
+    path = posixpath.join(base, *parts)
+    expected = {"root": "/".join(parts), "shared": "/".join(["..", "shared", *parts])}.get(
+        where, f"<outside>/{parts[-1]}")
+    assert provenance.portable_path(path, root) == expected
+    rel = provenance.root_relative(path, root)
+    assert not os.path.isabs(rel) and provenance.rooted(rel, root) == Path(path)
+    assert provenance.rooted(path, root) == Path(path)           # an older, absolute record
+
+
+def machine(*parts: str) -> str:
+    """An absolute path of a machine, built so that this file names none
+    (tests/test_machine_paths.py)."""
+    return "/" + "/".join(parts)
+
+
+def test_older_records_commands_are_shown_relative_as_command_line_writes_them(root):
+    rec = provenance.recorded_command
+    main = machine("work", "main", "planners", "bench", "__main__.py")
+    assert rec(f"python {main} clock --sizes 5") == "python -m planners.bench clock --sizes 5"
+    layouts = machine("work", "shared", "external", "ilqr_svr", "push_mcl_layouts")
+    assert rec(f"python experiments/mpc.py --preset authors --layouts {layouts} "
+               f"--out docs/results/runs/t") == \
+        ("python experiments/mpc.py --preset authors --layouts "
+         "../shared/external/ilqr_svr/push_mcl_layouts --out docs/results/runs/t")
+    assert rec(f"python -m dopt.bench cloth-warp --record {machine('root', 'out', 'w.json')}") \
+        == \
+        "python -m dopt.bench cloth-warp --record '<outside>/w.json'"
+    for kept in ("python experiments/mpc.py --task soft --out 'a b'", "python -c 'unbalanced",
+                 "", "make demo"):
+        assert rec(kept) == kept
+    # today's records are what recorded_command shows them as
+    today = provenance.command_line([str(root / "experiments" / "mpc.py"), "--layouts",
+                                     str(root.parent / "shared" / "l"), "--out", "/x/y"])
+    assert rec(today) == today
+
+
+def test_every_committed_command_is_shown_without_a_machines_folder():
+    """Over the commands of every committed result: none shown names a folder of a machine
+    (tests/test_machine_paths.py's pattern), and every word of the recorded one that is no
+    path is still there, in order."""
+    from tests.test_machine_paths import MACHINE_PATH
+
+    results = Path(__file__).resolve().parents[2] / "docs" / "results"
+    commands = []
+    for f in sorted(results.glob("*.json")):
+        data = json.loads(f.read_text())
+        for key in ("provenance", "resummarized_from"):
+            if isinstance(data.get(key), dict) and data[key].get("command"):
+                commands.append(data[key]["command"])
+    assert len(commands) > 50
+    for command in commands:
+        shown = provenance.recorded_command(command)
+        assert not MACHINE_PATH.search(shown), (command, shown)
+        words = iter(w for w in shlex.split(shown) if "/" not in w)
+        assert all(w in words for w in shlex.split(command) if "/" not in w), (command, shown)
 
 
 def test_a_module_run_with_dash_m_is_recorded_as_python_dash_m(root, monkeypatch):

@@ -135,7 +135,7 @@ def test_spun_bodies_are_flagged_on_every_route(x_kw, step, body, c_kernels):
         want = max(site_speed(sc, x0, "far"), site_speed(sc, x0, "bob_far"))
         assert open_loop.max_speed[0] == pytest.approx(want, rel=1e-9)
     else:
-        from dopt.view.blowup import _body_of_reason
+        from dopt.blowup import _body_of_reason
         reason = open_loop.reason[0]
         assert reason.startswith("speed") and reason.endswith(f"(body {body})"), reason
         assert _body_of_reason(sc.model, reason) == sc.model.body(body).id

@@ -1,8 +1,9 @@
 """Packed trials (dopt.trialpack, dopt.sweep.pack_trials): packing keeps every record as it
 was and deletes each loose file only once its line reads back the same; the same records give
-the same bytes; a loose file overrides its packed record; a resume reuses packed trials without
-running them; a pack that cannot be read is named with its line; the viewer lists and opens
-packed trials."""
+the same bytes; a loose file overrides its packed record, and re-packing appends the new one
+after the old line; a resume reuses packed trials without running them; a pack that cannot be
+read is named with its line; the viewer lists and opens packed trials. The format itself
+(append-only, the earlier gzip packs, precedence, a cut last line): test_trialpack_format.py."""
 
 import gzip
 import json
@@ -25,6 +26,7 @@ from dopt.sweep import (
 )
 from dopt.sweep import main as sweep_main
 from dopt.trialpack import (
+    GZIP_PACK_NAME,
     PACK_NAME,
     pack_bytes,
     pack_path,
@@ -66,7 +68,7 @@ def test_pack_then_load_gives_the_records_the_files_held(tmp_path):
     assert sorted(p.name for p in (tmp_path / "trials").iterdir()) == [PACK_NAME]
     after = load_finished(tmp_path)
     assert json.dumps(after) == json.dumps(before)          # same records, same member order
-    lines = gzip.decompress(pack_path(tmp_path / "trials").read_bytes()).decode().splitlines()
+    lines = pack_path(tmp_path / "trials").read_text().splitlines()
     assert lines == [texts[k] for k in sorted(texts)]        # each line is its file's text
     assert [t.name for t in stored_trials(tmp_path / "trials")] == ["x1.json", "x2.json",
                                                                     "x3.json"]
@@ -81,7 +83,7 @@ def test_a_bare_nan_of_an_older_file_is_packed_as_its_note(tmp_path):
     path.write_text(json.dumps({"key": "x1", "params": {}, "result": {"y_mean": float("nan")},
                                 "code": CODE}))
     pack_trials(tmp_path)
-    (line,) = gzip.decompress(pack_path(path.parent).read_bytes()).decode().splitlines()
+    (line,) = pack_path(path.parent).read_text().splitlines()
     assert "NaN" not in line.replace('"NaN:', "")            # strict JSON, a note beside
     y = load_finished(tmp_path)["x1"]["result"]["y_mean"]
     assert y != y                                              # read back as NaN
@@ -107,15 +109,19 @@ def test_repacking_the_same_records_gives_the_same_bytes(tmp_path):
 def test_a_loose_file_overrides_its_packed_record_and_repacking_keeps_the_old_one(tmp_path):
     swept(tmp_path)
     pack_trials(tmp_path)
+    pack = pack_path(tmp_path / "trials")
+    first = pack.read_bytes()
     newer = {"key": "x2", "params": {"x": 2}, "result": {"y": 40}, "code": CODE}
     (tmp_path / "trials" / "x2.json").write_text(json.dumps(newer))
     assert load_finished(tmp_path)["x2"]["result"]["y"] == 40
     assert [t.packed for t in stored_trials(tmp_path / "trials")] == [True, False, True]
     res = pack_trials(tmp_path)
-    assert res.added == ["x2"] and list(res.replaced) == ["x2"]
+    assert res.added == ["x2"] and res.replaced == {"x2": f"{pack} line 2"} and res.n == 3
     assert load_finished(tmp_path)["x2"]["result"]["y"] == 40
-    old = json.loads((tmp_path / "trials" / "outdated" / "x2.json").read_text())
-    assert old["result"]["y"] == 4                             # never deleted
+    data = pack.read_bytes()
+    assert data.startswith(first)                              # the old line stays, never rewritten
+    assert [json.loads(x)["result"]["y"] for x in data[len(first):].splitlines()] == [40]
+    assert not (tmp_path / "trials" / "outdated").exists()
 
 
 def test_a_resume_reuses_packed_trials_without_running_them(tmp_path):
@@ -145,7 +151,7 @@ def test_a_packed_record_of_other_code_or_schema_is_recomputed_and_overridden(
     assert not is_finished(tmp_path, "x2")
     records, corrupt = check_trial_files(tmp_path, schema)      # packed: stays in the pack
     assert records == {} and set(corrupt) == {"x1.json", "x2.json", "x3.json"}
-    assert "packed in pack.jsonl.gz line 2" in corrupt["x2.json"]
+    assert "packed in pack.jsonl line 2" in corrupt["x2.json"]
     assert pack_path(tmp_path / "trials").read_bytes() == packed
 
 
@@ -159,33 +165,46 @@ def test_a_corrupt_loose_file_over_a_packed_record_gives_way_to_it(tmp_path):
     assert (tmp_path / "trials" / "corrupt" / "x1.json").read_text() == "{"
 
 
-#: (raw bytes, gzip them?, cut bytes off the end, what the error names); gzip with mtime 0,
-#: so that every pytest-xdist worker collects the same parameters
+#: (the pack's name, raw bytes, gzip them?, cut bytes off the end, what the error names); gzip
+#: with mtime 0, so that every pytest-xdist worker collects the same parameters. A key twice is
+#: an error only in a gzip pack (in pack.jsonl the later line replaces the earlier one), and a
+#: cut pack.jsonl is a CutPackError (test_trialpack_format.py repairs it).
 BAD_PACKS = {
-    "not-gzip": (b"not gzip", False, 0, r"pack\.jsonl\.gz cannot be read"),
-    "bad-json": (b'{"key": "a"}\n{"key": "b"', True, 0,
+    "not-gzip": (GZIP_PACK_NAME, b"not gzip", False, 0, r"pack\.jsonl\.gz cannot be read"),
+    "bad-json": (GZIP_PACK_NAME, b'{"key": "a"}\n{"key": "b"', True, 0,
                  r"pack\.jsonl\.gz line 2: not valid JSON"),
-    "not-a-record": (b'{"key": "a"}\n[1]\n', True, 0, "line 2: not a trial record"),
-    "bad-key": (b'{"key": "a"}\n{"key": "../b"}\n', True, 0,
+    "not-a-record": (GZIP_PACK_NAME, b'{"key": "a"}\n[1]\n', True, 0,
+                     "line 2: not a trial record"),
+    "bad-key": (GZIP_PACK_NAME, b'{"key": "a"}\n{"key": "../b"}\n', True, 0,
                 "line 2: its key '../b' is not a valid"),
-    "twice": (b'{"key": "a"}\n{"key": "a"}\n', True, 0, "line 2: key 'a' is packed twice"),
-    "truncated": (b'{"key": "a"}\n{"key": "b"}\n', True, 6, "cannot be read"),
+    "twice": (GZIP_PACK_NAME, b'{"key": "a"}\n{"key": "a"}\n', True, 0,
+              "line 2: key 'a' is packed twice"),
+    "truncated": (GZIP_PACK_NAME, b'{"key": "a"}\n{"key": "b"}\n', True, 6, "cannot be read"),
+    "jsonl-bad-json": (PACK_NAME, b'{"key": "a"}\n{"key": "b"\n', False, 0,
+                       r"pack\.jsonl line 2: not valid JSON"),
+    "jsonl-not-a-record": (PACK_NAME, b'{"key": "a"}\n"b"\n', False, 0,
+                           "line 2: not a trial record"),
+    "jsonl-bad-key": (PACK_NAME, b'{"key": ""}\n', False, 0, "line 1: its key '' is not"),
+    "jsonl-not-utf8": (PACK_NAME, b'{"key": "a\xff"}\n', False, 0, "cannot be read"),
+    "jsonl-cut": (PACK_NAME, b'{"key": "a"}\n{"key": "b"}\n', False, 3,
+                  r"pack\.jsonl line 2 is cut short .*pack --repair"),
 }
 
 
 @pytest.mark.parametrize("case", list(BAD_PACKS))
 def test_a_pack_that_cannot_be_read_is_named_with_its_line(tmp_path, case):
-    raw, packed, cut, match = BAD_PACKS[case]
+    name, raw, packed, cut, match = BAD_PACKS[case]
     content = gzip.compress(raw, mtime=0) if packed else raw
     content = content[:len(content) - cut]
     swept(tmp_path, [1])
-    pack_path(tmp_path / "trials").write_bytes(content)
+    (tmp_path / "trials" / name).write_bytes(content)
     for read in (lambda: load_finished(tmp_path), lambda: is_finished(tmp_path, "x1"),
                  lambda: run_sweep(never, trials([1]), tmp_path),
                  lambda: pack_trials(tmp_path)):
         with pytest.raises(PackError, match=match):
             read()
     assert (tmp_path / "trials" / "x1.json").is_file()          # nothing moved or deleted
+    assert (tmp_path / "trials" / name).read_bytes() == content
 
 
 def test_files_that_are_not_records_are_left_loose_and_the_command_fails(tmp_path, capsys):
@@ -194,7 +213,7 @@ def test_files_that_are_not_records_are_left_loose_and_the_command_fails(tmp_pat
     (tmp_path / "trials" / ".tmp-x.json").write_text("{")      # a killed write: left alone
     assert sweep_main(["pack", str(tmp_path)]) == 1
     out = capsys.readouterr().out
-    assert "1 trials in" in out and "notes.json: not a trial record" in out
+    assert "1 trials packed" in out and "notes.json: not a trial record" in out
     assert sorted(p.name for p in (tmp_path / "trials").iterdir()) == [
         ".tmp-x.json", "notes.json", PACK_NAME]
     (tmp_path / "trials" / "notes.json").unlink()

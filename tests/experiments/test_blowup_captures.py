@@ -1,5 +1,5 @@
 """cli_args.blowup_captures: the blow-up captures of a run's trials, named on the console and
-listed for its summary; dopt.view.blowup.retire_captures moves a rerun trial's old ones
+listed for its summary; dopt.blowup.retire_captures moves a rerun trial's old ones
 aside; a pick-and-place run (rope.py) lists the captures of its flagged plans."""
 
 import json
@@ -8,7 +8,7 @@ import mujoco
 import numpy as np
 from cli_args import blowup_captures
 
-from dopt.view.blowup import capture_dir, list_captures, retire_captures, save_blowup
+from dopt.blowup import capture_dir, list_captures, retire_captures, save_blowup
 
 BALL = ("<mujoco><worldbody><body name='ball'><freejoint/><geom size='.1'/></body>"
         "</worldbody></mujoco>")

@@ -44,7 +44,8 @@ def test_committed_results_md_and_readme_are_generated():
 def test_the_script_needs_only_the_standard_library():
     """Besides the standard library it loads dopt.cli (the command-line types),
     dopt.multiple (Holm's correction), dopt.dicts (nested dicts), dopt.trialpack (the reader
-    of committed trials, loose or packed) with dopt.jsonio and dopt.atomic (its atomic write) and
+    of committed trials, loose or packed) with dopt.jsonio and dopt.atomic (its atomic write),
+    dopt.provenance (a recorded command shown without its machine's folders) and
     planners.trial_progress (the reader of a trial's checkpoint), standard library themselves,
     and nothing else of the project or of its dependencies."""
     # as `python experiments/report.py`: the script's folder (its sibling cli_args) on the path
@@ -57,7 +58,8 @@ def test_the_script_needs_only_the_standard_library():
             "             and m not in ('planners', 'planners.trial_progress')\n"
             "             or (m.startswith('dopt.') and m not in ('dopt.cli', 'dopt.multiple',\n"
             "                                                 'dopt.dicts', 'dopt.trialpack',\n"
-            "                                                 'dopt.jsonio', 'dopt.atomic')))\n"
+            "                                                 'dopt.jsonio', 'dopt.atomic',\n"
+            "                                                 'dopt.provenance')))\n"
             "assert not bad, bad\n")
     subprocess.run([sys.executable, "-c", code], check=True, capture_output=True, timeout=60)
 
@@ -384,9 +386,9 @@ def test_packed_trials_are_reported_as_their_files_were(site, capsys):
         assert not list((runs / sweep / "trials").glob("*.json"))
     assert run(site) == 0
     assert (site["md"].read_text(), site["readme"].read_text()) == before
-    pack_path(runs / "t1" / "trials").write_bytes(b"not gzip")
+    pack_path(runs / "t1" / "trials").write_bytes(b"not json\n")
     assert run(site) == 2
-    assert "pack.jsonl.gz cannot be read" in capsys.readouterr().err
+    assert "pack.jsonl line 1: not valid JSON" in capsys.readouterr().err
 
 
 def test_a_result_whose_preset_was_redefined_is_shown_stale(site):

@@ -508,7 +508,7 @@ def test_scaling_study_renders_sizes_and_the_trend(site):
            "provenance": provenance("python experiments/fig7_scaling.py --goal diagonal")})
     assert run(site) == 0
     md = site["md"].read_text()
-    assert "## Key particles: the gain against the cloth's size" in md
+    assert "## Key particles: the gain against the particle count" in md
     assert "| 10 x 10 | 100 | 10.1 ± " in md
     assert f"**{stats['trend']['original_minus_simple']['verdict']}**" in md
     assert stats["trend"]["original_minus_simple"]["verdict"] == "grows"
@@ -518,7 +518,8 @@ def test_scaling_study_renders_sizes_and_the_trend(site):
     assert run(site) == 0
     assert "](images/fig7-scaling-diagonal.png)" in site["md"].read_text()
     t = stats["trend"]["original_minus_simple"]
-    assert (f"| Sec. V: the gain against the cloth's size | `python experiments/fig7_scaling.py "
+    assert (f"| Sec. V: the gain against the particle count (a finer sheet of one size; a bigger "
+            f"sheet at fixed spacing) | `python experiments/fig7_scaling.py "
             f"--goal diagonal` | Original - Simple gap per log N (N 100-400, 3 seeds): "
             f"diagonal grows ({t['slope'] * 1e3:.1f} ± {t['slope_ci95'] * 1e3:.1f} mm) |") \
         in block(site["readme"])
@@ -546,6 +547,32 @@ def test_scaling_study_renders_sizes_and_the_trend(site):
     md = site["md"].read_text()
     assert (f"Holm p over the 4 tests of the 2 folds {adjusted[0]:.3f}: **"
             f"{'grows' if adjusted[0] <= 0.05 else 'no trend detected at 95 %'}**") in md
+
+
+def test_a_fixed_spacing_scaling_file_stands_beside_the_resolution_one(site):
+    """``fig7_scaling.py --mode size`` on the fold of a resolution file: both sections render,
+    each fold's Holm family is its own mode's, and the normalised trend is shown."""
+    from planners.pick_place.scaling import scaling_summary
+
+    records = [{"params": {"settings": {"n": n}, "method": m, "seed": seed},
+                "result": {"final_cost": 0.01 + (0.002 * n if m == "original" else 0.0)
+                           + 0.0001 * seed, "unstable": False}}
+               for n in (10, 20) for seed in range(3) for m in ("simple", "original", "random")]
+    plain = scaling_summary(records)
+    grown = scaling_summary(records, {10: 0.04, 20: 0.08})
+    for name, mode, stats in (("fig7-scaling-side.json", None, plain),
+                              ("fig7-scaling-spacing-side.json", "size", grown)):
+        write(site["results"], name,
+              {"experiment": "fig7_scaling", "task": "cloth", "goal": "side",
+               "protocol": "paper", "physics_preset": "default", **stats, "failed": {},
+               **({"mode": mode} if mode else {}),
+               "provenance": provenance("python experiments/fig7_scaling.py --goal side")})
+    assert run(site) == 0
+    md = site["md"].read_text()
+    assert "### side: `fig7-scaling-side.json`" in md
+    assert "### side at fixed spacing: `fig7-scaling-spacing-side.json`" in md
+    assert "normalised by the flat sheet's cost, original - simple: slope" in md
+    assert "tests of the 2 folds" not in md          # one file per mode: no shared family
 
 
 def test_a_run_that_departs_from_its_protocol_is_judged_apart_and_seed_by_seed(site):

@@ -396,6 +396,15 @@ def test_a_table1_file_with_flagged_episodes_says_so_and_the_map_reads_no_means_
     results = report.load_results(site["results"])
     assert report_map.table1_line(results, "paper") == (
         "cheapest reduced row / baseline: soft rand-t5 0.39")
+    # with verdicts against rand: those stand, the baseline's are n/a when it is kept too little
+    pair = {"row": "sum-t10-r1", "reference": "rand-t5", "verdict": "dearer"}
+    data = {**soft(18), "versus": {"alpha": 0.05, "family_size": 1, "references":
+                                   ["baseline", "rand-t5"],
+                                   "pairs": {"sum-t10-r1 vs rand-t5": pair}}}
+    write(site["results"], "table1-soft.json", data)
+    results = report.load_results(site["results"])
+    assert report_map.table1_line(results, "paper") == (
+        "SVR cheaper:dearer/n vs baseline, rand-t5 (Holm): soft n/a (kept 1/20), 0:1/1")
 
 
 def test_the_protocol_line_says_when_the_push_plan_ends_braking():

@@ -123,7 +123,7 @@ def test_in_place_brings_a_clean_summary_of_an_older_format_up_to_date(tmp_path,
     path.write_text(json.dumps(old))
     monkeypatch.setenv(COMMIT_ENV, "f" * 40)
     assert resummarize.main(["--results-dir", str(results), "--in-place"]) == 0
-    assert "versus, lag_cost_tau)" in capsys.readouterr().out   # "(the rebuild adds ...)"
+    assert "versus, lag_cost_tau, choice)" in capsys.readouterr().out   # "(the rebuild adds ...)"
     new = json.loads(path.read_text())
     assert new["resummarized_from"] == old["provenance"]
     kept = {row: {f: v for f, v in m.items() if f in old["methods"][row]}

@@ -347,10 +347,10 @@ def test_derivatives_fields(kwargs, error, match):
 
 def test_make_problem_checks_the_sizes_its_settings_imply_before_building_anything():
     """A cloth of 100000 x 100000 particles once ended in a MemoryError of numpy; the
-    settings' sizes are checked first, naming the setting (``planners.pick_budget``)."""
+    settings' sizes are checked first, naming the setting (``planners.pick_place.budget``)."""
     from dataclasses import replace
 
-    from planners.pick_budget import BudgetError, budget_problem
+    from planners.pick_place.budget import BudgetError, budget_problem
 
     cloth = PickPlaceSettings.preset("cloth", "diagonal")
     with pytest.raises(BudgetError, match=r"on 10000000000 particles\) needs about .* more "

@@ -8,8 +8,16 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from dopt.tasks import make_cloth
 from dopt.trialpack import stored_trials
-from planners.pick_place.scaling import NO_TREND, scaling_summary, scaling_trials
+from planners.pick_place import PickPlaceSettings, trial_key
+from planners.pick_place.scaling import (
+    NO_TREND,
+    flat_cost,
+    scaling_settings,
+    scaling_summary,
+    scaling_trials,
+)
 
 ROOT = Path(__file__).resolve().parents[2]
 SIZES = (10, 15, 20, 30)
@@ -89,6 +97,7 @@ def test_committed_20x20_trials_have_the_scaling_keys(goal):
     (["--goal", "diagonal", "--methods", "original,random"], "--methods"),
     (["--goal", "diagonal", "--seeds", "0"], "--seeds"),
     (["--goal", "diagonal", "--reuse-from", "/nonexistent/fig7"], "--reuse-from"),
+    (["--goal", "diagonal", "--mode", "spacing"], "--mode"),
 ])
 def test_bad_flags_exit_2_with_one_line(argv, flag, tmp_path, capsys):
     import fig7_scaling
@@ -100,3 +109,69 @@ def test_bad_flags_exit_2_with_one_line(argv, flag, tmp_path, capsys):
     errors = [line for line in err.splitlines() if "error:" in line]
     assert len(errors) == 1 and flag in errors[0] and "Traceback" not in err
     assert not (tmp_path / "out").exists()
+
+
+def test_the_size_sweep_keeps_density_and_relative_reach_fixed():
+    """Mode "size": every sheet at the 20 x 20 preset's spacing, its mass per area, picker's
+    bound and workspace per side those of the preset, its CEM budget the preset's; at n = 20
+    the preset itself (the Fig. 7 trials' keys). Mass and spacing read back from MuJoCo."""
+    preset = PickPlaceSettings.preset("cloth", "side", protocol="paper")
+    spacing, density = preset.side / (preset.n - 1), preset.scene_config().mass / preset.side ** 2
+    for n in (10, 15, 20, 25, 30):
+        s = scaling_settings("side", n, mode="size")
+        assert s.n == n and s.cem == preset.cem and s.physics == preset.physics
+        assert s.scene_config().spacing == pytest.approx(spacing, rel=1e-12)
+        assert s.scene_config().mass / s.side ** 2 == pytest.approx(density, rel=1e-12)
+        assert s.bound / s.side == pytest.approx(preset.bound / preset.side, rel=1e-12)
+        box = np.array(s.constraint().high[:2]) - s.constraint().low[:2]
+        assert box / s.side == pytest.approx(2.0, rel=1e-12)
+        assert s.scene_config().particle_radius == pytest.approx(
+            preset.scene_config().particle_radius, rel=1e-12)
+    assert scaling_settings("side", 20, mode="size") == scaling_settings("side", 20) == preset
+    assert trial_key("simple", 0, scaling_settings("side", 20, mode="size")) == \
+        trial_key("simple", 0, preset)
+    for n in (10, 25):
+        s = scaling_settings("side", n, mode="size")
+        scene = make_cloth(s.scene_config(), s.picker())
+        m = scene.model
+        bodies = m.flex_vertbodyid[m.flex_vertadr[0]:][:n * n]
+        assert m.body_mass[bodies].sum() / s.side ** 2 == pytest.approx(density, rel=1e-6)
+        p = scene.positions(scene.initial_state)
+        assert np.ptp(p[:, 0]) == pytest.approx((n - 1) * spacing, rel=1e-3)
+    with pytest.raises(ValueError, match="scaling mode"):
+        scaling_settings("side", 10, mode="spacing")
+    with pytest.raises(ValueError, match="mass"):
+        PickPlaceSettings.preset("rope", "fold").__class__(
+            **{**PickPlaceSettings.preset("rope", "fold").__dict__, "mass": 0.1})
+
+
+def test_flat_cost_is_the_folds_travel_and_grows_with_the_side():
+    """The side fold moves half the sheet from x to about -x: a mean distance of side / 4 over
+    the whole sheet, less the rounded crease's share; the diagonal's is side * 2 sqrt(2) / 12
+    (the moving triangle's mean distance to the crease, doubled, over two)."""
+    for n in (10, 20, 25):
+        s = scaling_settings("side", n, mode="size")
+        assert flat_cost(s) == pytest.approx(s.side / 4, rel=0.06)
+        d = scaling_settings("diagonal", n, mode="size")
+        assert flat_cost(d) == pytest.approx(d.side * 2 * np.sqrt(2) / 12, rel=0.1)
+
+
+def test_the_normalised_statistics_divide_by_the_flat_cost():
+    recs = records(0.004)
+    flat = {n: 0.01 * n for n in SIZES}
+    out = scaling_summary(recs, flat)
+    plain = scaling_summary(recs)
+    assert out["trend"] == plain["trend"] and out["verdict"] == plain["verdict"]
+    for n in SIZES:
+        e, p = out["per_size"][str(n)], plain["per_size"][str(n)]
+        assert e["flat_cost"] == flat[n]
+        simple = e["methods"]["simple"]
+        assert simple["final_cost_normalised_mean"] == pytest.approx(
+            p["methods"]["simple"]["final_cost_mean"] / flat[n])
+        assert e["original_minus_simple_normalised"]["values"] == pytest.approx(
+            [v / flat[n] for v in p["original_minus_simple"]["values"]])
+    # a gap that grows as log N in m shrinks once divided by a flat cost that grows as n
+    assert out["trend_normalised"]["original_minus_simple"]["slope"] < 0
+    assert "of the flat cost" in out["verdict_normalised"]
+    with pytest.raises(ValueError, match="flat_costs"):
+        scaling_summary(recs, {10: 0.1})

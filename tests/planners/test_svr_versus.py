@@ -172,3 +172,26 @@ def test_fig4_fields_compare_every_grid_point_with_the_baseline_in_one_family():
     assert verdicts == {"sum-t0-r1 vs baseline": "no difference shown",
                         "sum-t10-r1 vs baseline": "cheaper",
                         "sum-t10-r500 vs baseline": "no difference shown"}
+
+
+def test_unstable_episodes_leave_their_pairs_unless_kept():
+    """A pair whose baseline episode is flagged unstable is left out of the comparison (and
+    counted in "excluded"); ``keep_unstable`` keeps it and gives the t-test on all pairs;
+    an outlier stays out either way."""
+    rng = np.random.default_rng(5)
+    base = rng.uniform(50, 150, 10)
+    costs = {"baseline": base, "sum-t10-r1": base * np.exp(rng.normal(-0.2, 0.05, 10))}
+    recs = records(costs)
+    for r in recs:
+        if r["params"]["method"] == "baseline" and r["params"]["seed"] < 4:
+            r["result"]["unstable"] = True
+        if r["params"]["method"] == "baseline" and r["params"]["seed"] == 9:
+            r["result"]["goal_distance_end"] = 10.0                 # an outlier
+    dropped = versus(recs, references=("baseline",))["pairs"]["sum-t10-r1 vs baseline"]
+    kept = versus(recs, references=("baseline",),
+                  keep_unstable=True)["pairs"]["sum-t10-r1 vs baseline"]
+    assert (dropped["pairs"], dropped["excluded"]) == (5, 5)
+    assert (kept["pairs"], kept["excluded"]) == (9, 1)
+    seeds = list(range(9))
+    assert kept["p"] == pytest.approx(stats.ttest_rel(
+        np.log(costs["sum-t10-r1"][seeds]), np.log(base[seeds])).pvalue, rel=1e-9)

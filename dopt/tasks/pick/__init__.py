@@ -12,6 +12,10 @@
     panda_gripper.py  a Panda with a two-finger hand executes picker plans (the arm is
                     the neutral dopt.tasks.panda, shared with the push wing)
     constraints.py  the action constraint C(a_t): the picker's workspace box
+    drag.py         short drags of virtual pick points attached to the mesh (the key-particle
+                    authors' action encoding, N free of the physics mesh)
+    pinned.py       a scene with particles welded to the world, relaxed to equilibrium
+                    (PinnedScene: the physics references' pins and clamps)
 
 The scene builders are registered by name in ``dopt.tasks.PICK_SCENES``.
 """

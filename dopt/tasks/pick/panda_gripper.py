@@ -23,7 +23,7 @@ model. The fingers close for the picture and do not collide with anything.
 
 The replay is judged by the scene's stability bounds and MuJoCo's warnings after every step;
 ``execute(..., blowup_out=OUT)`` writes a blow-up capture of its first failure (the last
-``dopt.view.blowup.KEEP`` states of the combined model, kept in a ring buffer) to
+``dopt.blowup.KEEP`` states of the combined model, kept in a ring buffer) to
 ``OUT/blowups/<blowup_label>``, which ``dopt-view`` opens at the failing step.
 
 Shapes: N particles, H actions, ns state row of the combined model.
@@ -39,6 +39,7 @@ from dataclasses import dataclass, field
 import mujoco
 import numpy as np
 
+from dopt.blowup import KEEP, capture_dir, save_blowup
 from dopt.scene import Scene
 from dopt.stability import Monitor, Stability
 from dopt.tasks.panda import (
@@ -51,7 +52,6 @@ from dopt.tasks.panda import (
 from dopt.tasks.pick.picker import fix_grasp_anchors, grasp_equalities, smooth_profile
 from dopt.tasks.pick.scene import DeformableScene
 from dopt.validation import check_config, float_array
-from dopt.view.blowup import KEEP, capture_dir, save_blowup
 
 log = logging.getLogger(__name__)
 

@@ -285,6 +285,19 @@ class Picker:
         """(ncontrol,) control row holding nothing, servo on with v = 0."""
         return self._base.copy()
 
+    def control_row(self, grasped=(), velocity=(0.0, 0.0, 0.0)) -> np.ndarray:
+        """(ncontrol,) control row: servo on with the velocity target (3,) m/s, the grasp
+        equalities of the particles ``grasped`` (k,) on (a drag that holds several at once,
+        ``dopt.tasks.pick.drag``). ValueError naming a particle without a grasp equality."""
+        ids = np.asarray(grasped, dtype=int).reshape(-1)
+        bad = (ids < 0) | (ids >= self.n_particles)
+        if bad.any() or (self._column[ids] < 0).any():
+            raise ValueError(f"grasped: particles {ids.tolist()} must all have a grasp equality")
+        row = self._base.copy()
+        row[self._vel] = float_array(velocity, "velocity", (3,))
+        row[self._column[ids]] = 1.0
+        return row
+
     # ---------------------------------------------------------------- actions
     def check(self, particles, displacements) -> tuple[np.ndarray, np.ndarray]:
         """Validate a batch of action sequences.

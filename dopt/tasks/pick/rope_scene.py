@@ -34,11 +34,13 @@ FLEX = "rope"
 
 #: physics presets: name -> the fields that differ from RopeSceneConfig's defaults (which are
 #: "default"), chosen by ``python -m planners.bench rope`` (docs/DESIGN-NOTES.md, "Cloth and
-#: rope physics")
+#: rope physics"); "accurate" also by ``python -m planners.bench reference``: edges four times
+#: quicker to restore their length stretch a twelfth as much under the rope's weight, and
+#: Newton converges where CG's 50 iterations stop short on them (catenary sag, cantilever)
 PHYSICS_PRESETS: dict[str, dict] = {
     "fast": {"timestep": 0.02},
     "default": {},
-    "accurate": {"timestep": 0.005},
+    "accurate": {"timestep": 0.005, "edge_solref": (0.001, 1.0), "solver": "Newton"},
 }
 
 
@@ -55,7 +57,10 @@ class RopeSceneConfig:
             keeps the neighbours of a lifted particle from overshooting it: at 1e-3 and dt
             0.02, 289 of 1000 random pick-and-place actions stretch an edge beyond 50 %
             (docs/results/physics-rope.json).
-        edge_solref: solref of the inextensibility constraint.
+        edge_solref: solref of the inextensibility constraint. In MuJoCo 4.0 this, not
+            ``young``, sets how far the edges stretch: the rope hanging under its own weight
+            stretches about as the square of the time constant (0.004 s: 2 %, sagging 5 %
+            deeper than the inextensible catenary; ``planners.bench.reference``).
         friction: sliding friction with the floor.
         selfcollide: rope-rope contacts: False / True ("none" / "auto") or MuJoCo's
             midphase by name (``SELFCOLLIDE_MODES``).

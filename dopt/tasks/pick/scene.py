@@ -8,8 +8,8 @@ positions.
 
 Blow-up captures (``PickPlaceTask(..., blowup_out=OUT)``, opt-in): an executed action sequence
 (``execute``, ``step``; never a population that ``evaluate`` scores) that the stability verdict
-flags is re-simulated from its start to the flagged step (``dopt.view.blowup.capture_blowup``)
-and its last ``dopt.view.blowup.KEEP`` states, the model and the verdict are written to
+flags is re-simulated from its start to the flagged step (``dopt.blowup.capture_blowup``)
+and its last ``dopt.blowup.KEEP`` states, the model and the verdict are written to
 ``OUT/blowups/<blowup_label>``, which ``dopt-view`` opens at that step; ``blowups`` lists them.
 
 Shapes: P population, H actions per sequence, K steps per action, N particles, ns state size.
@@ -25,6 +25,7 @@ from dataclasses import dataclass, replace
 import mujoco
 import numpy as np
 
+from dopt.blowup import capture_blowup, capture_dir
 from dopt.rollout import RolloutConfig, RolloutResult, RolloutService
 from dopt.scene import Scene
 from dopt.stability import StabilityBounds
@@ -33,7 +34,6 @@ from dopt.tasks.pick.constraints import ActionConstraint
 from dopt.tasks.pick.picker import CONTROL_SPEC, Picker, PickerConfig, fix_grasp_anchors
 from dopt.tasks.pick.settle import RestTest, rollout_until_rest
 from dopt.validation import check_real, float_array, index_array, is_int
-from dopt.view.blowup import capture_blowup, capture_dir
 
 log = logging.getLogger(__name__)
 

@@ -105,7 +105,8 @@ def test_a_flagged_replay_is_captured_and_opens_at_the_flagged_step(cloth, tmp_p
     import json
     from dataclasses import replace
 
-    from dopt.view.blowup import KEEP, load_blowup
+    from dopt.blowup import KEEP
+    from dopt.view.episode import load_blowup
 
     d = np.array([[-0.1, -0.05, 0.02]])
     calm = PandaExecutor(cloth).execute(cloth.initial_state, [N * N - 1], d,

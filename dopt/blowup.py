@@ -1,5 +1,7 @@
 """Blow-up captures: the last states of an executed rollout that the stability verdict
-(``dopt.stability``) flagged, written so that ``dopt-view`` opens them at the failing step.
+(``dopt.stability``) flagged, written so that ``dopt-view`` opens them at the failing step
+(its reader is the viewer's, ``dopt.view.episode.load_blowup``; the runtime that writes them,
+``dopt.mpc`` and the pick scenes, imports nothing of ``dopt.view``).
 
 A capture is one folder::
 
@@ -271,55 +273,3 @@ def _write_xml(path: Path, model: mujoco.MjModel, xml) -> bool:
 def _version() -> str:
     from dopt import __version__
     return __version__
-
-
-# ------------------------------------------------------------------------------ viewing
-def load_blowup(path, max_frames: int = 400):
-    """A capture folder as a ``dopt.view.episode.Episode`` opening at the state after the
-    failing step, the offending body marked.
-
-    Raises:
-        FileNotFoundError / ValueError: no capture there, or one of another format.
-    """
-    from dopt.view.episode import Episode, frame_rows
-
-    path = Path(path)
-    meta_file = path / "blowup.json"
-    if not meta_file.is_file():
-        raise FileNotFoundError(f"{path} holds no blowup.json")
-    meta = json.loads(meta_file.read_text())
-    if meta.get("format") != FORMAT:
-        raise ValueError(f"{meta_file}: format {meta.get('format')!r}, expected {FORMAT!r}")
-    model = mujoco.MjModel.from_binary_path(str(path / "model.mjb"))
-    rows = np.load(path / "states.npy")
-    first, step = int(meta["first_row"]), int(meta["step"])
-    failing = min(max(step + 1 - first, 0), len(rows) - 1)
-    keep = frame_rows(len(rows), max_frames, must=[failing])
-    layout = StateLayout.of(model, int(meta["spec"]))
-    times = (rows[keep, layout["time"]].ravel() if "time" in layout.slices
-             else (first + keep) * model.opt.timestep)
-    captions = [f"rollout row {first + r} (after step {first + r - 1})"
-                + ("  <- the verdict flagged this step" if r == failing else "")
-                for r in keep]
-    body = meta.get("body_id")
-    summary = (f"**Blow-up** {meta.get('label') or path.name}  \n"
-               f"step {step}: {meta['reason']}  \nbody: {meta.get('body')}  \n"
-               f"{len(rows)} states kept (rows {first}..{first + len(rows) - 1})")
-    return Episode(path.name, model, rows[keep], np.nan_to_num(times), captions, summary,
-                   spec=int(meta["spec"]), marked_body=None if body is None else int(body),
-                   start_frame=int(np.searchsorted(keep, failing)))
-
-
-class BlowupSource:
-    """The episode source of capture folders (``dopt.view.episode.sources``)."""
-
-    name = "blowup"
-
-    def claims(self, path: Path, record: dict | None) -> bool:
-        return record is None and Path(path).is_dir() and (Path(path) / "blowup.json").is_file()
-
-    def load(self, path: Path, max_frames: int = 400):
-        return load_blowup(path, max_frames)
-
-
-BLOWUP_SOURCE = BlowupSource()
