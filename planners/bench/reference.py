@@ -310,10 +310,10 @@ def bench_reference(presets=PRESETS, checks=tuple(CHECKS), rope_n: int | None = 
     unknown = [c for c in checks if c not in CHECKS]
     if unknown:
         raise ValueError(f"unknown reference checks {unknown}; choose from {list(CHECKS)}")
-    rows = []
+    rows, sizes = [], {"rope": rope_n, "cloth": cloth_n}
     for check in checks:
         task, run = CHECKS[check]
-        n = rope_n if task == "rope" else cloth_n
+        n = sizes[task]
         done = {p: {"check": check, **run(p, **({} if n is None else {"n": n}))}
                 for p in presets}
         base = done.get("default")
