@@ -145,6 +145,12 @@ def num(x, digits: int = 2, scale: float = 1.0) -> str:
     return f"{x * scale:.{digits}f}" if _finite(x) else "n/a"
 
 
+def as_flag(x) -> str:
+    """A number as the commands write it: 50, 0.5, 1e6."""
+    return f"{x:g}".replace("e+0", "e").replace("e+", "e") if isinstance(x, (int, float)) \
+        else str(x)
+
+
 def sci(x) -> str:
     """x in scientific notation with two significant digits; "-" for None."""
     return "-" if x is None else (f"{x:.1e}" if _finite(x) else "n/a")

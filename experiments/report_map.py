@@ -1,10 +1,11 @@
 """The README's map of the papers' figures and tables (the block between the results markers).
 
 One row per figure or table of the two papers: the command that reproduces it, one headline
-sentence read from the result files, and a link to its section of RESULTS.md, where every
-table, per-seed number, setting and recorded command is. No cell is longer than ``MAX_CELL``
-characters. A row whose files are stale or hold trials from uncommitted code says so in its
-link cell. Standard library only (report.py's rule).
+sentence read from the result files, and a link to its claim on its paper's page
+(``MapRow.claim``, ``report_pages``) or, for a row beyond the papers' claims, to its section
+of RESULTS.md, where every table, per-seed number, setting and recorded command is. No cell
+is longer than ``MAX_CELL`` characters. A row whose files are stale or hold trials from
+uncommitted code says so in its link cell. Standard library only (report.py's rule).
 """
 
 from __future__ import annotations
@@ -15,7 +16,20 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
-from report_base import KP, REGENERATE, SVR, Result, _label, cell, mm, num, pm, table
+from report_base import (
+    KP,
+    REGENERATE,
+    SVR,
+    Result,
+    _label,
+    as_flag,
+    cell,
+    mm,
+    num,
+    pm,
+    table,
+)
+from report_claims import PAGE_FILES, claim_of, fig4_files
 from report_fig7 import CLOTH_DIFFICULTY, _departs, fig7_claims
 from report_stats import scaling_families
 from report_svr import (
@@ -230,18 +244,10 @@ def versus_counts(v: dict | None) -> dict[str, str]:
     return {ref: f"{c['cheaper']}:{c['dearer']}/{c['n']}" for ref, c in verdict_counts(v).items()}
 
 
-def _fig4_files(results: list[Result], problem: str) -> list[Result]:
-    """The Fig. 4 files (not quick) of ``problem`` ("authors" or "ours"), fewest trials first:
-    a row reads the last, the sweep with the most scenes per point."""
-    files = [r for r in _paper(results, "fig4") if r.data.get("problem", "ours") == problem]
-    return sorted(files, key=lambda r: (sum(p.get("n_trials") or 0
-                                            for p in r.data.get("points") or []), r.name))
-
-
 def fig4_line(results: list[Result], problem: str = "ours") -> str | None:
     """The lowest MPC cost / baseline of the Fig. 4 sweep on ``problem`` and where it lies;
     on the authors' clutter also the scenes per point."""
-    files = _fig4_files(results, problem)
+    files = fig4_files(results, problem)
     if not files:
         return None
     d = files[-1].data
@@ -258,15 +264,15 @@ def fig4_line(results: list[Result], problem: str = "ours") -> str | None:
     holm = "".join(f"; Holm: {c['cheaper']}/{c['n']} points cheaper, {c['dearer']} dearer"
                    for c in verdict_counts(d.get("versus")).values())
     return (f"{d.get('task')}: lowest cost / baseline {cost} (90 % CI) at rho "
-            f"{_g(best.get('rho'))}, theta {best.get('theta')}; {len(rhos)} rho from "
-            f"{_g(rhos[0])} to {_g(rhos[-1])}{scenes}{holm}")
+            f"{as_flag(best.get('rho'))}, theta {best.get('theta')}; {len(rhos)} rho from "
+            f"{as_flag(rhos[0])} to {as_flag(rhos[-1])}{scenes}{holm}")
 
 
 def authors_line(results: list[Result]) -> str | None:
     """The state-vector-reduction mechanism on the authors' problems: |C| at rho 1 and 500
     (theta 10) from their Fig. 4 file, and the contact share of sum-t10-r1 from svr_explain."""
     parts = []
-    fig4 = _fig4_files(results, "authors")
+    fig4 = fig4_files(results, "authors")
     if fig4:
         pts = {(p.get("theta"), p.get("rho")): p for p in fig4[-1].data.get("points") or []}
         a, b = pts.get((10, 1.0)), pts.get((10, 500.0))
@@ -285,18 +291,13 @@ def authors_line(results: list[Result]) -> str | None:
     return "; ".join(parts) or None
 
 
-def _g(x) -> str:
-    """A number as the commands write it: 50, 0.5, 1e6."""
-    return f"{x:g}".replace("e+0", "e").replace("e+", "e") if isinstance(x, (int, float)) \
-        else str(x)
-
-
 # --------------------------------------------------------------------------------- rows
 @dataclass(frozen=True)
 class MapRow:
     """A figure or table of a paper: the command that reproduces it (the short form; the
     recorded commands are in RESULTS.md), the RESULTS.md section with its details, the
-    headline sentence from the result files, and which files the row reads."""
+    headline sentence from the result files, which files the row reads, and the title of its
+    claim on its paper's page (``report_claims``; None: the row links to its section)."""
 
     paper: str
     item: str
@@ -304,6 +305,7 @@ class MapRow:
     section: str
     headline: Callable[[list[Result]], str | None]
     reads: Callable[[Result], bool]
+    claim: str | None = None
 
 
 def _fig7(task: str) -> Callable[[Result], bool]:
@@ -321,30 +323,34 @@ ROWS = (
     MapRow(KP, "Fig. 4, Sec. IV-C.1: key particles of each goal",
            "python experiments/key_particles.py --task all",
            "Key particles, Fig. 4 and Sec. IV-C.1: key particles of each goal", kp_line,
-           lambda r: r.kind == "key_particles" and not r.quick),
+           lambda r: r.kind == "key_particles" and not r.quick, "Few key particles per goal"),
     MapRow(KP, "Sec. IV-C.1 on the authors' own cloth goals",
            "python -m deformables.bench authors --external DIR",
            "Key particles on the authors' own goals", kp_authors_line,
-           lambda r: r.kind == "kp_authors"),
+           lambda r: r.kind == "kp_authors", "The same keys on the authors' goals"),
     MapRow(KP, "Fig. 7 (a, b): rope straightening, folding",
            "python experiments/rope.py --preset paper --goal straighten",
-           "Key particles, Fig. 7: final cost of pick-and-place", rope_line, _fig7("rope")),
+           "Key particles, Fig. 7: final cost of pick-and-place", rope_line, _fig7("rope"),
+           "Rope: Simple beats Original, Random is worst"),
     MapRow(KP, "Fig. 7 (c-f): cloth diagonal, side, reflective, underneath folds",
            "python experiments/cloth_fold.py --preset paper --goal diagonal",
-           "Key particles, Fig. 7: final cost of pick-and-place", cloth_line, _fig7("cloth")),
+           "Key particles, Fig. 7: final cost of pick-and-place", cloth_line, _fig7("cloth"),
+           "Cloth: Simple beats Original on every fold"),
     MapRow(KP, "Sec. V: the gain against the particle count (a finer sheet of one size; a "
                "bigger sheet at fixed spacing)",
            "python experiments/fig7_scaling.py --goal diagonal",
            "Key particles: the gain against the particle count", scaling_line,
-           lambda r: r.kind == "fig7_scaling" and not r.quick),
+           lambda r: r.kind == "fig7_scaling" and not r.quick,
+           "The gain grows with the particle count"),
     MapRow(KP, "Sec. IV-D: a Panda executes the plans",
            "python experiments/panda_execute.py --seeds 3",
            "Key particles, Sec. IV-D: a Panda executes the plans", panda_line,
-           lambda r: r.kind == "panda_execute" and not r.quick),
+           lambda r: r.kind == "panda_execute" and not r.quick,
+           "A robot arm executes the plans"),
     MapRow(SVR, "Table 1 on the authors' problems: clutter, soft, soft_rigid",
            "python experiments/mpc.py --task clutter --preset authors --layouts DIR",
            "State-vector reduction, Table 1 beside the paper", table1_line,
-           _table1("authors")),
+           _table1("authors"), "SVR costs less than the baseline"),
     MapRow(SVR, "Table 1 on dopt's own push tasks (a second benchmark)",
            "python experiments/mpc.py --task clutter --preset paper",
            "State-vector reduction, Table 1: iLQR-SVR in asynchronous MPC",
@@ -353,7 +359,8 @@ ROWS = (
            "python experiments/rho_sweep.py --task clutter --preset authors --layouts DIR",
            "State-vector reduction, Fig. 4: importance threshold rho and random DoFs theta",
            lambda results: fig4_line(results, "authors"),
-           lambda r: (r.kind == "fig4" and not r.quick and r.data.get("problem") == "authors")),
+           lambda r: (r.kind == "fig4" and not r.quick and r.data.get("problem") == "authors"),
+           "The best rho is moderate"),
     MapRow(SVR, "Fig. 4 on dopt's own clutter (a second benchmark)",
            "python experiments/rho_sweep.py --task clutter --preset paper",
            "State-vector reduction, Fig. 4: importance threshold rho and random DoFs theta",
@@ -363,7 +370,8 @@ ROWS = (
            "python experiments/svr_explain.py --preset authors --layouts DIR",
            "State-vector reduction: which DoFs each method holds, and what rho cuts",
            authors_line, lambda r: (r.kind in ("fig4", "svr_explain") and not r.quick
-                                    and r.data.get("problem") == "authors")),
+                                    and r.data.get("problem") == "authors"),
+           "A larger rho keeps fewer DoFs"),
 )
 
 
@@ -379,6 +387,11 @@ def _notes(files: list[Result]) -> str:
     return "".join(f"; {n}" for n in notes)
 
 
+def readme_rel(results_md: Path, readme: Path, name: str) -> str:
+    """The path, relative to the README, of the page ``name`` beside RESULTS.md."""
+    return Path(os.path.relpath(Path(results_md).parent / name, Path(readme).parent)).as_posix()
+
+
 def map_block(results: list[Result], readme: Path, results_md: Path) -> str:
     """The README's block (between the markers, markers excluded)."""
     rel = Path(os.path.relpath(results_md, Path(readme).parent)).as_posix()
@@ -386,8 +399,14 @@ def map_block(results: list[Result], readme: Path, results_md: Path) -> str:
     for row in ROWS:
         headline = row.headline(results)
         files = [r for r in results if row.reads(r)]
-        # a row no file feeds yet has no RESULTS.md section to link to
-        details = (f"[RESULTS.md]({rel}#{anchor(row.section)})" + _notes(files)) if files else "-"
+        # a row no file feeds yet has no section to link to; a row with a claim links to the
+        # claim on its paper's page, the others to their section of RESULTS.md
+        if row.claim is not None:
+            where = f"{readme_rel(results_md, readme, PAGE_FILES[claim_of(row.claim).paper])}"
+            link = f"[{Path(where).stem}]({where}#{anchor(row.claim)})"
+        else:
+            link = f"[RESULTS.md]({rel}#{anchor(row.section)})"
+        details = (link + _notes(files)) if files else "-"
         rows.append([row.paper, row.item, f"`{row.command}`",
                      headline if headline is not None else "not recorded yet", details])
     for r in rows:
@@ -398,9 +417,10 @@ def map_block(results: list[Result], readme: Path, results_md: Path) -> str:
         f"<!-- generated by experiments/report.py from the result files; edit those, then run "
         f"`{REGENERATE}` -->",
         *table(["paper", "figure / table", "command", "headline", "details"], rows), "",
-        f"[{rel}]({rel}) holds every table, per-seed number and setting with the command that "
-        f"recorded it, the headline of every result file "
-        f"([{HEADLINES_TITLE.split(':')[0].lower()}]({rel}#{anchor(HEADLINES_TITLE)})), and what "
-        "goes beyond the papers: the end-effector cost term, derivatives at key timesteps, "
-        "control limits in the backward pass, the virtual clock, the physics presets and the "
-        "benchmarks."])
+        "Each paper's claims with our verdicts: "
+        + ", ".join(f"[{Path(where).stem}]({where})" for where in
+                    (readme_rel(results_md, readme, name) for name in PAGE_FILES.values()))
+        + f"; their index [{rel}]({rel}) holds every table and setting with its recorded "
+        f"command, the [{HEADLINES_TITLE.split(':')[0].lower()}]({rel}#"
+        f"{anchor(HEADLINES_TITLE)}) of every result file, and what goes beyond the papers "
+        "(cost terms, derivatives, control limits, clocks, physics presets, benchmarks)."])

@@ -366,13 +366,16 @@ def table1_vs_paper_section(results: list[Result], page: Path) -> list[str]:
     return lines[:-1]
 
 
-def equal_lag_table1(results: list[Result], task: str) -> Result | None:
-    """The newest Table 1 file of ``task`` on the authors' problems with every row lagging
-    alike (a fixed model clock, ``clock_ms``), if any."""
+def equal_lag_table1(results: list[Result], task: str, like: Result | None = None):
+    """The Table 1 file of ``task`` on the authors' problems with every row lagging alike (a
+    fixed model clock, ``clock_ms``), if any: the last by name; given ``like`` (a run on the
+    clock), of those run by its executor the newest by its trials' date."""
     chosen = [r for r in results if r.kind == "table1" and r.data.get("task") == task
               and r.data.get("preset") == "authors" and not r.quick
-              and r.data.get("clock_ms") is not None]
-    return chosen[-1] if chosen else None
+              and r.data.get("clock_ms") is not None and (like is None or r.data.get(
+                  "executor") == like.data.get("executor"))]
+    key = (lambda r: 0) if like is None else (lambda r: str(r.origin.get("date", "")))
+    return sorted(chosen, key=key)[-1] if chosen else None
 
 
 def equal_lag_lines(r: Result | None, pub: dict) -> list[str]:

@@ -447,27 +447,37 @@ def test_a_result_recording_only_a_preset_name_is_checked_at_its_commit(site):
 
 
 # ------------------------------------------------------------------------- README's map
-def test_the_committed_readme_map_is_compact_and_links_to_results_md():
+def test_the_committed_readme_map_is_compact_and_links_to_its_details():
     """README's block is the map: one row per paper figure or table (``report_map.ROWS``), no
-    cell over ``MAX_CELL`` characters, each recorded row's link an anchor of a RESULTS.md
-    heading (a row not recorded yet links nowhere)."""
+    cell over ``MAX_CELL`` characters, each recorded row's link the heading of its claim on
+    its paper's page (``row.claim``), else of its RESULTS.md section (a row not recorded yet
+    links nowhere)."""
+    import report_claims
     import report_map
 
-    readme, md = (ROOT / "README.md"), (ROOT / "docs" / "RESULTS.md")
+    readme, docs = (ROOT / "README.md"), ROOT / "docs"
+
+    def anchors(page: Path) -> set[str]:
+        return {report_map.anchor(line.lstrip("#")) for line in page.read_text().splitlines()
+                if line.startswith(("## ", "### "))}
+
     rows = [line for line in block(readme).splitlines() if line.startswith("| ")][1:]
     assert len(rows) == len(report_map.ROWS)
-    anchors = {report_map.anchor(line.lstrip("#")) for line in md.read_text().splitlines()
-               if line.startswith("## ")}
     for line, row in zip(rows, report_map.ROWS, strict=True):
         cells = [c.strip() for c in line.strip("|").split(" | ")]
         assert max(map(len, cells)) <= report_map.MAX_CELL, line
         assert cells[1] == row.item
         if cells[3] == "not recorded yet":
             assert cells[4] == "-", line
+            continue
+        if row.claim is None:
+            page, title = docs / "RESULTS.md", row.section
         else:
-            assert f"#{report_map.anchor(row.section)})" in cells[4], line
-            assert report_map.anchor(row.section) in anchors, row.section
-    assert report_map.anchor(report_map.HEADLINES_TITLE) in anchors
+            page = docs / report_claims.PAGE_FILES[report_claims.claim_of(row.claim).paper]
+            title = row.claim
+        assert f"(docs/{page.name}#{report_map.anchor(title)})" in cells[4], line
+        assert report_map.anchor(title) in anchors(page), title
+    assert report_map.anchor(report_map.HEADLINES_TITLE) in anchors(docs / "RESULTS.md")
 
 
 def test_map_rows_read_the_protocols_files(site):
