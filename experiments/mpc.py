@@ -225,6 +225,20 @@ def add_run_arguments(ap: argparse.ArgumentParser) -> None:
                     help="run the trials on Ray (local instance if no ADDRESS)")
     ap.add_argument("--threads", type=nonneg_int, default=None,
                     help="simulation threads per trial (default: all cores, 1 with workers>1)")
+    add_episode_arguments(ap)
+    ap.add_argument("--out", type=output_dir, default=None,
+                    help="output folder (default results/<script>_<task>); finished trials "
+                         "are kept under OUT/trials and a rerun resumes")
+    ap.add_argument("--fresh", action="store_true",
+                    help="recompute every trial (old trial files go to OUT/trials/outdated/)")
+    add_reuse_argument(ap)
+    ap.add_argument("--record", type=output_file, default=None, metavar="PATH",
+                    help="also write the summary to PATH (docs/results/...)")
+
+
+def add_episode_arguments(ap: argparse.ArgumentParser) -> None:
+    """--quick (``QUICK``) and --keep-controls (``KEEP_CONTROLS``): the flags of every MPC
+    script that say how long its episodes are and whether dopt-view can replay them."""
     ap.add_argument("--quick", action="store_true",
                     help="a short episode where SVR visibly acts, in seconds: "
                          + " ".join(f"--{k} {','.join(v) if isinstance(v, tuple) else v}"
@@ -238,14 +252,6 @@ def add_run_arguments(ap: argparse.ArgumentParser) -> None:
                          "trial): first (default: the first seed of each row, the episode the "
                          "plots show; a stored trial is reused as it is), all (the bare flag; "
                          "a stored trial without them is rerun), none")
-    ap.add_argument("--out", type=output_dir, default=None,
-                    help="output folder (default results/<script>_<task>); finished trials "
-                         "are kept under OUT/trials and a rerun resumes")
-    ap.add_argument("--fresh", action="store_true",
-                    help="recompute every trial (old trial files go to OUT/trials/outdated/)")
-    add_reuse_argument(ap)
-    ap.add_argument("--record", type=output_file, default=None, metavar="PATH",
-                    help="also write the summary to PATH (docs/results/...)")
 
 
 def add_clock_arguments(ap: argparse.ArgumentParser) -> None:
