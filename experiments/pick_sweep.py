@@ -41,7 +41,8 @@ def run_trials(trials: list[Trial], iterations_per_trial: int, out: Path,
         desc="CEM iterations", workers=workers,
         fresh=fresh, schema=SCHEMA,
         steps=lambda t: iterations_per_trial if t.key in cem else 0,
-        held=lambda t: iterations_held([t], iterations_per_trial, out) if t.key in cem else 0)
+        held=lambda t: iterations_held([t], iterations_per_trial, out) if t.key in cem else 0,
+        describe=lambda rec: f"final cost {rec['result']['final_cost'] * 1e3:.1f} mm")
     keys = {t.key for t in trials}
     return [r["result"] for k, r in res.records.items() if k in keys], res
 
