@@ -128,6 +128,19 @@ positive_float = _number(float, 0.0, strict=True)
 nonneg_float = _number(float, 0.0, strict=False)
 
 
+def number_in(kind, low: float, high: float) -> Callable[[str], float]:
+    """An argparse ``type=``: a finite number of ``kind`` (int or float) with
+    ``low <= value <= high``."""
+    at_least = _number(kind, low, strict=False)
+
+    def parse(text: str):
+        v = at_least(text)
+        if v > high:
+            raise argparse.ArgumentTypeError(f"must be <= {high:g}, got {text}")
+        return v
+    return parse
+
+
 def int_at_least(low: int) -> Callable[[str], int]:
     """An argparse ``type=``: an int >= ``low``."""
     return _number(int, low, strict=False)

@@ -78,6 +78,11 @@ EXECUTORS = ("alg1", "authors")
 #: the authors' landing search starts from this smallest error (``AsyncronusMPCWorker``): a
 #: plan whose nominal rows are all at least this far (L1) from the state lands at its lag
 NEAREST_MAX_L1 = 1000.0
+#: the largest ``MPCConfig.control_noise`` (a standard deviation, as a fraction of each
+#: control's range): beyond the whole range a draw leaves it nearly every step, so the noise
+#: is no longer a perturbation of the plan; far beyond (1e154 and up) the controls' squares,
+#: and so the MPC cost, overflow to +inf
+MAX_CONTROL_NOISE = 1.0
 _BAD = (mujoco.mjtWarning.mjWARN_BADQPOS, mujoco.mjtWarning.mjWARN_BADQVEL,
         mujoco.mjtWarning.mjWARN_BADQACC, mujoco.mjtWarning.mjWARN_BADCTRL)
 
@@ -153,12 +158,12 @@ class MPCConfig:
     model timestep (1 = real time). synchronous: the agent waits for the optimiser and runs
     ``steps_per_plan`` steps per optimisation. feedback: add K (x - x_nominal) on the measured
     state to the executed control (the paper's authors did not). control_noise: standard
-    deviation of Gaussian noise on executed controls, as a fraction of each control's range.
-    warmup: optimiser iterations before the agent starts. clock: ``real``, ``virtual`` or
-    ``model`` (module docstring); threads: the nominal thread count a virtual duration divides
-    the CPU time by (2: this project's reference machine); model_ms: (a, b) of the model
-    clock, ms per optimisation = a + b |C|. executor: ``alg1`` or
-    ``authors`` (module docstring); apply_limit: the authors' executor applies buffered
+    deviation of Gaussian noise on executed controls, as a fraction of each control's range
+    (at most ``MAX_CONTROL_NOISE``). warmup: optimiser iterations before the agent starts.
+    clock: ``real``, ``virtual`` or ``model`` (module docstring); threads: the nominal thread
+    count a virtual duration divides the CPU time by (2: this project's reference machine);
+    model_ms: (a, b) of the model clock, ms per optimisation = a + b |C|. executor: ``alg1``
+    or ``authors`` (module docstring); apply_limit: the authors' executor applies buffered
     controls while its cursor is below min(apply_limit, T), then holds."""
 
     timeout: int
@@ -177,7 +182,8 @@ class MPCConfig:
     def __post_init__(self):
         check_config(self, positive=("slowdown", "threads"),
                      minimum={"timeout": 1, "steps_per_plan": 1, "control_noise": 0,
-                              "warmup": 0, "apply_limit": 1})
+                              "warmup": 0, "apply_limit": 1},
+                     maximum={"control_noise": MAX_CONTROL_NOISE})
         if self.executor not in EXECUTORS:
             raise ValueError(f"executor must be one of {EXECUTORS}, got {self.executor!r}")
         if self.clock not in CLOCKS:

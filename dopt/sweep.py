@@ -27,12 +27,14 @@ ValueError naming the pack and the line, rather than having its trials recompute
 
 Trial files are checked when read: a file that is not a trial record (truncated or invalid
 JSON, not an object, without "key", "params", "result" or the "code" stamp, or whose key is
-not its file name) or whose result does not fit the experiment's ``Schema`` (the keys its
-summary reads: a result ``{}``, another experiment's, an older format) is named in a logged
-warning and moved to ``OUT/trials/corrupt/`` (never deleted; a packed record stays in the
-pack), and its trial is recomputed. A trial function's own result that does not fit is a
-failure, never a record. Every file is strict JSON (``dopt.jsonio``: a NaN is written ``null``
-with the reason beside it, and read back as NaN).
+not its file name), whose result does not fit the experiment's ``Schema`` (the keys its
+summary reads: a result ``{}``, another experiment's, an older format; a number that must be
+finite and is not), or whose params are another trial's (``Schema.identity``: a record of
+another goal copied under this trial's name) is named in a logged warning and moved to
+``OUT/trials/corrupt/`` with its reason beside it (``<stem>.reason.txt``; never deleted; a
+packed record stays in the pack), and its trial is recomputed. A trial function's own result
+that does not fit is a failure, never a record. Every file is strict JSON (``dopt.jsonio``: a
+NaN is written ``null`` with the reason beside it, and read back as NaN).
 
 **Which code a record stands for.** Each record stores ``CodeState.stamp()`` under "code"
 (dopt's version, the git commit, "-dirty" with a fingerprint for uncommitted code; see
@@ -287,14 +289,18 @@ def _takes(fn: Callable, name: str) -> bool:
 
 
 def is_finished(out_dir: Path | str, key: str, *, root: Path | str | None = None,
-                reuse: str = "same-code", schema: Schema = ANY) -> bool:
+                reuse: str = "same-code", schema: Schema = ANY,
+                params: dict | None = None) -> bool:
     """Whether ``run_sweep`` (not fresh, same ``reuse``, ``root`` and ``schema``) would skip
-    trial ``key``: its file under OUT/trials, or else its packed record, is a valid record
-    that may stand for this code (the code state this process last saw, ``current_code``).
-    Reads only (PackError: the pack cannot be read)."""
+    trial ``key`` (of ``params``, when given: the stored params must be its, by
+    ``Schema.params_problem``): its file under OUT/trials, or else its packed record, is a
+    valid record that may stand for this code (the code state this process last saw,
+    ``current_code``). Reads only (PackError: the pack cannot be read)."""
     _check_reuse(reuse)
     rec, _ = stored_record(out_dir, key, schema)
     if rec is None or schema.wanted_problem(rec["result"]):
+        return False
+    if params is not None and schema.params_problem(rec["params"], params):
         return False
     return reuse == "any" or reuse_problem(rec.get("code"), current_code(root), root) is None
 
@@ -318,6 +324,8 @@ def _sort_stored(trials, out_dir, state, *, fresh, reuse, root, schema
     done, corrupt = check_trial_files(out_dir, schema)
     recomputed, across = {}, {}
     for t in trials:
+        if t.key in done:
+            _check_params(out_dir, t, done, corrupt, schema)
         if f"{t.key}.json" in corrupt and t.key not in done:
             recomputed[t.key] = f"corrupt trial file: {corrupt[f'{t.key}.json']}"
         rec = done.get(t.key)
@@ -340,6 +348,22 @@ def _sort_stored(trials, out_dir, state, *, fresh, reuse, root, schema
         log.log(logging.INFO if fresh else logging.WARNING, "trial %s is recomputed: %s (%s)",
                 t.key, reason, old)
     return done, recomputed, corrupt, across
+
+
+def _check_params(out_dir, trial: Trial, done: dict, corrupt: dict, schema: Schema) -> None:
+    """Take the stored record of ``trial`` out of ``done`` into ``corrupt`` when its params
+    are another trial's (``Schema.params_problem``): a loose file is moved to
+    OUT/trials/corrupt/ with the reason, a packed record stays in the pack (its trial's new
+    record, written loose, overrides it); logged either way."""
+    problem = schema.params_problem(done[trial.key]["params"], trial.params)
+    if problem is None:
+        return
+    del done[trial.key]
+    corrupt[f"{trial.key}.json"] = problem
+    path = trial_path(out_dir, trial.key)
+    where = (f"moved to {move_aside(path, CORRUPT_DIR, problem)}" if path.is_file() else
+             f"its packed record stays in trials/{PACK_NAME}, overridden by the new file")
+    log.warning("trial file %s is not used (%s): %s", path, problem, where)
 
 
 def _check_args(fn, trials, workers, reuse, schema, callbacks: dict) -> None:
@@ -418,7 +442,8 @@ def _run_locked(fn, trials, out_dir, state, *, workers, ray_address, progress, t
     _DELIBERATE.update(across)
     todo = [t for t in trials if t.key not in done]
     skipped = [t.key for t in trials if t.key in done]
-    checkpoints = {t.key: Checkpoint(out_dir, t.key, root, state, schema) for t in todo}
+    checkpoints = {t.key: Checkpoint(out_dir, t.key, root, state, schema, t.params)
+                   for t in todo}
     if fresh:
         for c in checkpoints.values():
             if c.path.exists():

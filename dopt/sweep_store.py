@@ -2,7 +2,9 @@
 
 - ``OUT/trials/<key>.json``: a finished trial's record {"key", "params", "result", "code"}
   (``check_record``: a file that is not one, or whose result does not fit the sweep's
-  ``Schema``, is named in a logged warning, moved to ``OUT/trials/corrupt/`` and recomputed);
+  ``Schema`` (a key missing, a number that must be finite and is not), or whose params are
+  another trial's (``Schema.params_problem``), is named in a logged warning, moved to
+  ``OUT/trials/corrupt/`` with its reason beside it (``<stem>.reason.txt``) and recomputed);
 - ``OUT/trials/pack.jsonl``: finished trials packed, one record a line, append-only
   (``dopt.trialpack``; ``dopt.sweep_pack.pack_trials`` appends the loose files to it), over
   the read-only ``pack.jsonl.gz`` of earlier packs; a loose file overrides the packed record of
@@ -15,22 +17,24 @@
   ``dopt.sweep_lock``, importable from here): a second one refuses.
 
 Every file is written atomically and as strict JSON (``dopt.jsonio``: no bare NaN).
-Standard library only (with ``dopt.provenance``, ``dopt.jsonio``, ``dopt.sweep_lock`` and
-``dopt.trialpack``).
+Standard library only (with ``dopt.atomic``, ``dopt.provenance``, ``dopt.jsonio``,
+``dopt.sweep_lock`` and ``dopt.trialpack``).
 Packing itself (``pack_trials``, ``PackResult``) lives in ``dopt.sweep_pack``, which imports
 this module (``dopt.sweep`` re-exports both).
 """
 
 from __future__ import annotations
 
+import json
 import logging
+import math
 import os
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
-from dopt import jsonio
+from dopt import atomic, jsonio
 from dopt.provenance import COMMIT_ENV, CodeState, code_state, repo_root, reuse_problem
 from dopt.sweep_lock import FRESH_LOCK_S, LOCK_NAME, OutLock, SweepLockedError  # noqa: F401
 from dopt.trialpack import StoredTrial, loose_files, read_pack
@@ -88,6 +92,18 @@ class Schema:
             that did not ask for them wrote it, e.g. an MPC trial without --keep-controls):
             such a record is not corrupt but outdated, moved to OUT/trials/outdated/ and
             recomputed (``dopt.sweep``), even where the sweep reuses across code changes.
+        finite: result keys whose value must be a finite number (an int or a float, not a
+            bool; a NaN or an infinity is stored null with its reason and read back as
+            itself): a record with another value there is corrupt.
+        identity: what of a trial's params names the trial (a picklable function params ->
+            a JSON-able value, compared as JSON reads it back: e.g. the key the params give,
+            or ``dict`` for all of them; None: params are not compared, for a sweep whose
+            params hold knobs of how it runs): a stored record or checkpoint whose params
+            give another identity than those of the trial it is stored for is another
+            trial's (a record of another goal copied under this trial's name) and is not used
+            (``params_problem``). Fields that do not change a result (threads) are left out
+            of it, so that a rerun with other threads reuses the trial. Every experiment of
+            the project names one.
     """
 
     result: tuple[str, ...] = ()
@@ -95,20 +111,45 @@ class Schema:
     check_result: Callable[[dict], str | None] | None = None
     check_progress: Callable[[dict], str | None] | None = None
     wanted: tuple[str, ...] = ()
+    finite: tuple[str, ...] = ()
+    identity: Callable[[dict], object] | None = None
 
     def __post_init__(self):
-        for name in ("result", "progress", "wanted"):
+        for name in ("result", "progress", "wanted", "finite"):
             keys = getattr(self, name)
             if isinstance(keys, str) or not all(isinstance(k, str) for k in keys):
                 raise TypeError(f"Schema.{name} must be a tuple of key names, got {keys!r}")
             object.__setattr__(self, name, tuple(keys))
-        for name in ("check_result", "check_progress"):
+        for name in ("check_result", "check_progress", "identity"):
             if getattr(self, name) is not None and not callable(getattr(self, name)):
                 raise TypeError(f"Schema.{name} must be callable or None")
 
     def result_problem(self, result) -> str | None:
         """Why ``result`` is not a trial result of this experiment, or None."""
-        return _fields_problem(result, self.result, self.check_result, "result")
+        return (_fields_problem(result, self.result, None, "result")
+                or _finite_problem(result, self.finite)
+                or (None if self.check_result is None else self.check_result(result)))
+
+    def params_problem(self, stored, params: dict) -> str | None:
+        """Why a record or checkpoint holding the params ``stored`` cannot stand for the trial
+        of ``params`` (their ``identity`` differ, or ``stored`` cannot be read as this
+        experiment's params), or None (always, without an ``identity``)."""
+        if self.identity is None:
+            return None
+        try:
+            theirs = self._identity(stored)
+        except (KeyError, IndexError, TypeError, ValueError, AttributeError) as e:
+            return (f"its params cannot be read as this experiment's ({type(e).__name__}: "
+                    f"{e})")
+        mine = self._identity(params)
+        if theirs == mine:
+            return None
+        return (f"its params are another trial's "
+                f"({_difference(json.loads(theirs), json.loads(mine), stored, params)})")
+
+    def _identity(self, params) -> str:
+        """The identity of ``params`` as canonical JSON text (tuples as lists, keys sorted)."""
+        return json.dumps(self.identity(params), sort_keys=True, allow_nan=True, default=repr)
 
     def wanted_problem(self, result: dict) -> str | None:
         """Why the sound trial ``result`` cannot stand for this run (it lacks a ``wanted``
@@ -134,6 +175,48 @@ def _fields_problem(value, keys, check, what: str) -> str | None:
         return (f"its {what} lacks {', '.join(repr(k) for k in missing)} (another "
                 f"experiment's or an older format)")
     return None if check is None else check(value)
+
+
+def _finite_problem(result: dict, keys: tuple[str, ...]) -> str | None:
+    """Why a value of ``result`` under ``keys`` is not a finite number, or None."""
+    for k in keys:
+        v = result.get(k)
+        if isinstance(v, bool) or not isinstance(v, (int, float)):
+            return (f"its result's {k!r} is not a number ({json.dumps(v, default=repr)[:60]}"
+                    f"), where this experiment writes a finite one")
+        if not math.isfinite(v):
+            return (f"its result's {k!r} is {v}, not a finite number (a trial whose result "
+                    f"cannot be summarised)")
+    return None
+
+
+def _difference(theirs, mine, stored, params) -> str:
+    """A few words on how the identity ``theirs`` of a stored record (its params ``stored``)
+    differs from ``mine`` (of the trial it is stored for, of ``params``): the differing
+    fields (nested ones dotted, the first three), of the identities where they are objects,
+    else of the params."""
+    def flat(d, prefix="") -> dict:
+        out = {}
+        for k, v in d.items():
+            out.update(flat(v, f"{prefix}{k}.") if isinstance(v, dict) and v else
+                       {f"{prefix}{k}": v})
+        return out
+
+    def short(v) -> str:
+        text = json.dumps(v, sort_keys=True, default=repr)
+        return text if len(text) <= 60 else text[:57] + "..."
+    head = ""
+    if not (isinstance(theirs, dict) and isinstance(mine, dict)):
+        head = f"it names {short(theirs)}, this trial {short(mine)}"
+        theirs, mine = stored, json.loads(json.dumps(params, default=repr))
+        if not (isinstance(theirs, dict) and isinstance(mine, dict)):
+            return head
+    a, b = flat(theirs), flat(mine)
+    keys = sorted(k for k in a.keys() | b.keys() if a.get(k, ...) != b.get(k, ...))
+    parts = [f"{k!r}: stored {short(a[k]) if k in a else '(none)'}, this trial's "
+             f"{short(b[k]) if k in b else '(none)'}" for k in keys[:3]]
+    tail = "; ".join(parts) + (f"; {len(keys) - 3} more" if len(keys) > 3 else "")
+    return "; ".join(x for x in (head, tail) if x)
 
 
 def trial_path(out_dir: Path | str, key: str) -> Path:
@@ -214,22 +297,33 @@ def stored_record(out_dir: Path | str, key: str, schema: Schema = ANY
     return check_packed(packed, schema)
 
 
-def move_aside(path: Path, folder: str) -> Path | None:
-    """Move ``path`` into ``folder`` next to it (a free name: <stem>.1.json, ...); None if it
-    cannot be moved (it is then left where it is)."""
+def move_aside(path: Path, folder: str, reason: str | None = None) -> Path | None:
+    """Move ``path`` into ``folder`` next to it (a free name: <stem>.1.json, ...) and, with
+    ``reason``, write why beside it (``<its stem>.reason.txt``: the old path and the reason,
+    one line); None if it cannot be moved (it is then left where it is)."""
     dest_dir = path.parent / folder
     try:
         dest_dir.mkdir(exist_ok=True)
         dest = dest_dir / path.name
         n = 0
-        while dest.exists():
+        while dest.exists() or (reason is not None and reason_path(dest).exists()):
             n += 1
             dest = dest_dir / f"{path.stem}.{n}{path.suffix}"
         os.replace(path, dest)
     except OSError as e:
         log.warning("could not move %s to %s/: %s", path, dest_dir, e)
         return None
+    if reason is not None:
+        try:
+            atomic.write_text(reason_path(dest), f"{path}: {reason}\n", fsync=False)
+        except OSError as e:               # the log names the reason too
+            log.warning("could not write why %s was moved aside: %s", dest, e)
     return dest
+
+
+def reason_path(moved: Path) -> Path:
+    """The file beside a file ``move_aside`` moved that says why: <stem>.reason.txt."""
+    return moved.with_name(f"{moved.stem}.reason.txt")
 
 
 def check_trial_files(out_dir: Path | str, schema: Schema = ANY) -> tuple[dict, dict]:
@@ -257,7 +351,7 @@ def check_trial_files(out_dir: Path | str, schema: Schema = ANY) -> tuple[dict, 
                 records[rec["key"]] = rec
                 continue
             corrupt[path.name] = problem
-            where = move_aside(path, CORRUPT_DIR)
+            where = move_aside(path, CORRUPT_DIR, problem)
             log.warning("trial file %s is not used (%s): %s", path, problem,
                         f"moved to {where}" if where else "it could not be moved aside")
         if key in packed:
@@ -280,16 +374,22 @@ class Checkpoint:
     none or it cannot be resumed (unreadable, another key, progress that does not fit the
     sweep's ``schema``: moved to checkpoints/corrupt/; code that may give another result,
     ``dopt.provenance.reuse_problem``: to checkpoints/outdated/; logged, never deleted).
-    ``root`` is the repository asked (default: this checkout). Picklable: a process pool's
-    workers get it with their trial (and the code state its sweep saw).
+    ``root`` is the repository asked (default: this checkout). ``params``: the params of
+    the trial it is of (None: not known): saved with the progress, and a checkpoint whose
+    saved params are another trial's (``Schema.params_problem``) is not resumed (moved to
+    checkpoints/corrupt/). Picklable: a process pool's workers get it with their trial (and
+    the code state its sweep saw).
     """
 
     def __init__(self, out_dir: Path | str, key: str, root: Path | str | None = None,
-                 state: CodeState | None = None, schema: Schema = ANY):
+                 state: CodeState | None = None, schema: Schema = ANY,
+                 params: dict | None = None):
         Trial(key, {})                                   # the key's checks
         if not isinstance(schema, Schema):
             raise TypeError(f"schema must be a dopt.sweep.Schema, got {type(schema).__name__}")
-        self.key, self.schema = key, schema
+        if params is not None and not isinstance(params, dict):
+            raise TypeError(f"params must be a dict or None, got {type(params).__name__}")
+        self.key, self.schema, self.params = key, schema, params
         self.path = Path(out_dir) / "trials" / CHECKPOINT_DIR / f"{key}.json"
         self.root = None if root is None else str(root)
         self._state = state
@@ -305,15 +405,16 @@ class Checkpoint:
 
     def save(self, progress: dict) -> None:
         """Write ``progress`` (a JSON-able dict) for a rerun to resume."""
-        jsonio.write_atomic(self.path, {"key": self.key, "code": self.state.stamp(),
-                                        "progress": progress})
+        rec = {"key": self.key, "code": self.state.stamp(), "progress": progress}
+        jsonio.write_atomic(self.path, rec if self.params is None
+                            else {**rec, "params": self.params})
 
     def load(self) -> dict | None:
         """The progress to resume, or None (a bad file is logged and moved aside)."""
         progress, problem, folder = self._read()
         if problem is None:
             return progress
-        where = move_aside(self.path, folder)
+        where = move_aside(self.path, folder, problem if folder == CORRUPT_DIR else None)
         log.warning("checkpoint %s is not resumed (%s): %s", self.path, problem,
                     f"moved to {where}" if where else "it could not be moved aside")
         return None
@@ -337,6 +438,9 @@ class Checkpoint:
         if rec["key"] != self.key:
             return None, f"the checkpoint of {rec['key']!r}", CORRUPT_DIR
         if (problem := self.schema.progress_problem(rec["progress"])) is not None:
+            return None, problem, CORRUPT_DIR
+        if self.params is not None and "params" in rec and (
+                problem := self.schema.params_problem(rec["params"], self.params)):
             return None, problem, CORRUPT_DIR
         problem = reuse_problem(rec["code"], self.state, self.root)
         if problem is not None:
@@ -407,5 +511,5 @@ class Report:
 __all__ = ["ANY", "CHECKPOINT_DIR", "CORRUPT_DIR", "LOCK_NAME", "OUTDATED_DIR", "PROGRESS_DIR",
            "RECORD_FIELDS", "Checkpoint", "OutLock", "Report", "Schema",
            "SweepLockedError", "Trial", "check_packed", "check_record", "check_trial_files",
-           "check_value", "current_code", "move_aside", "read_json",
+           "check_value", "current_code", "move_aside", "read_json", "reason_path",
            "stored_record", "trial_path"]

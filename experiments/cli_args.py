@@ -50,6 +50,7 @@ from dopt.cli import (  # noqa: F401  (re-exported for the scripts)
     no_repeats,
     nonneg_float,
     nonneg_int,
+    number_in,
     number_list,
     one_line,
     output_dir,
@@ -114,16 +115,22 @@ def record_problem(record: Path | None, out: Path, root: Path | None = None) -> 
     return None if problem is None else f"argument --record: {problem}"
 
 
-def check_outputs(ap, args, default: str) -> None:
+def check_outputs(ap, args, default: str, files: tuple[str, ...] = ("summary.json",)
+                  ) -> None:
     """Every experiment's last flag check: ``args.out`` defaults to ``results/<default>`` (a
     folder of this checkout's, ignored by git), then a usage error (one line, exit 2) when the
-    run cannot write its --out or --record (``record_problem``)."""
+    run cannot write its --out or --record (``record_problem``) or one of the ``files`` it
+    writes in --out (a folder there, a file it may not write: ``file_problem``), so that the
+    run stops before its first trial rather than after its last."""
     if args.out is None:
         args.out = Path("results") / default
         if (problem := folder_problem(args.out)) is not None:
             ap.error(f"argument --out: (default) {problem}")
     if (problem := record_problem(args.record, args.out)) is not None:
         ap.error(problem)
+    for name in files:
+        if (problem := file_problem(Path(args.out) / name)) is not None:
+            ap.error(f"argument --out: the run writes {name} there, but {problem}")
 
 
 def settings_dict(settings) -> dict:

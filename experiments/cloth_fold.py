@@ -44,7 +44,7 @@ import pick_place_cli  # noqa: E402  (after MUJOCO_GL: rendering reads it at imp
 
 HELP = {
     "seed": "first seed; runs use seed .. seed+seeds-1 (default %(default)s)",
-    "quick": "smoke-sized run: 8x8 cloth, population 8, 2 iterations, 1 seed",
+    "quick": "smoke-sized run: 8x8 cloth, population 8, 2 iterations, 1 seed (unless --seeds)",
     "n": "cloth particles per side (default 12)",
     "population": "CEM population P (default 32; 16 reflective and underneath)",
     "elites": "CEM elites (default 6; 4 reflective and underneath)",

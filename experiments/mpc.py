@@ -62,6 +62,7 @@ from cli_args import (
     no_repeats,
     nonneg_float,
     nonneg_int,
+    number_in,
     output_dir,
     output_file,
     positive_float,
@@ -72,7 +73,7 @@ from cli_args import (
 from mpc_outputs import write_plots, write_table
 from sweep_console import out_lock, print_outputs, run_with_console
 
-from dopt.mpc import EXECUTORS
+from dopt.mpc import EXECUTORS, MAX_CONTROL_NOISE
 from dopt.sweep import Schema, SweepResult, Trial, is_finished
 from dopt.tasks import PUSH_TASKS
 from dopt.tasks.push.costs import COST_PRESETS
@@ -99,10 +100,19 @@ from planners.svr_mpc.authors_data import TASK_DIRS, authors_travel
 
 log = logging.getLogger(__name__)
 FEEDBACK = {"off": (False,), "on": (True,), "both": (False, True)}
-#: what a stored MPC trial must hold to be reused: the fields the summary and plots read
+#: task instances (seeds) per method without --trials (1 with --quick)
+DEFAULT_TRIALS = 20
+#: the files a run writes under --out (besides its trials): checked before the first trial
+RUN_FILES = ("summary.json", "table1.md")
+#: what a stored MPC trial must hold to be reused: the fields the summary and plots read,
+#: the numbers among them finite (a cost of +inf once failed every rerun in the summary), and
+#: params that name the trial they are stored for (``trial_key``: not the threads)
 SCHEMA = Schema(result=("mpc_cost", "success", "steps", "goal_distance_start",
                         "goal_distance_end", "opt_ms_mean", "dofs_mean", "n_dofs", "opt_step",
-                        "lag_steps_mean", "unstable"))
+                        "lag_steps_mean", "unstable"),
+                finite=("mpc_cost", "steps", "goal_distance_start", "goal_distance_end",
+                        "opt_ms_mean", "dofs_mean", "lag_steps_mean"),
+                identity=trial_key)
 #: --keep-controls: which trials keep their start state and executed controls for dopt-view's
 #: exact replay (about ``CONTROLS_BYTES_PER_STEP`` bytes per agent step of JSON); "first"
 #: (the default) is one episode per row, the one the plots show, and reuses a stored trial as
@@ -205,8 +215,9 @@ def add_run_arguments(ap: argparse.ArgumentParser) -> None:
                          "(planners.keypoints) instead of --fd-skip")
     ap.add_argument("--box-qp", action="store_true",
                     help="control limits in iLQR's backward pass (mju_boxQP)")
-    ap.add_argument("--trials", type=positive_int, default=20,
-                    help="task instances (seeds) per method (default %(default)s)")
+    ap.add_argument("--trials", type=positive_int, default=None,
+                    help=f"task instances (seeds) per method (default {DEFAULT_TRIALS}; 1 with "
+                         f"--quick)")
     ap.add_argument("--seed", type=nonneg_int, default=0,
                     help="first seed; trials use seed..seed+N-1 (default %(default)s)")
     ap.add_argument("--slowdown", type=positive_float, default=None,
@@ -218,9 +229,11 @@ def add_run_arguments(ap: argparse.ArgumentParser) -> None:
                     help="execute u + K (x - x_nom) on the measured state (authors: off); "
                          "'both' runs every trial open-loop and with feedback back to back, "
                          "so the pair sees the same machine load (rows 'METHOD +fb')")
-    ap.add_argument("--control-noise", type=nonneg_float, default=None,
+    ap.add_argument("--control-noise", type=number_in(float, 0.0, MAX_CONTROL_NOISE),
+                    default=None,
                     help="Gaussian noise on executed controls, fraction of range (authors and "
-                         "--preset paper: 0.05; ours: 0)")
+                         f"--preset paper: 0.05; ours: 0; at most {MAX_CONTROL_NOISE:g}, the "
+                         "whole range)")
     ap.add_argument("--workers", type=positive_int, default=1,
                     help="local worker processes (default %(default)s)")
     ap.add_argument("--ray", nargs="?", const="local", default=None, metavar="ADDRESS",
@@ -294,12 +307,18 @@ def parse_args(argv=None, ap: argparse.ArgumentParser | None = None,
     quick_defaults(args)
     if args.threads is None:
         args.threads = 1 if (args.workers > 1 or args.ray) else 0
+    if args.layouts is not None and (args.preset, args.task) != ("authors", "clutter"):
+        ap.error(f"argument --layouts: only --preset authors on --task clutter reads the "
+                 f"authors' clutter scenes, not --preset {args.preset} on --task {args.task} "
+                 f"(leave it out)")
     try:               # the pipeline's own checks of the settings, as usage errors
         for row in grid(args):
             settings_of(args, row, args.feedback == "on")
     except (ValueError, TypeError) as e:
         ap.error(str(e))
-    check_outputs(ap, args, f"{Path(ap.prog).stem}_{args.task}")
+    if (problem := layouts_problem(args)) is not None:
+        ap.error(problem)
+    check_outputs(ap, args, f"{Path(ap.prog).stem}_{args.task}", files=RUN_FILES)
     return args
 
 
@@ -307,11 +326,12 @@ def quick_defaults(args) -> None:
     """Resolve the flags whose default depends on --quick: the preset (ours; ``QUICK``'s with
     --quick) and, with --quick, one trial and each other flag of ``QUICK`` where it is not
     given (--rows only where the script has it and neither --rows nor --methods is given;
-    --clock not beside --clock-ms, which sets the model clock)."""
+    --clock not beside --clock-ms, which sets the model clock); an explicit --trials stands."""
+    if args.trials is None:                  # an explicit --trials stands with --quick
+        args.trials = QUICK["trials"] if args.quick else DEFAULT_TRIALS
     if not args.quick:
         args.preset = args.preset or "ours"
         return
-    args.trials = QUICK["trials"]
     for name, value in QUICK.items():
         if name == "trials" or not hasattr(args, name) or getattr(args, name) is not None:
             continue
@@ -319,6 +339,29 @@ def quick_defaults(args) -> None:
                 (name == "clock" and args.clock_ms is not None):
             continue
         setattr(args, name, list(value) if isinstance(value, tuple) else value)
+
+
+def layouts_problem(args) -> str | None:
+    """Why the --layouts scenes of the run's seeds cannot be run (a seed without a scene, a
+    file that is not a layout or whose scene makes no sense: ``check_layout``), or None;
+    before any trial, so that a bad scene is not found by its trial alone."""
+    if args.layouts is None:
+        return None
+    from dopt.tasks import N_AUTHORS_LAYOUTS
+    from dopt.tasks.push.authors import check_layout
+
+    for seed in range(args.seed, args.seed + args.trials):
+        if seed >= N_AUTHORS_LAYOUTS:
+            return (f"argument --trials: seed {seed} names no scene of the authors' clutter "
+                    f"(scenes 0-{N_AUTHORS_LAYOUTS - 1})")
+        path = args.layouts / f"{seed}.csv"
+        try:
+            check_layout(path)
+        except FileNotFoundError:
+            return f"argument --layouts: no {path} (the scene of seed {seed})"
+        except ValueError as e:
+            return f"argument --layouts: {e}"
+    return None
 
 
 def settings_of(args, row: Row, feedback: bool) -> SVRMPCSettings:
@@ -422,7 +465,7 @@ def run(args, trials, fn=None, out: Path | None = None, workers: int | None = No
         CapturingTrial(str(out), fn or run_trial, every, seeds), trials, out, unit="step",
         desc=f"{args.task} MPC steps", steps=lambda t: steps[t.key],
         held=lambda t: steps[t.key] if is_finished(out, t.key, reuse=reuse_mode(args),
-                                                   schema=schema) else 0,
+                                                   schema=schema, params=t.params) else 0,
         seconds=lambda t: steps[t.key] * agent_seconds(t.params),
         basis="this machine's optimisation times (agent_seconds)",
         describe=describe_result,

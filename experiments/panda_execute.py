@@ -51,7 +51,7 @@ from cli_args import (
 from dopt import atomic
 from dopt.blowup import retire_captures
 from dopt.stats import mean_ci
-from dopt.sweep import Trial, run_sweep
+from dopt.sweep import Schema, Trial, run_sweep
 from planners.pick_place import PickPlaceSettings, make_planner, make_problem, run_problem
 
 GOALS = ("diagonal", "side")
@@ -62,13 +62,13 @@ def parser() -> argparse.ArgumentParser:
                         formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--goals", type=choices_type(GOALS, "goal(s)"), default=",".join(GOALS),
                     help="comma-separated cloth goals (default %(default)s, the paper's)")
-    ap.add_argument("--seeds", type=positive_int, default=3,
-                    help="seeds per goal (default %(default)s)")
+    ap.add_argument("--seeds", type=positive_int, default=None,
+                    help="seeds per goal (default 3; 1 with --quick)")
     ap.add_argument("--seed", type=nonneg_int, default=0, help="first seed (default 0)")
     ap.add_argument("--n", type=positive_int, default=None,
                     help="cloth particles per side (default: the goal's preset)")
     ap.add_argument("--quick", action="store_true",
-                    help="smoke run: one seed, 8 x 8 cloth, 2 CEM iterations")
+                    help="smoke run: one seed (unless --seeds), 8 x 8 cloth, 2 CEM iterations")
     ap.add_argument("--out", type=output_dir, default=None,
                     help="output folder (default results/panda_execute); finished trials are "
                          "kept under OUT/trials")
@@ -103,6 +103,18 @@ def replay(problem, actions: list[dict], snapshots: bool = False, blowup_out=Non
     arm = PandaExecutor(problem.scene, pickable=held)
     return arm, arm.execute(problem.start_state, parts, disps, snapshots=snapshots,
                             blowup_out=blowup_out, blowup_label=blowup_label)
+
+
+def trial_identity(params: dict) -> dict:
+    """What names a trial of ``params`` ({"goal", "seed", "settings"}): its goal, seed and
+    ``PickPlaceSettings.identity`` (not the threads). A stored record whose params give
+    another is another trial's, recomputed (``SCHEMA``)."""
+    return {"goal": params["goal"], "seed": int(params["seed"]),
+            "settings": PickPlaceSettings.from_dict(params["settings"]).identity()}
+
+
+#: what a stored trial must be to be reused: the trial it is stored for (``trial_identity``)
+SCHEMA = Schema(identity=trial_identity)
 
 
 def trial_key(goal: str, seed: int, n: int, quick: bool) -> str:
@@ -225,6 +237,8 @@ def parse_args(argv=None) -> argparse.Namespace:
     """Parsed flags; exit 2 with one line on a bad one."""
     ap = parser()
     args = ap.parse_args(argv)
+    if args.seeds is None:                      # an explicit --seeds stands with --quick
+        args.seeds = 1 if args.quick else 3
     check_outputs(ap, args, "panda_execute")
     return args
 
@@ -233,7 +247,7 @@ def parse_args(argv=None) -> argparse.Namespace:
 def main(argv=None) -> int:
     logging.basicConfig(level=logging.WARNING)
     args = parse_args(argv)
-    seeds = range(args.seed, args.seed + (1 if args.quick else args.seeds))
+    seeds = range(args.seed, args.seed + args.seeds)
     trials = []
     for goal in args.goals:
         s = settings_of(goal, args)
@@ -242,7 +256,7 @@ def main(argv=None) -> int:
                                 {"goal": goal, "seed": int(seed), "settings": s.to_dict()}))
     keys = [t.key for t in trials]
     res = run_sweep(functools.partial(panda_trial, blowup_out=str(args.out), quick=args.quick),
-                    trials, args.out, workers=1, fresh=args.fresh)
+                    trials, args.out, workers=1, fresh=args.fresh, schema=SCHEMA)
     for key, err in res.failed.items():
         print(f"FAILED {key}: {err}", file=sys.stderr)
     wanted = {t.key for t in trials}

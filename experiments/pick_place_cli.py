@@ -67,6 +67,8 @@ from planners.pick_place.budget import budget_problem
 log = logging.getLogger(__name__)
 COLOURS = {"simple": "tab:blue", "original": "tab:red", "random": "tab:green",
            "scripted": "tab:gray"}
+#: the files a run writes under --out (besides its trials and renders): checked first
+RUN_FILES = ("summary.json", "curves.csv", "cost_curves.png")
 #: seeds per method of a command that names neither --seeds nor --preset: a first answer in
 #: minutes (the protocols' seeds, ``PROTOCOL_SEEDS``, are a flag away)
 FIRST_SEEDS = 1
@@ -162,9 +164,10 @@ def parse(ap: argparse.ArgumentParser, task: str, argv) -> tuple[argparse.Namesp
                                      protocol=args.preset)
         cem = {k: getattr(args, k) for k in ("population", "elites", "iterations", "horizon")
                if getattr(args, k) is not None}
-        if args.seeds is None:
-            args.seeds = PROTOCOL_SEEDS[args.preset] if named else FIRST_SEEDS
-        trials = (1 if args.quick else args.seeds) * len(args.methods)
+        if args.seeds is None:             # an explicit --seeds stands with --quick
+            args.seeds = (1 if args.quick else PROTOCOL_SEEDS[args.preset] if named
+                          else FIRST_SEEDS)
+        trials = args.seeds * len(args.methods)
         threads = args.threads or share_cores(min(args.workers, trials))
         s = replace(s, cem=replace(s.cem, **cem), threads=threads,
                     n=args.n or s.n, bound=args.bound or s.bound,
@@ -178,7 +181,7 @@ def parse(ap: argparse.ArgumentParser, task: str, argv) -> tuple[argparse.Namesp
         ap.error(str(e))
     if (too_big := budget_problem(s)) is not None:   # what the sizes need, before any is made
         ap.error(f"argument {BUDGET_FLAGS[too_big.field]}: {too_big}")
-    check_outputs(ap, args, f"{task}_{args.goal}")
+    check_outputs(ap, args, f"{task}_{args.goal}", files=RUN_FILES)
     return args, s
 
 
@@ -202,7 +205,7 @@ def _experiment(task: str, script: str, args, settings: PickPlaceSettings, argv)
                         format="%(levelname)s %(name)s: %(message)s")
     out = args.out
     out.mkdir(parents=True, exist_ok=True)
-    seeds = range(args.seed, args.seed + (1 if args.quick else args.seeds))
+    seeds = range(args.seed, args.seed + args.seeds)
     problem = make_problem(settings, seeds[0])
     print(f"{task} ({problem.scene.n_particles} particles), goal {args.goal}: "
           + "; ".join(f"{s.name}: {len(s.keys)} key particles {s.keys.tolist()}"
@@ -265,8 +268,8 @@ def estimate_line(problem, settings: PickPlaceSettings, trials: list[Trial], ite
     cem = [t for t in trials if t.params["method"] != "scripted"]
     held = 0 if args.fresh else _iterations_held(cem, iterations, out)
     left = len(cem) * iterations - held
-    open_trials = sum(args.fresh or not is_finished(out, t.key, schema=SCHEMA)
-                      for t in trials)
+    open_trials = sum(args.fresh or not is_finished(out, t.key, schema=SCHEMA,
+                                                    params=t.params) for t in trials)
     n = len({t.params["seed"] for t in trials})
     m = len(args.methods)
     seeds = f"{n} seed{'s' if n > 1 else ''} x {m} method{'s' if m > 1 else ''}"

@@ -14,18 +14,22 @@ from sweep_console import run_with_console
 
 from dopt.sweep import Checkpoint, Schema, SweepResult, Trial, is_finished
 from planners.pick_place import run_trial
+from planners.pick_place.run import checkpoint_problem, trial_identity
 from planners.trial_progress import (
     PROGRESS_FIELDS,
     RESULT_FIELDS,
     iterations_done,
-    progress_problem,
+    result_problem,
 )
 
 #: the flag of each setting ``planners.pick_place.budget`` may name
 BUDGET_FLAGS = {"n": "--n", "bound": "--bound", "picker_speed": "--picker-speed",
                 "cem.population": "--population", "cem.horizon": "--horizon"}
-#: what a stored trial and its checkpoint must hold to be reused or resumed (``dopt.sweep``)
-SCHEMA = Schema(result=RESULT_FIELDS, progress=PROGRESS_FIELDS, check_progress=progress_problem)
+#: what a stored trial and its checkpoint must hold to be reused or resumed (``dopt.sweep``):
+#: their fields, a cost history as long as its stages' list, a CEM progress that can resume,
+#: and params that name the trial they are stored for (the key they hash to)
+SCHEMA = Schema(result=RESULT_FIELDS, progress=PROGRESS_FIELDS, check_result=result_problem,
+                check_progress=checkpoint_problem, identity=trial_identity)
 
 
 def run_trials(trials: list[Trial], iterations_per_trial: int, out: Path,
@@ -61,9 +65,10 @@ def iterations_held(trials: list[Trial], iterations_per_trial: int, out: Path) -
     all of a finished trial's, those of a checkpoint it resumes."""
     held = 0
     for t in trials:
-        if is_finished(out, t.key, schema=SCHEMA):
+        if is_finished(out, t.key, schema=SCHEMA, params=t.params):
             held += iterations_per_trial
-        elif (progress := Checkpoint(out, t.key, schema=SCHEMA).peek()) is not None:
+        elif (progress := Checkpoint(out, t.key, schema=SCHEMA, params=t.params).peek()
+              ) is not None:
             held += iterations_done(progress)
     return held
 

@@ -35,7 +35,8 @@ import pick_place_cli  # noqa: E402  (after MUJOCO_GL: rendering reads it at imp
 HELP = {
     "seed": "first seed; runs use seed .. seed+seeds-1; the seed also picks the crumpled "
             "start of straighten (default %(default)s)",
-    "quick": "smoke-sized run: 20 particles, population 8, 2 iterations, horizon 2, 1 seed",
+    "quick": "smoke-sized run: 20 particles, population 8, 2 iterations, horizon 2, 1 seed "
+             "(unless --seeds)",
     "n": "rope particles (default 40)",
     "population": "CEM population P (default 32)",
     "elites": "CEM elites (default 6)",

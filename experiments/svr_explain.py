@@ -51,7 +51,8 @@ RHO_CUTS = (1.0, 500.0)
 SCHEMA = Schema(result=("steps", "opt_step", "n_dofs", "goal_share", "goal_importance",
                         "importance",
                         "rel_improvement", "goal_distance_at_opt", "alpha", "contact_steps",
-                        "mu", "travel", "goal_distance_end", "lag_steps_mean", "horizon"))
+                        "mu", "travel", "goal_distance_end", "lag_steps_mean", "horizon"),
+                identity=table1.trial_key)
 
 
 def parser() -> argparse.ArgumentParser:

@@ -41,6 +41,26 @@ def progress_problem(progress: dict) -> str | None:
     return None
 
 
+def result_problem(result: dict) -> str | None:
+    """Why ``result`` (holding ``RESULT_FIELDS``) cannot be a trial's result, or None: its
+    cost history must be a list of numbers as long as its ``stage_of_iteration`` (the curves
+    and the summary read them pairwise), its final cost a number (NaN, stored null, for an
+    unstable trial)."""
+    history, stages = result["cost_history"], result["stage_of_iteration"]
+    if not (isinstance(history, list) and isinstance(stages, list)):
+        return "its cost history or its stage of each iteration is not a list"
+    if len(history) != len(stages):
+        return (f"its cost history holds {len(history)} iterations, its stage of each "
+                f"iteration {len(stages)} (a shortened history)")
+    if not all(_is_number(c) for c in [*history, result["final_cost"]]):
+        return "its cost history or final cost holds something that is not a number"
+    return None
+
+
+def _is_number(x) -> bool:
+    return isinstance(x, (int, float)) and not isinstance(x, bool)
+
+
 def iterations_done(progress: dict) -> int:
     """The CEM iterations a saved progress holds: those of its finished stages (one per entry
     of their ``cost_history``) and those of the stage it stopped in.

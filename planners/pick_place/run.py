@@ -279,6 +279,41 @@ def _result(problem: Problem, progress: TrialProgress, state: np.ndarray, method
                            progress.segments, [b for p in done for b in p.blowups])
 
 
+def trial_identity(params: dict) -> str:
+    """What names a sweep's trial of ``params`` ({"settings", "method", "seed"}, as
+    ``run_trial`` takes them): its ``trial_key``, which hashes the settings that change its
+    result (not the threads). The experiments' ``dopt.sweep.Schema.identity``: a stored
+    record whose params give another is another trial's.
+
+    Raises:
+        KeyError, TypeError, ValueError: ``params`` are not a trial's."""
+    return trial_key(params["method"], int(params["seed"]),
+                     PickPlaceSettings.from_dict(params["settings"]))
+
+
+def checkpoint_problem(progress: dict) -> str | None:
+    """Why the saved ``progress`` of a trial (holding ``PROGRESS_FIELDS``) cannot be resumed,
+    or None: ``planners.trial_progress.progress_problem``, then each finished stage read as a
+    ``StagePlan`` and the unfinished stage's CEM progress as a ``CEMProgress`` (finite
+    probabilities >= 0 that sum to 1, histories as long as its iterations, ...). The
+    experiments' ``dopt.sweep.Schema.check_progress``: a checkpoint that fails is moved
+    aside and its trial starts afresh, where it once failed the trial on every rerun."""
+    from planners.cem import CEMProgress
+    from planners.trial_progress import progress_problem
+
+    if (problem := progress_problem(progress)) is not None:
+        return problem
+    try:
+        for d in progress["stages"]:
+            StagePlan.from_dict(d)
+        stage = progress["stage"]
+        if stage is not None:
+            CEMProgress.from_dict(stage["cem"])
+    except (KeyError, TypeError, ValueError) as e:
+        return f"its progress cannot be resumed ({type(e).__name__}: {e})"
+    return None
+
+
 def _trial_difference(saved, trial: dict) -> str:
     """How a checkpoint's trial identity ``saved`` differs from ``trial``'s."""
     if not isinstance(saved, dict):

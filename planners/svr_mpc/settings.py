@@ -13,7 +13,7 @@ from typing import Literal
 import mujoco
 import numpy as np
 
-from dopt.mpc import CLOCKS, EXECUTORS
+from dopt.mpc import CLOCKS, EXECUTORS, MAX_CONTROL_NOISE
 from dopt.provenance import root_relative, rooted
 from dopt.rollout import FDConfig
 from dopt.tasks import PUSH_PROBLEMS, build_push_task, get_task
@@ -295,7 +295,12 @@ class SVRMPCSettings:
         # None; timeout an int >= 1 or None; feedback, synchronous bools; threads an int >= 0
         check_config(self, positive=("slowdown", "nominal_threads", "fd_eps", "clock_ms"),
                      minimum={"rho": 0.0, "theta": 0, "timeout": 1, "control_noise": 0.0,
-                              "threads": 0, "fd_skip": 1})
+                              "threads": 0, "fd_skip": 1},
+                     maximum={"control_noise": MAX_CONTROL_NOISE})
+        if self.layouts is not None and (self.problem, self.task) != ("authors", "clutter"):
+            raise ValueError(f"layouts: only the authors' clutter reads them (problem "
+                             f"'authors', task 'clutter'), not problem {self.problem!r} on "
+                             f"{self.task}")
         _ = self.ilqr                              # ValueError naming a bad keypoint method
         if self.synchronous and self.clock != "real":
             raise ValueError("synchronous runs have no clock: use clock='real' with it")
@@ -338,7 +343,11 @@ class SVRMPCSettings:
     @classmethod
     def preset(cls, name: str, task: str, layouts: str | Path | None = None) -> SVRMPCSettings:
         """The protocol ``name`` (``PRESETS``) on ``task``: ``ours`` (the defaults), ``paper``
-        (``paper``, its default row) or ``authors`` (``authors``, with ``layouts``)."""
+        (``paper``, its default row) or ``authors`` (``authors``, with ``layouts``; only the
+        authors' problem reads them: ValueError with another preset)."""
+        if layouts is not None and name != "authors":
+            raise ValueError(f"layouts are the authors' clutter scenes: only preset 'authors' "
+                             f"reads them, not {name!r}")
         if name == "authors":
             return cls.authors(task, layouts=layouts)
         if name == "paper":

@@ -201,7 +201,8 @@ def test_load_finished_never_raises_on_garbage(tmp_path, code):
         (folder / f"g{i}.json").write_text(text)
     (folder / "sub.json").mkdir()                      # a folder named like a trial file
     assert load_finished(tmp_path) == {}
-    assert len(list((folder / "corrupt").iterdir())) == 6
+    assert len(list((folder / "corrupt").glob("*.json"))) == 6       # each with its reason
+    assert len(list((folder / "corrupt").glob("*.reason.txt"))) == 6
 
 
 def _record(tmp_path, key, x, code=None):

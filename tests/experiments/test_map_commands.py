@@ -56,8 +56,8 @@ def test_map_command_passes_its_checks(script, argv, tmp_path, monkeypatch):
     checker = importlib.import_module(CHECKED_IN.get(script, script))
     real = checker.check_outputs
 
-    def check_then_stop(ap, args, default):
-        real(ap, args, default)
+    def check_then_stop(ap, args, default, **kwargs):
+        real(ap, args, default, **kwargs)
         raise Parsed(args)
 
     monkeypatch.setattr(checker, "check_outputs", check_then_stop)

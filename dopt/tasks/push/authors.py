@@ -16,6 +16,11 @@ run on the authors' problem as well as on ours (``dopt.tasks.build_push_task``):
                                         (r 0.06 m, half-height 0.08 m, 0.74 kg) that moves on
                                         three slide joints x, y, z; nv 7 + 48 x 3 + 3 = 154
 
+A layout file is checked for sense before its scene is built (``check_layout``): a goal on the
+goal cylinder, an object or the goal off the table, a goal or goal cylinder beyond the arm's
+reach, objects overlapping one another or the arm at their start poses are each refused with a
+ValueError naming the file (all 100 of theirs pass).
+
 What stays ours in every scene: the Panda (``panda.py``: gravity compensated, a rod pusher;
 theirs is franka_sim's Panda with its hand as the pusher), the table plane, dt 0.004 s, T, Y and
 the slowdown of ``PUSH_TASKS``' tasks of the same name, and the start of the arm: the pusher tip
@@ -73,6 +78,7 @@ from dopt.stability import StabilityBounds
 from dopt.tasks.panda import (
     TABLE_NAME,
     TOOL_RADIUS,
+    arm_qpos_index,
     ik_pointing_down,
     rest_state,
     table_scene_spec,
@@ -258,6 +264,95 @@ def _tip_behind(centre: np.ndarray, goal: np.ndarray, radius: float) -> np.ndarr
     return np.array([xy[0], xy[1], EE_HEIGHT])
 
 
+def _clutter_spec(layout: AuthorsLayout) -> tuple[mujoco.MjSpec, np.ndarray]:
+    """The clutter scene of ``layout`` before it is compiled, and the goal marker's centre."""
+    spec = table_scene_spec(DT, mujoco.mjtIntegrator.mjINT_EULER)
+    spec.geom(TABLE_NAME).friction = list(FRICTION)
+    add_object(spec, GOAL_CYLINDER, GOAL_SHAPE, layout.poses[0, :2], layout.poses[0, 5],
+               GOAL_RGBA, GOAL_SOLREF, CLUTTER_SOLIMP)
+    for name, shape, pose in zip(DISTRACTORS, OBSTACLE_SHAPES, layout.poses[1:], strict=True):
+        add_object(spec, name, shape, pose[:2], pose[5], DISTRACTOR_RGBA, OBSTACLE_SOLREF,
+                   CLUTTER_SOLIMP)
+    goal = add_goal_marker(spec, layout.goal, GOAL_SHAPE.size[0], 2 * GOAL_SHAPE.half_height)
+    return spec, goal
+
+
+def _plane_problem(layout: AuthorsLayout, table_half: np.ndarray) -> str | None:
+    """What makes the layout's plan view senseless (a goal on the goal cylinder, a goal or
+    an object off the table, a goal the pusher cannot reach), or None. ``table_half``: (2,)
+    the table's half sizes (m)."""
+    centre, goal, radius = layout.poses[0, :2], layout.goal, GOAL_SHAPE.size[0]
+    if np.linalg.norm(goal - centre) < radius:
+        return (f"the goal {goal.tolist()} lies on the goal cylinder (centre "
+                f"{centre.tolist()}, radius {radius} m): there is nothing to push, and no "
+                f"direction to push it in")
+    names = (GOAL_CYLINDER, *DISTRACTORS)
+    places = {"the goal": goal, **{name: pose[:2] for name, pose in
+                                   zip(names, layout.poses, strict=True)}}
+    for name, xy in places.items():
+        if np.any(np.abs(xy) > table_half):
+            return (f"{name} at {xy.tolist()} is off the table (|x| <= {table_half[0]:g} m, "
+                    f"|y| <= {table_half[1]:g} m)")
+    along = (goal - centre) / np.linalg.norm(goal - centre)
+    for what, xy in (("the goal cylinder", centre), ("the goal", goal)):
+        tip = xy - (radius + TOOL_RADIUS) * along        # the tip touching it, behind it
+        try:
+            ik_pointing_down(np.array([tip[0], tip[1], EE_HEIGHT]))
+        except RuntimeError as e:
+            return (f"{what} at {xy.tolist()} is beyond the arm's reach: the pusher cannot "
+                    f"stand behind it with the tool down ({e})")
+    return None
+
+
+def _overlap_problem(model: mujoco.MjModel, arm_qpos: np.ndarray) -> str | None:
+    """Which two bodies of the scene ``model`` overlap at their start poses with the arm at
+    ``arm_qpos`` (MuJoCo's own contacts: a penetration, not the table's), or None: such a
+    scene is not what the file means (the overlap is thrown apart while the scene settles,
+    objects flying up to 1 m)."""
+    data = mujoco.MjData(model)
+    data.qpos[arm_qpos_index(model)] = arm_qpos
+    mujoco.mj_forward(model, data)
+    table = model.geom(TABLE_NAME).id
+    worst = min(((c.dist, c.geom1, c.geom2) for c in data.contact[:data.ncon]
+                 if table not in (c.geom1, c.geom2)), default=None)
+    if worst is None or worst[0] >= 0.0:
+        return None
+    dist, a, b = worst
+    return (f"{model.geom(a).name} and {model.geom(b).name} overlap by {-dist * 1e3:.1f} mm "
+            f"at their start poses")
+
+
+def check_layout(layout_path: str | Path) -> None:
+    """Check that one of their layout files (``read_layout``) makes a sensible scene,
+    without settling it: the goal off the goal cylinder, every object and the goal on the
+    table, the goal cylinder and the goal within the arm's reach (the pusher tip behind each
+    on the line of the push, by ``ik_pointing_down``), no two objects overlapping and none
+    overlapping the arm at its start (MuJoCo's contacts at the start poses). All 100 of
+    theirs pass (their closest objects are 1.0 mm apart; their goals 0.28-0.30 m from the
+    goal cylinder, at most 0.71 m from the arm's base).
+
+    Raises:
+        FileNotFoundError: no such file.
+        ValueError: naming the file and what is wrong (``read_layout``'s, or the above).
+    """
+    layout = read_layout(layout_path)
+    _check_scene(layout, _clutter_spec(layout)[0].compile())
+
+
+def _check_scene(layout: AuthorsLayout, model: mujoco.MjModel) -> np.ndarray:
+    """``check_layout`` on the compiled scene ``model`` of ``layout``; returns the arm's start
+    (7,) joint angles."""
+    problem = _plane_problem(layout, model.geom(TABLE_NAME).size[:2])
+    arm_qpos = None
+    if problem is None:
+        arm_qpos = ik_pointing_down(_tip_behind(layout.poses[0, :2], layout.goal,
+                                                GOAL_SHAPE.size[0]))
+        problem = _overlap_problem(model, arm_qpos)
+    if problem is not None:
+        raise ValueError(f"{layout.path}: {problem}")
+    return arm_qpos
+
+
 def build_clutter_authors(layout_path: str | Path) -> TaskModel:
     """The clutter task on one of their scenes (a file ``read_layout`` reads).
 
@@ -273,21 +368,14 @@ def build_clutter_authors(layout_path: str | Path) -> TaskModel:
     cylinder on the line from the goal through its centre, at ``EE_HEIGHT``, as in ours.
 
     Raises:
-        FileNotFoundError, ValueError: as ``read_layout``.
+        FileNotFoundError, ValueError: as ``check_layout`` (a file that is not a layout, or
+            whose scene makes no sense: named with the file).
         RuntimeError: the scene raised a MuJoCo warning while it settled.
     """
     layout = read_layout(layout_path)
-    spec = table_scene_spec(DT, mujoco.mjtIntegrator.mjINT_EULER)
-    spec.geom(TABLE_NAME).friction = list(FRICTION)
-    add_object(spec, GOAL_CYLINDER, GOAL_SHAPE, layout.poses[0, :2], layout.poses[0, 5],
-               GOAL_RGBA, GOAL_SOLREF, CLUTTER_SOLIMP)
-    for name, shape, pose in zip(DISTRACTORS, OBSTACLE_SHAPES, layout.poses[1:], strict=True):
-        add_object(spec, name, shape, pose[:2], pose[5], DISTRACTOR_RGBA, OBSTACLE_SOLREF,
-                   CLUTTER_SOLIMP)
-    goal = add_goal_marker(spec, layout.goal, GOAL_SHAPE.size[0], 2 * GOAL_SHAPE.half_height)
+    spec, goal = _clutter_spec(layout)
     model = spec.compile()
-    tip = _tip_behind(layout.poses[0, :2], layout.goal, GOAL_SHAPE.size[0])
-    state = rest_state(model, ik_pointing_down(tip), CLUTTER_SETTLE_STEPS)
+    state = rest_state(model, _check_scene(layout, model), CLUTTER_SETTLE_STEPS)
     log.debug("clutter (authors, %s): goal cylinder %s, goal %s", layout.path,
               layout.poses[0, :2], layout.goal)
     return clutter_task(model, state, goal)

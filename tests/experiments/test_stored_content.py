@@ -1,0 +1,159 @@
+"""The experiments' stored trials judged by content (each experiment's ``Schema``): a record
+of another goal or seed stored under a trial's name, a shortened cost history, a non-finite
+MPC cost and a checkpoint whose CEM probabilities are negative are moved aside and recomputed
+(each once failed every rerun: KeyError 'matching_distance', a zip() ValueError, the
+summary's non-finite ValueError, the trial's own ValueError); and the flags that could only
+make such content are refused at parse time."""
+
+import json
+import logging
+import math
+
+import mpc
+import pick_sweep
+import pytest
+import rope
+import torch
+
+from dopt import jsonio
+from dopt.provenance import COMMIT_ENV
+from dopt.sweep import Checkpoint
+
+QUICK_ROPE = ["--quick", "--no-render"]
+
+
+@pytest.fixture(autouse=True)
+def fixed_code(monkeypatch):
+    monkeypatch.setenv(COMMIT_ENV, "c0ffee")
+
+
+def _only_record(out):
+    (path,) = (out / "trials").glob("*.json")
+    return path, json.loads(path.read_text())
+
+
+# ----------------------------------------------------------------------- pick-and-place
+def test_a_record_of_another_goal_under_a_trials_name_is_recomputed(tmp_path, caplog):
+    """The fold record copied under the straighten trial's name (its key edited to match)
+    was reused as the straighten trial's: its summary then failed on a metric the fold
+    result does not have."""
+    fold, straight = tmp_path / "fold", tmp_path / "straighten"
+    base = [*QUICK_ROPE, "--methods", "scripted"]
+    assert rope.main([*base, "--goal", "fold", "--out", str(fold)]) == 0
+    assert rope.main([*base, "--goal", "straighten", "--out", str(straight)]) == 0
+    path, mine = _only_record(straight)
+    _, theirs = _only_record(fold)
+    path.write_text(json.dumps({**theirs, "key": mine["key"]}))
+    with caplog.at_level(logging.WARNING, logger="dopt.sweep"):
+        assert rope.main([*base, "--goal", "straighten", "--out", str(straight)]) == 0
+    assert "its params are another trial's" in caplog.text
+    assert "'settings.goal': stored \"fold\", this trial's \"straighten\"" in caplog.text
+    assert (straight / "trials" / "corrupt" / path.name).exists()
+    reason = (straight / "trials" / "corrupt" / f"{path.stem}.reason.txt").read_text()
+    assert "another trial's" in reason
+    again = json.loads(path.read_text())["result"]                          # recomputed
+    assert {k: v for k, v in again.items() if k != "wall_s"} == {
+        k: v for k, v in mine["result"].items() if k != "wall_s"}
+
+
+def test_the_pick_identity_leaves_out_the_threads_only():
+    """A trial rerun with other threads is the same trial; one of another goal or seed
+    is not."""
+    from planners.pick_place import PickPlaceSettings
+
+    def params(goal="fold", seed=0, threads=1):
+        s = PickPlaceSettings.preset("rope", goal, quick=True)
+        return json.loads(json.dumps({"settings": {**s.to_dict(), "threads": threads},
+                                      "method": "simple", "seed": seed}))
+    schema = pick_sweep.SCHEMA
+    assert schema.params_problem(params(threads=4), params(threads=1)) is None
+    assert "another trial's" in schema.params_problem(params("straighten"), params())
+    assert "another trial's" in schema.params_problem(params(seed=1), params())
+    assert "cannot be read" in schema.params_problem({"settings": {"n": 3}}, params())
+
+
+def test_a_shortened_cost_history_is_moved_aside_and_recomputed(tmp_path, caplog):
+    """A cost history one entry short of its stages gave zip()'s ValueError in the curves."""
+    out = tmp_path / "rope"
+    argv = [*QUICK_ROPE, "--methods", "scripted", "--out", str(out)]
+    assert rope.main(argv) == 0
+    path, rec = _only_record(out)
+    rec["result"]["cost_history"].pop()
+    path.write_text(json.dumps(rec))
+    with caplog.at_level(logging.WARNING, logger="dopt.sweep"):
+        assert rope.main(argv) == 0
+    assert "cost history" in caplog.text and (out / "trials" / "corrupt" / path.name).exists()
+    again = json.loads(path.read_text())["result"]
+    assert len(again["cost_history"]) == len(again["stage_of_iteration"])
+
+
+def _cem_progress(probs):
+    """A CEM progress record of one action over one candidate (and None), as
+    ``CEMProgress.to_dict`` writes it, with the categorical ``probs``."""
+    zeros = [[[0.0] * 3] * 2]
+    return {"iteration": 1, "dist": {"probs": [probs], "mean": zeros, "std": zeros},
+            "best": [[0], [0], [[0.0, 0.0, 0.0]]], "best_cost": 0.5, "cost_history": [0.5],
+            "elite_history": [0.5], "seconds": [0.1], "n_nonfinite": 0,
+            "generator_state": torch.Generator().get_state().tolist()}
+
+
+def _progress(probs):
+    return {"trial": {}, "stages": [], "planner": {},
+            "stage": {"candidates": [0], "cem": _cem_progress(probs),
+                      "task": {"n_evaluated": 0, "n_unstable": 0, "n_infeasible": 0}}}
+
+
+def test_the_pick_schema_reads_a_checkpoints_cem_progress():
+    schema = pick_sweep.SCHEMA
+    assert schema.progress_problem(_progress([0.25, 0.75])) is None
+    assert "probabilities" in schema.progress_problem(_progress([1.25, -0.25]))
+    assert "probabilities" in schema.progress_problem(_progress([0.5, math.nan]))
+
+
+def test_a_checkpoint_with_a_negative_cem_probability_is_moved_aside(tmp_path, caplog):
+    """It failed its trial on every rerun (CEMProgress.from_dict's ValueError inside the
+    trial) and stayed where it was."""
+    out = tmp_path / "rope"
+    argv = [*QUICK_ROPE, "--methods", "random", "--out", str(out)]
+    assert rope.main(argv) == 0
+    path, rec = _only_record(out)
+    path.unlink()
+    Checkpoint(out, path.stem).save(_progress([1.25, -0.25]))
+    with caplog.at_level(logging.WARNING, logger="dopt.sweep"):
+        assert rope.main(argv) == 0
+    assert "is not resumed" in caplog.text and "probabilities" in caplog.text
+    moved = out / "trials" / "checkpoints" / "corrupt"
+    assert (moved / path.name).exists() and (moved / f"{path.stem}.reason.txt").exists()
+    assert json.loads(path.read_text())["result"]["cost_history"] == \
+        rec["result"]["cost_history"]
+
+
+# ---------------------------------------------------------------------------------- MPC
+def _fake_episode(params, report=None, blowup_out=None, keep_controls=False):
+    return {**dict.fromkeys(mpc.SCHEMA.result, 0.5), "unstable": False, "seed": params["seed"]}
+
+
+def test_a_non_finite_mpc_cost_is_moved_aside_and_recomputed(tmp_path):
+    """A stored mpc_cost of +inf (null with its reason) reached the summary: every rerun
+    died there (authors_kept: 1 non-finite value(s))."""
+    args = mpc.parse_args(["--quick", "--methods", "baseline", "--out", str(tmp_path)])
+    (trial,) = mpc.make_trials(args)
+    jsonio.write_atomic(tmp_path / "trials" / f"{trial.key}.json", {
+        "key": trial.key, "params": trial.params, "code": {"version": "0", "commit": "c0ffee"},
+        "result": {**dict.fromkeys(mpc.SCHEMA.result, 0.5), "mpc_cost": math.inf}})
+    records, res = mpc.run(args, [trial], fn=_fake_episode)
+    assert res.ran == [trial.key] and records[0]["result"]["mpc_cost"] == 0.5
+    assert "'mpc_cost' is inf" in res.recomputed[trial.key]
+
+
+def test_an_mpc_record_of_another_seed_under_a_trials_name_is_recomputed(tmp_path):
+    args = mpc.parse_args(["--quick", "--methods", "baseline", "--out", str(tmp_path),
+                           "--trials", "2"])
+    first, second = mpc.make_trials(args)
+    (tmp_path / "trials").mkdir()
+    (tmp_path / "trials" / f"{first.key}.json").write_text(json.dumps({
+        "key": first.key, "params": second.params,
+        "code": {"version": "0", "commit": "c0ffee"}, "result": _fake_episode(second.params)}))
+    records, res = mpc.run(args, [first], fn=_fake_episode)
+    assert res.ran == [first.key] and records[0]["result"]["seed"] == first.params["seed"]
+    assert "another trial's" in res.recomputed[first.key]
