@@ -143,13 +143,16 @@ def left_line(done: int, left: int, elapsed: float, unit: str) -> str:
     return f"about {duration(left * elapsed / done)} left at {done / elapsed:.3g} {unit}/s"
 
 
-def print_outputs(out: Path, pictures=(), view: Path | None = None) -> None:
+def print_outputs(out: Path, pictures=(), view: Path | None = None,
+                  viewer: bool = True) -> None:
     """A script's last lines: the paths of its ``pictures`` (names under ``out``, or paths)
-    that exist, and the ``dopt-view`` command that opens the trials of ``view`` (default
-    ``out``), with the viewer's install line."""
+    that exist, and (``viewer``: its trials are episodes dopt-view opens) the ``dopt-view``
+    command that opens the trials of ``view`` (default ``out``), with the viewer's install
+    line."""
     out = Path(out)
     found = [p for p in (out / name for name in pictures) if p.is_file()]
     if found:
         print("pictures: " + " ".join(str(p) for p in found))
-    print(f"replay its trials in the browser: dopt-view {view or out}   "
-          f"(the viewer: pip install -e \".[viz]\")")
+    if viewer:
+        print(f"replay its trials in the browser: dopt-view {view or out}   "
+              f"(the viewer: pip install -e \".[viz]\")")
