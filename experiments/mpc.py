@@ -85,6 +85,7 @@ from planners.svr_mpc import (
     TABLE1_ROWS,
     CapturingTrial,
     Derivatives,
+    KeptControls,
     Row,
     SVRMPCSettings,
     authors_clock,
@@ -447,22 +448,23 @@ def protocol(args, params: dict) -> dict:
 def run(args, trials, fn=None, out: Path | None = None, workers: int | None = None,
         schema: Schema = SCHEMA) -> tuple[list, SweepResult]:
     """Run (or resume; ``args.fresh``: recompute) the trials with ``fn`` (default one MPC
-    episode, ``run_trial``; any function of its signature) under ``out`` (default --out), on
-    ``workers`` processes (default --workers, or Ray with --ray), with the sweep's console
+    episode, ``run_trial``, which writes its blow-up captures under ``out``; another takes
+    ``(params, report, keep_controls=False)``) under ``out`` (default --out), on ``workers``
+    processes (default --workers, or Ray with --ray), with the sweep's console
     (``sweep_console``: an estimate of the time up front, a bar of the agent steps of every
     trial, a trial's budget its timeout, each trial's cost as it finishes); a stored trial is
-    reused only when it fits ``schema``; an episode writes its blow-up captures under ``out``
-    and keeps its controls as --keep-controls says (``kept_controls``). Returns their records
-    and the sweep's result (``failed``: {key: error}, ``commits``: code commits of the
-    records)."""
+    reused only when it fits ``schema``; a trial keeps its controls as --keep-controls says
+    (``kept_controls``, ``KeptControls``). Returns their records and the sweep's result
+    (``failed``: {key: error}, ``commits``: code commits of the records)."""
     out = out or args.out
     every, seeds = kept_controls(args)
     if every:
         schema = replace(schema, wanted=schema.wanted + CONTROLS_FIELDS)
     steps = {t.key: int(t.params.get("timeout") or task_defaults(t.params["task"])[1])
              for t in trials}
+    kept = KeptControls(fn or run_trial, seeds, every)
     res = run_with_console(
-        CapturingTrial(str(out), fn or run_trial, every, seeds), trials, out, unit="step",
+        kept if fn is not None else CapturingTrial(str(out), kept), trials, out, unit="step",
         desc=f"{args.task} MPC steps", steps=lambda t: steps[t.key],
         held=lambda t: steps[t.key] if is_finished(out, t.key, reuse=reuse_mode(args),
                                                    schema=schema, params=t.params) else 0,

@@ -40,7 +40,7 @@ from sweep_console import out_lock, print_outputs
 
 from dopt import atomic
 from dopt.sweep import Schema
-from planners.svr_mpc import row_label, run_trial, split_params
+from planners.svr_mpc import row_label, run_svr_mpc, split_params
 
 DEFAULT_ROWS = ("rand-t5", "sum-t10-r1", "sum-t10-r500", "svd-t10-r1")
 #: importance decades counted: 10^k <= v < 10^(k+1) for k in DECADES (and the ends beyond)
@@ -66,8 +66,7 @@ def parser() -> argparse.ArgumentParser:
     return ap
 
 
-def explain_trial(params: dict, report=None, blowup_out=None,
-                  keep_controls: bool = False) -> dict:
+def explain_trial(params: dict, report=None, keep_controls: bool = False) -> dict:
     """One episode with its optimisations' sets and importances, reduced to per-optimisation
     records (start step, |C|, share of the goal object's planar DoFs in C, the line-search
     step alpha, the relative improvement dJ/J, the regularisation mu, the nominal's states in
@@ -75,22 +74,22 @@ def explain_trial(params: dict, report=None, blowup_out=None,
     the goal object's travel and the importance counts, beside the episode's own result
     (``SVRMPCResult.to_dict``: what dopt-view shows; with ``keep_controls`` its start state
     and controls, for the exact replay). ``report`` (the sweep's) is called after every agent
-    step; ``blowup_out``: the sweep's folder, for the episode's blow-up captures
-    (``run_trial``'s)."""
+    step."""
     from dopt.tasks.push.task_model import planar_dofs
 
-    settings, seed, _ = split_params(params)
+    settings, seed, optimiser = split_params(params)
     history: list = []
-    result = run_trial(params, report, blowup_out, keep_controls, history=history)
+    result = run_svr_mpc(settings, seed, history=history, on_step=report, optimiser=optimiser,
+                         keep_controls=keep_controls)
     task = settings.build_task(seed)
     goal = planar_dofs(task.model, task.goal_bodies)
     robot = set(task.robot_dofs.tolist())
     values = [v for h in history if h["importance"] is not None
               for d, v in zip(h["dofs"], h["importance"], strict=True) if d not in robot]
-    distance = result["goal_distance"]
-    at_start = [distance[min(s // result["goal_distance_stride"], len(distance) - 1)]
-                for s in result["opt_step"]]
-    return {**result, "travel": goal_travel(task, result["final_state"]),
+    stride = result.goal_distance_stride
+    at_start = [result.goal_distance[min(s // stride, len(result.goal_distance) - 1)]
+                for s in result.opt_step]
+    return {**result.to_dict(), "travel": goal_travel(task, result.final_state),
             "horizon": task.horizon,
             "goal_share": [round(float(np.isin(goal, h["dofs"]).mean()), 4) for h in history],
             "goal_importance": [goal_importances(h, goal) for h in history],

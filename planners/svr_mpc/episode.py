@@ -321,7 +321,7 @@ def episode_result(ctl, res, start: np.ndarray, config: MPCConfig,
 
 def run_trial(params: dict, report: Callable[[], None] | None = None,
               blowup_out: str | os.PathLike | None = None,
-              keep_controls: bool = False, history: list | None = None) -> dict:
+              keep_controls: bool = False) -> dict:
     """``run_svr_mpc`` for ``dopt.sweep``: params holds the ``SVRMPCSettings`` fields,
     "seed" and, where it is not ``svr``, "optimiser" (``trial_params``) ->
     ``SVRMPCResult.to_dict()``; ``report`` (the sweep's) is called after every
@@ -331,13 +331,13 @@ def run_trial(params: dict, report: Callable[[], None] | None = None,
     ``keep_controls``: the result also holds "start_state" (ns,) and "controls" (S, nu) of
     the executed episode (``CONTROLS_FIELDS``; about 280 KB a trial) and its final state
     unrounded, for ``dopt-view``'s exact replay; the params, and so the key, are the same
-    either way. ``history``: ``run_svr_mpc``'s (each optimisation's set, importances, ...)."""
+    either way."""
     settings, seed, optimiser = split_params(params)
     if blowup_out is None:
-        return run_svr_mpc(settings, seed, history=history, on_step=report,
-                           optimiser=optimiser, keep_controls=keep_controls).to_dict()
+        return run_svr_mpc(settings, seed, on_step=report, optimiser=optimiser,
+                           keep_controls=keep_controls).to_dict()
     retire_captures(blowup_out, [trial_key(params)])
-    res = run_svr_mpc(settings, seed, history=history, on_step=report, blowup_out=blowup_out,
+    res = run_svr_mpc(settings, seed, on_step=report, blowup_out=blowup_out,
                       blowup_label=trial_key(params), optimiser=optimiser,
                       keep_controls=keep_controls).to_dict()
     return {**res, "blowups": [os.path.relpath(b, blowup_out) for b in res["blowups"]]}
@@ -347,22 +347,13 @@ def run_trial(params: dict, report: Callable[[], None] | None = None,
 class CapturingTrial:
     """``trial`` (default ``run_trial``) with blow-up captures under the sweep's folder ``out``
     (its ``blowup_out``): a picklable trial function for ``dopt.sweep``'s pools and Ray (on a
-    cluster the captures land on the worker's file system). ``keep_controls=True`` is passed
-    on to ``trial`` (``run_trial``'s) when ``keep_controls`` is True or the trial's seed is
-    one of ``keep_seeds`` (a run that keeps one replayable episode per row: its first seed)."""
+    cluster the captures land on the worker's file system). ``keep_controls``: passed on to
+    ``trial`` when True (``run_trial``'s)."""
 
     out: str
     trial: Callable = run_trial
     keep_controls: bool = False
-    keep_seeds: tuple[int, ...] = ()
-
-    def __post_init__(self):
-        if not isinstance(self.keep_controls, bool):
-            raise TypeError(f"keep_controls must be a bool, got "
-                            f"{type(self.keep_controls).__name__}")
-        object.__setattr__(self, "keep_seeds", tuple(int(s) for s in self.keep_seeds))
 
     def __call__(self, params: dict, report: Callable[[], None] | None = None) -> dict:
-        keep = self.keep_controls or int(params.get("seed", -1)) in self.keep_seeds
-        return self.trial(params, report, blowup_out=self.out,
-                          **({"keep_controls": True} if keep else {}))
+        keep = {"keep_controls": True} if self.keep_controls else {}
+        return self.trial(params, report, blowup_out=self.out, **keep)
