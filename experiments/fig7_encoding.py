@@ -22,7 +22,6 @@ from __future__ import annotations
 
 import argparse
 import functools
-import logging
 import sys
 import time
 from dataclasses import replace
@@ -44,7 +43,7 @@ from cli_args import (
 )
 from fig7_scaling import plot
 from pick_sweep import SCHEMA, cem_trial, describe_result, iterations_held
-from sweep_console import out_lock, print_outputs, run_with_console
+from sweep_console import print_outputs, run_with_console, sweep_session
 
 from dopt.rollout import share_cores
 from planners.pick_place.drag_settings import DragSettings
@@ -119,10 +118,7 @@ def main(argv=None) -> int:
 
 def _main(argv=None) -> int:
     args = parse(argv)
-    logging.basicConfig(level=logging.INFO if args.verbose else logging.WARNING,
-                        format="%(levelname)s %(name)s: %(message)s")
-    args.out.mkdir(parents=True, exist_ok=True)
-    with out_lock(args.out):
+    with sweep_session(args.out, args.verbose):
         return _experiment(args, argv)
 
 

@@ -34,7 +34,6 @@ from __future__ import annotations
 
 import argparse
 import functools
-import logging
 import sys
 import time
 from pathlib import Path
@@ -56,7 +55,7 @@ from cli_args import (
     write_summary,
 )
 from pick_sweep import SCHEMA, add_move_argument, cem_trial, describe_result, iterations_held
-from sweep_console import out_lock, print_outputs, run_with_console
+from sweep_console import print_outputs, run_with_console, sweep_session
 
 from dopt import atomic
 from dopt.rollout import share_cores
@@ -153,11 +152,7 @@ def main(argv=None) -> int:
 
 def _main(argv=None) -> int:
     args = parse(argv)
-    logging.basicConfig(level=logging.INFO if args.verbose else logging.WARNING,
-                        format="%(levelname)s %(name)s: %(message)s")
-    out = args.out
-    out.mkdir(parents=True, exist_ok=True)
-    with out_lock(out):
+    with sweep_session(args.out, args.verbose):
         return _experiment(args, argv)
 
 

@@ -41,7 +41,7 @@ from cli_args import (
 from pick_sweep import BUDGET_FLAGS, SCHEMA, add_move_argument
 from pick_sweep import iterations_held as _iterations_held
 from pick_sweep import run_trials as _run
-from sweep_console import duration, out_lock, print_outputs
+from sweep_console import duration, print_outputs, sweep_session
 
 from dopt import atomic
 from dopt.rollout import share_cores
@@ -195,16 +195,13 @@ def main(task: str, script: str, doc: str, help_: dict, argv=None) -> int:
 def _main(task: str, script: str, doc: str, help_: dict, argv=None) -> int:
     ap = parser(task, doc, help_)
     args, settings = parse(ap, task, argv)
-    with out_lock(args.out):                  # a second run on this --out refuses at once
+    with sweep_session(args.out, args.verbose):
         return _experiment(task, script, args, settings, argv)
 
 
 def _experiment(task: str, script: str, args, settings: PickPlaceSettings, argv) -> int:
     """The run of ``_main`` once its flags are checked and it holds its folder."""
-    logging.basicConfig(level=logging.INFO if args.verbose else logging.WARNING,
-                        format="%(levelname)s %(name)s: %(message)s")
     out = args.out
-    out.mkdir(parents=True, exist_ok=True)
     seeds = range(args.seed, args.seed + args.seeds)
     problem = make_problem(settings, seeds[0])
     print(f"{task} ({problem.scene.n_particles} particles), goal {args.goal}: "

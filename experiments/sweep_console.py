@@ -38,6 +38,17 @@ def out_lock(out: Path) -> OutLock:
 
 
 @contextlib.contextmanager
+def sweep_session(out: Path, verbose: bool):
+    """What a sweep script holds while it runs: logging at INFO (``verbose``) or WARNING, the
+    folder ``out`` made, and its lock (``out_lock``: a second run on it refuses at once)."""
+    logging.basicConfig(level=logging.INFO if verbose else logging.WARNING,
+                        format="%(levelname)s %(name)s: %(message)s")
+    out.mkdir(parents=True, exist_ok=True)
+    with out_lock(out):
+        yield
+
+
+@contextlib.contextmanager
 def _warnings_logged():
     """Python warnings go through logging (and so above the bar) while the block runs."""
     logging.captureWarnings(True)

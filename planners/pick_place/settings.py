@@ -259,12 +259,12 @@ class PickPlaceSettings:
         return json.loads(json.dumps(out))
 
     def to_dict(self) -> dict:
-        """JSON-able form (nested configs as dicts); ``from_dict`` inverts it. ``picker_move``
-        and ``fold_start`` appear only when set, so that the settings of a trial with the
-        fixed move and the chained start read as they did before the fields existed (in its
-        record, the sweep's params, the presets' snapshot)."""
+        """JSON-able form (nested configs as dicts); ``from_dict`` inverts it. ``picker_move``,
+        ``fold_start`` and ``drag`` appear only when set, so that the settings of a trial with
+        the fixed move, the chained start and the macro encoding read as they did before the
+        fields existed (in its record, the sweep's params, the presets' snapshot)."""
         out = asdict(self)
-        for name in ("picker_move", "fold_start"):
+        for name in ("picker_move", "fold_start", "drag"):
             if out[name] is None:
                 del out[name]
         return out
