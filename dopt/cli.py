@@ -12,6 +12,7 @@ traceback with ``DOPT_TRACEBACK=1``).
 from __future__ import annotations
 
 import argparse
+import contextlib
 import functools
 import math
 import os
@@ -29,14 +30,45 @@ EPILOG = (f"Exit status: 0 done; 1 a trial or the run failed (one line 'SCRIPT: 
           "same command resumes).")
 
 
+#: script file -> the name a console script runs it under (``shown_as``): what its usage,
+#: help and error lines call it
+_SHOWN: dict[str, str] = {}
+
+
+def shown_name(prog: str) -> str:
+    """The name that the script ``prog`` (its file name, e.g. "mpc.py") goes by in what it
+    prints: the console script's that runs it (``shown_as``), else ``prog``."""
+    return _SHOWN.get(prog, prog)
+
+
+@contextlib.contextmanager
+def shown_as(script: str, name: str):
+    """While the block runs, the script file ``script`` calls itself ``name`` (its console
+    script, e.g. ``dopt-mpc`` for "mpc.py") in its usage, help and one-line errors; its
+    ``prog``, and what is derived from it (the default --out folder), stay the file's."""
+    before = _SHOWN.get(script)
+    _SHOWN[script] = name
+    try:
+        yield
+    finally:
+        if before is None:
+            _SHOWN.pop(script, None)
+        else:
+            _SHOWN[script] = before
+
+
 class ArgumentParser(argparse.ArgumentParser):
     """argparse's parser with usage errors on one line: "PROG: error: MESSAGE (PROG --help
     lists the flags)" on stderr, exit status 2, where plain argparse prints its usage block
-    first."""
+    first. PROG is ``shown_name(prog)``: a console script's own name where one runs it."""
+
+    def _get_formatter(self):
+        return self.formatter_class(prog=shown_name(self.prog))
 
     def error(self, message: str):
-        self.exit(2, f"{self.prog}: error: {' '.join(message.split())} "
-                     f"({self.prog} --help lists the flags)\n")
+        prog = shown_name(self.prog)
+        self.exit(2, f"{prog}: error: {' '.join(message.split())} "
+                     f"({prog} --help lists the flags)\n")
 
 
 def choices_list(text: str, choices: Sequence[str], what: str) -> list[str]:
@@ -227,7 +259,8 @@ def guarded(script: str):
     the environment sets DOPT_TRACEBACK=1); Ctrl-C exits 130 with one line, and an
     interrupted sweep (``dopt.sweep.SweepInterrupted``) its ``exit_code`` (130, SIGTERM 143)
     with its message and the command that resumes it. Usage errors (argparse's SystemExit 2)
-    pass through."""
+    pass through. SCRIPT is ``shown_name(script)``: a console script's own name where one runs
+    it."""
     def wrap(main):
         @functools.wraps(main)
         def run(*args, **kwargs) -> int:
@@ -235,13 +268,13 @@ def guarded(script: str):
                 return main(*args, **kwargs)
             except KeyboardInterrupt as e:
                 sweep = hasattr(e, "exit_code")
-                print(f"{script}: {e if sweep else 'interrupted'}"
+                print(f"{shown_name(script)}: {e if sweep else 'interrupted'}"
                       + (f"; to resume: {resume_command()}" if sweep else ""), file=sys.stderr)
                 return int(getattr(e, "exit_code", 130))
             except Exception as e:
                 if os.environ.get(TRACEBACK_ENV, "") not in ("", "0"):
                     traceback.print_exc()
-                print(f"{script}: error: {one_line(e)}", file=sys.stderr)
+                print(f"{shown_name(script)}: error: {one_line(e)}", file=sys.stderr)
                 return 1
         return run
     return wrap

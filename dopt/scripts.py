@@ -4,8 +4,10 @@
 
 experiments/ is not a package: each console script runs its file with ``runpy`` as
 ``__main__`` with the experiments folder first on ``sys.path`` (as ``python
-experiments/X.py`` does), so the two are the same run. The folder is the repository's, beside
-this package (an editable install), or ``$DOPT_EXPERIMENTS``. Standard library only.
+experiments/X.py`` does), so the two are the same run; its usage, help and error lines call
+it by the console script's name (``dopt.cli.shown_as``). The folder is the repository's,
+beside this package (an editable install), or ``$DOPT_EXPERIMENTS``. Standard library and
+``dopt.cli`` only.
 """
 
 from __future__ import annotations
@@ -14,6 +16,8 @@ import os
 import runpy
 import sys
 from pathlib import Path
+
+from dopt.cli import shown_as
 
 #: console script -> the experiment script it runs
 SCRIPTS = {"dopt-fold": "cloth_fold.py", "dopt-rope": "rope.py", "dopt-mpc": "mpc.py",
@@ -44,7 +48,8 @@ def run(name: str, argv: list[str] | None = None) -> int:
     sys.argv = [str(script), *args]
     sys.path.insert(0, str(script.parent))
     try:
-        runpy.run_path(str(script), run_name="__main__")
+        with shown_as(SCRIPTS[name], name):      # its usage and errors say dopt-..., not X.py
+            runpy.run_path(str(script), run_name="__main__")
     finally:
         sys.argv, sys.path[:] = saved[0], saved[1]
     return 0

@@ -25,6 +25,7 @@ import sys
 import mpc as table1
 import numpy as np
 from cli_args import EPILOG, ArgumentParser, guarded, positive_int, write_summary
+from sweep_console import print_outputs
 
 from dopt.stats import mean_ci
 from dopt.sweep import Trial
@@ -99,6 +100,8 @@ def main(argv=None) -> int:
                    "rows": compare(records, args.nominal_threads),
                    "failed": failed, "trial_commits": commits},
                   args.out, args.record, "experiments/clock_check.py", argv)
+    print(f"wrote {args.out / 'summary.json'}")
+    print_outputs(args.out, view=args.out / "virtual")
     return 1 if failed else 0
 
 

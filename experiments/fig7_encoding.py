@@ -42,8 +42,8 @@ from cli_args import (
     write_summary,
 )
 from fig7_scaling import plot
-from pick_sweep import SCHEMA, cem_trial, iterations_held
-from sweep_console import run_with_console, sweep_session
+from pick_sweep import SCHEMA, cem_trial, describe_result, iterations_held
+from sweep_console import print_outputs, run_with_console, sweep_session
 
 from dopt.rollout import share_cores
 from planners.pick_place.drag_settings import DragSettings
@@ -134,7 +134,8 @@ def _experiment(args, argv) -> int:
         functools.partial(cem_trial, blowup_out=str(out)), trials, out, unit="it",
         desc="CEM iterations", workers=args.workers, fresh=args.fresh, schema=SCHEMA,
         steps=lambda t: args.iterations,
-        held=lambda t: iterations_held([t], args.iterations, out))
+        held=lambda t: iterations_held([t], args.iterations, out),
+        describe=describe_result)
     keys = {t.key for t in trials}
     stats = encoding_summary([r for k, r in res.records.items() if k in keys], args.points)
     summary = {"experiment": "fig7_encoding", "task": "cloth", "goal": args.goal,
@@ -151,6 +152,7 @@ def _experiment(args, argv) -> int:
     print(f"wrote {out}/summary.json")
     for key, err in res.failed.items():
         print(f"FAILED {key}: {err}", file=sys.stderr)
+    print_outputs(out, ["encoding.png"])
     return 1 if res.failed else 0
 
 

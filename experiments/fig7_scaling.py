@@ -54,8 +54,8 @@ from cli_args import (
     settings_dict,
     write_summary,
 )
-from pick_sweep import SCHEMA, add_move_argument, cem_trial, iterations_held
-from sweep_console import run_with_console, sweep_session
+from pick_sweep import SCHEMA, add_move_argument, cem_trial, describe_result, iterations_held
+from sweep_console import print_outputs, run_with_console, sweep_session
 
 from dopt import atomic
 from dopt.rollout import share_cores
@@ -175,7 +175,8 @@ def _experiment(args, argv) -> int:
         functools.partial(cem_trial, blowup_out=str(out)), trials, out, unit="it",
         desc="CEM iterations", workers=args.workers, fresh=args.fresh, schema=SCHEMA,
         reuse=reuse_mode(args), steps=lambda t: per_trial,
-        held=lambda t: iterations_held([t], per_trial, out))
+        held=lambda t: iterations_held([t], per_trial, out),
+        describe=describe_result)
     keys = {t.key for t in trials}
     records = [r for k, r in res.records.items() if k in keys]
     stats = scaling_summary(records, {n: flat[n] for n in
@@ -200,6 +201,7 @@ def _experiment(args, argv) -> int:
     print(f"wrote {out}/summary.json")
     for key, err in res.failed.items():
         print(f"FAILED {key}: {err}", file=sys.stderr)
+    print_outputs(out, ["scaling.png"])
     return 1 if res.failed else 0
 
 

@@ -46,6 +46,7 @@ from cli_args import (
     settings_dict,
     write_summary,
 )
+from sweep_console import print_outputs
 
 from deformables import (
     ClothConfig,
@@ -410,29 +411,40 @@ def reduce_tasks(tasks: list[str], cloth_n: int, rope_config: RopeConfig,
     """Reduce each task's goal sequence (the Fig. 4 curves, with ``curve_config``): its
     entry in ``summary["tasks"]``, its curve and plot under ``out``, a failure listed in
     ``summary["failed"]`` (the other tasks go on), each success counted for ``commit``."""
-    failed = summary["failed"]
-    for task in tasks:
-        kwargs = {} if task in ROPE_TASKS else {"n": cloth_n}
-        try:
-            sequence = goal_sequence(task, **kwargs)
-            results = [reduce_goal(goal, rope_config, curve_config) for goal in sequence]
-        except Exception as exc:        # listed, the other tasks go on
-            failed[task] = one_line(exc)
-            logger.error("%s failed: %s", task, failed[task])
-            continue
-        commits[commit] += 1
-        goal, result = sequence[-1], results[-1]
-        entry = record(result)
-        entry["particles"] = len(goal.positions)
-        if len(sequence) > 1:
-            entry["intermediate_goals"] = [
-                {"goal": g.name, **record(r)}
-                for g, r in zip(sequence[:-1], results[:-1], strict=True)]
-        summary["tasks"][task] = entry
-        write_curve(out / f"curve_{task}.csv", result)
-        plot_task(out / f"{task}.png", task, goal, result, cloth_config.z_scale)
-        logger.info("%s: %d elements, %d key particles %s, %.4f s", task, result.n_elements,
-                    result.n_keys, result.indices.tolist(), result.seconds)
+    from tqdm import tqdm
+    from tqdm.contrib.logging import logging_redirect_tqdm
+
+    with logging_redirect_tqdm():
+        for task in tqdm(tasks, desc="goals reduced", unit="goal"):
+            _reduce_task(task, cloth_n, rope_config, cloth_config, curve_config, out, summary,
+                         commits, commit)
+
+
+def _reduce_task(task: str, cloth_n: int, rope_config: RopeConfig, cloth_config: ClothConfig,
+                 curve_config: ClothConfig, out: Path, summary: dict, commits: dict,
+                 commit: str) -> None:
+    """One task of ``reduce_tasks``."""
+    kwargs = {} if task in ROPE_TASKS else {"n": cloth_n}
+    try:
+        sequence = goal_sequence(task, **kwargs)
+        results = [reduce_goal(goal, rope_config, curve_config) for goal in sequence]
+    except Exception as exc:        # listed, the other tasks go on
+        summary["failed"][task] = one_line(exc)
+        logger.error("%s failed: %s", task, summary["failed"][task])
+        return
+    commits[commit] += 1
+    goal, result = sequence[-1], results[-1]
+    entry = record(result)
+    entry["particles"] = len(goal.positions)
+    if len(sequence) > 1:
+        entry["intermediate_goals"] = [
+            {"goal": g.name, **record(r)}
+            for g, r in zip(sequence[:-1], results[:-1], strict=True)]
+    summary["tasks"][task] = entry
+    write_curve(out / f"curve_{task}.csv", result)
+    plot_task(out / f"{task}.png", task, goal, result, cloth_config.z_scale)
+    logger.info("%s: %d elements, %d key particles %s, %.4f s", task, result.n_elements,
+                result.n_keys, result.indices.tolist(), result.seconds)
 
 
 def robustness(args, rng: np.random.Generator, rope_config: RopeConfig,
@@ -521,6 +533,8 @@ def main(argv=None) -> int:
                   indent=1)
     for what, err in failed.items():
         print(f"FAILED {what}: {err}", file=sys.stderr)
+    # goal shapes, no episodes: nothing for dopt-view
+    print_outputs(args.out, [f"{task}.png" for task in tasks], viewer=False)
     return 1 if failed else 0
 
 

@@ -22,10 +22,16 @@ OUT/final_<row>.png (the final scene; MUJOCO_GL=egl, skipped with --no-render). 
 holds "trial_keys" (its trials: a folder may hold other runs' too) and "trial_commits" (the code
 commits of the trial results: more than one when a resumed sweep mixes code). Exits 1 if a
 trial failed (summary.json lists it under "failed") or the run failed (one line on stderr);
-2 on a bad flag. --keep-controls also keeps each trial's start state
-and executed controls (about 280 KB a trial), which dopt-view re-simulates exactly; the keys
-are the same either way, and a stored trial without controls is rerun.
+2 on a bad flag. The first seed of each row keeps its start state and executed controls
+(``--keep-controls``: ``KEEP_CONTROLS``, about 142 bytes per agent step, 280 KB a 2000-step
+clutter trial), which dopt-view re-simulates exactly; the keys are the same either way. The run
+ends with the paths of its pictures and the dopt-view command that replays its episodes.
 
+``--quick`` is a short episode in which SVR visibly acts: ``QUICK``'s flags (the paper's
+protocol, rows sum-t10-r1 and baseline, one seed, 300 agent steps, the deterministic model
+clock), each where it is not given; its table and plots show |C| falling and the rows differ.
+
+    python experiments/mpc.py --quick
     python experiments/mpc.py --task clutter --trials 20 --out results/mpc_clutter
     python experiments/mpc.py --task clutter --preset paper --trials 100 --workers 2 \\
         --out results/table1-clutter
@@ -34,6 +40,7 @@ are the same either way, and a stored trial without controls is rerun.
 from __future__ import annotations
 
 import argparse
+import functools
 import importlib.util
 import logging
 import os
@@ -43,6 +50,7 @@ from pathlib import Path
 
 os.environ.setdefault("MUJOCO_GL", "egl")   # offscreen renders; read when mujoco is imported
 
+import numpy as np
 from cli_args import (
     EPILOG,
     ArgumentParser,
@@ -63,7 +71,7 @@ from cli_args import (
     write_summary,
 )
 from mpc_outputs import write_plots, write_table
-from sweep_console import out_lock, run_with_console
+from sweep_console import out_lock, print_outputs, run_with_console
 
 from dopt.mpc import EXECUTORS, MAX_CONTROL_NOISE
 from dopt.sweep import Schema, SweepResult, Trial, is_finished
@@ -71,13 +79,16 @@ from dopt.tasks import PUSH_TASKS
 from dopt.tasks.push.costs import COST_PRESETS
 from planners.svr import METHODS, paper_theta
 from planners.svr_mpc import (
+    CLOCK_MODEL_MS,
     CONTROLS_FIELDS,
     SVR_CLOCKS,
     TABLE1_ROWS,
     CapturingTrial,
     Derivatives,
+    KeptControls,
     Row,
     SVRMPCSettings,
+    authors_clock,
     parse_row,
     row_label,
     run_trial,
@@ -103,16 +114,27 @@ SCHEMA = Schema(result=("mpc_cost", "success", "steps", "goal_distance_start",
                 finite=("mpc_cost", "steps", "goal_distance_start", "goal_distance_end",
                         "opt_ms_mean", "dofs_mean", "lag_steps_mean"),
                 identity=trial_key)
+#: --keep-controls: which trials keep their start state and executed controls for dopt-view's
+#: exact replay (about ``CONTROLS_BYTES_PER_STEP`` bytes per agent step of JSON); "first"
+#: (the default) is one episode per row, the one the plots show, and reuses a stored trial as
+#: it is; "all" reruns a stored trial that lacks them
+KEEP_CONTROLS = ("first", "all", "none")
+#: bytes of kept controls per agent step (the Panda's seven controls as JSON, measured)
+CONTROLS_BYTES_PER_STEP = 142
+#: the flags of --quick, each applied where it is not given: a short episode in which SVR
+#: visibly acts (|C| falls from the full set, the rows' costs differ)
+QUICK = {"preset": "paper", "rows": ("sum-t10-r1", "baseline"), "trials": 1, "timeout": 300,
+         "clock": "model"}
 
 
 def parser() -> argparse.ArgumentParser:
     ap = ArgumentParser(prog="mpc.py", description=__doc__, epilog=EPILOG,
                         formatter_class=argparse.RawDescriptionHelpFormatter)
     add_rows_argument(ap, None)
-    ap.add_argument("--methods", type=choices_type(METHODS, "method(s)"),
-                    default=",".join(METHODS),
+    ap.add_argument("--methods", type=choices_type(METHODS, "method(s)"), default=None,
                     help="comma-separated DoF-selection methods, with --rho and --theta, "
-                         "when no --rows are given (default: all five)")
+                         "when no --rows are given (default: all five; with --preset paper "
+                         "or authors the nine rows of Table 1 unless --methods is given)")
     ap.add_argument("--rho", type=nonneg_float, default=1.0,
                     help="SVR importance threshold: DoFs below it leave the active set "
                          "(default %(default)s, the paper's)")
@@ -122,9 +144,6 @@ def parser() -> argparse.ArgumentParser:
     add_run_arguments(ap)
     ap.add_argument("--no-render", action="store_true",
                     help="skip the renders of the final scenes (final_<method>.png)")
-    ap.add_argument("--keep-controls", action="store_true",
-                    help="keep each trial's start state and executed controls, for dopt-view "
-                         "replays (~280 KB per trial; stored trials without them are rerun)")
     return ap
 
 
@@ -158,15 +177,15 @@ def add_run_arguments(ap: argparse.ArgumentParser) -> None:
     timing, feedback, workers, output."""
     ap.add_argument("--task", default="clutter", choices=list(PUSH_TASKS),
                     help="the pushing task (default %(default)s)")
-    ap.add_argument("--preset", default="ours", choices=["ours", "paper", "authors"],
+    ap.add_argument("--preset", default=None, choices=["ours", "paper", "authors"],
                     help="paper: the authors' protocol on our problems (Eq. 2 cost without the "
                          "end-effector term, on soft with their terminal reach residual; their "
                          "set-up motion and initial push plan, 5%% control noise, virtual "
                          "clock); authors: the same protocol on the authors' own problems "
                          "(their scenes, objects, contacts and cost weights, no control cost, "
                          "no control noise; clutter needs --layouts); ours: cost with the "
-                         "end-effector term, zero initial plan, real clock (default "
-                         "%(default)s). Flags below override it")
+                         "end-effector term, zero initial plan, real clock (default ours; "
+                         "paper with --quick). Flags below override it")
     ap.add_argument("--layouts", type=Path, default=None, metavar="DIR",
                     help="the authors' clutter scenes (a folder of {0..99}.csv, e.g. "
                          "../shared/external/ilqr_svr/push_mcl_layouts); seed i runs scene i")
@@ -222,8 +241,7 @@ def add_run_arguments(ap: argparse.ArgumentParser) -> None:
                     help="run the trials on Ray (local instance if no ADDRESS)")
     ap.add_argument("--threads", type=nonneg_int, default=None,
                     help="simulation threads per trial (default: all cores, 1 with workers>1)")
-    ap.add_argument("--quick", action="store_true",
-                    help="smoke run: 1 trial per method, Y = 100 steps")
+    add_episode_arguments(ap)
     ap.add_argument("--out", type=output_dir, default=None,
                     help="output folder (default results/<script>_<task>); finished trials "
                          "are kept under OUT/trials and a rerun resumes")
@@ -232,6 +250,24 @@ def add_run_arguments(ap: argparse.ArgumentParser) -> None:
     add_reuse_argument(ap)
     ap.add_argument("--record", type=output_file, default=None, metavar="PATH",
                     help="also write the summary to PATH (docs/results/...)")
+
+
+def add_episode_arguments(ap: argparse.ArgumentParser) -> None:
+    """--quick (``QUICK``) and --keep-controls (``KEEP_CONTROLS``): the flags of every MPC
+    script that say how long its episodes are and whether dopt-view can replay them."""
+    ap.add_argument("--quick", action="store_true",
+                    help="a short episode where SVR visibly acts, in seconds: "
+                         + " ".join(f"--{k} {','.join(v) if isinstance(v, tuple) else v}"
+                                    for k, v in QUICK.items())
+                         + " (each where not given; --rows only where the script has it)")
+    ap.add_argument("--keep-controls", nargs="?", const="all", default="first",
+                    choices=KEEP_CONTROLS,
+                    help="which trials keep their start state and executed controls for "
+                         "dopt-view's exact replay, about "
+                         f"{CONTROLS_BYTES_PER_STEP} bytes per agent step (280 KB a 2000-step "
+                         "trial): first (default: the first seed of each row, the episode the "
+                         "plots show; a stored trial is reused as it is), all (the bare flag; "
+                         "a stored trial without them is rerun), none")
 
 
 def add_clock_arguments(ap: argparse.ArgumentParser) -> None:
@@ -269,10 +305,7 @@ def parse_args(argv=None, ap: argparse.ArgumentParser | None = None,
     if args.authors_data is not None and not (args.authors_data / TASK_DIRS[args.task]).is_dir():
         ap.error(f"--authors-data: no {TASK_DIRS[args.task]} folder under {args.authors_data} "
                  f"(the authors' PaperData)")
-    if args.trials is None:                  # an explicit --trials stands with --quick
-        args.trials = 1 if args.quick else DEFAULT_TRIALS
-    if args.quick:
-        args.timeout = args.timeout or 100
+    quick_defaults(args)
     if args.threads is None:
         args.threads = 1 if (args.workers > 1 or args.ray) else 0
     if args.layouts is not None and (args.preset, args.task) != ("authors", "clutter"):
@@ -288,6 +321,25 @@ def parse_args(argv=None, ap: argparse.ArgumentParser | None = None,
         ap.error(problem)
     check_outputs(ap, args, f"{Path(ap.prog).stem}_{args.task}", files=RUN_FILES)
     return args
+
+
+def quick_defaults(args) -> None:
+    """Resolve the flags whose default depends on --quick: the preset (ours; ``QUICK``'s with
+    --quick) and, with --quick, one trial and each other flag of ``QUICK`` where it is not
+    given (--rows only where the script has it and neither --rows nor --methods is given;
+    --clock not beside --clock-ms, which sets the model clock); an explicit --trials stands."""
+    if args.trials is None:                  # an explicit --trials stands with --quick
+        args.trials = QUICK["trials"] if args.quick else DEFAULT_TRIALS
+    if not args.quick:
+        args.preset = args.preset or "ours"
+        return
+    for name, value in QUICK.items():
+        if name == "trials" or not hasattr(args, name) or getattr(args, name) is not None:
+            continue
+        if (name == "rows" and getattr(args, "methods", None) is not None) or \
+                (name == "clock" and args.clock_ms is not None):
+            continue
+        setattr(args, name, list(value) if isinstance(value, tuple) else value)
 
 
 def layouts_problem(args) -> str | None:
@@ -346,16 +398,17 @@ def baseline_label(args) -> str:
 
 
 def grid(args, methods=None, rhos=None, thetas=None) -> list[Row]:
-    """The rows of the flags: those of --rows (default with --preset paper: the nine of Table
-    1; ``parse_row``), else every (method, rho, theta) of the arguments or flags, without
-    variants of their own."""
-    rows = getattr(args, "rows", None)
-    if (rows is None and methods is None and args.preset in ("paper", "authors")
-            and hasattr(args, "rows")):
+    """The rows of the flags: those of --rows (default with --preset paper or authors and no
+    --methods: the nine of Table 1; ``parse_row``), else every (method, rho, theta) of the
+    arguments or flags (--methods' default: all five), without variants of their own."""
+    rows, flag = getattr(args, "rows", None), getattr(args, "methods", None)
+    if (rows is None and methods is None and flag is None
+            and args.preset in ("paper", "authors") and hasattr(args, "rows")):
         rows = list(TABLE1_ROWS)
     if rows:
         return [parse_row(r) for r in rows]
-    return [Row(m, t, rho) for m in methods or getattr(args, "methods", ["baseline"])
+    flag = flag or (list(METHODS) if hasattr(args, "methods") else ["baseline"])
+    return [Row(m, t, rho) for m in methods or flag
             for rho in rhos or [getattr(args, "rho", 1.0)]
             for t in thetas or [_theta(getattr(args, "theta", None), m)]]
 
@@ -395,29 +448,84 @@ def protocol(args, params: dict) -> dict:
 def run(args, trials, fn=None, out: Path | None = None, workers: int | None = None,
         schema: Schema = SCHEMA) -> tuple[list, SweepResult]:
     """Run (or resume; ``args.fresh``: recompute) the trials with ``fn`` (default one MPC
-    episode) under ``out`` (default --out), on ``workers`` processes (default --workers, or
-    Ray with --ray), with the sweep's console (``sweep_console``: a bar of the agent steps of
-    every trial, a trial's budget its timeout); a stored trial is reused only when it fits
-    ``schema``; an MPC episode writes its blow-up captures under ``out`` and, with
-    --keep-controls, keeps its controls (a stored trial without them is rerun). Returns their
-    records and the sweep's result (``failed``: {key: error}, ``commits``: code commits of the
-    records)."""
-    out, keep = out or args.out, getattr(args, "keep_controls", False)
-    if keep and fn is None:
+    episode, ``run_trial``, which writes its blow-up captures under ``out``; another takes
+    ``(params, report, keep_controls=False)``) under ``out`` (default --out), on ``workers``
+    processes (default --workers, or Ray with --ray), with the sweep's console
+    (``sweep_console``: an estimate of the time up front, a bar of the agent steps of every
+    trial, a trial's budget its timeout, each trial's cost as it finishes); a stored trial is
+    reused only when it fits ``schema``; a trial keeps its controls as --keep-controls says
+    (``kept_controls``, ``KeptControls``). Returns their records and the sweep's result
+    (``failed``: {key: error}, ``commits``: code commits of the records)."""
+    out = out or args.out
+    every, seeds = kept_controls(args)
+    if every:
         schema = replace(schema, wanted=schema.wanted + CONTROLS_FIELDS)
     steps = {t.key: int(t.params.get("timeout") or task_defaults(t.params["task"])[1])
              for t in trials}
+    kept = KeptControls(fn or run_trial, seeds, every)
     res = run_with_console(
-        fn or CapturingTrial(str(out), run_trial, keep), trials, out, unit="step",
+        kept if fn is not None else CapturingTrial(str(out), kept), trials, out, unit="step",
         desc=f"{args.task} MPC steps", steps=lambda t: steps[t.key],
         held=lambda t: steps[t.key] if is_finished(out, t.key, reuse=reuse_mode(args),
                                                    schema=schema, params=t.params) else 0,
+        seconds=lambda t: steps[t.key] * agent_seconds(t.params),
+        basis="this machine's optimisation times (agent_seconds)",
+        describe=describe_result,
         workers=workers or args.workers, ray_address=None if workers else args.ray,
         fresh=args.fresh, reuse=reuse_mode(args), schema=schema)
     for key, err in res.failed.items():
         print(f"FAILED {key}: {err}", file=sys.stderr)
     wanted = {t.key for t in trials}
     return [r for k, r in res.records.items() if k in wanted], res
+
+
+def kept_controls(args) -> tuple[bool, tuple[int, ...]]:
+    """--keep-controls (``KEEP_CONTROLS``) as (every trial keeps its controls, a stored one
+    without them rerun; the seeds whose newly run trials keep theirs)."""
+    mode = getattr(args, "keep_controls", "none")
+    return mode == "all", ((int(args.seed),) if mode == "first" else ())
+
+
+@functools.cache
+def _sizes(task: str) -> tuple[float, int]:
+    """dt (s) and nv of the task's own instance (seed 0)."""
+    built = PUSH_TASKS[task](np.random.default_rng(0))
+    return float(built.dt), int(built.model.nv)
+
+
+def agent_seconds(params: dict) -> float:
+    """A trial's expected wall time per agent step (s), a first guess that the console
+    revises from the run's own pace: the task's dt times its slowdown (the real clock's
+    pace), on a modelled clock (model, authors) times this machine's optimisation time over
+    the clock's where that is more (``CLOCK_MODEL_MS`` over the clock's a + b n, at the
+    task's full DoF count n: an optimisation takes what it takes here, and the agent moves
+    on by what the clock says; executing the steps keeps the real pace a floor). The virtual
+    clock is taken at the real clock's pace."""
+    dt, nv = _sizes(params["task"])
+    pace = dt * float(params.get("slowdown") or task_defaults(params["task"])[0])
+    clock = params.get("clock")
+    if clock in ("model", "authors"):
+        a, b = CLOCK_MODEL_MS[params["task"]]
+        ours = a + b * nv
+        if clock == "authors":
+            a, b = authors_clock.model_ms(params["task"], params["method"])
+            theirs = a + b * nv
+        else:
+            theirs = params.get("clock_ms") or ours
+        pace *= max(1.0, ours / theirs)
+    return pace
+
+
+def describe_result(record: dict) -> str:
+    """A finished MPC trial in a few words: its MPC cost, mean |C|, the goal object's final
+    distance to the goal and whether it got there."""
+    r = record["result"]
+    text = f"MPC cost {r['mpc_cost']:.4g}"
+    if r.get("dofs_mean") is not None:
+        text += f", mean |C| {r['dofs_mean']:.1f}"
+    return (text + f", goal {100 * r['goal_distance_end']:.1f} cm away"
+            + (", reached" if r.get("success") else "")
+            + (", UNSTABLE" if r.get("unstable") else ""))
 
 
 @guarded("mpc.py")
@@ -450,6 +558,8 @@ def _main(args, argv) -> int:
     write_table(args.out, args.task, rows, summary.get("feedback_effect"))
     write_plots(args.out, args.task, records, list(rows), render=not args.no_render)
     print((args.out / "table1.md").read_text())
+    print_outputs(args.out, ["table1.md", "mpc_dofs.png", "mpc_goal_distance.png",
+                             *(f"final_{row}.png" for row in rows)])
     return 1 if failed else 0
 
 

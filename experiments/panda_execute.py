@@ -47,11 +47,12 @@ from cli_args import (
     positive_int,
     write_summary,
 )
+from sweep_console import print_outputs, run_with_console
 
 from dopt import atomic
 from dopt.blowup import retire_captures
 from dopt.stats import mean_ci
-from dopt.sweep import Schema, Trial, run_sweep
+from dopt.sweep import Schema, Trial, is_finished
 from planners.pick_place import PickPlaceSettings, make_planner, make_problem, run_problem
 
 GOALS = ("diagonal", "side")
@@ -122,17 +123,20 @@ def trial_key(goal: str, seed: int, n: int, quick: bool) -> str:
     return f"{goal}-seed{seed}-n{n}{'-quick' if quick else ''}"
 
 
-def panda_trial(params: dict, blowup_out: str | None = None, quick: bool = False) -> dict:
+def panda_trial(params: dict, report=None, blowup_out: str | None = None,
+                quick: bool = False) -> dict:
     """Plan with CEM(Simple) on the picker, replay with the arm; the two final costs and how
-    far apart the two final cloths are (m). ``blowup_out``: the run folder that receives a
-    blow-up capture of the arm's replay as blowups/<trial key> (``quick``: the key's; an
-    earlier run's moves to blowups/outdated/)."""
+    far apart the two final cloths are (m). ``report`` (the sweep's) is called after each CEM
+    iteration. ``blowup_out``: the run folder that receives a blow-up capture of the arm's
+    replay as blowups/<trial key> (``quick``: the key's; an earlier run's moves to
+    blowups/outdated/)."""
     from dopt.tasks.pick.scene import mean_distance
 
     s = PickPlaceSettings.from_dict(params["settings"])
     seed = params["seed"]
     problem = make_problem(s, seed)
-    res = run_problem(problem, make_planner("simple", s, seed), method="simple", seed=seed)
+    res = run_problem(problem, make_planner("simple", s, seed), method="simple", seed=seed,
+                      on_iteration=None if report is None else (lambda i, best: report()))
     label = trial_key(params["goal"], seed, s.n, quick)
     if blowup_out is not None:
         retire_captures(blowup_out, [label])
@@ -255,8 +259,18 @@ def main(argv=None) -> int:
             trials.append(Trial(trial_key(goal, seed, s.n, args.quick),
                                 {"goal": goal, "seed": int(seed), "settings": s.to_dict()}))
     keys = [t.key for t in trials]
-    res = run_sweep(functools.partial(panda_trial, blowup_out=str(args.out), quick=args.quick),
-                    trials, args.out, workers=1, fresh=args.fresh, schema=SCHEMA)
+    iterations = {g: settings_of(g, args).cem.iterations
+                  * len(make_problem(settings_of(g, args), args.seed).stages)
+                  for g in args.goals}
+    res = run_with_console(
+        functools.partial(panda_trial, blowup_out=str(args.out), quick=args.quick), trials,
+        args.out, unit="it", desc="CEM iterations (the arm's replays uncounted)",
+        steps=lambda t: iterations[t.params["goal"]],
+        held=lambda t: iterations[t.params["goal"]] if is_finished(
+            args.out, t.key, schema=SCHEMA, params=t.params) else 0,
+        describe=lambda rec: (f"picker {rec['result']['picker_final_cost'] * 1e3:.1f} mm, "
+                              f"Panda {rec['result']['panda_final_cost'] * 1e3:.1f} mm"),
+        workers=1, fresh=args.fresh, schema=SCHEMA)
     for key, err in res.failed.items():
         print(f"FAILED {key}: {err}", file=sys.stderr)
     wanted = {t.key for t in trials}
@@ -285,6 +299,8 @@ def main(argv=None) -> int:
                 arm, done = replay(problem, result["actions"], snapshots=True)
                 render_strip(args.out / f"panda_{goal}.png", arm, done, problem.final_goal,
                              strip_title(goal, first.params["seed"], result))
+    # the arm's replays are no trial dopt-view opens (it replays the picker's plans)
+    print_outputs(args.out, [f"panda_{goal}.png" for goal in args.goals], viewer=False)
     return 1 if res.failed else 0
 
 

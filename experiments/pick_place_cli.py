@@ -41,7 +41,7 @@ from cli_args import (
 from pick_sweep import BUDGET_FLAGS, SCHEMA, add_move_argument
 from pick_sweep import iterations_held as _iterations_held
 from pick_sweep import run_trials as _run
-from sweep_console import sweep_session
+from sweep_console import duration, print_outputs, sweep_session
 
 from dopt import atomic
 from dopt.rollout import share_cores
@@ -247,6 +247,9 @@ def _experiment(task: str, script: str, args, settings: PickPlaceSettings, argv)
         print(line + f"  ({e['n_candidates']} candidates, {e['n_unstable_rollouts']} of "
                      f"{e['n_rollouts']} rollouts unstable)")
     print(f"wrote {out}/summary.json in {summary['wall_s']:.0f} s")
+    print_outputs(out, ["cost_curves.png", *(f"{kind}_{m}.{ext}" for m in args.methods
+                                             for kind, ext in (("goal_vs", "png"),
+                                                               ("plan", "gif")))])
     for key, err in failed.items():
         print(f"FAILED {key}: {err}", file=sys.stderr)
     return 1 if failed else 0
@@ -276,15 +279,10 @@ def estimate_line(problem, settings: PickPlaceSettings, trials: list[Trial], ite
     H = settings.cem.horizon
     actions = left * settings.cem.population * H + open_trials * len(problem.stages) * H
     seconds = actions * per_action / min(args.workers, open_trials)
-    return (f"{seeds}: about {_duration(seconds)} for {left} CEM iterations of "
+    return (f"{seeds}: about {duration(seconds)} for {left} CEM iterations of "
             f"{settings.cem.population} plans x {H} actions in {open_trials} trials, at "
             f"{per_action:.2f} s per action timed here now (a calibration rollout of {plans} "
             f"random plans; renders not counted)")
-
-
-def _duration(seconds: float) -> str:
-    return f"{seconds:.0f} s" if seconds < 90 else (
-        f"{seconds / 60:.0f} min" if seconds < 5400 else f"{seconds / 3600:.1f} h")
 
 
 # --------------------------------------------------------------------------------- report

@@ -45,9 +45,15 @@ def run_trials(trials: list[Trial], iterations_per_trial: int, out: Path,
         desc="CEM iterations", workers=workers,
         fresh=fresh, schema=SCHEMA,
         steps=lambda t: iterations_per_trial if t.key in cem else 0,
-        held=lambda t: iterations_held([t], iterations_per_trial, out) if t.key in cem else 0)
+        held=lambda t: iterations_held([t], iterations_per_trial, out) if t.key in cem else 0,
+        describe=describe_result)
     keys = {t.key for t in trials}
     return [r["result"] for k, r in res.records.items() if k in keys], res
+
+
+def describe_result(record: dict) -> str:
+    """A finished pick-and-place trial in a few words (its finished line): its final cost."""
+    return f"final cost {record['result']['final_cost'] * 1e3:.1f} mm"
 
 
 def cem_trial(params: dict, checkpoint: Checkpoint | None = None, report=None,

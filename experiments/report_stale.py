@@ -63,16 +63,16 @@ SVR_FLAGS = {"--cost": ("cost",), "--control-noise": ("control_noise",), "--cloc
 SVR_KINDS = ("table1", "svr_explain", "clock_check", "fig4")
 #: the files that compute an MPC trial on Table 1's protocol (git pathspecs): the runtime
 #: (dopt, less the lab: sweeps, packs, file writing, provenance, statistics, the command-line
-#: helpers, the viewer and its blow-up captures) and the SVR slice's planners; a change
-#: elsewhere (summaries, reports, the viewer) cannot change a trial's outcome
+#: helpers and console scripts, the viewer and its blow-up captures) and the SVR slice's
+#: planners; a change elsewhere (summaries, reports, the viewer) cannot change a trial's outcome
 SVR_COMPUTE_PATHS = ("dopt", "planners/ilqr.py", "planners/svr.py", "planners/keypoints.py",
                      "planners/_checks.py", "planners/svr_mpc/episode.py",
                      "planners/svr_mpc/optimisers.py", "planners/svr_mpc/settings.py",
                      "planners/svr_mpc/authors_clock.py",
                      *(f":(exclude)dopt/{f}" for f in (
                          "sweep*.py", "trialpack.py", "jsonio.py", "atomic.py", "provenance.py",
-                         "stats.py", "multiple.py", "cli.py", "bench", "render.py", "view",
-                         "blowup.py")))
+                         "stats.py", "multiple.py", "cli.py", "scripts.py", "bench",
+                         "render.py", "view", "blowup.py")))
 
 
 def load_snapshot(results_dir: Path) -> dict | None:

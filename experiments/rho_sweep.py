@@ -26,7 +26,7 @@ from pathlib import Path
 import mpc as table1
 import numpy as np
 from cli_args import EPILOG, ArgumentParser, guarded, number_list, record_figure, write_summary
-from sweep_console import out_lock
+from sweep_console import out_lock, print_outputs
 
 from dopt import atomic
 from planners.svr_mpc import fig4_fields, row_label
@@ -108,6 +108,7 @@ def _main(args, paper: dict | None, argv) -> int:
             w.writerows(rows)
         plot(rows, args.thetas, args.out / "rho_sweep.png", args.task, args.method, paper)
         record_figure(args.out / "rho_sweep.png", args.record)
+    print_outputs(args.out, ["rho_sweep.png", "rho_sweep.csv"])
     return 1 if failed else 0
 
 

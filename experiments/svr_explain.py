@@ -36,7 +36,7 @@ import sys
 import mpc as table1
 import numpy as np
 from cli_args import EPILOG, ArgumentParser, guarded, positive_int, write_summary
-from sweep_console import out_lock
+from sweep_console import out_lock, print_outputs
 
 from dopt import atomic
 from dopt.sweep import Schema
@@ -66,18 +66,21 @@ def parser() -> argparse.ArgumentParser:
     return ap
 
 
-def explain_trial(params: dict, report=None) -> dict:
+def explain_trial(params: dict, report=None, keep_controls: bool = False) -> dict:
     """One episode with its optimisations' sets and importances, reduced to per-optimisation
     records (start step, |C|, share of the goal object's planar DoFs in C, the line-search
     step alpha, the relative improvement dJ/J, the regularisation mu, the nominal's states in
     contact with the pushed object, the goal object's distance to the goal when it started),
-    the goal object's travel and the importance counts. ``report`` (the sweep's) is called
-    after every agent step."""
+    the goal object's travel and the importance counts, beside the episode's own result
+    (``SVRMPCResult.to_dict``: what dopt-view shows; with ``keep_controls`` its start state
+    and controls, for the exact replay). ``report`` (the sweep's) is called after every agent
+    step."""
     from dopt.tasks.push.task_model import planar_dofs
 
     settings, seed, optimiser = split_params(params)
     history: list = []
-    result = run_svr_mpc(settings, seed, history=history, on_step=report, optimiser=optimiser)
+    result = run_svr_mpc(settings, seed, history=history, on_step=report, optimiser=optimiser,
+                         keep_controls=keep_controls)
     task = settings.build_task(seed)
     goal = planar_dofs(task.model, task.goal_bodies)
     robot = set(task.robot_dofs.tolist())
@@ -86,12 +89,8 @@ def explain_trial(params: dict, report=None) -> dict:
     stride = result.goal_distance_stride
     at_start = [result.goal_distance[min(s // stride, len(result.goal_distance) - 1)]
                 for s in result.opt_step]
-    return {"steps": result.steps, "mpc_cost": result.mpc_cost, "success": result.success,
-            "goal_distance_start": result.goal_distance_start,
-            "goal_distance_end": result.goal_distance_end,
-            "travel": goal_travel(task, result.final_state),
-            "lag_steps_mean": result.lag_steps_mean, "horizon": task.horizon,
-            "opt_step": result.opt_step, "n_dofs": result.n_dofs,
+    return {**result.to_dict(), "travel": goal_travel(task, result.final_state),
+            "horizon": task.horizon,
             "goal_share": [round(float(np.isin(goal, h["dofs"]).mean()), 4) for h in history],
             "goal_importance": [goal_importances(h, goal) for h in history],
             "alpha": [h["alpha"] for h in history],
@@ -99,10 +98,7 @@ def explain_trial(params: dict, report=None) -> dict:
                                 if h["cost_before"] else 0.0 for h in history],
             "mu": [h["mu"] for h in history],
             "contact_steps": [h["contact_steps"] for h in history],
-            "goal_distance_at_opt": at_start,
-            "n_unstable_rollouts": result.n_unstable_rollouts, "unstable": result.unstable,
-            "unstable_reason": result.unstable_reason,
-            "importance": importance_counts(values)}
+            "goal_distance_at_opt": at_start, "importance": importance_counts(values)}
 
 
 def goal_importances(h: dict, goal) -> list[float] | None:
@@ -344,6 +340,7 @@ def _main(args, argv) -> int:
                   args.out, args.record, "experiments/svr_explain.py", argv)
     if rows:
         plot(rows, args.out / "svr_explain.png", args.task)
+    print_outputs(args.out, ["svr_explain.png"])
     return 1 if res.failed else 0
 
 

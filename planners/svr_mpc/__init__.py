@@ -34,6 +34,8 @@ Shapes: T horizon, nu controls, ns state row, c = |C| active DoFs.
     authors_data.py  the authors' Table 1 statistic on their per-episode files and on ours
     authors_clock.py  the model clock fitted to the authors' optimisation times (clock
                  ``authors``)
+    replays.py   KeptControls: which trials keep their executed controls (dopt-view's
+                 exact replay), the first seed's or every one's
     choice.py    what each row's C held (the goal object's share) beside its lag and held
                  steps, from stored active sets (choice_fields)
 """
@@ -60,6 +62,7 @@ from planners.svr_mpc.optimisers import (
     register_optimiser,
     svr_optimiser,
 )
+from planners.svr_mpc.replays import KeptControls
 from planners.svr_mpc.settings import (
     CLOCK_MODEL_MS,
     FINITE_DIFFERENCES,
@@ -94,7 +97,8 @@ from planners.svr_mpc.summary import (
 
 __all__ = ["CLOCK_MODEL_MS", "CONTROLS_FIELDS", "DEFAULT_OPTIMISER", "FINITE_DIFFERENCES",
            "GOAL_DISTANCE_STRIDE", "OPTIMISERS", "OUTLIER_DISTANCE", "PAPER_COSTS", "PRESETS",
-           "SVR_CLOCKS", "TABLE1_ROWS", "CapturingTrial", "Derivatives", "OptimiserContext", "Row",
+           "SVR_CLOCKS", "TABLE1_ROWS", "CapturingTrial", "Derivatives", "KeptControls",
+           "OptimiserContext", "Row",
            "SVRController", "SVRMPCResult", "SVRMPCSettings", "build_controller",
            "derivatives_effect", "derivatives_tag", "dofs_mask", "dofs_of_mask", "feedback_effect",
            "fig4_fields", "optimiser_factory", "optimiser_names", "paired", "paired_ratio",

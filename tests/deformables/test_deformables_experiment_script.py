@@ -8,9 +8,12 @@ ROOT = Path(__file__).resolve().parents[2]
 
 
 def test_quick_run_writes_summary_curves_and_plots(tmp_path):
-    subprocess.run([sys.executable, str(ROOT / "experiments" / "key_particles.py"), "--task",
-                    "all", "--quick", "--out", str(tmp_path)], check=True, cwd=ROOT,
-                   capture_output=True, timeout=120)
+    proc = subprocess.run([sys.executable, str(ROOT / "experiments" / "key_particles.py"),
+                           "--task", "all", "--quick", "--out", str(tmp_path)], check=True,
+                          cwd=ROOT, capture_output=True, text=True, timeout=120)
+    assert "goals reduced" in proc.stderr and "7/7" in proc.stderr         # the bar
+    assert proc.stdout.strip().splitlines()[-1].startswith(
+        f"pictures: {tmp_path / 'rope_straighten.png'} ")
     summary = json.loads((tmp_path / "summary.json").read_text())
     tasks = summary["tasks"]
     assert tasks["rope_straighten"]["n_keys"] == 2

@@ -302,7 +302,7 @@ def test_mpc_with_every_trial_failing_exits_1(tmp_path, monkeypatch, capsys):
                      "--no-render"]) == 1
     summary = json.loads((out / "summary.json").read_text())
     assert sorted(k.split("-")[1] for k in summary["failed"]) == ["baseline", "naive"]
-    assert all(k.startswith("clutter-") and k.endswith("-seed0") for k in summary["failed"])
+    assert all(k.startswith("clutter-") and "-seed0" in k for k in summary["failed"])
     assert set(summary["failed"].values()) == {"RuntimeError: impossible setting for seed 0"}
     assert summary["methods"] == {} and summary["trial_commits"] == {}
     _check_provenance(summary, "mpc.py")

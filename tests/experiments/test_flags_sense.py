@@ -26,7 +26,7 @@ def no_run(monkeypatch):
         raise AssertionError("the arguments were accepted")
     monkeypatch.setattr(pick_place_cli, "make_problem", stop)
     monkeypatch.setattr(mpc, "run", stop)
-    monkeypatch.setattr(panda_execute, "run_sweep", stop)
+    monkeypatch.setattr(panda_execute, "run_with_console", stop)
 
 
 def usage_error(capsys, main, argv) -> str:
@@ -102,7 +102,7 @@ def test_quick_keeps_an_explicit_trial_count(tmp_path, monkeypatch):
 
     def capture(fn, trials, *args, **kwargs):
         raise Trials(trials)
-    monkeypatch.setattr(panda_execute, "run_sweep", capture)
+    monkeypatch.setattr(panda_execute, "run_with_console", capture)
     for flags, seeds in [(["--seeds", "2"], [0, 1]), ([], [0])]:
         with pytest.raises(Trials) as run:
             panda_execute.main(["--quick", "--goals", "diagonal", *flags, "--out", out])

@@ -6,6 +6,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -50,30 +51,79 @@ def test_quick_run_writes_table_and_resumes(tmp_path):
 
 
 def test_keep_controls_reaches_the_trials_and_reruns_those_without(tmp_path):
-    """--keep-controls: a trial keeps its start state and controls under the key it has
-    without the flag, a stored trial without them is rerun (its file kept under
-    trials/outdated/, not corrupt/: it is sound), one with them is reused, and
-    dopt-view's replay of the kept controls ends within 1e-9 of its recorded final state."""
+    """--keep-controls: by default the first seed's trial keeps its start state and controls
+    and the others do not, all under the keys they have without them; the bare flag (all)
+    reruns a stored trial without them (its file kept under trials/outdated/, not corrupt/:
+    it is sound) and reuses one with them; dopt-view's replay of the kept controls ends
+    within 1e-9 of its recorded final state; none keeps none."""
     from planners.view import load_mpc
 
     out = tmp_path / "mpc"
-    flags = ("--quick", "--timeout", "8", "--methods", "baseline", "--no-render",
-             "--out", str(out))
-    run(*flags)
-    (plain,) = (out / "trials").glob("*.json")
+    flags = ("--preset", "paper", "--clock", "model", "--timeout", "8", "--methods",
+             "baseline", "--no-render", "--out", str(out))
+    run(*flags, "--trials", "2", "--seed", "3")
+    first, plain = sorted((out / "trials").glob("*.json"))      # seed3 before seed4
+    assert "-seed3-" in first.name and "-seed4-" in plain.name
     assert "controls" not in json.loads(plain.read_text())["result"]
-    run(*flags, "--keep-controls")
-    (kept,) = (out / "trials").glob("*.json")
-    assert kept.name == plain.name
+    assert len(json.loads(first.read_text())["result"]["controls"]) == 8
+    stamp = first.stat().st_mtime_ns
+    run(*flags, "--trials", "2", "--seed", "3", "--keep-controls")
+    assert first.stat().st_mtime_ns == stamp                   # it has them: reused
     (moved,) = (out / "trials" / "outdated").glob("*.json")
     assert moved.name.startswith(plain.stem) and not (out / "trials" / "corrupt").exists()
     assert "controls" not in json.loads(moved.read_text())["result"]
-    result = json.loads(kept.read_text())["result"]
+    result = json.loads(plain.read_text())["result"]
     assert len(result["controls"]) == result["steps"] == 8 and result["start_state"]
-    assert load_mpc(kept).replay_error <= 1e-9
-    stamp = kept.stat().st_mtime_ns
-    run(*flags, "--keep-controls")
-    assert kept.stat().st_mtime_ns == stamp                    # it has them: reused
+    assert load_mpc(plain).replay_error <= 1e-9
+    none = tmp_path / "none"
+    run(*flags[:-1], str(none), "--trials", "1", "--keep-controls", "none")
+    (path,) = (none / "trials").glob("*.json")
+    assert "controls" not in json.loads(path.read_text())["result"]
+
+
+def test_quick_is_a_short_episode_where_svr_visibly_acts(tmp_path):
+    """--quick alone: the paper's protocol on rows sum-t10-r1 and baseline, one seed, 300
+    agent steps on the model clock; SVR's |C| falls below the full set after its first
+    optimisation while baseline's stays there, the two rows' costs differ, the goal object
+    stays upright (no success claimed for a toppled cylinder), both episodes keep their
+    controls and replay exactly, and the run's last lines name its pictures and the viewer
+    command; the console gave an estimate up front and each trial's cost as it finished."""
+    import mujoco
+
+    from planners.svr_mpc import split_params
+    from planners.view import load_mpc
+
+    out = tmp_path / "quick"
+    proc = run("--quick", "--no-render", "--out", str(out))
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["preset"] == "paper" and summary["clock"] == "model"
+    rows = summary["methods"]
+    assert set(rows) == {"sum-t10-r1", "baseline"}
+    assert rows["sum-t10-r1"]["mpc_cost_normalised_mean"] != pytest.approx(1.0, abs=1e-3)
+    for path in sorted((out / "trials").glob("*.json")):
+        record = json.loads(path.read_text())
+        res = record["result"]
+        assert res["steps"] == 300 and len(res["controls"]) == 300
+        full = res["n_dofs"][0]
+        if record["params"]["method"] == "baseline":
+            assert set(res["n_dofs"]) == {full}
+        else:
+            assert max(res["n_dofs"][1:]) < full
+        episode = load_mpc(path)
+        assert episode.replay_error <= 1e-9
+        task = split_params(record["params"])[0].build_task(0)
+        m, d = task.model, mujoco.MjData(task.model)
+        body = m.body(task.goal_object).id
+        for state in episode.states:
+            mujoco.mj_setState(m, d, state, mujoco.mjtState.mjSTATE_INTEGRATION)
+            mujoco.mj_kinematics(m, d)
+            assert d.xmat[body][8] > np.cos(np.radians(30))       # within 30 deg of upright
+    tail = proc.stdout.strip().splitlines()[-2:]
+    assert tail[0].startswith("pictures: ") and str(out / "mpc_dofs.png") in tail[0]
+    assert f"dopt-view {out}" in tail[1]
+    assert "estimate: about" in proc.stderr
+    said = proc.stdout + proc.stderr
+    assert "finished clutter-baseline" in said and "MPC cost" in said and "left" in said
 
 
 def test_ray_path(tmp_path):

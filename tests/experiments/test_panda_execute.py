@@ -7,9 +7,16 @@ import panda_execute
 import pytest
 
 
-def test_quick_run_writes_both_goals_and_resumes(tmp_path):
+def test_quick_run_writes_both_goals_and_resumes(tmp_path, capsys):
     out = tmp_path / "panda"
     assert panda_execute.main(["--quick", "--out", str(out)]) == 0
+    said = capsys.readouterr()
+    # the console: a bar of CEM iterations, each trial's costs as it finishes, and at the end
+    # the pictures
+    assert "CEM iterations" in said.err and "finished diagonal-seed0" in said.out
+    assert "mm, Panda " in said.out
+    assert said.out.strip().splitlines()[-1] == \
+        f"pictures: {out / 'panda_diagonal.png'} {out / 'panda_side.png'}"
     s = json.loads((out / "summary.json").read_text())
     assert s["experiment"] == "panda_execute" and set(s["goals"]) == {"diagonal", "side"}
     assert s["blowups"] == [] and not (out / "blowups").exists()      # stable replays

@@ -97,7 +97,7 @@ def test_the_mpc_experiment_passes_its_schema(tmp_path, capsys):
            "recomputed" in capsys.readouterr().err
 
 
-def _fake_episode(params, report=None):
+def _fake_episode(params, report=None, keep_controls=False):
     for _ in range(3):
         report()
     return {**dict.fromkeys(mpc.SCHEMA.result, 0), "unstable": False}

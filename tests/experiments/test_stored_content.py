@@ -129,7 +129,7 @@ def test_a_checkpoint_with_a_negative_cem_probability_is_moved_aside(tmp_path, c
 
 
 # ---------------------------------------------------------------------------------- MPC
-def _fake_episode(params, report=None):
+def _fake_episode(params, report=None, keep_controls=False):
     return {**dict.fromkeys(mpc.SCHEMA.result, 0.5), "unstable": False, "seed": params["seed"]}
 
 

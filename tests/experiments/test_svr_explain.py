@@ -112,3 +112,11 @@ def test_short_run_writes_summary_and_plot(tmp_path):
     assert svr["goal_importance"]["first_median"] >= 0
     assert "goal_importance" not in d["rows"]["rand-t5"]
     assert (out / "svr_explain.png").stat().st_size > 10_000
+    # the first seed keeps its controls (--keep-controls' default): dopt-view's MPC source
+    # claims each trial and its replay ends on the recorded final state
+    from planners.view import MPC
+    for path in (out / "trials").glob("*.json"):
+        record = json.loads(path.read_text())
+        assert MPC.claims(path, record) and len(record["result"]["controls"]) == 60
+        assert MPC.load(path).replay_error <= 1e-9
+    assert f"dopt-view {out}" in proc.stdout and str(out / "svr_explain.png") in proc.stdout
