@@ -242,12 +242,23 @@ def _versus(reference: str) -> Callable[[list[Result]], Finding | None]:
             judged += 1
             held += c["cheaper"] > 0 and c["dearer"] == 0
             parts.append(f"{task} {c['cheaper']} of {c['n']} SVR rows cheaper, "
-                         f"{c['dearer']} dearer")
+                         f"{c['dearer']} dearer" + _at_equal_time(results, r, reference))
         if not parts:
             return None
         return Finding(share(held, judged), "under Holm's correction: " + "; ".join(parts),
                        tuple(files))
     return judge
+
+
+def _at_equal_time(results: list[Result], free: Result, reference: str) -> str:
+    """" (at equal time, every optimisation X ms: a of n cheaper, b dearer)" where the task
+    of ``free`` has an equal-lag run by the same executor (``equal_lag_table1``), else ""."""
+    equal = equal_lag_table1(results, free.data.get("task"), like=free)
+    c = equal and verdict_counts(equal.data.get("versus")).get(reference)
+    if not c:
+        return ""
+    return (f" (at equal time, every optimisation {as_flag(equal.data['clock_ms'])} ms: "
+            f"{c['cheaper']} of {c['n']} cheaper, {c['dearer']} dearer)")
 
 
 def _faster(results: list[Result]) -> Finding | None:
