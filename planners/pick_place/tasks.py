@@ -43,7 +43,7 @@ CRUMPLE_TURN = 0.8
 #: ``_set_to_folded``) draws a crease edge out to strain 2.5 (the verdict's bound is 0.5) and
 #: the sheet lands 72 mm from the side fold, layers out of order; 2 cm still breaks the bound
 #: (0.66); 1 cm peaks at 0.07 and lands within 2 mm of the goal (the side goal: 1.9 mm mean;
-#: the reflective goal: 2.4 mm; tests/planners/test_prepared_start.py holds them to 3 mm)
+#: the reflective goal: 2.4 mm; tests/planners/pick_place/test_prepared_start.py holds them to 3 mm)
 PREPARED_LIFT = 0.01
 #: seconds the dropped sheet settles (ours, measured: 20 x 20 sheets at rest, the particles'
 #: root-mean-square speed under 0.1 mm/s; the authors step FleX 15 times, 0.15 s at its dt)

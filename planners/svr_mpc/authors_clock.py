@@ -38,7 +38,7 @@ PLAIN_DOFS = {"clutter": {"baseline": 55, "naive": 23},
 
 #: the fits (``fit_authors_clock`` on ``paper_data/<TASK_DIRS[task]>``, rounded to 0.01 ms):
 #: (a, b, s) of ms = a + b |C| + s [SVD]; source: DMackRus/iLQR_SVR ``PaperData`` (runs of
-#: 2024-06-10/12), 38 clutter runs, 9 per soft task; tests/planners/test_authors_clock.py
+#: 2024-06-10/12), 38 clutter runs, 9 per soft task; tests/planners/svr_mpc/test_authors_clock.py
 #: refits them
 AUTHORS_CLOCK = {"clutter": (40.29, 8.16, 29.82), "soft": (12.41, 5.0, -11.65),
                  "soft_rigid": (396.38, 24.68, -14.94)}

@@ -59,7 +59,7 @@ def test_a_pick_place_run_names_the_captures_of_its_flagged_plans(tmp_path, monk
 
     import planners.pick_place.run as run
     from planners.pick_place import capture_label, make_problem
-    from tests.planners.test_pick_place_blowup import slow
+    from tests.planners.pick_place.test_pick_place_blowup import slow
 
     monkeypatch.setattr(run, "make_problem", lambda s, seed: slow(make_problem(s, seed)))
     out = tmp_path / "rope"

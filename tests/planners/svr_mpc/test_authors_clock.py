@@ -18,7 +18,7 @@ from planners.svr_mpc.authors_clock import (
 from planners.svr_mpc.authors_data import TASK_DIRS, authors_table1
 from planners.svr_mpc.settings import TABLE1_ROWS
 
-PAPER_DATA = Path(__file__).resolve().parents[2] / ".." / "shared" / "external" / "ilqr_svr" \
+PAPER_DATA = Path(__file__).resolve().parents[3] / ".." / "shared" / "external" / "ilqr_svr" \
     / "paper_data"
 needs_data = pytest.mark.skipif(not PAPER_DATA.is_dir(),
                                 reason=f"the authors' paper data is not at {PAPER_DATA}")

@@ -25,7 +25,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from tests.test_view import BIN, committed_trial, write_mpc_trial
+from tests.dopt.view.test_view import BIN, committed_trial, write_mpc_trial
 
 #: the browser window (px); the viewer's panel covers the right of it
 WINDOW = (1280, 800)

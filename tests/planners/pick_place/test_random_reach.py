@@ -12,7 +12,7 @@ import pytest
 from dopt.trialpack import stored_trials
 from planners.pick_place.random_reach import p_blind, random_reach, reach_summary
 
-RUNS = Path(__file__).resolve().parents[2] / "docs" / "results" / "runs"
+RUNS = Path(__file__).resolve().parents[3] / "docs" / "results" / "runs"
 
 
 def test_p_blind_matches_enumeration():

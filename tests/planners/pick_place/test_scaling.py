@@ -19,7 +19,7 @@ from planners.pick_place.scaling import (
     scaling_trials,
 )
 
-ROOT = Path(__file__).resolve().parents[2]
+ROOT = Path(__file__).resolve().parents[3]
 SIZES = (10, 15, 20, 30)
 
 

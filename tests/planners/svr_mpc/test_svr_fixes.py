@@ -61,7 +61,7 @@ def test_mu_reset_starts_every_iteration_from_mu_init(reset):
     from dopt.costs import QuadraticCost
     from planners.ilqr import ILQR, ILQRConfig
 
-    from ..dopt.models import SLIDER
+    from ...dopt.models import SLIDER
 
     scene = Scene.from_xml(SLIDER)
     d = mujoco.MjData(scene.model)

@@ -30,7 +30,7 @@ from planners.pick_place import (
     trial_key,
 )
 
-ROOT = Path(__file__).resolve().parents[2]
+ROOT = Path(__file__).resolve().parents[3]
 #: the prepared start's mean particle distance to the previous fold's goal (m)
 MEAN_TOLERANCE = 0.003
 #: its largest particle distance to that goal (m)

@@ -9,7 +9,7 @@ import pytest
 
 from dopt.bench.cloth_steps import bench_cloth_steps
 
-ROOT = Path(__file__).resolve().parents[2]
+ROOT = Path(__file__).resolve().parents[3]
 
 
 def test_rows_split_the_step_into_stages_that_add_up():

@@ -16,7 +16,7 @@ from planners.svr_mpc.authors_data import (
     authors_table1,
 )
 
-SHARED = Path(__file__).resolve().parents[2] / ".." / "shared"
+SHARED = Path(__file__).resolve().parents[3] / ".." / "shared"
 PAPER_DATA = SHARED / "external" / "ilqr_svr" / "paper_data"
 PAPER_TEXT = SHARED / "seeds" / "state_vector_reduction_mpc.txt"
 

@@ -24,7 +24,7 @@ from planners.pick_place import (
     register_goal,
 )
 
-ROOT = Path(__file__).resolve().parents[2]
+ROOT = Path(__file__).resolve().parents[3]
 
 
 @pytest.fixture

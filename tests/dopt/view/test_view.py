@@ -20,7 +20,7 @@ from dopt.trialpack import read_trial_text, stored_trials
 
 os.environ.setdefault("MUJOCO_GL", "egl")
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[3]
 RUNS = ROOT / "docs" / "results" / "runs"
 BIN = Path(sys.executable).parent
 

@@ -11,9 +11,9 @@ import pytest
 
 from planners.svr_mpc import run_trial
 
-from ..external import LAYOUTS
+from ...external import LAYOUTS
 
-ROOT = Path(__file__).resolve().parents[2]
+ROOT = Path(__file__).resolve().parents[3]
 TRIAL = (ROOT / "docs" / "results" / "runs" / "table1-clutter-authors-executor" / "trials"
          / "clutter-rand-rho1-theta5-slow1-Y0-seed3-costauthors-clutter-ws-clockauthors-"
            "execauthors-authors.json")
