@@ -45,7 +45,7 @@ from collections import Counter
 import numpy as np
 
 from dopt.atomic import write_text
-from dopt.cli import (
+from dopt.lab.cli import (
     EPILOG,
     ArgumentParser,
     existing_dir,
@@ -56,7 +56,7 @@ from dopt.cli import (
     output_file,
     positive_int,
 )
-from dopt.provenance import provenance
+from dopt.lab.provenance import provenance
 
 from .authors import AUTHORS_CLOTH, keys_agree, load_authors_cloth
 from .cloth import ClothConfig, cloth_key_particles

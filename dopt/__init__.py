@@ -12,17 +12,11 @@ It knows MuJoCo and no planner (docs/ARCHITECTURE.md has the map and the rule). 
                             written for dopt-view (which reads them; the runtime no viewer)
     costs.py, mpc.py        QuadraticCost + residual terms (Eq. 2-3); asynchronous MPC (Alg. 1)
                             with its real, virtual and model clocks, mpc_cost (Eq. 5)
-    sweep.py                resumable trial sweeps (inline, process pool, Ray), checkpoints,
-                            schemas, the folder's lock, interrupts; its files sweep_store.py,
-                            its runners sweep_exec.py; jsonio.py: strict JSON (no bare NaN);
-                            trialpack.py: finished trials packed, the one reader of trials;
-                            sweep_pack.py: pack_trials, loose trial files into the pack
-    provenance.py           command, commit, versions of a result; the recording and reuse rules
-    stats.py, multiple.py   means and intervals; Holm's correction
-    validation.py, cli.py   argument checks; the command lines' shared types and guarded()
-    dicts.py                small helpers on nested JSON-like dicts (standard library only)
+    validation.py, atomic.py argument checks; the one atomic writer of files (the base
+                            modules every room, the lab's included, may import)
+    lab/                    the research machinery, apart from the runtime: sweeps, trial
+                            files, provenance, statistics, command lines (dopt.lab)
     render.py               offscreen images of states (numpy arrays; no task knowledge)
-    scripts.py              the console scripts of the experiment scripts
     tasks/                  the two papers' tasks: registries in tasks/__init__.py, the wings
                             tasks/pick and tasks/push, the shared arm tasks/panda.py
     view/, bench/           dopt-view (the browser viewer); python -m dopt.bench
@@ -39,12 +33,12 @@ Glossary of shape letters used in every docstring:
 
 import importlib
 
-#: the version a result records (``dopt.provenance.code_version``); bump it for a
+#: the version a result records (``dopt.lab.provenance.code_version``); bump it for a
 #: result-changing release. pyproject.toml reads it from here.
 __version__ = "0.2.0"
 
 #: public name -> the module that defines it; loaded on first use, so that the pure-Python
-#: modules (dopt.validation, dopt.stats, dopt.provenance, dopt.cli) import without MuJoCo or torch
+#: modules (dopt.validation, dopt.atomic, dopt.lab) import without MuJoCo or torch
 _EXPORTS = {
     "RolloutError": "dopt.errors", "UnstableRolloutError": "dopt.errors",
     "Derivatives": "dopt.rollout", "FDConfig": "dopt.rollout", "RolloutConfig": "dopt.rollout",

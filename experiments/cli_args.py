@@ -1,5 +1,5 @@
 """Command-line helpers of the experiment scripts: the shared argparse types and one-line
-errors of ``dopt.cli`` (re-exported here, so a script imports its CLI pieces from one place),
+errors of ``dopt.lab.cli`` (re-exported here, so a script imports its CLI pieces from one place),
 plus what only experiments do: check --record (not the --out folder, and only from committed
 code), the sweeps' --reuse-any flag, and write OUT/summary.json with the run's provenance.
 
@@ -13,20 +13,20 @@ the summary and every ``SVRMPCSettings`` field in each trial's params.
 
 Recording: ``--record PATH`` is refused, one line naming the changed files, when files that can
 change a result (dopt/, deformables/, planners/, experiments/, pyproject.toml, setup.py; the
-exact rule is ``dopt.provenance``'s) differ from HEAD, or outside a git checkout:
+exact rule is ``dopt.lab.provenance``'s) differ from HEAD, or outside a git checkout:
 ``record_problem`` says so before anything runs, and ``write_summary`` checks again before it
 writes the copy (OUT/summary.json is written either way, marked "-dirty" in its provenance).
 A run with --out only is never refused. ``record_problem`` also tries the places a run writes
 (the --record file and the --out folder: a file created and removed, nothing overwritten), so
 that a path the user cannot write fails before the first trial, not after the run.
 
-Strict JSON: ``write_summary`` writes with ``dopt.jsonio`` (a value that is not a finite number
+Strict JSON: ``write_summary`` writes with ``dopt.lab.jsonio`` (a value that is not a finite number
 is ``null`` with its reason beside it under "<field>_undefined"; no bare NaN).
 
 Blow-up captures: ``blowup_captures`` names the captures of a run's trials (OUT/blowups,
 ``dopt.blowup``) on the console and for its summary's "blowups".
 
-Standard library and ``dopt.cli`` / ``dopt.provenance`` / ``dopt.sweep`` only (all pure Python),
+Standard library and ``dopt.lab.cli`` / ``dopt.lab.provenance`` / ``dopt.lab.sweep`` only (all pure Python),
 so the MuJoCo-free key-particle experiment can use them without importing torch or MuJoCo
 (``blowup_captures`` imports MuJoCo when called).
 """
@@ -36,7 +36,7 @@ import json
 import sys
 from pathlib import Path
 
-from dopt.cli import (  # noqa: F401  (re-exported for the scripts)
+from dopt.lab.cli import (  # noqa: F401  (re-exported for the scripts)
     EPILOG,
     TRACEBACK_ENV,
     ArgumentParser,
@@ -93,7 +93,7 @@ def record_problem(record: Path | None, out: Path, root: Path | None = None) -> 
     """Why the run cannot write what it will (one line, argparse's "argument --out: ..." or
     "argument --record: ..."): a package of ``RUN_PACKAGES`` missing, a place that fails
     ``write_problem``, --record the --out folder, or this code (``root``: default this
-    checkout) not committed (``dopt.provenance.CodeState.record_problem``). None when the
+    checkout) not committed (``dopt.lab.provenance.CodeState.record_problem``). None when the
     run can write both. Every experiment asks it before its first trial."""
     import importlib.util
 
@@ -109,7 +109,7 @@ def record_problem(record: Path | None, out: Path, root: Path | None = None) -> 
         return f"argument --record: {record} is the --out folder"
     if (problem := write_problem(record)) is not None:
         return f"argument --record: {problem}"
-    from dopt.provenance import code_state  # pure Python: no MuJoCo, no torch
+    from dopt.lab.provenance import code_state  # pure Python: no MuJoCo, no torch
 
     problem = code_state(root).record_problem()
     return None if problem is None else f"argument --record: {problem}"
@@ -152,7 +152,7 @@ def settings_dict(settings) -> dict:
 
 def add_reuse_argument(ap) -> None:
     """--reuse-any: a sweep's flag to reuse its finished trials across code changes
-    deliberately (``dopt.sweep.run_sweep(reuse="any")``; ``reuse_mode`` reads it)."""
+    deliberately (``dopt.lab.sweep.run_sweep(reuse="any")``; ``reuse_mode`` reads it)."""
     ap.add_argument("--reuse-any", action="store_true",
                     help="reuse every finished trial under --out, even one written by code "
                          "that may give another result (listed in summary.json under "
@@ -201,9 +201,10 @@ def write_summary(summary: dict, out: Path, record: Path | None, script: str, ar
             sweep of this process ran at); the --record file is then not written
             (OUT/summary.json is).
     """
-    from dopt import atomic, jsonio
-    from dopt.provenance import code_state, provenance  # pure Python: no MuJoCo, no torch
-    from dopt.sweep import current_code, take_deliberate_reuse
+    from dopt import atomic
+    from dopt.lab import jsonio
+    from dopt.lab.provenance import code_state, provenance  # pure Python: no MuJoCo, no torch
+    from dopt.lab.sweep import current_code, take_deliberate_reuse
 
     reused = take_deliberate_reuse()
     if reused:

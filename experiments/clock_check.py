@@ -27,8 +27,8 @@ import numpy as np
 from cli_args import EPILOG, ArgumentParser, guarded, positive_int, write_summary
 from sweep_console import print_outputs
 
-from dopt.stats import mean_ci
-from dopt.sweep import Trial
+from dopt.lab.stats import mean_ci
+from dopt.lab.sweep import Trial
 from planners.svr_mpc import row_label
 
 DEFAULT_ROWS = ("baseline", "rand-t5", "sum-t10-r1")

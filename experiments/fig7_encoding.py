@@ -3,7 +3,7 @@
 in T short drags whose pick is an index scalar over N + 2 nodes, on one 20 x 20 physics mesh
 with N virtual candidate points (``planners.pick_place.encoding``, ``planners.pick_place.drag``).
 
-The trials run through ``dopt.sweep`` into OUT/trials (a rerun resumes finished trials; a
+The trials run through ``dopt.lab.sweep`` into OUT/trials (a rerun resumes finished trials; a
 drag trial is not checkpointed inside). The statistics are the library's
 (``encoding_summary``): per N and method the mean final cost with its 95 % interval, the
 paired Original - Simple and Random - Simple differences, and the trend of each against

@@ -8,7 +8,7 @@ per side, changed (``planners.pick_place.scaling``) by ``--mode``: resolution (t
 only n, on the preset's 0.3 m sheet; size, the sheet grown at the preset's spacing, the
 picker's bound, the workspace and the mass scaled with its side (the paper's regime: SoftGym's
 cloths keep their spacing and grow with N). The trials run through
-``dopt.sweep`` into OUT/trials (a rerun resumes); ``--reuse-from`` first copies the matching
+``dopt.lab.sweep`` into OUT/trials (a rerun resumes); ``--reuse-from`` first copies the matching
 finished trials of a Fig. 7 sweep folder (docs/results/runs/fig7-cloth-<goal>: its 20 x 20
 trials, loose or packed) into OUT/trials, so they count. The statistics are the library's
 (``scaling_summary``): per size and method the mean final cost with its 95 % interval, the
@@ -59,7 +59,7 @@ from sweep_console import print_outputs, run_with_console, sweep_session
 
 from dopt import atomic
 from dopt.rollout import share_cores
-from dopt.trialpack import is_stored_trial, read_trial_text
+from dopt.lab.trialpack import is_stored_trial, read_trial_text
 from planners.pick_place.scaling import (
     COMPARED,
     SCALING_MODES,

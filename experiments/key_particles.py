@@ -58,8 +58,9 @@ from deformables import (
 )
 from deformables.cloth import PANEL_MODES
 from deformables.goals import CLOTH_REFERENCE_KEYS, TRIANGULATIONS, check_cloth_size
-from dopt import atomic, jsonio
-from dopt.provenance import code_version
+from dopt import atomic
+from dopt.lab import jsonio
+from dopt.lab.provenance import code_version
 from dopt.tasks.pick.cloth_scene import PHYSICS_PRESETS
 
 ROPE_TASKS = ["rope_straighten", "rope_fold", "rope_fold_unequal"]

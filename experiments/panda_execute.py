@@ -51,8 +51,8 @@ from sweep_console import print_outputs, run_with_console
 
 from dopt import atomic
 from dopt.blowup import retire_captures
-from dopt.stats import mean_ci
-from dopt.sweep import Schema, Trial, is_finished
+from dopt.lab.stats import mean_ci
+from dopt.lab.sweep import Schema, Trial, is_finished
 from planners.pick_place import PickPlaceSettings, make_planner, make_problem, run_problem
 
 GOALS = ("diagonal", "side")

@@ -39,7 +39,9 @@ from pathlib import Path
 
 from cli_args import EPILOG, ArgumentParser, existing_dir, guarded, output_file
 
-from dopt import atomic, jsonio
+from dopt import atomic
+
+from dopt.lab import jsonio
 from planners.svr_mpc import TABLE1_ROWS, row_name
 from planners.svr_mpc.authors_data import RAND_MIN_RHO, RAND_THETA, TASK_DIRS, authors_table1
 
@@ -214,7 +216,7 @@ def main(argv=None) -> int:
         stat = authors_statistic(args.paper_data)
         summary.update(paper_data=str(args.paper_data), paper_data_sha256=stat["sha256"],
                        authors_statistic=stat["tasks"])
-    from dopt.provenance import provenance
+    from dopt.lab.provenance import provenance
 
     summary["provenance"] = provenance(["experiments/paper_reference.py",
                                         *(sys.argv[1:] if argv is None else argv)])

@@ -1,7 +1,7 @@
 """The command line and the report of the key-particle experiments (cloth_fold.py, rope.py).
 
 The pipeline is library code (``planners.pick_place``); this module turns flags into
-``PickPlaceSettings``, runs every (method, seed) trial through ``dopt.sweep`` (one JSON per
+``PickPlaceSettings``, runs every (method, seed) trial through ``dopt.lab.sweep`` (one JSON per
 finished trial under OUT/trials, a rerun resumes; the key holds a hash of the settings), shows
 progress, and writes the report: summary.json (with the command line, git commit and package
 versions), curves.csv, cost_curves.png and, for the first seed of each method, the renders
@@ -45,8 +45,8 @@ from sweep_console import duration, print_outputs, sweep_session
 
 from dopt import atomic
 from dopt.rollout import share_cores
-from dopt.stats import mean_ci
-from dopt.sweep import Trial, is_finished
+from dopt.lab.stats import mean_ci
+from dopt.lab.sweep import Trial, is_finished
 from dopt.tasks.pick.cloth_scene import PHYSICS_PRESETS
 from planners.pick_place import (
     FOLD_STARTS,

@@ -1,5 +1,5 @@
 """The sweep of the key-particle experiments (cloth_fold.py, rope.py): their trials run through
-``dopt.sweep`` with the sweep's console (``sweep_console``), their schema (what a stored
+``dopt.lab.sweep`` with the sweep's console (``sweep_console``), their schema (what a stored
 result and checkpoint must hold to be reused or resumed), the CEM iterations a folder already
 holds, and the flags ``planners.pick_place.budget`` may name. ``pick_place_cli`` is the command line
 around it. The trials write their blow-up captures under the sweep's folder
@@ -12,7 +12,7 @@ from pathlib import Path
 
 from sweep_console import run_with_console
 
-from dopt.sweep import Checkpoint, Schema, SweepResult, Trial, is_finished
+from dopt.lab.sweep import Checkpoint, Schema, SweepResult, Trial, is_finished
 from planners.pick_place import run_trial
 from planners.pick_place.run import checkpoint_problem, trial_identity
 from planners.trial_progress import (
@@ -25,7 +25,7 @@ from planners.trial_progress import (
 #: the flag of each setting ``planners.pick_place.budget`` may name
 BUDGET_FLAGS = {"n": "--n", "bound": "--bound", "picker_speed": "--picker-speed",
                 "cem.population": "--population", "cem.horizon": "--horizon"}
-#: what a stored trial and its checkpoint must hold to be reused or resumed (``dopt.sweep``):
+#: what a stored trial and its checkpoint must hold to be reused or resumed (``dopt.lab.sweep``):
 #: their fields, a cost history as long as its stages' list, a CEM progress that can resume,
 #: and params that name the trial they are stored for (the key they hash to)
 SCHEMA = Schema(result=RESULT_FIELDS, progress=PROGRESS_FIELDS, check_result=result_problem,

@@ -30,7 +30,7 @@ from cli_args import (
     write_summary,
 )
 
-from dopt.sweep import load_finished
+from dopt.lab.sweep import load_finished
 from planners.pick_place.random_reach import MOVING, random_reach, reach_summary
 
 

@@ -25,7 +25,7 @@ uncommitted code" where any were (``report_trials``); a result whose named prese
 resolve to the fields it ran with is shown **stale** in both (``report_stale``, against the
 snapshot that ``experiments/presets_snapshot.py`` writes). The families of comparisons behind
 the papers' claims (Fig. 7's Simple-vs-Original/Random differences per setup, Table 1's pairwise
-orderings per column) are judged with Holm's correction (``report_stats``, ``dopt.multiple``),
+orderings per column) are judged with Holm's correction (``report_stats``, ``dopt.lab.multiple``),
 and the sentences say so.
 
 Result kinds (the file's "experiment" field): "fig7" (experiments/cloth_fold.py, rope.py),
@@ -40,9 +40,9 @@ Files of other kinds are listed by name.
 
 A result file that cannot be read exits 2 naming it; one whose provenance lacks the command,
 the git commit or the versions of dopt, mujoco and torch is named in a note on stderr.
-Standard library only (with dopt.cli, the command-line types, dopt.multiple, Holm's
-correction, dopt.trialpack, the reader of committed trials, loose or packed, with
-dopt.jsonio, dopt.provenance, which shows a recorded command without its machine's folders,
+Standard library only (with dopt.lab.cli, the command-line types, dopt.lab.multiple, Holm's
+correction, dopt.lab.trialpack, the reader of committed trials, loose or packed, with
+dopt.lab.jsonio, dopt.lab.provenance, which shows a recorded command without its machine's folders,
 and planners.trial_progress, the reader of a trial's checkpoint, all standard library
 themselves), so it runs without torch, numpy or MuJoCo. Its sections live in
 report_base.py, report_fig7.py, report_kp.py, report_svr.py, report_sweeps.py and

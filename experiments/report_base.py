@@ -2,7 +2,7 @@
 the Markdown helpers every section uses, and the Fig. 7 labels and panels.
 
 Standard library only (report.py's rule: it runs without torch, numpy or MuJoCo), with
-``dopt.provenance.recorded_command``: a recorded command is shown naming no folder of the
+``dopt.lab.provenance.recorded_command``: a recorded command is shown naming no folder of the
 machine that recorded it.
 """
 
@@ -15,7 +15,7 @@ import statistics
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from dopt.provenance import recorded_command
+from dopt.lab.provenance import recorded_command
 
 ROOT = Path(__file__).resolve().parents[1]
 BEGIN, END = "<!-- results:begin -->", "<!-- results:end -->"
@@ -32,7 +32,7 @@ FIG7_PANELS = {("rope", "straighten"): "(a) rope straightening",
                ("cloth", "side"): "(d) cloth side fold",
                ("cloth", "reflective"): "(e) cloth reflective fold",
                ("cloth", "underneath"): "(f) cloth underneath fold"}
-#: what every result file's "provenance" holds (``dopt.provenance.provenance()``)
+#: what every result file's "provenance" holds (``dopt.lab.provenance.provenance()``)
 PROVENANCE_FIELDS = ("command", "git_commit", "versions")
 PROVENANCE_VERSIONS = ("dopt", "mujoco", "torch")
 KP = "key particles"

@@ -21,7 +21,7 @@ from pathlib import Path
 from report_base import ReportError, Result, num, pm, section, table
 from report_svr import protocol_line
 
-from dopt.trialpack import PackError, stored_trials
+from dopt.lab.trialpack import PackError, stored_trials
 
 #: a scene whose ratio reaches this ran on a machine this much slower than the reference's
 SLOW = 1.5

@@ -2,7 +2,7 @@
 detail, and the paper's claims checked on the recorded files (``fig7_claims``), each family of
 Simple-vs-other comparisons judged with Holm's correction (``report_stats``).
 
-Standard library only (and ``dopt.multiple``, pure Python).
+Standard library only (and ``dopt.lab.multiple``, pure Python).
 """
 
 from __future__ import annotations

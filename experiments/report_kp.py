@@ -168,7 +168,7 @@ def settle_rest_section(results: list[Result], page: Path) -> list[str]:
 
 
 def _machine_words(mach: dict) -> str:
-    """A recorded machine (``dopt.provenance.machine()``) in words: its CPU model and cores."""
+    """A recorded machine (``dopt.lab.provenance.machine()``) in words: its CPU model and cores."""
     return ", ".join(filter(None, [mach.get("cpu"), mach.get("cpus") and
                                    f"{mach['cpus']} cores"])) or "machine not recorded"
 

@@ -39,7 +39,7 @@ from pathlib import Path
 
 from report_base import Result
 
-from dopt.dicts import flatten
+from dopt.lab.dicts import flatten
 from planners.trial_progress import RUN_ONLY_SETTINGS
 
 #: where the snapshot lies under the results folder
@@ -70,9 +70,9 @@ SVR_COMPUTE_PATHS = ("dopt", "planners/ilqr.py", "planners/svr.py", "planners/ke
                      "planners/svr_mpc/optimisers.py", "planners/svr_mpc/settings.py",
                      "planners/svr_mpc/authors_clock.py",
                      *(f":(exclude)dopt/{f}" for f in (
-                         "sweep*.py", "trialpack.py", "jsonio.py", "atomic.py", "provenance.py",
-                         "stats.py", "multiple.py", "cli.py", "scripts.py", "bench",
-                         "render.py", "view", "blowup.py")))
+                         "lab", "sweep*.py", "trialpack.py", "jsonio.py", "atomic.py",
+                         "provenance.py", "stats.py", "multiple.py", "cli.py", "scripts.py",
+                         "bench", "render.py", "view", "blowup.py")))
 
 
 def load_snapshot(results_dir: Path) -> dict | None:

@@ -6,7 +6,7 @@ The report is standard library only, so the distributions are here in pure Pytho
   of freedom, from the regularized incomplete beta function (continued fraction, as in
   Numerical Recipes' ``betacf``); ``t_ppf(q, df)`` its quantile, by bisection;
 - ``welch_p(a, b)``: Welch's two-sided test of mean(b) = mean(a) on two samples (what
-  ``dopt.stats.difference_ci`` turns into an interval: the interval excludes zero exactly when
+  ``dopt.lab.stats.difference_ci`` turns into an interval: the interval excludes zero exactly when
   p < 1 - level);
 - ``welch_p_from_intervals``: the same from each side's mean, Student-t half-width at a level
   and count (the standard error is the half-width over the t quantile);
@@ -14,7 +14,7 @@ The report is standard library only, so the distributions are here in pure Pytho
   Table 1 statistic, 1.645 std / sqrt(n)).
 
 ``kendall_tau_b(x, y)``: Kendall's tau-b rank correlation (how two columns order the same
-rows). ``holm_family`` applies ``dopt.multiple.holm`` (pure Python) to a family of p-values;
+rows). ``holm_family`` applies ``dopt.lab.multiple.holm`` (pure Python) to a family of p-values;
 ``scaling_families`` groups the scaling studies' trend tests into families by what they vary.
 The tests check every function against scipy.
 """
@@ -24,7 +24,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 
-from dopt.multiple import holm, holm_slopes
+from dopt.lab.multiple import holm, holm_slopes
 
 #: the family-wise error rate the report's families are judged at
 FAMILY_ALPHA = 0.05

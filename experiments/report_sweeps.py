@@ -2,7 +2,7 @@
 yet: Fig. 7's seed by seed with the checkpoints of trials stopped part-way, the MPC sweeps'
 counted per row and scene.
 
-Standard library only (and ``planners.trial_progress`` and ``dopt.trialpack``, the reader of
+Standard library only (and ``planners.trial_progress`` and ``dopt.lab.trialpack``, the reader of
 committed trials, standard library themselves).
 """
 
@@ -28,7 +28,7 @@ from report_base import (
 )
 from report_trials import TrialInfo, machines_text, out_folder, record_stamp
 
-from dopt.trialpack import PackError, stored_trials
+from dopt.lab.trialpack import PackError, stored_trials
 from planners.trial_progress import RUN_ONLY_SETTINGS, iterations_done
 
 
@@ -44,8 +44,8 @@ def held_seeds(summary: dict, method: str, settings: dict) -> set:
 
 def unrecorded_sweeps(results_dir: Path, results: list[Result]) -> dict[str, list[dict]]:
     """{folder name: its trial records} of every ``runs/fig7-*`` folder under ``results_dir``
-    with committed trials (``trials/*.json`` as ``dopt.sweep`` writes them, or packed:
-    ``dopt.trialpack.stored_trials``) that its recorded summary ``<folder>.json`` among
+    with committed trials (``trials/*.json`` as ``dopt.lab.sweep`` writes them, or packed:
+    ``dopt.lab.trialpack.stored_trials``) that its recorded summary ``<folder>.json`` among
     ``results`` (``load_results(results_dir)``) does not hold: all of them while no summary
     is recorded, else those whose method and seed (and a scaling study's size: ``held_seeds``)
     the summary lacks (a sweep recorded for some methods, seeds or sizes, more committed
@@ -64,7 +64,7 @@ def unrecorded_sweeps(results_dir: Path, results: list[Result]) -> dict[str, lis
         for path in files:
             try:
                 data = json.loads(path.read_text())
-                # dopt.sweep.RECORD_FIELDS (copied: this script imports no dopt.sweep)
+                # dopt.lab.sweep.RECORD_FIELDS (copied: this script imports no dopt.lab.sweep)
                 missing = [k for k in ("key", "params", "result") if k not in data]
                 if missing:
                     raise KeyError(", ".join(missing))
@@ -83,7 +83,7 @@ def unrecorded_sweeps(results_dir: Path, results: list[Result]) -> dict[str, lis
 
 def _checkpoints(folder: Path) -> list[tuple[dict, int, float]]:
     """(trial, CEM iterations done, seconds so far) per checkpoint under
-    ``folder/trials/checkpoints/`` (``dopt.sweep.Checkpoint``: a trial stopped part-way that
+    ``folder/trials/checkpoints/`` (``dopt.lab.sweep.Checkpoint``: a trial stopped part-way that
     a rerun resumes), in file-name order; ``ReportError`` naming the file for one that is not
     a Fig. 7 trial's."""
     out = []

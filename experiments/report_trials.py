@@ -4,7 +4,7 @@ summary holds, the commits they were written at, and how many came from uncommit
 A summary's trials lie in the folder its command wrote them to (``--out
 docs/results/runs/<sweep>``, read from the command of the run whose trials it holds, also for a
 re-summarised file): ``trials/*.json`` there and the records packed in ``trials/pack.jsonl``
-and ``pack.jsonl.gz`` (``dopt.trialpack``, the one reader: a loose file overrides them), and
+and ``pack.jsonl.gz`` (``dopt.lab.trialpack``, the one reader: a loose file overrides them), and
 ``real/`` and ``virtual/`` below it for the clock check. Where several summaries share a
 folder, or a folder holds more than one summary used, only the summary's own are taken: a
 Fig. 7 summary's methods and seeds (the trial key is ``<method>-seed<seed>-<settings hash>``),
@@ -12,11 +12,11 @@ a scaling summary's methods, seeds and cloth sizes (each trial's settings "n"), 
 seeds. Everything else in the folder is the summary's (the docs/results test
 checks the counts against "trial_commits").
 
-A trial's commit is read from its record's "code" (``dopt.sweep`` writes it last, so the tail
+A trial's commit is read from its record's "code" (``dopt.lab.sweep`` writes it last, so the tail
 of the file is enough; the whole file is parsed when it is not there). "-dirty", "unknown",
 "no git" or no commit at all: uncommitted code, which no one can check out to rerun.
 
-Standard library only (experiments/report.py's rule; ``dopt.trialpack`` is standard library).
+Standard library only (experiments/report.py's rule; ``dopt.lab.trialpack`` is standard library).
 """
 
 from __future__ import annotations
@@ -29,7 +29,7 @@ from pathlib import Path
 
 from report_base import ReportError, Result, short_commit
 
-from dopt.trialpack import PackError, StoredTrial, stored_trials
+from dopt.lab.trialpack import PackError, StoredTrial, stored_trials
 
 #: a Fig. 7 trial's key (experiments/pick_place_cli.py's ``trial_key``)
 FIG7_KEY = re.compile(r"^(?P<method>[a-z]+)-seed(?P<seed>\d+)-[0-9a-f]{8}$")
@@ -47,7 +47,7 @@ class TrialInfo:
 
     Attributes:
         folder: their sweep folder, relative to the results folder ("runs/<sweep>").
-        files: the trials the summary holds (``dopt.trialpack.StoredTrial``: a loose file or
+        files: the trials the summary holds (``dopt.lab.trialpack.StoredTrial``: a loose file or
             a packed record, read alike).
         commits: {commit: trials} over ``files``, as recorded.
         recorded: the trials the summary's "trial_commits" counts (None: it has none).
@@ -89,7 +89,7 @@ def out_folder(results_dir: Path, command: str) -> Path | None:
 
 def _files(folder: Path, r: Result) -> list[StoredTrial]:
     """The trials of ``folder`` that summary ``r`` holds (loose files and packed records,
-    ``dopt.trialpack``), sorted by folder and name."""
+    ``dopt.lab.trialpack``), sorted by folder and name."""
     d = r.data
     if r.kind == "clock_check":
         seeds = set(d.get("seeds") or ())
@@ -122,7 +122,7 @@ def _cloth_size(path: Path | StoredTrial) -> int | None:
 
 def trial_stamp(path: Path | StoredTrial) -> tuple[str, str | None]:
     """``(commit, machine)`` a trial records: its code's commit ("unknown" for none or an
-    unreadable file) and its machine as "CPU, N cores" (``dopt.provenance.machine()``; None
+    unreadable file) and its machine as "CPU, N cores" (``dopt.lab.provenance.machine()``; None
     for a trial that names none: a sweep's records carry it since 7b3eb64)."""
     try:
         text = path.read_text()
@@ -147,7 +147,7 @@ def record_stamp(rec) -> tuple[str, str | None]:
 
 
 def machine_words(machine: dict) -> str:
-    """"CPU, N cores" of a ``dopt.provenance.machine()`` record ("unnamed CPU" without one)."""
+    """"CPU, N cores" of a ``dopt.lab.provenance.machine()`` record ("unnamed CPU" without one)."""
     cores = machine.get("cpus")
     return (f"{machine.get('cpu') or 'unnamed CPU'}"
             + (f", {cores} cores" if isinstance(cores, int) else ""))

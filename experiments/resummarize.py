@@ -48,7 +48,9 @@ from cli_args import EPILOG, ArgumentParser, existing_dir, guarded, output_dir
 from report_base import ROOT, Result, load_results
 from report_trials import TrialInfo, summary_trials, uncommitted
 
-from dopt import atomic, jsonio
+from dopt import atomic
+
+from dopt.lab import jsonio
 
 #: the fields each kind of summary computes from its trials
 TRIAL_FIELDS = {
@@ -65,7 +67,7 @@ REL_TOL, ABS_TOL = 1e-9, 1e-12
 
 def records_of(info: TrialInfo) -> list[dict]:
     """The trial records ({"key", "params", "result", "code"}), in file-name order (a NaN
-    written null with its note read back as NaN: ``dopt.jsonio``)."""
+    written null with its note read back as NaN: ``dopt.lab.jsonio``)."""
     return [jsonio.loads(p.read_text(), strict_numbers=False)
             for p in sorted(info.files, key=lambda p: p.name)]
 
@@ -210,7 +212,7 @@ def rebuild(results_dir: Path, r: Result) -> dict | None:
 
 def committed_fields(r: Result) -> dict:
     """The trial fields of a committed summary, each value the writer meant: a non-finite
-    number written as null with its note (``dopt.jsonio``) is that number again and the note
+    number written as null with its note (``dopt.lab.jsonio``) is that number again and the note
     is gone, as the rebuild holds them."""
     return jsonio.restore(copy.deepcopy({k: r.data[k] for k in TRIAL_FIELDS[r.kind]
                                          if k in r.data}))
@@ -282,7 +284,7 @@ def parser() -> argparse.ArgumentParser:
 
 @guarded("resummarize.py")
 def main(argv=None) -> int:
-    from dopt.provenance import code_state, provenance
+    from dopt.lab.provenance import code_state, provenance
 
     args = parser().parse_args(argv)
     argv = sys.argv[1:] if argv is None else list(argv)

@@ -39,7 +39,7 @@ from cli_args import EPILOG, ArgumentParser, guarded, positive_int, write_summar
 from sweep_console import out_lock, print_outputs
 
 from dopt import atomic
-from dopt.sweep import Schema
+from dopt.lab.sweep import Schema
 from planners.svr_mpc import row_label, run_svr_mpc, split_params
 
 DEFAULT_ROWS = ("rand-t5", "sum-t10-r1", "sum-t10-r500", "svd-t10-r1")

@@ -1,4 +1,4 @@
-"""The console of an experiment's sweep (``dopt.sweep.run_sweep``), the same for every script:
+"""The console of an experiment's sweep (``dopt.lab.sweep.run_sweep``), the same for every script:
 
 - one line before the first trial: how many trials are reused, resumed from a checkpoint and
   run from the start (``SweepPlan.line``), and one after the last (``SweepResult.line``);
@@ -6,7 +6,7 @@
   pool's and Ray's running trials included (their ``report``), starting at what the folder
   already holds; a trial that ends early (an MPC episode that succeeds) tops the bar up;
 - log records and Python warnings printed above the bar, never on its line (tqdm's logging
-  redirect; the pool's workers send theirs to this process, ``dopt.sweep_pool``);
+  redirect; the pool's workers send theirs to this process, ``dopt.lab.sweep_pool``);
 - an estimate of the run's time before the first trial (where the script gives each trial's
   ``seconds``), revised on each trial's ``finished`` line from the steps done so far, which
   also says the trial's result (the script's ``describe``).
@@ -14,7 +14,7 @@
 ``print_outputs`` is every script's last word: the paths of its pictures and the ``dopt-view``
 command that opens its trials.
 
-Also ``out_lock``: an experiment holds its --out folder's lock (``dopt.sweep.OutLock``) for the
+Also ``out_lock``: an experiment holds its --out folder's lock (``dopt.lab.sweep.OutLock``) for the
 whole run, so that a second run on the same folder refuses at once, naming the first.
 """
 
@@ -28,7 +28,7 @@ from collections import Counter
 from collections.abc import Callable
 from pathlib import Path
 
-from dopt.sweep import OutLock, SweepPlan, SweepResult, Trial, run_sweep
+from dopt.lab.sweep import OutLock, SweepPlan, SweepResult, Trial, run_sweep
 
 
 def out_lock(out: Path) -> OutLock:

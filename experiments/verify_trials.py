@@ -54,7 +54,7 @@ def parser() -> argparse.ArgumentParser:
 
 
 def sample_trials(files: list, n: int, seed: int) -> list[dict]:
-    """``n`` of the trial records in ``files`` (loose or packed, ``dopt.trialpack``; sorted by
+    """``n`` of the trial records in ``files`` (loose or packed, ``dopt.lab.trialpack``; sorted by
     key first, so the draw does not depend on the file system), drawn without replacement by a
     seeded generator."""
     records = sorted((json.loads(p.read_text()) for p in files), key=lambda r: r["key"])

@@ -15,7 +15,7 @@ from __future__ import annotations
 RUN_ONLY_SETTINGS = ("threads",)
 #: keys every pick-and-place trial result holds (``PickPlaceResult.to_dict``): what the
 #: summary, the curves, the renders and the report read; a stored result without one of them
-#: is not reused (``dopt.sweep.Schema``)
+#: is not reused (``dopt.lab.sweep.Schema``)
 RESULT_FIELDS = ("method", "seed", "final_cost", "cost_history", "stage_of_iteration",
                  "stage_costs", "n_candidates", "s_per_iteration", "actions", "final_state",
                  "wall_s", "unstable", "unstable_reason", "n_rollouts",

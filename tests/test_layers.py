@@ -2,7 +2,7 @@
 
 Every import statement of every module (top level, inside functions, under TYPE_CHECKING) is
 parsed with ast, so a lazy import that runs up the house fails here as well. deformables may
-import the pure-Python modules of dopt, dopt.validation, dopt.provenance, dopt.cli and
+import the pure-Python modules of dopt, dopt.validation, dopt.lab.provenance, dopt.lab.cli and
 dopt.atomic, and importing them must not load MuJoCo.
 
 Inside dopt the same holds between its rooms (``room``): the core (every module outside
@@ -37,7 +37,7 @@ ROOT = Path(__file__).resolve().parents[1]
 #: package -> top-level names its modules must never import
 FORBIDDEN = {
     "dopt": {"planners", "deformables", "experiments"},
-    # deformables may import dopt.validation, dopt.provenance, dopt.cli, dopt.atomic (ALLOWED)
+    # deformables may import dopt.validation, dopt.lab.provenance, dopt.lab.cli, dopt.atomic (ALLOWED)
     "deformables": {"dopt", "planners", "experiments", "mujoco"},
     "planners": {"experiments"},
 }
@@ -45,7 +45,7 @@ FORBIDDEN = {
 
 #: modules importable across the rule above (pure Python, no MuJoCo, no torch; dopt.atomic:
 #: the one atomic writer of every result file, the benchmarks' included)
-ALLOWED = {"dopt.validation", "dopt.provenance", "dopt.cli", "dopt.atomic"}
+ALLOWED = {"dopt.validation", "dopt.lab.provenance", "dopt.lab.cli", "dopt.atomic"}
 
 
 def imported_roots(path: Path) -> set[str]:
@@ -131,24 +131,33 @@ def import_targets(path: Path, text: str | None = None, known=None,
 # ------------------------------------------------------------------------ inside dopt
 #: room -> the rooms of dopt it must never import (``room`` names them)
 DOPT_FORBIDDEN = {
-    "core": {"front", "pick", "push", "neutral", "view"},
-    "pick": {"front", "push", "view"},
-    "push": {"front", "pick", "view"},
-    "neutral": {"front", "pick", "push", "view"},
-    "front": {"view"},
+    "core": {"front", "pick", "push", "neutral", "view", "lab"},
+    "pick": {"front", "push", "view", "lab"},
+    "push": {"front", "pick", "view", "lab"},
+    "neutral": {"front", "pick", "push", "view", "lab"},
+    "front": {"view", "lab"},
     "bench": {"view"},
     "view": {"front", "pick", "push", "neutral", "bench"},
+    # the lab (sweeps, trial files, provenance, statistics, command lines) knows no physics:
+    # of the rest of dopt only the base modules (``BASE``) and the package front
+    "lab": {"core", "front", "pick", "push", "neutral", "view", "bench"},
 }
+
+#: pure-Python modules every room may import: argument checks and the atomic file writer
+BASE = {"dopt", "dopt.validation", "dopt.atomic"}
 
 
 def room(module: str) -> str | None:
     """The room of dopt a dotted module name lies in (None outside dopt): "front"
     (``dopt.tasks`` itself), "pick" / "push" (a wing), "neutral" (another module of
-    ``dopt.tasks``), "bench" (``dopt.bench``), "view" (``dopt.view``) or "core" (the rest)."""
+    ``dopt.tasks``), "bench" (``dopt.bench``), "view" (``dopt.view``), "lab" (``dopt.lab``),
+    "base" (``BASE``, importable from every room) or "core" (the rest)."""
     parts = module.split(".")
     if parts[0] != "dopt":
         return None
-    if parts[1:2] in (["bench"], ["view"]):
+    if module in BASE:
+        return "base"
+    if parts[1:2] in (["bench"], ["view"], ["lab"]):
         return parts[1]
     if parts[1:2] != ["tasks"]:
         return "core"
@@ -160,6 +169,8 @@ def room(module: str) -> str | None:
 def leaks(path: Path, text: str | None = None) -> list[str]:
     """The modules the dopt module at ``path`` imports from a room it must not."""
     here = room(module_name(path))
+    if here == "base":
+        return sorted(m for m in import_targets(path, text) if room(m) not in (None, "base"))
     return sorted(m for m in import_targets(path, text)
                   if room(m) in DOPT_FORBIDDEN[here] and room(m) != here)
 
@@ -173,8 +184,8 @@ def test_inside_dopt_the_core_imports_no_task_and_the_wings_not_each_other():
 def test_the_rooms_of_dopt_and_the_leaks_the_checker_sees():
     assert [room(m) for m in ("dopt.render", "dopt.blowup", "dopt.view.cli", "dopt.tasks",
                               "dopt.tasks.panda", "dopt.tasks.pick.replay", "dopt.tasks.push",
-                              "dopt.bench.rollout", "numpy")] == [
-        "core", "core", "view", "front", "neutral", "pick", "push", "bench", None]
+                              "dopt.bench.rollout", "dopt.lab.sweep", "dopt.atomic", "numpy")] == [
+        "core", "core", "view", "front", "neutral", "pick", "push", "bench", "lab", "base", None]
     # parsed as if they were these files (nothing is written)
     wing = ROOT / "dopt" / "tasks" / "pick" / "fake.py"
     code = "from ..push import clutter\nfrom . import picker\ndef f():\n    import dopt.render\n"
@@ -195,6 +206,13 @@ def test_the_rooms_of_dopt_and_the_leaks_the_checker_sees():
                                                                     "dopt.tasks.pick",
                                                                     "dopt.tasks.pick.scene"]
     assert leaks(viewer, "from .episode import Episode\nfrom dopt.blowup import FORMAT\n") == []
+    assert leaks(core, "from dopt.lab import jsonio\n") == ["dopt.lab", "dopt.lab.jsonio"]
+    lab = ROOT / "dopt" / "lab" / "fake.py"
+    assert leaks(lab, "from dopt import atomic\nfrom .jsonio import dumps\n") == []
+    assert leaks(lab, "def f():\n    from dopt.rollout import RolloutService\n") \
+        == ["dopt.rollout"]
+    base = ROOT / "dopt" / "atomic.py"
+    assert leaks(base, "from dopt.lab import jsonio\n") == ["dopt.lab", "dopt.lab.jsonio"]
 
 
 #: the modules outside dopt that may import the viewer: its sources of the planners' trials

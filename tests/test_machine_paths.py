@@ -3,11 +3,11 @@ a docstring that does means nothing on another machine and tells a reader where 
 their files. Every file git tracks is read, trial packs (gzip) as their text.
 
 Recorded result fields are never edited after the fact, so the result files recorded before the
-writers stopped naming such folders (``dopt.provenance.command_line``, ``root_relative``) are
+writers stopped naming such folders (``dopt.lab.provenance.command_line``, ``root_relative``) are
 exempt by name (``RECORDED_BEFORE``, a frozen list): a new result with an absolute path fails,
 and so does an exempt file that no longer holds one (the list only shrinks). The report shows
-their commands relative (``dopt.provenance.recorded_command``,
-tests/dopt/test_provenance.py)."""
+their commands relative (``dopt.lab.provenance.recorded_command``,
+tests/dopt/lab/test_provenance.py)."""
 
 from __future__ import annotations
 

@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from dopt.trialpack import stored_trials
+from dopt.lab.trialpack import stored_trials
 from dopt.view.episode import collect
 from planners.svr_mpc import TABLE1_ROWS, row_label
 from planners.view import MPC

@@ -19,7 +19,7 @@ from pathlib import Path
 
 import pytest
 
-from dopt.trialpack import PACK_NAMES, StoredTrial, read_pack
+from dopt.lab.trialpack import PACK_NAMES, StoredTrial, read_pack
 
 ROOT = Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "docs" / "results"
@@ -63,7 +63,7 @@ def _trial_commits(value, where: str):
 
 def committed_trials():
     """(path, bytes) of every committed trial record under docs/results/runs/, loose files and
-    packed records alike (``dopt.trialpack``; a packed one under the path its file would have),
+    packed records alike (``dopt.lab.trialpack``; a packed one under the path its file would have),
     in folder and name order. In a git checkout only the files git tracks count (a run's own
     summary.json, or a sweep's loose trials not yet committed, are not committed trials)."""
     runs = RESULTS / "runs"

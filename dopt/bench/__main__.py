@@ -8,7 +8,7 @@ from __future__ import annotations
 import sys
 
 from dopt.bench.cli import add_common_args, add_record_arg, print_json, write_record
-from dopt.cli import EPILOG, ArgumentParser, guarded, nonneg_int, number_list, positive_int
+from dopt.lab.cli import EPILOG, ArgumentParser, guarded, nonneg_int, number_list, positive_int
 
 #: a comma list of particles per side (a cloth needs two per side)
 SIZES = number_list(int, 2, "particles per side")

@@ -1,6 +1,6 @@
 """Command-line pieces shared by ``python -m dopt.bench`` and ``python -m planners.bench``:
 the flags every bench takes, --record and its result file, one JSON line per measurement.
-The argparse types themselves are ``dopt.cli``'s."""
+The argparse types themselves are ``dopt.lab.cli``'s."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ import argparse
 import json
 
 from dopt import atomic
-from dopt.cli import nonneg_int, output_file, positive_int
+from dopt.lab.cli import nonneg_int, output_file, positive_int
 
 
 def add_common_args(p: argparse.ArgumentParser, task: str = "clutter") -> None:
@@ -34,7 +34,7 @@ def add_record_arg(p: argparse.ArgumentParser, experiment: str, when: str = "") 
 def write_record(path, experiment: str, rows: list[dict], **fields) -> None:
     """Write ``rows`` (and ``fields``, e.g. the task) with this run's provenance to ``path``
     as a result file ``{"experiment", **fields, "rows", "provenance"}``."""
-    from dopt.provenance import provenance
+    from dopt.lab.provenance import provenance
 
     atomic.write_text(path, json.dumps({"experiment": experiment, **fields, "rows": rows,
                                         "provenance": provenance()}, indent=1))

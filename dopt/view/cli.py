@@ -22,7 +22,7 @@ import subprocess
 import sys
 import time
 
-from dopt.cli import EPILOG, ArgumentParser, guarded, int_at_least, output_file, positive_int
+from dopt.lab.cli import EPILOG, ArgumentParser, guarded, int_at_least, output_file, positive_int
 
 PROG = "dopt-view"
 log = logging.getLogger(__name__)

@@ -23,17 +23,17 @@ from pathlib import Path
 import mujoco
 import numpy as np
 
-from dopt import jsonio
+from dopt.lab import jsonio
 from dopt.blowup import FORMAT
 from dopt.state import INTEGRATION, StateLayout, check_model, check_spec, check_states
-from dopt.trialpack import PACK_NAMES, is_stored_trial, read_pack, read_trial_text
+from dopt.lab.trialpack import PACK_NAMES, is_stored_trial, read_pack, read_trial_text
 from dopt.validation import check_int, float_array
 
 log = logging.getLogger(__name__)
 
 #: entry-point group of the episode sources of other packages
 ENTRY_POINTS = "dopt.view.sources"
-#: sub-folders of a trial folder that hold no finished trials (``dopt.sweep``)
+#: sub-folders of a trial folder that hold no finished trials (``dopt.lab.sweep``)
 SKIPPED_FOLDERS = ("checkpoints", "corrupt", "outdated")
 
 
@@ -232,7 +232,7 @@ def frame_rows(n_rows: int, max_frames: int, must: Sequence[int] = ()) -> np.nda
 # ------------------------------------------------------------------------------ sources
 def read_record(path: Path) -> dict | None:
     """The JSON object of a file, or of the trial packed under its name in its folder's pack
-    (``dopt.trialpack.read_trial_text``), or None when it is not one (logged)."""
+    (``dopt.lab.trialpack.read_trial_text``), or None when it is not one (logged)."""
     try:
         record = jsonio.loads(read_trial_text(path), strict_numbers=False)
     except (OSError, UnicodeDecodeError, ValueError) as e:
@@ -259,7 +259,7 @@ def candidates(path: Path) -> list[Path]:
     """The files and folders under ``path`` a source may claim: ``path`` itself when it is a
     file, a packed trial (its loose file's path) or a blow-up capture; for a folder its JSON
     files, those of its ``trials/`` (not checkpoints, corrupt or outdated ones) and the trials
-    packed there (``dopt.trialpack``: each as the path its loose file would have), its
+    packed there (``dopt.lab.trialpack``: each as the path its loose file would have), its
     sub-folders and those of its ``blowups/``, in name order. A pack file
     (``trials/pack.jsonl`` or ``.gz``) stands for its folder, a summary (``summary_folder``) for the
     sweep folder it summarises."""

@@ -8,7 +8,7 @@ import argparse
 import sys
 
 from dopt.bench.cli import add_common_args, add_record_arg, print_json, write_record
-from dopt.cli import (
+from dopt.lab.cli import (
     EPILOG,
     ArgumentParser,
     choices_type,

@@ -17,7 +17,7 @@ from dataclasses import fields, replace
 
 import numpy as np
 
-from dopt.provenance import provenance
+from dopt.lab.provenance import provenance
 from dopt.rollout import RolloutConfig, RolloutService
 from dopt.tasks.pick.picker import CONTROL_SPEC, PickerConfig
 from planners.pick_place import (

@@ -39,7 +39,7 @@ import mujoco
 import numpy as np
 from scipy.optimize import brentq
 
-from dopt.provenance import provenance
+from dopt.lab.provenance import provenance
 from dopt.tasks.pick.picker import CONTROL_SPEC, PickerConfig
 from dopt.tasks.pick.pinned import PinnedScene, Relaxed
 from planners.bench.physics import differing_fields

@@ -20,7 +20,7 @@ from __future__ import annotations
 from collections.abc import Iterable, Sequence
 from dataclasses import replace
 
-from dopt.sweep import Trial
+from dopt.lab.sweep import Trial
 from planners.pick_place.drag_settings import SOFTGYM_SPACING, DragSettings
 from planners.pick_place.scaling import scaling_summary
 from planners.pick_place.settings import PickPlaceSettings, trial_key
@@ -45,7 +45,7 @@ def encoding_settings(goal: str, drag: DragSettings, side: float = SIDE,
 def encoding_trials(goal: str, points: Sequence[int], seeds: Iterable[int],
                     methods: Sequence[str], drag: DragSettings = DragSettings(),
                     side: float = SIDE, threads: int = 0) -> list[Trial]:
-    """The ``dopt.sweep`` trials: every (N, seed) of the methods but CEM(Simple), and one
+    """The ``dopt.lab.sweep`` trials: every (N, seed) of the methods but CEM(Simple), and one
     CEM(Simple) trial per seed at the smallest N (key ``trial_key``, params {"settings",
     "method", "seed"}, which ``run_trial`` runs)."""
     unknown = sorted(set(methods) - set(BASE))

@@ -1,5 +1,5 @@
 """The run loop: plan and execute every stage of a problem (``run_problem``), one trial in one
-call (``solve``), and the same for ``dopt.sweep`` (``run_trial``); a trial saves its progress
+call (``solve``), and the same for ``dopt.lab.sweep`` (``run_trial``); a trial saves its progress
 to a checkpoint and resumes from it to the result it gives unstopped.
 
 Blow-up captures (``blowup_out``, opt-in): every stage's executed plan that the stability
@@ -73,7 +73,7 @@ class PickPlaceResult:
 
 @dataclass
 class TrialProgress:
-    """What a trial has done, kept in its checkpoint (``dopt.sweep.Checkpoint``, or anything
+    """What a trial has done, kept in its checkpoint (``dopt.lab.sweep.Checkpoint``, or anything
     with ``load() -> dict | None`` and ``save(dict)``; None: not checkpointed): the trial it
     is of (method, seed, ``settings.identity()``), the stages planned, the planner's progress
     in the next (``partial``), the runs so far and their wall time."""
@@ -178,7 +178,7 @@ def run_problem(problem: Problem, planner: PickPlanner, *, method: str = "", see
     """Plan and execute every stage of ``problem`` in turn with ``planner``.
 
     ``service`` defaults to a new one with the settings' threads (closed at the end);
-    ``method`` and ``seed`` only label the result. ``checkpoint`` (``dopt.sweep.Checkpoint``,
+    ``method`` and ``seed`` only label the result. ``checkpoint`` (``dopt.lab.sweep.Checkpoint``,
     or anything with ``load() -> dict | None`` and ``save(dict)``): the trial's progress is
     saved after every stage and, with a resumable planner (``PickPlanner``), after every step
     of its planning; a progress found there is resumed, and the result is the one the trial
@@ -282,7 +282,7 @@ def _result(problem: Problem, progress: TrialProgress, state: np.ndarray, method
 def trial_identity(params: dict) -> str:
     """What names a sweep's trial of ``params`` ({"settings", "method", "seed"}, as
     ``run_trial`` takes them): its ``trial_key``, which hashes the settings that change its
-    result (not the threads). The experiments' ``dopt.sweep.Schema.identity``: a stored
+    result (not the threads). The experiments' ``dopt.lab.sweep.Schema.identity``: a stored
     record whose params give another is another trial's.
 
     Raises:
@@ -296,7 +296,7 @@ def checkpoint_problem(progress: dict) -> str | None:
     or None: ``planners.trial_progress.progress_problem``, then each finished stage read as a
     ``StagePlan`` and the unfinished stage's CEM progress as a ``CEMProgress`` (finite
     probabilities >= 0 that sum to 1, histories as long as its iterations, ...). The
-    experiments' ``dopt.sweep.Schema.check_progress``: a checkpoint that fails is moved
+    experiments' ``dopt.lab.sweep.Schema.check_progress``: a checkpoint that fails is moved
     aside and its trial starts afresh, where it once failed the trial on every rerun."""
     from planners.cem import CEMProgress
     from planners.trial_progress import progress_problem
@@ -352,7 +352,7 @@ def solve(settings: PickPlaceSettings, method: str = "simple", seed: int = 0,
 
 def run_trial(params: dict, on_iteration: Callable[[int, float], None] | None = None,
               checkpoint=None, blowup_out: str | os.PathLike | None = None) -> dict:
-    """``solve`` for ``dopt.sweep``: params {"settings": PickPlaceSettings.to_dict(),
+    """``solve`` for ``dopt.lab.sweep``: params {"settings": PickPlaceSettings.to_dict(),
     "method", "seed"} -> ``PickPlaceResult.to_dict()``; the sweep's ``checkpoint`` lets a
     stopped trial resume. ``blowup_out``: the sweep's folder, which receives the blow-up
     captures of the trial's executed plans as ``blowups/<trial key>-<stage>`` (``trial_key``,

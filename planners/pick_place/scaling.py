@@ -20,8 +20,8 @@ The trend test: the paired difference of the final cost, method minus CEM(Simple
 common to both at each size, regressed on log N (N = n * n particles) by ordinary least squares
 (``scipy.stats.linregress``; the slope's 95 % interval from the t quantile with n_points - 2
 degrees of freedom); the p-values of Original - Simple and Random - Simple are Holm-adjusted
-together (``dopt.multiple.holm``); a claim over several folds judges all their tests as one
-family (``dopt.multiple.holm_slopes``). A positive slope: the gain of CEM(Simple) grows with
+together (``dopt.lab.multiple.holm``); a claim over several folds judges all their tests as one
+family (``dopt.lab.multiple.holm_slopes``). A positive slope: the gain of CEM(Simple) grows with
 the particle count. Means and differences are over the stable trials only (as ``summarize``).
 """
 
@@ -33,9 +33,9 @@ from dataclasses import replace
 import numpy as np
 from scipy import stats
 
-from dopt.multiple import NO_TREND, TREND_LEVEL, holm, slope_verdict
-from dopt.stats import mean_ci
-from dopt.sweep import Trial
+from dopt.lab.multiple import NO_TREND, TREND_LEVEL, holm, slope_verdict
+from dopt.lab.stats import mean_ci
+from dopt.lab.sweep import Trial
 from planners.pick_place.settings import PickPlaceSettings, trial_key
 
 #: the methods compared to CEM(Simple) by the trend test
@@ -78,7 +78,7 @@ def flat_cost(settings: PickPlaceSettings) -> float:
 def scaling_trials(goal: str, sizes: Sequence[int], seeds: Iterable[int],
                    methods: Sequence[str], threads: int = 0,
                    move: str | None = None, mode: str = "resolution") -> list[Trial]:
-    """The ``dopt.sweep`` trials of every (size, seed, method): key ``trial_key(method, seed,
+    """The ``dopt.lab.sweep`` trials of every (size, seed, method): key ``trial_key(method, seed,
     settings)`` and params {"settings": settings.to_dict(), "method", "seed"}, exactly as the
     Fig. 7 sweep (experiments/pick_place_cli.py) builds them, so ``run_trial`` runs them.
 
@@ -134,7 +134,7 @@ def trend(sizes: Sequence[int], diffs: Sequence[float]) -> dict:
 
 
 def scaling_summary(records: Iterable[dict], flat_costs: dict | None = None) -> dict:
-    """The statistics of the scaling sweep's records (``dopt.sweep`` records: {"params",
+    """The statistics of the scaling sweep's records (``dopt.lab.sweep`` records: {"params",
     "result"}).
 
     Returns {"sizes": [n, ...] ascending, "n_particles": [n * n, ...],

@@ -17,7 +17,7 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from dopt.dicts import flatten
+from dopt.lab.dicts import flatten
 from dopt.tasks.pick.cloth_scene import PHYSICS_PRESETS
 from dopt.tasks.pick.constraints import ActionConstraint
 from dopt.tasks.pick.picker import MOVE_RULES, PickerConfig

@@ -8,7 +8,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from dopt.stats import difference_ci, mean_ci
+from dopt.lab.stats import difference_ci, mean_ci
 
 
 def summarize(results: Sequence[dict], methods: Sequence[str],
@@ -21,7 +21,7 @@ def summarize(results: Sequence[dict], methods: Sequence[str],
     The means and intervals are over the stable trials only; the per-seed values list every
     trial (``unstable_seeds`` marks the others). Every method beside "simple" also holds each
     metric's difference to CEM(Simple), ``<metric>_minus_simple_mean`` and ``_ci95`` (its mean
-    minus Simple's and the Welch 95 % half-width, ``dopt.stats.difference_ci``): whether the
+    minus Simple's and the Welch 95 % half-width, ``dopt.lab.stats.difference_ci``): whether the
     two differ where their own intervals overlap.
 
     results: ``PickPlaceResult.to_dict()`` of finished trials.

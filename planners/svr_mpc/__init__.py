@@ -27,7 +27,7 @@ Shapes: T horizon, nu controls, ns state row, c = |C| active DoFs.
                  by name (parse_row -> Row), task_defaults, trial params, keys and row labels
     optimisers.py  OPTIMISERS by name, register_optimiser, OptimiserContext, svr_optimiser
     episode.py   build_controller, wire_controller, run_svr_mpc -> SVRMPCResult, run_trial
-                 and CapturingTrial (for dopt.sweep; keep_controls: for an exact replay)
+                 and CapturingTrial (for dopt.lab.sweep; keep_controls: for an exact replay)
     summary.py   summarize, paired, versus (SVR rows against rand and baseline, Holm),
                  feedback_effect, derivatives_effect; table1_fields, fig4_fields: all of a
                  Table 1 / Fig. 4 summary at once

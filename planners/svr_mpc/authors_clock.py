@@ -10,7 +10,7 @@ its lag is the authors' lag.
 The model, per task: ``ms = a + b |C| + s [SVD ranking]``. Each of the task's runs (every
 ``iLQR_SVR`` run, Table 1 rows and Fig. 4 points alike, and the two plain ``iLQR`` runs:
 baseline at the task's full DoF count, naive at the paper's count, ``PLAIN_DOFS``) gives one
-point: the authors' Table 1 statistic (``dopt.stats.authors_mean_ci``) of its DoF and time
+point: the authors' Table 1 statistic (``dopt.lab.stats.authors_mean_ci``) of its DoF and time
 columns. The coefficients minimise the squared relative error over the points (every run
 weighs alike, whatever its time). The SVD offset is what their files show besides |C|: at equal
 |C| the clutter SVD runs take about 30 ms longer (the decomposition); a fit without it misses
@@ -27,7 +27,7 @@ from pathlib import Path
 
 import numpy as np
 
-from dopt.stats import authors_mean_ci
+from dopt.lab.stats import authors_mean_ci
 from planners.svr_mpc.authors_data import authors_rows, read_episodes, read_settings
 
 #: the DoF counts the authors' plain iLQR runs logged as 0: baseline covers every DoF of the

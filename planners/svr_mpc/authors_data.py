@@ -4,7 +4,7 @@ statistic applied to our trials.
 The authors' ``PaperData`` (DMackRus/iLQR_SVR) holds, per task, ``iLQR/<run>/`` and
 ``iLQR_SVR/<run>/`` folders with a ``summary.csv`` (one row per MPC episode: final cost, average
 DoFs, average optimisation time, ...) and a ``summary.yaml`` (the run's settings). Their Table 1
-cell of a column is ``dopt.stats.authors_mean_ci`` of it (an outlier fence, then the mean and a
+cell of a column is ``dopt.lab.stats.authors_mean_ci`` of it (an outlier fence, then the mean and a
 normal 90 % half-width), costs divided by the baseline row's kept mean.
 
 - ``authors_rows(task_dir)``: the run folders of one task by our Table 1 row names
@@ -27,7 +27,7 @@ from pathlib import Path
 
 import numpy as np
 
-from dopt.stats import authors_kept, authors_mean_ci
+from dopt.lab.stats import authors_kept, authors_mean_ci
 from planners.svr_mpc.settings import TABLE1_ROWS, row_label, row_name
 
 log = logging.getLogger(__name__)

@@ -1,6 +1,6 @@
 """One MPC episode on a pushing task: the controller wiring (``build_controller``: iLQR-SVR;
 ``wire_controller``: any optimiser of ``planners.svr_mpc.optimisers``), ``run_svr_mpc`` and its
-``SVRMPCResult``; ``run_trial`` for ``dopt.sweep`` (``CapturingTrial``: with blow-up captures of
+``SVRMPCResult``; ``run_trial`` for ``dopt.lab.sweep`` (``CapturingTrial``: with blow-up captures of
 the executed episode under the sweep's folder). ``keep_controls`` (opt-in: about 280 KB a
 trial) keeps the executed episode's start state and controls (``CONTROLS_FIELDS``), which
 ``planners.view`` re-simulates exactly.
@@ -322,7 +322,7 @@ def episode_result(ctl, res, start: np.ndarray, config: MPCConfig,
 def run_trial(params: dict, report: Callable[[], None] | None = None,
               blowup_out: str | os.PathLike | None = None,
               keep_controls: bool = False) -> dict:
-    """``run_svr_mpc`` for ``dopt.sweep``: params holds the ``SVRMPCSettings`` fields,
+    """``run_svr_mpc`` for ``dopt.lab.sweep``: params holds the ``SVRMPCSettings`` fields,
     "seed" and, where it is not ``svr``, "optimiser" (``trial_params``) ->
     ``SVRMPCResult.to_dict()``; ``report`` (the sweep's) is called after every
     agent step. ``blowup_out``: the sweep's folder, which receives the blow-up captures of
@@ -346,7 +346,7 @@ def run_trial(params: dict, report: Callable[[], None] | None = None,
 @dataclass(frozen=True)
 class CapturingTrial:
     """``trial`` (default ``run_trial``) with blow-up captures under the sweep's folder ``out``
-    (its ``blowup_out``): a picklable trial function for ``dopt.sweep``'s pools and Ray (on a
+    (its ``blowup_out``): a picklable trial function for ``dopt.lab.sweep``'s pools and Ray (on a
     cluster the captures land on the worker's file system). ``keep_controls``: passed on to
     ``trial`` when True (``run_trial``'s)."""
 

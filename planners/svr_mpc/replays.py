@@ -21,7 +21,7 @@ class KeptControls:
     option, e.g. ``run_trial``, ``CapturingTrial``'s ``trial``) run with
     ``keep_controls=True`` when ``every`` or the trial's seed is one of ``seeds``, without it
     otherwise; other options pass through. Picklable (by reference to ``trial``) for
-    ``dopt.sweep``'s pools and Ray."""
+    ``dopt.lab.sweep``'s pools and Ray."""
 
     trial: Callable
     seeds: tuple[int, ...] = ()

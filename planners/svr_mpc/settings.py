@@ -14,7 +14,7 @@ import mujoco
 import numpy as np
 
 from dopt.mpc import CLOCKS, EXECUTORS, MAX_CONTROL_NOISE
-from dopt.provenance import root_relative, rooted
+from dopt.lab.provenance import root_relative, rooted
 from dopt.rollout import FDConfig
 from dopt.tasks import PUSH_PROBLEMS, build_push_task, get_task
 from dopt.tasks.push.costs import COST_PRESETS
@@ -226,7 +226,7 @@ class SVRMPCSettings:
         problem: ``ours`` or ``authors`` (``PROBLEMS``): whose scenes the task builds.
         layouts: the folder of the authors' clutter scenes (``push_mcl_layouts``, one CSV per
             scene; seed i loads scene i); needed by problem ``authors`` on clutter only. A
-            relative path is taken from the checkout's root (``dopt.provenance.rooted``), as
+            relative path is taken from the checkout's root (``dopt.lab.provenance.rooted``), as
             ``authors`` and ``preset`` record the folder they are given (relative to the
             current folder), so that a result names no folder of its machine.
         islands: MuJoCo's constraint islands (its default); False solves all constraints as
@@ -333,7 +333,7 @@ class SVRMPCSettings:
         (``authors``). Where the paper's text (Alg. 1) and their code differ, this follows
         the code, which generated their data; ``executor="alg1"`` is the text's reading.
         ``layouts`` (relative to the current folder) is recorded relative to the checkout's
-        root (``dopt.provenance.root_relative``)."""
+        root (``dopt.lab.provenance.root_relative``)."""
         layouts = None if layouts is None else root_relative(layouts)
         return cls.paper(task, row, **{"problem": "authors", "layouts": layouts,
                                        "cost": f"authors-{task}", "control_noise": 0.0,
@@ -391,7 +391,7 @@ def task_defaults(task: str) -> tuple[float, int]:
 
 def trial_params(settings: SVRMPCSettings, seed: int,
                  optimiser: str = DEFAULT_OPTIMISER) -> dict:
-    """A trial's params (``dopt.sweep``'s, what ``run_trial`` runs): every ``SVRMPCSettings``
+    """A trial's params (``dopt.lab.sweep``'s, what ``run_trial`` runs): every ``SVRMPCSettings``
     field, "seed", and "optimiser" where it is not ``svr`` (a name of ``OPTIMISERS``)."""
     if not isinstance(settings, SVRMPCSettings):
         raise TypeError(f"settings must be SVRMPCSettings, got {type(settings).__name__}")

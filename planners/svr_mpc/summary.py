@@ -2,7 +2,7 @@
 comparisons with baseline (``paired``), whether each SVR row beats rand and baseline under
 Holm's correction (``versus``) and the effects of feedback and derivative variants.
 
-records: lists of {"params", "result"} as ``dopt.sweep`` stores them.
+records: lists of {"params", "result"} as ``dopt.lab.sweep`` stores them.
 """
 
 from __future__ import annotations
@@ -10,8 +10,8 @@ from __future__ import annotations
 import numpy as np
 from scipy import stats
 
-from dopt.multiple import holm
-from dopt.stats import mean_ci
+from dopt.lab.multiple import holm
+from dopt.lab.stats import mean_ci
 from planners.svr_mpc.authors_data import authors_statistic
 from planners.svr_mpc.choice import choice_fields
 from planners.svr_mpc.settings import TABLE1_ROWS, row_label

@@ -1,4 +1,4 @@
-"""Console scripts print their own names (dopt.scripts, dopt.cli.shown_as): ``dopt-fold
+"""Console scripts print their own names (dopt.lab.scripts, dopt.lab.cli.shown_as): ``dopt-fold
 --help`` says ``usage: dopt-fold``, not the file it runs; usage errors and runtime failures
 name the console script too, and the name is the file's again once the run is over."""
 
@@ -7,8 +7,8 @@ import io
 
 import pytest
 
-from dopt.cli import ArgumentParser, guarded, shown_as, shown_name
-from dopt.scripts import SCRIPTS, run
+from dopt.lab.cli import ArgumentParser, guarded, shown_as, shown_name
+from dopt.lab.scripts import SCRIPTS, run
 
 
 def _run(name: str, argv: list[str]) -> tuple[int, str, str]:

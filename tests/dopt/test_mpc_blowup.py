@@ -123,7 +123,7 @@ def test_bad_capture_arguments():
 
 def test_the_capturing_trial_function_suits_the_sweeps():
     """Picklable for the pools and Ray, with the ``report`` parameter the sweep looks for."""
-    from dopt.sweep import takes_checkpoint, takes_report
+    from dopt.lab.sweep import takes_checkpoint, takes_report
     from planners.svr_mpc import CapturingTrial
 
     fn = pickle.loads(pickle.dumps(CapturingTrial("out")))

@@ -78,7 +78,7 @@ def block(readme: Path) -> str:
 
 
 def trial_record(method: str, seed: int, final_cost: float, wall_s: float, goal="side") -> dict:
-    """A trial file as dopt.sweep writes it for experiments/cloth_fold.py."""
+    """A trial file as dopt.lab.sweep writes it for experiments/cloth_fold.py."""
     settings = {"task": "cloth", "goal": goal, "n": 20, "selfcollide": False,
                 "physics": "default", "cem": {"population": 32, "elites": 6,
                                               "iterations": 30, "horizon": 3}}

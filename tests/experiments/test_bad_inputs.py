@@ -29,7 +29,7 @@ import rho_sweep
 import rope
 import svr_explain
 
-import dopt.cli
+import dopt.lab.cli
 
 ROOT = Path(__file__).resolve().parents[2]
 EXPERIMENTS = ROOT / "experiments"
@@ -218,7 +218,7 @@ def test_an_unwritable_out_is_a_usage_error_even_for_root(tmp_path, capsys, no_r
     ro = tmp_path / "ro"
     ro.mkdir()
     real = os.access
-    monkeypatch.setattr(dopt.cli.os, "access",
+    monkeypatch.setattr(dopt.lab.cli.os, "access",
                         lambda p, mode: False if Path(p) == ro else real(p, mode))
     assert f"argument --out: {ro} is not writable" in usage_error(capsys, script,
                                                                   ["--out", ro])
@@ -428,7 +428,7 @@ def test_truncated_and_stray_trial_files_are_named_and_recomputed(tmp_path, capl
     assert json.loads(trial.read_text())["code"]["commit"] in first["trial_commits"]
     trial.write_text(trial.read_text()[:60])                           # a write cut short
     (out / "trials" / "notes.json").write_text('{"note": "not a trial"}')
-    with caplog.at_level(logging.WARNING, logger="dopt.sweep"):
+    with caplog.at_level(logging.WARNING, logger="dopt.lab.sweep"):
         assert rope.main(argv) == 0
     assert f"trial file {trial} is not used (not valid JSON" in caplog.text
     assert f"trial file {out / 'trials' / 'notes.json'} is not used (not a trial record" \

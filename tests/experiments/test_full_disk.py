@@ -12,8 +12,8 @@ import pytest
 from cli_args import record_figure, write_summary
 from pick_place_cli import write_curves
 
-from dopt import provenance
-from tests.dopt.test_atomic_write import BIG, file_size_limit
+from dopt.lab import provenance
+from tests.dopt.lab.test_atomic_write import BIG, file_size_limit
 
 
 @pytest.fixture(autouse=True)

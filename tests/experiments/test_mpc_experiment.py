@@ -284,7 +284,7 @@ def test_committed_variant_rows_find_their_trials_by_key(name, tmp_path):
 
     import mpc
 
-    from dopt.sweep import load_finished
+    from dopt.lab.sweep import load_finished
 
     root = Path(__file__).resolve().parents[2]
     argv = shlex.split(json.loads((root / "docs" / "results" / f"{name}.json").read_text())

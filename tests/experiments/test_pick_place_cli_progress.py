@@ -5,7 +5,7 @@ a trial's progress: the pick-and-place schema refuses it)."""
 from pick_sweep import SCHEMA
 from pick_sweep import iterations_held as _iterations_held
 
-from dopt.sweep import Checkpoint, Trial, run_sweep
+from dopt.lab.sweep import Checkpoint, Trial, run_sweep
 from planners.trial_progress import RESULT_FIELDS
 
 

@@ -9,9 +9,9 @@ import subprocess
 import pytest
 from cli_args import add_reuse_argument, record_problem, reuse_mode, write_summary
 
-from dopt import provenance
-from dopt.sweep import Trial, run_sweep, take_deliberate_reuse
-from tests.dopt.sweep_trials import square
+from dopt.lab import provenance
+from dopt.lab.sweep import Trial, run_sweep, take_deliberate_reuse
+from tests.dopt.lab.sweep_trials import square
 
 
 def git(repo, *args) -> str:

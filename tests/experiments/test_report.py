@@ -42,10 +42,11 @@ def test_committed_results_md_and_readme_are_generated():
 
 
 def test_the_script_needs_only_the_standard_library():
-    """Besides the standard library it loads dopt.cli (the command-line types),
-    dopt.multiple (Holm's correction), dopt.dicts (nested dicts), dopt.trialpack (the reader
-    of committed trials, loose or packed) with dopt.jsonio and dopt.atomic (its atomic write),
-    dopt.provenance (a recorded command shown without its machine's folders) and
+    """Besides the standard library it loads dopt.lab.cli (the command-line types),
+    dopt.lab.multiple (Holm's correction), dopt.lab.dicts (nested dicts), dopt.lab.trialpack (the reader
+    of committed trials, loose or packed) with dopt.lab.jsonio and dopt.atomic (its atomic write),
+    dopt.lab.provenance (a recorded command shown without its machine's folders), the room
+    dopt.lab that holds them, and
     planners.trial_progress (the reader of a trial's checkpoint), standard library themselves,
     and nothing else of the project or of its dependencies."""
     # as `python experiments/report.py`: the script's folder (its sibling cli_args) on the path
@@ -56,10 +57,11 @@ def test_the_script_needs_only_the_standard_library():
             "bad = sorted(m for m in sys.modules if m.split('.')[0] in\n"
             "             {'torch', 'numpy', 'mujoco', 'scipy', 'planners', 'deformables'}\n"
             "             and m not in ('planners', 'planners.trial_progress')\n"
-            "             or (m.startswith('dopt.') and m not in ('dopt.cli', 'dopt.multiple',\n"
-            "                                                 'dopt.dicts', 'dopt.trialpack',\n"
-            "                                                 'dopt.jsonio', 'dopt.atomic',\n"
-            "                                                 'dopt.provenance')))\n"
+            "             or (m.startswith('dopt.') and m not in ('dopt.lab', 'dopt.lab.cli',\n"
+            "                                                 'dopt.lab.multiple',\n"
+            "                                                 'dopt.lab.dicts', 'dopt.lab.trialpack',\n"
+            "                                                 'dopt.lab.jsonio', 'dopt.atomic',\n"
+            "                                                 'dopt.lab.provenance')))\n"
             "assert not bad, bad\n")
     subprocess.run([sys.executable, "-c", code], check=True, capture_output=True, timeout=60)
 
@@ -198,7 +200,7 @@ def test_trials_differing_only_in_their_thread_count_share_one_table(site):
 def test_a_sweep_lists_its_checkpointed_trials(site, capsys):
     trials = site["results"] / "runs" / "fig7-cloth-side" / "trials"
     write(trials, "simple-seed0-abc.json", trial_record("simple", 0, 0.0069, 2100.0))
-    # dopt.sweep.Checkpoint's file: two stages done (30 iterations each), 12 of the third
+    # dopt.lab.sweep.Checkpoint's file: two stages done (30 iterations each), 12 of the third
     progress = {"trial": {"method": "original", "seed": 4, "settings": {}},
                 "stages": [{"cost_history": [0.1] * 30}, {"cost_history": [0.1] * 30}],
                 "stage": {"cem": {"iteration": 12}}, "wall_s": 3456.4, "segments": 1}
@@ -329,12 +331,12 @@ def test_a_scaling_summary_holds_only_its_own_sizes_methods_and_seeds(site):
 
 
 def test_the_machines_trials_ran_on_are_counted_as_their_records_name_them(site, monkeypatch):
-    """The trials line counts the machines that ``dopt.sweep`` writes into each record, loose
+    """The trials line counts the machines that ``dopt.lab.sweep`` writes into each record, loose
     and packed alike, and the records that name none (written before records carried it)."""
-    from dopt.provenance import COMMIT_ENV, machine
-    from dopt.sweep import Trial, pack_trials, run_sweep
-    from dopt.trialpack import stored_trials
-    from tests.dopt.sweep_trials import walk
+    from dopt.lab.provenance import COMMIT_ENV, machine
+    from dopt.lab.sweep import Trial, pack_trials, run_sweep
+    from dopt.lab.trialpack import stored_trials
+    from tests.dopt.lab.sweep_trials import walk
 
     monkeypatch.setenv(COMMIT_ENV, "c" * 40)
     out = site["results"] / "runs" / "t1"
@@ -359,11 +361,11 @@ def test_the_machines_trials_ran_on_are_counted_as_their_records_name_them(site,
 
 
 def test_packed_trials_are_reported_as_their_files_were(site, capsys):
-    """``python -m dopt.sweep pack`` changes nothing the report says: a summary's committed
-    trials and a Fig. 7 sweep in progress read the same from the pack (dopt.trialpack); a pack
+    """``python -m dopt.lab.sweep pack`` changes nothing the report says: a summary's committed
+    trials and a Fig. 7 sweep in progress read the same from the pack (dopt.lab.trialpack); a pack
     that cannot be read is named (exit 2)."""
-    from dopt.sweep import pack_trials
-    from dopt.trialpack import pack_path
+    from dopt.lab.sweep import pack_trials
+    from dopt.lab.trialpack import pack_path
 
     data = table1()
     data["provenance"] = provenance("python experiments/mpc.py --task clutter --out "

@@ -437,7 +437,7 @@ def test_fig7_cloth_claims_are_judged_as_one_family_with_holm(site):
     the correction, which do not, and the counts uncorrected and under Bonferroni."""
     from scipy import stats
 
-    from dopt.multiple import holm
+    from dopt.lab.multiple import holm
 
     rng = np.random.default_rng(3)
     simple = {g: rng.normal(0.02, 0.004, 10) for g in report.FIG7_PANELS if g[0] == "cloth"}

@@ -34,9 +34,9 @@ def test_a_change_to_the_runtime_makes_the_trials_stale_a_summary_change_does_no
     root.mkdir()
     git(root, "init", "-q")
     first = commit(root, {"dopt/mpc.py": "a\n", "planners/svr_mpc/summary.py": "s\n",
-                          "dopt/sweep.py": "w\n", "docs/results/x.json": "{}\n"}, "one")
+                          "dopt/lab/sweep.py": "w\n", "docs/results/x.json": "{}\n"}, "one")
     results = root / "docs" / "results"
-    commit(root, {"planners/svr_mpc/summary.py": "s2\n", "dopt/sweep.py": "w2\n"}, "lab")
+    commit(root, {"planners/svr_mpc/summary.py": "s2\n", "dopt/lab/sweep.py": "w2\n"}, "lab")
     assert code_findings(result(first), results) == []
     commit(root, {"dopt/mpc.py": "b\n"}, "runtime")
     (finding,) = code_findings(result(first), results)

@@ -14,7 +14,7 @@ pytest.importorskip("mujoco")
 import resummarize  # noqa: E402
 from report_base import load_results  # noqa: E402
 
-from dopt.provenance import COMMIT_ENV  # noqa: E402
+from dopt.lab.provenance import COMMIT_ENV  # noqa: E402
 from tests.external import LAYOUTS  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -141,10 +141,10 @@ def test_in_place_brings_a_clean_summary_of_an_older_format_up_to_date(tmp_path,
 
 def test_a_committed_nan_written_as_null_with_its_note_is_compared_as_nan():
     """A summary's mean over no kept pair is NaN, written null with a note beside it
-    (dopt.jsonio); the rebuild holds NaN and no note, and the two match."""
+    (dopt.lab.jsonio); the rebuild holds NaN and no note, and the two match."""
     from report_base import Result
 
-    from dopt import jsonio
+    from dopt.lab import jsonio
 
     methods = {"naive": {"mpc_cost_normalised_mean": float("nan"), "n_trials": 20}}
     written = json.loads(jsonio.dumps({"methods": methods}))

@@ -18,8 +18,8 @@ import pytest
 import rho_sweep
 import rope
 
-from dopt.provenance import COMMIT_ENV
-from dopt.sweep import Checkpoint
+from dopt.lab.provenance import COMMIT_ENV
+from dopt.lab.sweep import Checkpoint
 
 ROOT = Path(__file__).resolve().parents[2]
 QUICK_ROPE = ["--quick", "--no-render"]
@@ -56,7 +56,7 @@ def test_a_pick_record_of_another_format_is_named_moved_aside_and_recomputed(
     rec = json.loads(path.read_text())
     spoil(rec)
     path.write_text(json.dumps(rec))
-    with caplog.at_level(logging.WARNING, logger="dopt.sweep"):
+    with caplog.at_level(logging.WARNING, logger="dopt.lab.sweep"):
         assert rope.main(argv) == 0
     assert f"trial file {path} is not used (" in caplog.text and reason in caplog.text
     assert json.loads((out / "trials" / "corrupt" / path.name).read_text()) == rec
@@ -73,7 +73,7 @@ def test_a_checkpoint_of_another_format_is_moved_aside_and_its_trial_starts_afre
     first = json.loads(path.read_text())["result"]
     path.unlink()
     Checkpoint(out, path.stem).save({"stages": [], "stage": None})        # no "trial"
-    with caplog.at_level(logging.WARNING, logger="dopt.sweep"):
+    with caplog.at_level(logging.WARNING, logger="dopt.lab.sweep"):
         assert rope.main(argv) == 0
     assert "is not resumed (its progress lacks 'trial', 'planner'" in caplog.text
     assert (out / "trials" / "checkpoints" / "corrupt" / path.name).exists()
@@ -106,7 +106,7 @@ def _fake_episode(params, report=None, keep_controls=False):
 # ---------------------------------------------------------------------------------- lock
 def test_a_second_run_on_the_same_out_refuses_naming_the_first(tmp_path, capsys):
     out = tmp_path / "rope"
-    code = (f"from dopt.sweep import OutLock; import time\n"
+    code = (f"from dopt.lab.sweep import OutLock; import time\n"
             f"with OutLock({str(out)!r}):\n    print('held', flush=True); time.sleep(60)")
     proc = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE, text=True)
     try:
@@ -196,8 +196,8 @@ def test_the_console_counts_and_keeps_warnings_off_the_bar(tmp_path):
         import logging, sys
         sys.path[:0] = [{str(ROOT / "experiments")!r}, {str(ROOT)!r}]
         from sweep_console import run_with_console
-        from dopt.sweep import Trial
-        from tests.dopt.sweep_trials import walk, warn
+        from dopt.lab.sweep import Trial
+        from tests.dopt.lab.sweep_trials import walk, warn
         logging.basicConfig(format="%(levelname)s %(name)s: %(message)s")
         trials = [Trial(f"w{{i}}", {{"n": 8, "x0": 0.2 + i / 10, "sleep": 0.05}})
                   for i in range(2)]

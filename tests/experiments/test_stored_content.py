@@ -15,9 +15,9 @@ import pytest
 import rope
 import torch
 
-from dopt import jsonio
-from dopt.provenance import COMMIT_ENV
-from dopt.sweep import Checkpoint
+from dopt.lab import jsonio
+from dopt.lab.provenance import COMMIT_ENV
+from dopt.lab.sweep import Checkpoint
 
 QUICK_ROPE = ["--quick", "--no-render"]
 
@@ -44,7 +44,7 @@ def test_a_record_of_another_goal_under_a_trials_name_is_recomputed(tmp_path, ca
     path, mine = _only_record(straight)
     _, theirs = _only_record(fold)
     path.write_text(json.dumps({**theirs, "key": mine["key"]}))
-    with caplog.at_level(logging.WARNING, logger="dopt.sweep"):
+    with caplog.at_level(logging.WARNING, logger="dopt.lab.sweep"):
         assert rope.main([*base, "--goal", "straighten", "--out", str(straight)]) == 0
     assert "its params are another trial's" in caplog.text
     assert "'settings.goal': stored \"fold\", this trial's \"straighten\"" in caplog.text
@@ -80,7 +80,7 @@ def test_a_shortened_cost_history_is_moved_aside_and_recomputed(tmp_path, caplog
     path, rec = _only_record(out)
     rec["result"]["cost_history"].pop()
     path.write_text(json.dumps(rec))
-    with caplog.at_level(logging.WARNING, logger="dopt.sweep"):
+    with caplog.at_level(logging.WARNING, logger="dopt.lab.sweep"):
         assert rope.main(argv) == 0
     assert "cost history" in caplog.text and (out / "trials" / "corrupt" / path.name).exists()
     again = json.loads(path.read_text())["result"]
@@ -119,7 +119,7 @@ def test_a_checkpoint_with_a_negative_cem_probability_is_moved_aside(tmp_path, c
     path, rec = _only_record(out)
     path.unlink()
     Checkpoint(out, path.stem).save(_progress([1.25, -0.25]))
-    with caplog.at_level(logging.WARNING, logger="dopt.sweep"):
+    with caplog.at_level(logging.WARNING, logger="dopt.lab.sweep"):
         assert rope.main(argv) == 0
     assert "is not resumed" in caplog.text and "probabilities" in caplog.text
     moved = out / "trials" / "checkpoints" / "corrupt"

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 from sweep_console import duration, estimate_line, left_line, print_outputs, run_with_console
 
-from dopt.sweep import Trial
+from dopt.lab.sweep import Trial
 
 
 @pytest.mark.parametrize("seconds, text", [(0.4, "0 s"), (89, "89 s"), (90, "2 min"),

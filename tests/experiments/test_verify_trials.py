@@ -10,7 +10,7 @@ from pathlib import Path
 import pytest
 import verify_trials
 
-from dopt.provenance import COMMIT_ENV
+from dopt.lab.provenance import COMMIT_ENV
 
 from ..external import LAYOUTS
 

@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from dopt.trialpack import read_trial_text, stored_trials
+from dopt.lab.trialpack import read_trial_text, stored_trials
 
 os.environ.setdefault("MUJOCO_GL", "egl")
 
@@ -27,7 +27,7 @@ BIN = Path(sys.executable).parent
 
 def committed_trial(run: str, pattern: str) -> Path:
     """The path of the first committed trial of ``run`` whose file name matches ``pattern``
-    (its loose file, or the path a packed trial's file would have: ``dopt.trialpack``)."""
+    (its loose file, or the path a packed trial's file would have: ``dopt.lab.trialpack``)."""
     found = [t.path for t in stored_trials(RUNS / run / "trials") if fnmatch(t.name, pattern)]
     if not found:
         pytest.skip(f"no committed trial {run}/trials/{pattern}")
@@ -111,8 +111,8 @@ KEEP_SETTINGS = {"task": "clutter", "method": "baseline", "timeout": 10, "slowdo
 
 def write_run_trial(path: Path, **kwargs) -> tuple[dict, dict]:
     """``planners.svr_mpc.run_trial`` on KEEP_SETTINGS (seed 0) with ``kwargs``, written as
-    ``dopt.sweep`` writes a trial: its params and result."""
-    from dopt import jsonio
+    ``dopt.lab.sweep`` writes a trial: its params and result."""
+    from dopt.lab import jsonio
     from planners.svr_mpc import SVRMPCSettings, run_trial, trial_key, trial_params
 
     params = trial_params(SVRMPCSettings(**KEEP_SETTINGS), 0)
@@ -354,7 +354,7 @@ def test_entry_points_register_the_trial_sources():
 
 @pytest.mark.parametrize("name", ["dopt-fold", "dopt-report"])
 def test_console_scripts_are_the_experiment_scripts(name):
-    from dopt.scripts import SCRIPTS, experiments_dir
+    from dopt.lab.scripts import SCRIPTS, experiments_dir
 
     assert all((experiments_dir() / f).is_file() for f in SCRIPTS.values())
     exe = BIN / name
@@ -364,7 +364,7 @@ def test_console_scripts_are_the_experiment_scripts(name):
     script = subprocess.run([sys.executable, str(ROOT / "experiments" / SCRIPTS[name]),
                              "--help"], capture_output=True, text=True, timeout=120)
     assert mine.returncode == script.returncode == 0, mine.stderr + script.stderr
-    # the same help, but for the name in its usage lines (dopt.cli.shown_as)
+    # the same help, but for the name in its usage lines (dopt.lab.cli.shown_as)
     assert mine.stdout.startswith(f"usage: {name} ")
     assert mine.stdout.split("\n\n", 1)[1] == script.stdout.split("\n\n", 1)[1]
 
@@ -372,9 +372,9 @@ def test_console_scripts_are_the_experiment_scripts(name):
 # ------------------------------------------------------------------------ legibility
 def test_a_pack_file_and_a_summary_open_their_sweeps_trials(tmp_path):
     """The pack and the recorded summary of a committed sweep list the same trials as its
-    folder, all of them (the pack's records: dopt.trialpack); an OUT/summary.json opens the
+    folder, all of them (the pack's records: dopt.lab.trialpack); an OUT/summary.json opens the
     trials beside it; a summary whose folder is gone says so."""
-    from dopt.trialpack import stored_trials
+    from dopt.lab.trialpack import stored_trials
     from dopt.view.episode import collect
 
     run = RUNS / "fig7-cloth-diagonal"

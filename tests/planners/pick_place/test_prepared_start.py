@@ -18,7 +18,7 @@ import pytest
 from deformables.cloth import cloth_key_particles
 from deformables.goals import ClothGoal, goal_sequence, lift_layers, make_goal
 from dopt.errors import UnstableRolloutError
-from dopt.trialpack import stored_trials
+from dopt.lab.trialpack import stored_trials
 from planners.cem import CEMConfig
 from planners.pick_place import (
     GOALS,

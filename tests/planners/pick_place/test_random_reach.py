@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from dopt.trialpack import stored_trials
+from dopt.lab.trialpack import stored_trials
 from planners.pick_place.random_reach import p_blind, random_reach, reach_summary
 
 RUNS = Path(__file__).resolve().parents[3] / "docs" / "results" / "runs"

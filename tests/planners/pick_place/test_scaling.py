@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from dopt.tasks import make_cloth
-from dopt.trialpack import stored_trials
+from dopt.lab.trialpack import stored_trials
 from planners.pick_place import PickPlaceSettings, trial_key
 from planners.pick_place.scaling import (
     NO_TREND,

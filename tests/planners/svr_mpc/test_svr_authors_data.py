@@ -1,4 +1,4 @@
-"""planners/svr_mpc/authors_data.py and dopt.stats.authors_*: the state-vector-reduction authors'
+"""planners/svr_mpc/authors_data.py and dopt.lab.stats.authors_*: the state-vector-reduction authors'
 Table 1 statistic, on hand-computed arrays and on their own per-episode files (which must
 reproduce their printed Table 1)."""
 
@@ -8,7 +8,7 @@ import numpy as np
 import paper_reference
 import pytest
 
-from dopt.stats import authors_kept, authors_mean_ci
+from dopt.lab.stats import authors_kept, authors_mean_ci
 from planners.svr_mpc.authors_data import (
     TASK_DIRS,
     authors_rows,

@@ -6,7 +6,7 @@ import os
 
 import pytest
 
-from dopt.provenance import repo_root, rooted
+from dopt.lab.provenance import repo_root, rooted
 from planners.svr_mpc import SVRMPCSettings
 from planners.svr_mpc.settings import split_params, trial_params
 

@@ -15,7 +15,7 @@ ROWS = {"baseline": ("baseline", 0, 1.0), "rand-t5": ("rand", 5, 1.0),
 
 
 def records(costs: dict) -> list[dict]:
-    """{row name: [cost per seed]} -> trial records as dopt.sweep stores them."""
+    """{row name: [cost per seed]} -> trial records as dopt.lab.sweep stores them."""
     out = []
     for row, values in costs.items():
         method, theta, rho = ROWS[row]

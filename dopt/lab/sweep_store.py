@@ -1,4 +1,4 @@
-"""The files of a sweep (``dopt.sweep``) under its folder OUT, and their checks when read.
+"""The files of a sweep (``dopt.lab.sweep``) under its folder OUT, and their checks when read.
 
 - ``OUT/trials/<key>.json``: a finished trial's record {"key", "params", "result", "code"}
   (``check_record``: a file that is not one, or whose result does not fit the sweep's
@@ -6,7 +6,7 @@
   another trial's (``Schema.params_problem``), is named in a logged warning, moved to
   ``OUT/trials/corrupt/`` with its reason beside it (``<stem>.reason.txt``) and recomputed);
 - ``OUT/trials/pack.jsonl``: finished trials packed, one record a line, append-only
-  (``dopt.trialpack``; ``dopt.sweep_pack.pack_trials`` appends the loose files to it), over
+  (``dopt.lab.trialpack``; ``dopt.lab.sweep_pack.pack_trials`` appends the loose files to it), over
   the read-only ``pack.jsonl.gz`` of earlier packs; a loose file overrides the packed record of
   its key, and a packed record that does not fit stays in the pack and is recomputed;
 - ``OUT/trials/checkpoints/<key>.json``: an unfinished trial's saved progress
@@ -14,13 +14,13 @@
 - ``OUT/trials/.progress/<key>.json``: how far a running trial has got (``Report``: what a
   progress bar of a process pool or of Ray shows between whole trials), deleted when it ends;
 - ``OUT/.lock``: the process that runs a sweep on OUT, and its pool's workers (``OutLock``,
-  ``dopt.sweep_lock``, importable from here): a second one refuses.
+  ``dopt.lab.sweep_lock``, importable from here): a second one refuses.
 
-Every file is written atomically and as strict JSON (``dopt.jsonio``: no bare NaN).
-Standard library only (with ``dopt.atomic``, ``dopt.provenance``, ``dopt.jsonio``,
-``dopt.sweep_lock`` and ``dopt.trialpack``).
-Packing itself (``pack_trials``, ``PackResult``) lives in ``dopt.sweep_pack``, which imports
-this module (``dopt.sweep`` re-exports both).
+Every file is written atomically and as strict JSON (``dopt.lab.jsonio``: no bare NaN).
+Standard library only (with ``dopt.atomic``, ``dopt.lab.provenance``, ``dopt.lab.jsonio``,
+``dopt.lab.sweep_lock`` and ``dopt.lab.trialpack``).
+Packing itself (``pack_trials``, ``PackResult``) lives in ``dopt.lab.sweep_pack``, which imports
+this module (``dopt.lab.sweep`` re-exports both).
 """
 
 from __future__ import annotations
@@ -34,12 +34,14 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
-from dopt import atomic, jsonio
-from dopt.provenance import COMMIT_ENV, CodeState, code_state, repo_root, reuse_problem
-from dopt.sweep_lock import FRESH_LOCK_S, LOCK_NAME, OutLock, SweepLockedError  # noqa: F401
-from dopt.trialpack import StoredTrial, loose_files, read_pack
+from dopt import atomic
 
-log = logging.getLogger("dopt.sweep")
+from dopt.lab import jsonio
+from dopt.lab.provenance import COMMIT_ENV, CodeState, code_state, repo_root, reuse_problem
+from dopt.lab.sweep_lock import FRESH_LOCK_S, LOCK_NAME, OutLock, SweepLockedError  # noqa: F401
+from dopt.lab.trialpack import StoredTrial, loose_files, read_pack
+
+log = logging.getLogger("dopt.lab.sweep")
 
 #: folders under OUT/trials where unusable trial files are moved (never deleted)
 CORRUPT_DIR, OUTDATED_DIR = "corrupt", "outdated"
@@ -91,7 +93,7 @@ class Schema:
         wanted: keys this run needs that a sound record of the experiment may lack (a run
             that did not ask for them wrote it, e.g. an MPC trial without --keep-controls):
             such a record is not corrupt but outdated, moved to OUT/trials/outdated/ and
-            recomputed (``dopt.sweep``), even where the sweep reuses across code changes.
+            recomputed (``dopt.lab.sweep``), even where the sweep reuses across code changes.
         finite: result keys whose value must be a finite number (an int or a float, not a
             bool; a NaN or an infinity is stored null with its reason and read back as
             itself): a record with another value there is corrupt.
@@ -226,7 +228,7 @@ def trial_path(out_dir: Path | str, key: str) -> Path:
 
 def read_json(path: Path) -> tuple[object, str | None]:
     """(the JSON of the file at ``path``, None) or (None, what is wrong). Files are written
-    strict (``dopt.jsonio``); one with a bare NaN, written before, is read as it was meant."""
+    strict (``dopt.lab.jsonio``); one with a bare NaN, written before, is read as it was meant."""
     try:
         return jsonio.loads(Path(path).read_text(), strict_numbers=False), None
     except (OSError, UnicodeDecodeError) as e:
@@ -267,7 +269,7 @@ def check_value(rec, key: str, schema: Schema = ANY) -> tuple[dict | None, str |
 
 
 def check_packed(trial: StoredTrial, schema: Schema = ANY) -> tuple[dict | None, str | None]:
-    """``check_record`` of a packed record (``dopt.trialpack``); the problem names its line."""
+    """``check_record`` of a packed record (``dopt.lab.trialpack``); the problem names its line."""
     try:
         rec = jsonio.loads(trial.text, strict_numbers=False)
     except ValueError as e:
@@ -285,7 +287,7 @@ def stored_record(out_dir: Path | str, key: str, schema: Schema = ANY
     (None, what is wrong, or None when there is none). Reads only.
 
     Raises:
-        dopt.trialpack.PackError: the folder's pack cannot be read.
+        dopt.lab.trialpack.PackError: the folder's pack cannot be read.
     """
     path = trial_path(out_dir, key)
     packed = read_pack(path.parent).get(key)        # first: a bad pack is named either way
@@ -335,7 +337,7 @@ def check_trial_files(out_dir: Path | str, schema: Schema = ANY) -> tuple[dict, 
     (the temporary files of writes that were killed) are left alone.
 
     Raises:
-        dopt.trialpack.PackError: the folder's pack cannot be read (named with its line).
+        dopt.lab.trialpack.PackError: the folder's pack cannot be read (named with its line).
     """
     folder = Path(out_dir) / "trials"
     if not folder.is_dir():
@@ -373,7 +375,7 @@ class Checkpoint:
     stamp (``CodeState.stamp``); ``load()`` returns the dict last saved, or None when there is
     none or it cannot be resumed (unreadable, another key, progress that does not fit the
     sweep's ``schema``: moved to checkpoints/corrupt/; code that may give another result,
-    ``dopt.provenance.reuse_problem``: to checkpoints/outdated/; logged, never deleted).
+    ``dopt.lab.provenance.reuse_problem``: to checkpoints/outdated/; logged, never deleted).
     ``root`` is the repository asked (default: this checkout). ``params``: the params of
     the trial it is of (None: not known): saved with the progress, and a checkpoint whose
     saved params are another trial's (``Schema.params_problem``) is not resumed (moved to
@@ -386,7 +388,7 @@ class Checkpoint:
                  params: dict | None = None):
         Trial(key, {})                                   # the key's checks
         if not isinstance(schema, Schema):
-            raise TypeError(f"schema must be a dopt.sweep.Schema, got {type(schema).__name__}")
+            raise TypeError(f"schema must be a dopt.lab.sweep.Schema, got {type(schema).__name__}")
         if params is not None and not isinstance(params, dict):
             raise TypeError(f"params must be a dict or None, got {type(params).__name__}")
         self.key, self.schema, self.params = key, schema, params

@@ -1,4 +1,4 @@
-"""Holm's step-down correction (dopt.multiple) against hand-computed references and against the
+"""Holm's step-down correction (dopt.lab.multiple) against hand-computed references and against the
 procedure's definition, computed here by brute force (no statsmodels, no scipy); slope tests
 over several groups judged as one family."""
 
@@ -6,7 +6,7 @@ import random
 
 import pytest
 
-from dopt.multiple import NO_TREND, holm, holm_reject, holm_slopes
+from dopt.lab.multiple import NO_TREND, holm, holm_reject, holm_slopes
 
 
 def test_the_worked_example_by_hand():

@@ -18,8 +18,8 @@ from pathlib import Path
 
 import pytest
 
-from dopt.provenance import COMMIT_ENV
-from dopt.sweep import (
+from dopt.lab.provenance import COMMIT_ENV
+from dopt.lab.sweep import (
     LOCK_NAME,
     OutLock,
     SweepLockedError,
@@ -27,8 +27,8 @@ from dopt.sweep import (
     Trial,
     run_sweep,
 )
-from dopt.sweep_store import CHECKPOINT_DIR, Checkpoint, Report
-from tests.dopt.sweep_trials import walk, warn
+from dopt.lab.sweep_store import CHECKPOINT_DIR, Checkpoint, Report
+from tests.dopt.lab.sweep_trials import walk, warn
 
 HERE = Path(__file__).parent
 #: the most seconds from the signal to the sweep's exit
@@ -41,13 +41,13 @@ def walks(n_trials=8, n=40, sleep=0.05):
 
 
 def child(out: Path, workers: int, ray: bool):
-    """A CLI-like process that runs the walks on ``workers`` (or Ray) under dopt.cli.guarded,
+    """A CLI-like process that runs the walks on ``workers`` (or Ray) under dopt.lab.cli.guarded,
     started with SIGINT ignored under Ray, as a script's background job (``cmd &``) is: the
     processes Ray starts inherit that, and its workers must still be interruptible."""
     script = textwrap.dedent(f"""
         import sys
-        from dopt.cli import guarded
-        from dopt.sweep import Trial, run_sweep
+        from dopt.lab.cli import guarded
+        from dopt.lab.sweep import Trial, run_sweep
         from sweep_trials import walk
 
         @guarded("sweep")
@@ -178,7 +178,7 @@ def test_a_stopped_ray_trial_counts_as_begun_by_its_progress_read_before_it_is_r
     """A Ray task's cancellation does not say whether it had begun: a trial that reported a
     step or saved a checkpoint stopped part-way, one that did neither did not start. The
     count is read before the sweep removes the trial's progress file."""
-    from dopt.sweep_exec import _finish_ref, _Progress
+    from dopt.lab.sweep_exec import _finish_ref, _Progress
 
     class Cancelled(Exception):
         pass
@@ -233,7 +233,7 @@ def test_the_warnings_of_pool_workers_reach_this_process_loggers(tmp_path, caplo
 # ------------------------------------------------------------------------------ the lock
 def holder(out: Path):
     """A process that holds OUT's lock until killed."""
-    code = (f"from dopt.sweep import OutLock; import time\n"
+    code = (f"from dopt.lab.sweep import OutLock; import time\n"
             f"with OutLock({str(out)!r}):\n    print('held', flush=True); time.sleep(60)")
     proc = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE, text=True)
     assert proc.stdout.readline().strip() == "held"

@@ -8,10 +8,10 @@ import subprocess
 
 import pytest
 
-from dopt import provenance
-from dopt.provenance import code_state, reuse_problem
-from dopt.sweep import Checkpoint, Trial, current_code, is_finished, run_sweep
-from tests.dopt.sweep_trials import count, square
+from dopt.lab import provenance
+from dopt.lab.provenance import code_state, reuse_problem
+from dopt.lab.sweep import Checkpoint, Trial, current_code, is_finished, run_sweep
+from tests.dopt.lab.sweep_trials import count, square
 
 FILES = {"planners/cem.py": "STEP = 1\n", "dopt/__init__.py": "", "pyproject.toml": "[x]\n",
          "docs/notes.md": "notes\n", "README.md": "readme\n"}

@@ -257,7 +257,7 @@ def guarded(script: str):
     """Decorator of a script's ``main(argv) -> int``: an exception becomes one line
     "SCRIPT: error: ErrorType: message" on stderr and exit status 1 (the traceback first when
     the environment sets DOPT_TRACEBACK=1); Ctrl-C exits 130 with one line, and an
-    interrupted sweep (``dopt.sweep.SweepInterrupted``) its ``exit_code`` (130, SIGTERM 143)
+    interrupted sweep (``dopt.lab.sweep.SweepInterrupted``) its ``exit_code`` (130, SIGTERM 143)
     with its message and the command that resumes it. Usage errors (argparse's SystemExit 2)
     pass through. SCRIPT is ``shown_name(script)``: a console script's own name where one runs
     it."""

@@ -14,11 +14,13 @@ import stat
 
 import pytest
 
-from dopt import atomic, jsonio, trialpack
-from dopt.provenance import COMMIT_ENV
-from dopt.sweep import CHECKPOINT_DIR, Trial, run_sweep
-from dopt.sweep_exec import TrialInterrupted
-from tests.dopt.sweep_trials import count
+from dopt import atomic
+
+from dopt.lab import jsonio, trialpack
+from dopt.lab.provenance import COMMIT_ENV
+from dopt.lab.sweep import CHECKPOINT_DIR, Trial, run_sweep
+from dopt.lab.sweep_exec import TrialInterrupted
+from tests.dopt.lab.sweep_trials import count
 
 
 class Landed(BaseException):

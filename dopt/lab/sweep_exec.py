@@ -1,5 +1,5 @@
-"""How ``dopt.sweep`` runs its trials, inline or on Ray, and how it stops when asked to; the
-local process pool, ``run_pool``, lives in ``dopt.sweep_pool`` (with the pool workers' side:
+"""How ``dopt.lab.sweep`` runs its trials, inline or on Ray, and how it stops when asked to; the
+local process pool, ``run_pool``, lives in ``dopt.lab.sweep_pool`` (with the pool workers' side:
 they end with their parent, and one's death fails its own trial only).
 
 **Interrupts.** While trials run, SIGINT (Ctrl-C) and SIGTERM are caught (when the sweep runs
@@ -17,7 +17,7 @@ what its workers do). A second signal skips the grace period.
 sent to the sweep's process and handled by its loggers, so a progress bar's logging redirect
 covers them; Ray's workers log on their own (``log_to_driver=False``).
 
-**Progress.** A trial function with a ``report`` parameter gets a ``dopt.sweep_store.Report``;
+**Progress.** A trial function with a ``report`` parameter gets a ``dopt.lab.sweep_store.Report``;
 the steps it reports from a worker are read back from their files every ``POLL_S`` and given
 to the sweep's ``tick``.
 """
@@ -34,10 +34,10 @@ import time
 from collections.abc import Callable
 from pathlib import Path
 
-from dopt.provenance import machine
-from dopt.sweep_store import PROGRESS_DIR, Report
+from dopt.lab.provenance import machine
+from dopt.lab.sweep_store import PROGRESS_DIR, Report
 
-log = logging.getLogger("dopt.sweep")
+log = logging.getLogger("dopt.lab.sweep")
 
 #: seconds the running trials of an interrupted sweep get to end before their workers are
 #: killed, and between two looks at the workers' progress files
@@ -95,7 +95,7 @@ class Stopper:
 
 
 # ------------------------------------------------------------------------- worker side
-#: a pool worker's state (``dopt.sweep_pool``): its sweep is stopping; a trial runs
+#: a pool worker's state (``dopt.lab.sweep_pool``): its sweep is stopping; a trial runs
 _STOPPING = False
 _IN_TRIAL = False
 

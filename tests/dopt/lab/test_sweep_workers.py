@@ -1,4 +1,4 @@
-"""A process pool's workers and the deaths of processes (``dopt.sweep_pool``): the workers of
+"""A process pool's workers and the deaths of processes (``dopt.lab.sweep_pool``): the workers of
 a sweep whose main process is killed (``kill -9``, the OOM killer) exit within seconds and
 start no trial; a worker killed while the sweep runs fails its own trial only, named with its
 pid and signal or exit code, while the others finish; the folder's lock names the live
@@ -18,15 +18,15 @@ from pathlib import Path
 
 import pytest
 
-from dopt import sweep_lock
-from dopt.provenance import COMMIT_ENV
-from dopt.sweep import LOCK_NAME, OutLock, SweepLockedError, Trial, run_sweep
-from dopt.sweep_store import Checkpoint
-from tests.dopt.sweep_trials import linger, lock_workers
+from dopt.lab import sweep_lock
+from dopt.lab.provenance import COMMIT_ENV
+from dopt.lab.sweep import LOCK_NAME, OutLock, SweepLockedError, Trial, run_sweep
+from dopt.lab.sweep_store import Checkpoint
+from tests.dopt.lab.sweep_trials import linger, lock_workers
 
 HERE = Path(__file__).parent
 #: the checkout these tests belong to: its dopt, not an installed one, runs in the children
-ROOT = HERE.parents[1]
+ROOT = HERE.parents[2]
 #: the most seconds from the main process's death to the end of its last worker
 ORPHAN_S = 3.0
 
@@ -78,7 +78,7 @@ def child_env() -> dict:
 def sweep_child(out: Path, calls: Path) -> subprocess.Popen:
     """A process that runs 4 trials of 10 s on 2 workers."""
     script = textwrap.dedent(f"""
-        from dopt.sweep import Trial, run_sweep
+        from dopt.lab.sweep import Trial, run_sweep
         from sweep_trials import linger
         trials = [Trial(f"t{{i}}", {{"key": f"t{{i}}", "calls": {str(calls)!r}, "n": 200,
                                       "sleep": 0.05}}) for i in range(4)]
@@ -125,7 +125,7 @@ def test_a_worker_whose_parent_is_killed_exits_without_prctl(tmp_path):
     by a process that is then killed with SIGKILL."""
     grandchild = textwrap.dedent("""
         import os, time
-        from dopt.sweep_pool import watch_parent
+        from dopt.lab.sweep_pool import watch_parent
         watch_parent(os.getppid(), prctl=False)
         print(os.getpid(), flush=True)
         time.sleep(60)

@@ -1,6 +1,6 @@
 """Resumable sweeps: inline, process pool, Ray, a killed sweep that resumes, bad trial files
 (named, moved aside, recomputed) and the code rule of a resume (here with the commit named by
-DOPT_GIT_COMMIT; tests/dopt/test_reuse_rule.py asks a real temporary git repository)."""
+DOPT_GIT_COMMIT; tests/dopt/lab/test_reuse_rule.py asks a real temporary git repository)."""
 
 import json
 import logging
@@ -15,8 +15,8 @@ from pathlib import Path
 import pytest
 
 import dopt
-from dopt.provenance import COMMIT_ENV, code_version
-from dopt.sweep import (
+from dopt.lab.provenance import COMMIT_ENV, code_version
+from dopt.lab.sweep import (
     Checkpoint,
     Trial,
     check_record,
@@ -25,7 +25,7 @@ from dopt.sweep import (
     run_sweep,
     takes_checkpoint,
 )
-from tests.dopt.sweep_trials import count, square
+from tests.dopt.lab.sweep_trials import count, square
 
 
 def not_json(params):
@@ -60,7 +60,7 @@ def test_killed_sweep_resumes_without_redoing_finished_trials(tmp_path):
     calls.mkdir()
     out = tmp_path / "out"
     script = textwrap.dedent(f"""
-        from dopt.sweep import Trial, run_sweep
+        from dopt.lab.sweep import Trial, run_sweep
         from sweep_trials import square
         run_sweep(square, [Trial(f"x{{x}}", dict(x=x, calls={str(calls)!r}, sleep=0.4))
                            for x in range(6)], {str(out)!r})
@@ -151,7 +151,7 @@ def test_code_version_is_the_sources_not_stale_install_metadata(monkeypatch):
     import importlib.metadata
 
     import dopt
-    from dopt import provenance
+    from dopt.lab import provenance
     monkeypatch.setattr(importlib.metadata, "version", lambda name: "0.0.stale")
     assert code_version()["version"] == dopt.__version__ != "0.0.stale"
     assert provenance.versions()["dopt"] == dopt.__version__
@@ -176,7 +176,7 @@ def test_a_bad_trial_file_is_named_moved_aside_and_recomputed(tmp_path, code, ca
     else:
         (folder / name).write_text(text)
     (folder / ".tmp-abc.json").write_text('{"trunc')     # a write that was killed: left alone
-    with caplog.at_level(logging.WARNING, logger="dopt.sweep"):
+    with caplog.at_level(logging.WARNING, logger="dopt.lab.sweep"):
         res = run_sweep(square, trials([1, 2]), tmp_path)
     assert list(res.corrupt) == [name] and reason in res.corrupt[name]
     warnings = [r.getMessage() for r in caplog.records if r.levelno == logging.WARNING]
@@ -224,7 +224,7 @@ def test_resume_reuses_only_what_git_says_is_the_same_code(tmp_path, code, caplo
     _record(tmp_path, "x3", 3)                                               # before "code"
     _record(tmp_path, "x4", 4, {"version": "1.0.0", "commit": COMMIT + "-dirty",
                                 "tree": "0123"})                             # uncommitted
-    with caplog.at_level(logging.WARNING, logger="dopt.sweep"):
+    with caplog.at_level(logging.WARNING, logger="dopt.lab.sweep"):
         res = run_sweep(square, trials([1, 2, 3, 4, 5]), tmp_path)
     assert sorted(res.ran) == ["x2", "x3", "x4", "x5"] and res.skipped == ["x1"]
     assert res.recomputed == {
@@ -241,11 +241,11 @@ def test_resume_reuses_only_what_git_says_is_the_same_code(tmp_path, code, caplo
 
 
 def test_reuse_any_reuses_every_valid_record_and_lists_it(tmp_path, code, caplog):
-    from dopt.sweep import take_deliberate_reuse
+    from dopt.lab.sweep import take_deliberate_reuse
     take_deliberate_reuse()
     _record(tmp_path, "x1", 1, {"version": "1.0.0", "commit": "beef-dirty"})
     _record(tmp_path, "x2", 2, CODE)
-    with caplog.at_level(logging.WARNING, logger="dopt.sweep"):
+    with caplog.at_level(logging.WARNING, logger="dopt.lab.sweep"):
         res = run_sweep(square, trials([1, 2, 3]), tmp_path, reuse="any")
     assert res.ran == ["x3"] and sorted(res.skipped) == ["x1", "x2"]
     assert res.reused_across == {"x1": "written from uncommitted code (beef-dirty)"}
@@ -259,13 +259,13 @@ def test_reuse_any_reuses_every_valid_record_and_lists_it(tmp_path, code, caplog
 def test_a_sound_record_without_a_wanted_field_is_outdated_not_corrupt(tmp_path, code, caplog):
     """A record that fits the experiment but lacks what this run wants (Schema.wanted) is
     recomputed, even when reusing across code changes, and kept under trials/outdated/."""
-    from dopt.sweep import Schema
+    from dopt.lab.sweep import Schema
 
     run_sweep(square, trials([1, 2]), tmp_path)
     wants = Schema(result=("y",), wanted=("pid", "z"))
     assert not is_finished(tmp_path, "x1", schema=wants)
     assert is_finished(tmp_path, "x1", schema=Schema(result=("y",), wanted=("pid",)))
-    with caplog.at_level(logging.WARNING, logger="dopt.sweep"):
+    with caplog.at_level(logging.WARNING, logger="dopt.lab.sweep"):
         res = run_sweep(square, trials([1, 2]), tmp_path, schema=wants, reuse="any")
     assert sorted(res.ran) == ["x1", "x2"] and res.corrupt == {} and res.reused_across == {}
     assert res.recomputed["x1"] == "it lacks 'z' (written by a run that did not ask for them)"
@@ -351,7 +351,7 @@ def test_a_checkpoint_that_cannot_be_resumed_is_named_and_moved_aside(tmp_path, 
     c = Checkpoint(tmp_path, "c")
     c.path.parent.mkdir(parents=True)
     c.path.write_text(text)
-    with caplog.at_level(logging.WARNING, logger="dopt.sweep"):
+    with caplog.at_level(logging.WARNING, logger="dopt.lab.sweep"):
         assert c.peek() is None                      # reads only: nothing moved or logged
         assert c.path.read_text() == text and not caplog.text
         assert c.load() is None

@@ -1,17 +1,17 @@
 """Packing a sweep's loose trial files into its pack: ``pack_trials`` and its ``PackResult``.
 
 ``pack_trials`` appends the loose ``OUT/trials/<key>.json`` files of a sweep folder
-(``dopt.sweep_store``) to ``OUT/trials/pack.jsonl`` (``dopt.trialpack``, the one reader and
+(``dopt.lab.sweep_store``) to ``OUT/trials/pack.jsonl`` (``dopt.lab.trialpack``, the one reader and
 writer of packs: uncompressed and append-only, so that git stores a re-pack as the delta of its
-new lines), holding the folder's ``OutLock``; ``python -m dopt.sweep pack OUT`` runs it. An
+new lines), holding the folder's ``OutLock``; ``python -m dopt.lab.sweep pack OUT`` runs it. An
 earlier ``pack.jsonl.gz`` is read and left as it is: a loose file whose record it already holds
 is not packed again, a newer one is appended to ``pack.jsonl`` and overrides it. A loose file
 is deleted only once the packs read back its record. A packed record that a newer loose file
 replaces stays on its line (``PackResult.replaced`` names it). ``repair=True`` first repairs a
-``pack.jsonl`` whose last line was cut (``dopt.trialpack.repair_pack``; the cut line goes to
-``OUT/trials/corrupt/``). ``dopt.sweep`` and ``dopt.sweep_store`` re-export both names.
+``pack.jsonl`` whose last line was cut (``dopt.lab.trialpack.repair_pack``; the cut line goes to
+``OUT/trials/corrupt/``). ``dopt.lab.sweep`` and ``dopt.lab.sweep_store`` re-export both names.
 
-Standard library only (with ``dopt.jsonio``, ``dopt.sweep_store`` and ``dopt.trialpack``).
+Standard library only (with ``dopt.lab.jsonio``, ``dopt.lab.sweep_store`` and ``dopt.lab.trialpack``).
 """
 
 from __future__ import annotations
@@ -21,11 +21,11 @@ import logging
 from dataclasses import dataclass
 from pathlib import Path
 
-from dopt import jsonio
-from dopt.sweep_store import CORRUPT_DIR, OutLock, check_record
-from dopt.trialpack import append_pack, loose_files, pack_path, read_pack, repair_pack
+from dopt.lab import jsonio
+from dopt.lab.sweep_store import CORRUPT_DIR, OutLock, check_record
+from dopt.lab.trialpack import append_pack, loose_files, pack_path, read_pack, repair_pack
 
-log = logging.getLogger("dopt.sweep")
+log = logging.getLogger("dopt.lab.sweep")
 
 
 @dataclass(frozen=True)
@@ -70,13 +70,13 @@ class PackResult:
 
 def _one_line(path: Path) -> str:
     """The record of the loose trial file ``path`` as one line of strict JSON (the file's text
-    when it was written by ``dopt.jsonio``; a bare NaN of an older file becomes its note)."""
+    when it was written by ``dopt.lab.jsonio``; a bare NaN of an older file becomes its note)."""
     return jsonio.dumps(jsonio.loads(path.read_text(), restore_values=False,
                                      strict_numbers=False))
 
 
 def _same(text_a: str, text_b: str) -> bool:
-    """Whether two JSON texts load (``dopt.jsonio.loads``) as the same record, member order
+    """Whether two JSON texts load (``dopt.lab.jsonio.loads``) as the same record, member order
     and NaN included."""
     def load(t):
         return json.dumps(jsonio.loads(t, strict_numbers=False))
@@ -98,18 +98,18 @@ def _packable(path: Path) -> tuple[str | None, str | None]:
 
 
 def pack_trials(out_dir: Path | str, *, repair: bool = False) -> PackResult:
-    """Append the loose trial files of a sweep folder to its pack (``dopt.trialpack``): every
+    """Append the loose trial files of a sweep folder to its pack (``dopt.lab.trialpack``): every
     valid record (``check_record``, any schema) the packs do not hold already (as the same
     record) is appended to ``pack.jsonl``, in key order, replacing the packed record of its
     key (the old line stays); the pack is read back, and each loose file is deleted only once
     the packs give the same record as the file. Checkpoints, corrupt/ and outdated/ are left
     alone. Holds the folder's lock (``OutLock``): a sweep running on it refuses, and packing
     waits for none. ``repair``: repair a cut last line of ``pack.jsonl`` first
-    (``dopt.trialpack.repair_pack``, the cut line kept under OUT/trials/corrupt/).
+    (``dopt.lab.trialpack.repair_pack``, the cut line kept under OUT/trials/corrupt/).
 
     Raises:
         FileNotFoundError: ``out_dir`` has no trials/ folder.
-        dopt.trialpack.PackError: a pack cannot be read (nothing is changed;
+        dopt.lab.trialpack.PackError: a pack cannot be read (nothing is changed;
             ``CutPackError``: a cut last line, without ``repair``).
         SweepLockedError: a sweep runs on ``out_dir``.
         RuntimeError: the pack does not read back as written (no loose file is deleted).

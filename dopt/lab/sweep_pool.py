@@ -1,4 +1,4 @@
-"""The local process pool of ``dopt.sweep`` (``workers=N``, ``--workers N``): spawn processes
+"""The local process pool of ``dopt.lab.sweep`` (``workers=N``, ``--workers N``): spawn processes
 that each hold one pipe to the sweep and run one trial at a time, so that the sweep always
 knows which worker runs which trial.
 
@@ -18,12 +18,12 @@ once its parent is gone (its pipe ends too: the sweep is the only writer). A tri
 checkpoint is written atomically, so a worker killed anywhere leaves its last completed step.
 (Before, the workers of a killed sweep ran on, started queued trials, then waited forever,
 ignoring Ctrl-C and SIGTERM, beside the rerun that took the folder over.) The live workers'
-pids are handed to ``on_workers`` (``dopt.sweep`` notes them in the folder's lock,
+pids are handed to ``on_workers`` (``dopt.lab.sweep`` notes them in the folder's lock,
 ``OutLock.note_workers``, so that a rerun does not take the folder over while they run).
 PR_SET_PDEATHSIG fires when the thread that started the worker ends: ``run_pool`` starts
 every worker from the thread it runs in, and ends them all before it returns.
 
-**Interrupts** are as before (``dopt.sweep_exec``): queued trials are not started, running
+**Interrupts** are as before (``dopt.lab.sweep_exec``): queued trials are not started, running
 ones get SIGTERM (``TrialInterrupted`` inside them), those that end within ``GRACE_S`` are
 written, the workers still running are then killed.
 
@@ -48,7 +48,7 @@ from collections.abc import Callable
 from multiprocessing import connection, get_context, parent_process
 from multiprocessing.reduction import ForkingPickler
 
-from dopt.sweep_exec import (
+from dopt.lab.sweep_exec import (
     GRACE_S,
     POLL_S,
     Stopper,
@@ -59,7 +59,7 @@ from dopt.sweep_exec import (
     call_trial,
 )
 
-log = logging.getLogger("dopt.sweep")
+log = logging.getLogger("dopt.lab.sweep")
 
 #: seconds between two looks of a worker's watch thread at its parent
 WATCH_S = 0.2

@@ -4,7 +4,7 @@ one rule, asked of git itself, that says whether a stored result may stand for t
 Every experiment stores ``provenance()`` in its summary, so a number in the docs can be traced
 to the code and libraries that produced it; ``CodeState.stamp()`` (dopt's version, the git
 commit and, for uncommitted code, a fingerprint of it) is what a resumable sweep stores with
-each trial (``dopt.sweep``). A result names no folder of the machine it ran on: the command
+each trial (``dopt.lab.sweep``). A result names no folder of the machine it ran on: the command
 (``command_line``) and the settings (``root_relative``, read back by ``rooted``) record paths
 relative to the checkout's root, or its sibling ``../shared``; ``recorded_command`` shows an
 older record's command so.
@@ -21,7 +21,7 @@ The rules, exactly:
   do not count. A dirty tree's commit is ``"<HEAD sha>-dirty"``; outside a git checkout it is
   None (``code_version``: "no git").
 - **Recording** (``CodeState.record_problem``): a ``--record`` result (and trial files written
-  into docs/results/, ``dopt.sweep``) is refused, one line naming the changed files, from a
+  into docs/results/, ``dopt.lab.sweep``) is refused, one line naming the changed files, from a
   dirty tree or outside a git checkout. Ordinary runs (``--out`` elsewhere, the tests) are
   not: they write their records marked ``-dirty``.
 - **Reuse** (``reuse_problem``): a stored result of commit X stands for this code when X is
@@ -80,7 +80,7 @@ SHARED = "shared"
 CHECKOUT_DIRS = (*PACKAGE_DIRS, "docs", "tests")
 #: what a recorded path outside the checkout and its shared folder shows for its folders
 OUTSIDE = "<outside>"
-_ROOT = Path(__file__).resolve().parents[1]
+_ROOT = Path(__file__).resolve().parents[2]
 
 
 @dataclass(frozen=True)

@@ -9,12 +9,12 @@ else is passed to ``ray.init``), so a sweep of thousands of trials goes to many 
 code changes.
 
 **Packed trials.** A finished sweep's trials are packed into one file,
-``OUT/trials/pack.jsonl`` (``pack_trials``; ``python -m dopt.sweep pack [--repair] OUT
+``OUT/trials/pack.jsonl`` (``pack_trials``; ``python -m dopt.lab.sweep pack [--repair] OUT
 [OUT ...]``): one record a line, uncompressed and append-only (each pack appends the new
 records, sorted by key, after the lines already there, and never rewrites one), so that
 committing a re-packed sweep grows git's history by the delta of its new lines, not by the
 whole file as a compressed pack did; each loose file is deleted once the pack reads back its
-record. Everything below reads packed and loose trials alike (``dopt.trialpack``, the one
+record. Everything below reads packed and loose trials alike (``dopt.lab.trialpack``, the one
 reader), and for one key a later source overrides an earlier one: the read-only
 ``pack.jsonl.gz`` of earlier packs (never rewritten), then ``pack.jsonl`` (a later line over an
 earlier one), then the loose file (a trial recomputed since). A resume reuses a packed trial as
@@ -33,13 +33,13 @@ finite and is not), or whose params are another trial's (``Schema.identity``: a 
 another goal copied under this trial's name) is named in a logged warning and moved to
 ``OUT/trials/corrupt/`` with its reason beside it (``<stem>.reason.txt``; never deleted; a
 packed record stays in the pack), and its trial is recomputed. A trial function's own result
-that does not fit is a failure, never a record. Every file is strict JSON (``dopt.jsonio``: a
+that does not fit is a failure, never a record. Every file is strict JSON (``dopt.lab.jsonio``: a
 NaN is written ``null`` with the reason beside it, and read back as NaN).
 
 **Which code a record stands for.** Each record stores ``CodeState.stamp()`` under "code"
 (dopt's version, the git commit, "-dirty" with a fingerprint for uncommitted code; see
-``dopt.provenance`` for the exact rules). A stored trial is reused when its key matches (the
-key names its settings) and ``dopt.provenance.reuse_problem`` finds nothing that can change its
+``dopt.lab.provenance`` for the exact rules). A stored trial is reused when its key matches (the
+key names its settings) and ``dopt.lab.provenance.reuse_problem`` finds nothing that can change its
 result between its commit and HEAD (``git diff X HEAD -- dopt deformables planners experiments
 pyproject.toml setup.py`` empty, X an ancestor of HEAD, the working tree clean there). Anything
 else is recomputed and its old file moved to ``OUT/trials/outdated/`` (never deleted; a
@@ -47,7 +47,7 @@ packed record stays in its pack, shadowed by the new file, also once ``pack_tria
 there): a record of an unknown commit, of no commit ("no git"), of another branch, or marked
 "-dirty" (except in the very tree it was written from, so that a killed run resumes before its
 code is committed). The dopt version is recorded but decides nothing. Each record also names
-the machine its trial ran on ("machine": ``dopt.provenance.machine()`` of the worker; absent
+the machine its trial ran on ("machine": ``dopt.lab.provenance.machine()`` of the worker; absent
 from records written before records carried it): a CPU-time clock runs at its speed.
 ``reuse="any"`` reuses every valid record deliberately: ``SweepResult.reused_across`` (and
 ``take_deliberate_reuse()``, which the experiments' ``write_summary`` puts in the summary) list
@@ -78,12 +78,12 @@ workers still runs (a stale lock is taken over).
 ``kill -9`` or the OOM killer's: the kernel kills them on Linux, a watch thread elsewhere) and
 start no trial after it; a worker that dies while the sweep runs fails only the trial it was
 running, as ``WorkerDied`` naming its pid and signal or exit code, and the other trials go on
-(``dopt.sweep_pool``).
+(``dopt.lab.sweep_pool``).
 
 **Interrupts.** SIGINT (Ctrl-C) or SIGTERM cancels the queued trials, stops the running ones
 (each keeps the checkpoint of its last completed step, if it saved one), writes those that
 finished and raises ``SweepInterrupted`` (a KeyboardInterrupt) within a few seconds, inline,
-on the pool and on Ray alike (``dopt.sweep_exec``, ``dopt.sweep_pool``); its ``exit_code`` is
+on the pool and on Ray alike (``dopt.lab.sweep_exec``, ``dopt.lab.sweep_pool``); its ``exit_code`` is
 130 or 143 and its message says how to resume. The rerun gives exactly the result of an
 uninterrupted sweep.
 
@@ -104,10 +104,10 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from dopt import jsonio
-from dopt.cli import ArgumentParser
-from dopt.provenance import CodeState, repo_root, reuse_problem
-from dopt.sweep_exec import (
+from dopt.lab import jsonio
+from dopt.lab.cli import ArgumentParser
+from dopt.lab.provenance import CodeState, repo_root, reuse_problem
+from dopt.lab.sweep_exec import (
     Stopper,
     TrialInterrupted,
     _Progress,
@@ -115,9 +115,9 @@ from dopt.sweep_exec import (
     run_inline,
     run_ray,
 )
-from dopt.sweep_pack import PackResult, pack_trials  # noqa: F401
-from dopt.sweep_pool import WorkerDied, run_pool  # noqa: F401
-from dopt.sweep_store import (  # noqa: F401  (the public names of dopt.sweep)
+from dopt.lab.sweep_pack import PackResult, pack_trials  # noqa: F401
+from dopt.lab.sweep_pool import WorkerDied, run_pool  # noqa: F401
+from dopt.lab.sweep_store import (  # noqa: F401  (the public names of dopt.lab.sweep)
     ANY,
     CHECKPOINT_DIR,
     CORRUPT_DIR,
@@ -137,7 +137,7 @@ from dopt.sweep_store import (  # noqa: F401  (the public names of dopt.sweep)
     stored_record,
     trial_path,
 )
-from dopt.trialpack import GZIP_PACK_NAME, PACK_NAME, CutPackError, PackError  # noqa: F401
+from dopt.lab.trialpack import GZIP_PACK_NAME, PACK_NAME, CutPackError, PackError  # noqa: F401
 
 log = logging.getLogger(__name__)
 
@@ -374,7 +374,7 @@ def _check_args(fn, trials, workers, reuse, schema, callbacks: dict) -> None:
         raise ValueError(f"workers must be >= 1, got {workers}")
     _check_reuse(reuse)
     if not isinstance(schema, Schema):
-        raise TypeError(f"schema must be a dopt.sweep.Schema, got {type(schema).__name__}")
+        raise TypeError(f"schema must be a dopt.lab.sweep.Schema, got {type(schema).__name__}")
     for name, f in {"fn": fn, **callbacks}.items():
         if f is not None and not callable(f):
             raise TypeError(f"{name} must be callable or None, got {f!r}")
@@ -526,14 +526,14 @@ def _execute(fn, todo, out_dir, code, checkpoints, records, progress, tick, sche
 
 # ----------------------------------------------------------------------- command line
 def main(argv=None) -> int:
-    """``python -m dopt.sweep pack [--repair] OUT [OUT ...]``: pack each finished sweep's loose
+    """``python -m dopt.lab.sweep pack [--repair] OUT [OUT ...]``: pack each finished sweep's loose
     trial files (``pack_trials``), one line per folder; exit 1 when a file was left loose."""
-    from dopt.cli import EPILOG, existing_dir, guarded
+    from dopt.lab.cli import EPILOG, existing_dir, guarded
 
-    @guarded("python -m dopt.sweep")
+    @guarded("python -m dopt.lab.sweep")
     def run(argv) -> int:
         p = ArgumentParser(
-            prog="python -m dopt.sweep", epilog=EPILOG,
+            prog="python -m dopt.lab.sweep", epilog=EPILOG,
             description="Tools of the resumable sweeps' folders.")
         sub = p.add_subparsers(dest="command", required=True)
         pk = sub.add_parser(

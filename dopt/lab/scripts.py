@@ -5,9 +5,9 @@
 experiments/ is not a package: each console script runs its file with ``runpy`` as
 ``__main__`` with the experiments folder first on ``sys.path`` (as ``python
 experiments/X.py`` does), so the two are the same run; its usage, help and error lines call
-it by the console script's name (``dopt.cli.shown_as``). The folder is the repository's,
+it by the console script's name (``dopt.lab.cli.shown_as``). The folder is the repository's,
 beside this package (an editable install), or ``$DOPT_EXPERIMENTS``. Standard library and
-``dopt.cli`` only.
+``dopt.lab.cli`` only.
 """
 
 from __future__ import annotations
@@ -17,7 +17,7 @@ import runpy
 import sys
 from pathlib import Path
 
-from dopt.cli import shown_as
+from dopt.lab.cli import shown_as
 
 #: console script -> the experiment script it runs
 SCRIPTS = {"dopt-fold": "cloth_fold.py", "dopt-rope": "rope.py", "dopt-mpc": "mpc.py",
@@ -28,7 +28,7 @@ ENV = "DOPT_EXPERIMENTS"
 
 def experiments_dir() -> Path:
     """``$DOPT_EXPERIMENTS``, else the repository's experiments/ beside the dopt package."""
-    return Path(os.environ.get(ENV) or Path(__file__).resolve().parents[1] / "experiments")
+    return Path(os.environ.get(ENV) or Path(__file__).resolve().parents[2] / "experiments")
 
 
 def run(name: str, argv: list[str] | None = None) -> int:

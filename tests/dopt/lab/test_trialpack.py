@@ -1,4 +1,4 @@
-"""Packed trials (dopt.trialpack, dopt.sweep.pack_trials): packing keeps every record as it
+"""Packed trials (dopt.lab.trialpack, dopt.lab.sweep.pack_trials): packing keeps every record as it
 was and deletes each loose file only once its line reads back the same; the same records give
 the same bytes; a loose file overrides its packed record, and re-packing appends the new one
 after the old line; a resume reuses packed trials without running them; a pack that cannot be
@@ -13,8 +13,8 @@ import shutil
 import pytest
 
 import dopt
-from dopt.provenance import COMMIT_ENV
-from dopt.sweep import (
+from dopt.lab.provenance import COMMIT_ENV
+from dopt.lab.sweep import (
     PackError,
     Schema,
     Trial,
@@ -24,8 +24,8 @@ from dopt.sweep import (
     pack_trials,
     run_sweep,
 )
-from dopt.sweep import main as sweep_main
-from dopt.trialpack import (
+from dopt.lab.sweep import main as sweep_main
+from dopt.lab.trialpack import (
     GZIP_PACK_NAME,
     PACK_NAME,
     pack_bytes,
@@ -33,7 +33,7 @@ from dopt.trialpack import (
     read_trial_text,
     stored_trials,
 )
-from tests.dopt.sweep_trials import square
+from tests.dopt.lab.sweep_trials import square
 
 COMMIT = "c0ffee"
 CODE = {"version": dopt.__version__, "commit": COMMIT}
@@ -41,7 +41,7 @@ CODE = {"version": dopt.__version__, "commit": COMMIT}
 
 @pytest.fixture(autouse=True)
 def code(monkeypatch):
-    """This process's code, fixed at a clean commit (tests/dopt/test_sweep.py's fixture)."""
+    """This process's code, fixed at a clean commit (tests/dopt/lab/test_sweep.py's fixture)."""
     monkeypatch.setenv(COMMIT_ENV, COMMIT)
     return CODE
 
@@ -142,7 +142,7 @@ def test_a_packed_record_of_other_code_or_schema_is_recomputed_and_overridden(
     packed = pack_path(tmp_path / "trials").read_bytes()
     schema = Schema(result=("z",))
     assert not is_finished(tmp_path, "x1", schema=schema)
-    with caplog.at_level(logging.WARNING, logger="dopt.sweep"):
+    with caplog.at_level(logging.WARNING, logger="dopt.lab.sweep"):
         res = run_sweep(square, trials([1]), tmp_path, schema=Schema(result=("y",)),
                         fresh=True)
     assert res.ran == ["x1"] and res.recomputed == {"x1": "fresh sweep"}

@@ -9,7 +9,7 @@ procedure rejects everything Bonferroni's (p <= alpha / m) does, and possibly mo
 
 The adjusted p-value of H_(i) is max over j <= i of min(1, (m - j + 1) p_(j)): H_(i) is
 rejected at level alpha exactly when its adjusted p-value is <= alpha, so one adjustment
-serves every alpha. Pure Python (no numpy), like ``dopt.stats``.
+serves every alpha. Pure Python (no numpy), like ``dopt.lab.stats``.
 
 Slope tests (does an effect grow with a size?) get a three-way verdict, "grows" / "shrinks" /
 ``NO_TREND``, from the slope's sign and its Holm-adjusted p (``slope_verdict``); a claim that

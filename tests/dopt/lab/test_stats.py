@@ -1,4 +1,4 @@
-"""Intervals of dopt.stats against their textbook formulas and their coverage."""
+"""Intervals of dopt.lab.stats against their textbook formulas and their coverage."""
 
 import math
 import warnings
@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from dopt.stats import difference_ci, mean_ci
+from dopt.lab.stats import difference_ci, mean_ci
 
 
 def test_mean_ci_is_the_student_t_interval():

@@ -1,6 +1,6 @@
 """A sweep's finished trials packed in one append-only file, and the one reader of them all.
 
-A trial folder (``OUT/trials``, ``dopt.sweep``) holds its finished trials three ways, each
+A trial folder (``OUT/trials``, ``dopt.lab.sweep``) holds its finished trials three ways, each
 overriding the one before it for the same key:
 
 1. ``GZIP_PACK_NAME`` (``pack.jsonl.gz``), the earlier packs: one line per trial, sorted by key,
@@ -17,9 +17,9 @@ overriding the one before it for the same key:
 
 ``stored_trials`` lists a folder's trials all three ways, as ``StoredTrial`` (read like a file:
 ``name``, ``stem``, ``parent``, ``read_text()``), and ``read_trial_text`` reads one by its loose
-file's path, packed or not; every reader of trial records (``dopt.sweep``,
+file's path, packed or not; every reader of trial records (``dopt.lab.sweep``,
 ``experiments/report*.py``, ``experiments/resummarize.py``, ``dopt-view``) goes through them.
-``dopt.sweep.pack_trials`` (``python -m dopt.sweep pack OUT``) appends the loose files to the
+``dopt.lab.sweep.pack_trials`` (``python -m dopt.lab.sweep pack OUT``) appends the loose files to the
 pack.
 
 A pack that cannot be read (not gzip, not UTF-8, a line that is not a JSON object with a valid
@@ -40,7 +40,7 @@ import zlib
 from dataclasses import dataclass
 from pathlib import Path
 
-from dopt.jsonio import replace_atomic
+from dopt.lab.jsonio import replace_atomic
 
 #: the pack written now, inside a trial folder: uncompressed, append-only
 PACK_NAME = "pack.jsonl"
@@ -67,7 +67,7 @@ class CutPackError(PackError):
         super().__init__(
             f"trial pack {path} line {line} is cut short (no newline ends it: a write or a "
             f"copy stopped midway); the {line - 1} lines before it are whole. Run "
-            f"`python -m dopt.sweep pack --repair OUT` to keep them and move the cut line to "
+            f"`python -m dopt.lab.sweep pack --repair OUT` to keep them and move the cut line to "
             f"trials/corrupt/, or restore the pack from git (git checkout -- {path})")
 
 

@@ -15,7 +15,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from dopt import provenance
+from dopt.lab import provenance
 
 
 @pytest.fixture
@@ -109,7 +109,7 @@ def test_every_committed_command_is_shown_without_a_machines_folder():
     path is still there, in order."""
     from tests.test_machine_paths import MACHINE_PATH
 
-    results = Path(__file__).resolve().parents[2] / "docs" / "results"
+    results = Path(__file__).resolve().parents[3] / "docs" / "results"
     commands = []
     for f in sorted(results.glob("*.json")):
         data = json.loads(f.read_text())
@@ -153,7 +153,7 @@ def test_a_copied_tree_records_the_commit_its_copier_names(root, monkeypatch):
     assert provenance.code_version()["commit"] == "no git"
     assert provenance.code_state().record_problem().startswith(
         "cannot record outside a git checkout")
-    checkout = provenance.Path(provenance.__file__).parents[1]
+    checkout = provenance.Path(provenance.__file__).parents[2]
     monkeypatch.setenv("DOPT_GIT_COMMIT", "0123abc")
     assert provenance.git_commit() == "0123abc"
     assert provenance.code_state().record_problem() is None      # the copier vouches
@@ -171,7 +171,7 @@ def test_a_tree_inside_another_checkout_is_not_that_checkout(tmp_path, monkeypat
     """An installed package (a virtualenv's site-packages inside a checkout) names no commit:
     git would find the enclosing checkout's."""
     monkeypatch.delenv("DOPT_GIT_COMMIT", raising=False)
-    checkout = provenance.Path(provenance.__file__).parents[1]
+    checkout = provenance.Path(provenance.__file__).parents[2]
     if not (checkout / ".git").exists():
         pytest.skip("the tests run outside a git checkout")
     assert provenance.code_state(checkout / "dopt").head is None

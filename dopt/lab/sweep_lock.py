@@ -1,7 +1,7 @@
 """``OUT/.lock``, the lock of a sweep's folder (``OutLock``): one process at a time runs
 sweeps on OUT, and a rerun does not take the folder over while the workers of a dead sweep
-still write there. Standard library only (with ``dopt.jsonio``); importable from
-``dopt.sweep_store`` and ``dopt.sweep``."""
+still write there. Standard library only (with ``dopt.lab.jsonio``); importable from
+``dopt.lab.sweep_store`` and ``dopt.lab.sweep``."""
 
 from __future__ import annotations
 
@@ -12,16 +12,16 @@ import sys
 import time
 from pathlib import Path
 
-from dopt import jsonio
+from dopt.lab import jsonio
 
-log = logging.getLogger("dopt.sweep")
+log = logging.getLogger("dopt.lab.sweep")
 
 #: the lock file of a sweep's folder, and how long (s) an unreadable one counts as being
 #: written (older: garbage, taken over)
 LOCK_NAME = ".lock"
 FRESH_LOCK_S = 5.0
 #: how long (s) taking over the lock of a dead sweep waits for its workers to end before it
-#: refuses (they end within a second of their parent, ``dopt.sweep_pool``)
+#: refuses (they end within a second of their parent, ``dopt.lab.sweep_pool``)
 WORKERS_WAIT_S = 5.0
 
 

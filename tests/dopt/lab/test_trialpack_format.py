@@ -1,4 +1,4 @@
-"""The trial pack's format (dopt.trialpack): ``pack.jsonl`` is append-only (a second pack
+"""The trial pack's format (dopt.lab.trialpack): ``pack.jsonl`` is append-only (a second pack
 leaves the first file's bytes as its prefix, whatever the sequence of packs), a later line
 replaces an earlier one of its key; the earlier ``pack.jsonl.gz`` files, the committed ones
 included, are still read and never written; for one key a loose file overrides ``pack.jsonl``,
@@ -14,9 +14,9 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from dopt.sweep import PackError, load_finished, pack_trials
-from dopt.sweep import main as sweep_main
-from dopt.trialpack import (
+from dopt.lab.sweep import PackError, load_finished, pack_trials
+from dopt.lab.sweep import main as sweep_main
+from dopt.lab.trialpack import (
     GZIP_PACK_NAME,
     PACK_NAME,
     CutPackError,
@@ -26,7 +26,7 @@ from dopt.trialpack import (
     stored_trials,
 )
 
-ROOT = Path(__file__).resolve().parents[2]
+ROOT = Path(__file__).resolve().parents[3]
 CODE = {"version": "0", "commit": "c0ffee"}
 
 

@@ -9,9 +9,9 @@ import math
 
 import pytest
 
-from dopt.provenance import COMMIT_ENV
-from dopt.sweep import Checkpoint, Schema, Trial, is_finished, run_sweep
-from tests.dopt.sweep_trials import count, square
+from dopt.lab.provenance import COMMIT_ENV
+from dopt.lab.sweep import Checkpoint, Schema, Trial, is_finished, run_sweep
+from tests.dopt.lab.sweep_trials import count, square
 
 COMMIT = "c0ffee"
 
@@ -40,7 +40,7 @@ def test_a_record_of_another_trial_under_this_name_is_moved_aside_and_recomputed
     """Its params name another trial (x 5 under the name of x 1): before, it was reused as
     trial x1's result (the summary then read a record of another goal: KeyError)."""
     path, rec = _store(tmp_path, "x1", {"x": 5}, {"y": 25})
-    with caplog.at_level(logging.WARNING, logger="dopt.sweep"):
+    with caplog.at_level(logging.WARNING, logger="dopt.lab.sweep"):
         res = run_sweep(square, [Trial("x1", {"x": 1})], tmp_path,
                         schema=Schema(identity=dict))
     assert res.ran == ["x1"] and res.records["x1"]["result"]["y"] == 1
@@ -107,7 +107,7 @@ def test_a_result_whose_number_is_not_finite_is_moved_aside_and_recomputed(
     the summary and failed every rerun there."""
     path = tmp_path / "trials" / "x3.json"
     path.parent.mkdir(parents=True)
-    from dopt import jsonio
+    from dopt.lab import jsonio
     jsonio.write_atomic(path, {"key": "x3", "params": {"x": 3}, "result": {"y": value},
                                "code": {"version": "1", "commit": COMMIT}})
     schema = Schema(result=("y",), finite=("y",))
@@ -141,7 +141,7 @@ def test_a_checkpoint_of_another_trials_params_is_moved_aside_and_the_trial_star
     resumed as if it were that trial's."""
     schema = Schema(identity=dict)
     Checkpoint(tmp_path, "c", params={"n": 5, "stop_at": None}).save({"i": 4, "runs": 1})
-    with caplog.at_level(logging.WARNING, logger="dopt.sweep"):
+    with caplog.at_level(logging.WARNING, logger="dopt.lab.sweep"):
         res = run_sweep(count, [Trial("c", {"n": 3})], tmp_path, schema=schema)
     assert res.resumed == [] and res.records["c"]["result"]["runs"] == 1
     assert res.records["c"]["result"]["i"] == 3
