@@ -26,7 +26,8 @@ is ``null`` with its reason beside it under "<field>_undefined"; no bare NaN).
 Blow-up captures: ``blowup_captures`` names the captures of a run's trials (OUT/blowups,
 ``dopt.blowup``) on the console and for its summary's "blowups".
 
-Standard library and ``dopt.lab.cli`` / ``dopt.lab.provenance`` / ``dopt.lab.sweep`` only (all pure Python),
+Standard library and ``dopt.lab.cli`` / ``dopt.lab.provenance`` / ``dopt.lab.sweep`` only (all
+pure Python),
 so the MuJoCo-free key-particle experiment can use them without importing torch or MuJoCo
 (``blowup_captures`` imports MuJoCo when called).
 """

@@ -58,8 +58,8 @@ from pick_sweep import SCHEMA, add_move_argument, cem_trial, describe_result, it
 from sweep_console import print_outputs, run_with_console, sweep_session
 
 from dopt import atomic
-from dopt.rollout import share_cores
 from dopt.lab.trialpack import is_stored_trial, read_trial_text
+from dopt.rollout import share_cores
 from planners.pick_place.scaling import (
     COMPARED,
     SCALING_MODES,

@@ -73,8 +73,8 @@ from cli_args import (
 from mpc_outputs import write_plots, write_table
 from sweep_console import out_lock, print_outputs, run_with_console
 
-from dopt.mpc import EXECUTORS, MAX_CONTROL_NOISE
 from dopt.lab.sweep import Schema, SweepResult, Trial, is_finished
+from dopt.mpc import EXECUTORS, MAX_CONTROL_NOISE
 from dopt.tasks import PUSH_TASKS
 from dopt.tasks.push.costs import COST_PRESETS
 from planners.svr import METHODS, paper_theta

@@ -44,9 +44,9 @@ from pick_sweep import run_trials as _run
 from sweep_console import duration, print_outputs, sweep_session
 
 from dopt import atomic
-from dopt.rollout import share_cores
 from dopt.lab.stats import mean_ci
 from dopt.lab.sweep import Trial, is_finished
+from dopt.rollout import share_cores
 from dopt.tasks.pick.cloth_scene import PHYSICS_PRESETS
 from planners.pick_place import (
     FOLD_STARTS,

@@ -49,7 +49,6 @@ from report_base import ROOT, Result, load_results
 from report_trials import TrialInfo, summary_trials, uncommitted
 
 from dopt import atomic
-
 from dopt.lab import jsonio
 
 #: the fields each kind of summary computes from its trials

@@ -37,7 +37,8 @@ ROOT = Path(__file__).resolve().parents[1]
 #: package -> top-level names its modules must never import
 FORBIDDEN = {
     "dopt": {"planners", "deformables", "experiments"},
-    # deformables may import dopt.validation, dopt.lab.provenance, dopt.lab.cli, dopt.atomic (ALLOWED)
+    # deformables may import dopt.validation, dopt.lab.provenance, dopt.lab.cli, dopt.atomic
+    # (ALLOWED)
     "deformables": {"dopt", "planners", "experiments", "mujoco"},
     "planners": {"experiments"},
 }

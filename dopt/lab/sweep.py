@@ -83,7 +83,8 @@ running, as ``WorkerDied`` naming its pid and signal or exit code, and the other
 **Interrupts.** SIGINT (Ctrl-C) or SIGTERM cancels the queued trials, stops the running ones
 (each keeps the checkpoint of its last completed step, if it saved one), writes those that
 finished and raises ``SweepInterrupted`` (a KeyboardInterrupt) within a few seconds, inline,
-on the pool and on Ray alike (``dopt.lab.sweep_exec``, ``dopt.lab.sweep_pool``); its ``exit_code`` is
+on the pool and on Ray alike (``dopt.lab.sweep_exec``, ``dopt.lab.sweep_pool``); its
+``exit_code`` is
 130 or 143 and its message says how to resume. The rerun gives exactly the result of an
 uninterrupted sweep.
 

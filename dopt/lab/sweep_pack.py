@@ -11,7 +11,8 @@ replaces stays on its line (``PackResult.replaced`` names it). ``repair=True`` f
 ``pack.jsonl`` whose last line was cut (``dopt.lab.trialpack.repair_pack``; the cut line goes to
 ``OUT/trials/corrupt/``). ``dopt.lab.sweep`` and ``dopt.lab.sweep_store`` re-export both names.
 
-Standard library only (with ``dopt.lab.jsonio``, ``dopt.lab.sweep_store`` and ``dopt.lab.trialpack``).
+Standard library only (with ``dopt.lab.jsonio``, ``dopt.lab.sweep_store`` and
+``dopt.lab.trialpack``).
 """
 
 from __future__ import annotations

@@ -35,7 +35,6 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from dopt import atomic
-
 from dopt.lab import jsonio
 from dopt.lab.provenance import COMMIT_ENV, CodeState, code_state, repo_root, reuse_problem
 from dopt.lab.sweep_lock import FRESH_LOCK_S, LOCK_NAME, OutLock, SweepLockedError  # noqa: F401

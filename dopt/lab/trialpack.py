@@ -19,7 +19,8 @@ overriding the one before it for the same key:
 ``name``, ``stem``, ``parent``, ``read_text()``), and ``read_trial_text`` reads one by its loose
 file's path, packed or not; every reader of trial records (``dopt.lab.sweep``,
 ``experiments/report*.py``, ``experiments/resummarize.py``, ``dopt-view``) goes through them.
-``dopt.lab.sweep.pack_trials`` (``python -m dopt.lab.sweep pack OUT``) appends the loose files to the
+``dopt.lab.sweep.pack_trials`` (``python -m dopt.lab.sweep pack OUT``) appends the loose files
+to the
 pack.
 
 A pack that cannot be read (not gzip, not UTF-8, a line that is not a JSON object with a valid

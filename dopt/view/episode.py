@@ -23,10 +23,10 @@ from pathlib import Path
 import mujoco
 import numpy as np
 
-from dopt.lab import jsonio
 from dopt.blowup import FORMAT
-from dopt.state import INTEGRATION, StateLayout, check_model, check_spec, check_states
+from dopt.lab import jsonio
 from dopt.lab.trialpack import PACK_NAMES, is_stored_trial, read_pack, read_trial_text
+from dopt.state import INTEGRATION, StateLayout, check_model, check_spec, check_states
 from dopt.validation import check_int, float_array
 
 log = logging.getLogger(__name__)

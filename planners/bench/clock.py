@@ -15,8 +15,8 @@ import time
 import numpy as np
 import torch
 
-from dopt.mpc import Plan
 from dopt.lab.provenance import provenance
+from dopt.mpc import Plan
 from dopt.tasks import get_task
 from dopt.tasks.push import warm_start
 from dopt.tasks.push.costs import COST_PRESETS

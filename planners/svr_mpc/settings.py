@@ -13,8 +13,8 @@ from typing import Literal
 import mujoco
 import numpy as np
 
-from dopt.mpc import CLOCKS, EXECUTORS, MAX_CONTROL_NOISE
 from dopt.lab.provenance import root_relative, rooted
+from dopt.mpc import CLOCKS, EXECUTORS, MAX_CONTROL_NOISE
 from dopt.rollout import FDConfig
 from dopt.tasks import PUSH_PROBLEMS, build_push_task, get_task
 from dopt.tasks.push.costs import COST_PRESETS

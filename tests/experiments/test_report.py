@@ -43,7 +43,8 @@ def test_committed_results_md_and_readme_are_generated():
 
 def test_the_script_needs_only_the_standard_library():
     """Besides the standard library it loads dopt.lab.cli (the command-line types),
-    dopt.lab.multiple (Holm's correction), dopt.lab.dicts (nested dicts), dopt.lab.trialpack (the reader
+    dopt.lab.multiple (Holm's correction), dopt.lab.dicts (nested dicts), dopt.lab.trialpack (the
+    reader
     of committed trials, loose or packed) with dopt.lab.jsonio and dopt.atomic (its atomic write),
     dopt.lab.provenance (a recorded command shown without its machine's folders), the room
     dopt.lab that holds them, and
@@ -59,7 +60,8 @@ def test_the_script_needs_only_the_standard_library():
             "             and m not in ('planners', 'planners.trial_progress')\n"
             "             or (m.startswith('dopt.') and m not in ('dopt.lab', 'dopt.lab.cli',\n"
             "                                                 'dopt.lab.multiple',\n"
-            "                                                 'dopt.lab.dicts', 'dopt.lab.trialpack',\n"
+            "                                                 'dopt.lab.dicts',\n"
+            "                                                 'dopt.lab.trialpack',\n"
             "                                                 'dopt.lab.jsonio', 'dopt.atomic',\n"
             "                                                 'dopt.lab.provenance')))\n"
             "assert not bad, bad\n")

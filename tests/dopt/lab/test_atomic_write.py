@@ -15,7 +15,6 @@ import stat
 import pytest
 
 from dopt import atomic
-
 from dopt.lab import jsonio, trialpack
 from dopt.lab.provenance import COMMIT_ENV
 from dopt.lab.sweep import CHECKPOINT_DIR, Trial, run_sweep

@@ -8,8 +8,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from dopt.tasks import make_cloth
 from dopt.lab.trialpack import stored_trials
+from dopt.tasks import make_cloth
 from planners.pick_place import PickPlaceSettings, trial_key
 from planners.pick_place.scaling import (
     NO_TREND,

@@ -1,5 +1,5 @@
-"""planners/svr_mpc/authors_data.py and dopt.lab.stats.authors_*: the state-vector-reduction authors'
-Table 1 statistic, on hand-computed arrays and on their own per-episode files (which must
+"""planners/svr_mpc/authors_data.py and dopt.lab.stats.authors_*: the state-vector-reduction
+authors' Table 1 statistic, on hand-computed arrays and on their own per-episode files (which must
 reproduce their printed Table 1)."""
 
 from pathlib import Path
