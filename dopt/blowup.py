@@ -31,6 +31,7 @@ from __future__ import annotations
 import collections
 import json
 import logging
+import os
 import re
 import time
 from pathlib import Path
@@ -168,6 +169,15 @@ def list_captures(out) -> list[dict]:
         else:
             log.warning("%s: not a %s capture", meta_file, FORMAT)
     return found
+
+def captures_of(out, labels) -> list[dict]:
+    """The captures under OUT/blowups of the trials ``labels`` (their capture labels): a
+    summary's "blowups", each {"trial", "path" (relative to OUT), "step", "reason", "body"}."""
+    labels = set(labels)
+    return [{"trial": c["label"], "path": os.path.relpath(c["path"], out), "step": c["step"],
+             "reason": c["reason"], "body": c["body"]}
+            for c in list_captures(out) if c.get("label") in labels]
+
 
 
 def retire_captures(out, labels) -> list[Path]:

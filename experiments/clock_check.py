@@ -24,9 +24,10 @@ import sys
 
 import mpc as table1
 import numpy as np
-from cli_args import EPILOG, ArgumentParser, guarded, positive_int, write_summary
-from sweep_console import print_outputs
 
+from dopt.lab.cli import EPILOG, ArgumentParser, guarded, positive_int
+from dopt.lab.console import print_outputs
+from dopt.lab.record import write_summary
 from dopt.lab.stats import mean_ci
 from dopt.lab.sweep import Trial
 from planners.svr_mpc import row_label

@@ -26,10 +26,12 @@ import sys
 import time
 from dataclasses import replace
 
-from cli_args import (
+from fig7_scaling import plot
+from pick_sweep import SCHEMA, cem_trial, describe_result, iterations_held
+
+from dopt.lab.cli import (
     EPILOG,
     ArgumentParser,
-    check_outputs,
     choices_type,
     guarded,
     number_list,
@@ -37,14 +39,9 @@ from cli_args import (
     output_file,
     positive_float,
     positive_int,
-    record_figure,
-    settings_dict,
-    write_summary,
 )
-from fig7_scaling import plot
-from pick_sweep import SCHEMA, cem_trial, describe_result, iterations_held
-from sweep_console import print_outputs, run_with_console, sweep_session
-
+from dopt.lab.console import print_outputs, run_with_console, sweep_session
+from dopt.lab.record import check_outputs, record_figure, settings_dict, write_summary
 from dopt.rollout import share_cores
 from planners.pick_place.drag_settings import DragSettings
 from planners.pick_place.encoding import (

@@ -38,26 +38,28 @@ import sys
 import time
 from pathlib import Path
 
-from cli_args import (
+from pick_sweep import SCHEMA, add_move_argument, cem_trial, describe_result, iterations_held
+
+from dopt import atomic
+from dopt.lab.cli import (
     EPILOG,
     ArgumentParser,
-    add_reuse_argument,
-    check_outputs,
     choices_type,
     guarded,
     number_list,
     output_dir,
     output_file,
     positive_int,
+)
+from dopt.lab.console import print_outputs, run_with_console, sweep_session
+from dopt.lab.record import (
+    add_reuse_argument,
+    check_outputs,
     record_figure,
     reuse_mode,
     settings_dict,
     write_summary,
 )
-from pick_sweep import SCHEMA, add_move_argument, cem_trial, describe_result, iterations_held
-from sweep_console import print_outputs, run_with_console, sweep_session
-
-from dopt import atomic
 from dopt.lab.trialpack import is_stored_trial, read_trial_text
 from dopt.rollout import share_cores
 from planners.pick_place.scaling import (

@@ -29,25 +29,6 @@ from pathlib import Path
 
 import numpy as np
 
-# experiments/ is on the path: it is the script's folder (pytest: pythonpath in pyproject)
-from cli_args import (
-    EPILOG,
-    ArgumentParser,
-    check_outputs,
-    choices_type,
-    guarded,
-    int_at_least,
-    nonneg_int,
-    number_list,
-    one_line,
-    output_dir,
-    output_file,
-    positive_int,
-    settings_dict,
-    write_summary,
-)
-from sweep_console import print_outputs
-
 from deformables import (
     ClothConfig,
     RopeConfig,
@@ -60,7 +41,24 @@ from deformables.cloth import PANEL_MODES
 from deformables.goals import CLOTH_REFERENCE_KEYS, TRIANGULATIONS, check_cloth_size
 from dopt import atomic
 from dopt.lab import jsonio
+
+# experiments/ is on the path: it is the script's folder (pytest: pythonpath in pyproject)
+from dopt.lab.cli import (
+    EPILOG,
+    ArgumentParser,
+    choices_type,
+    guarded,
+    int_at_least,
+    nonneg_int,
+    number_list,
+    one_line,
+    output_dir,
+    output_file,
+    positive_int,
+)
+from dopt.lab.console import print_outputs
 from dopt.lab.provenance import code_version
+from dopt.lab.record import check_outputs, settings_dict, write_summary
 from dopt.tasks.pick.cloth_scene import PHYSICS_PRESETS
 
 ROPE_TASKS = ["rope_straighten", "rope_fold", "rope_fold_unequal"]

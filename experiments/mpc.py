@@ -51,12 +51,12 @@ from pathlib import Path
 os.environ.setdefault("MUJOCO_GL", "egl")   # offscreen renders; read when mujoco is imported
 
 import numpy as np
-from cli_args import (
+from mpc_outputs import write_plots, write_table
+
+from dopt.blowup import captures_of
+from dopt.lab.cli import (
     EPILOG,
     ArgumentParser,
-    add_reuse_argument,
-    blowup_captures,
-    check_outputs,
     choices_type,
     guarded,
     no_repeats,
@@ -67,12 +67,9 @@ from cli_args import (
     output_file,
     positive_float,
     positive_int,
-    reuse_mode,
-    write_summary,
 )
-from mpc_outputs import write_plots, write_table
-from sweep_console import out_lock, print_outputs, run_with_console
-
+from dopt.lab.console import out_lock, print_captures, print_outputs, run_with_console
+from dopt.lab.record import add_reuse_argument, check_outputs, reuse_mode, write_summary
 from dopt.lab.sweep import Schema, SweepResult, Trial, is_finished
 from dopt.mpc import EXECUTORS, MAX_CONTROL_NOISE
 from dopt.tasks import PUSH_TASKS
@@ -451,7 +448,7 @@ def run(args, trials, fn=None, out: Path | None = None, workers: int | None = No
     episode, ``run_trial``, which writes its blow-up captures under ``out``; another takes
     ``(params, report, keep_controls=False)``) under ``out`` (default --out), on ``workers``
     processes (default --workers, or Ray with --ray), with the sweep's console
-    (``sweep_console``: an estimate of the time up front, a bar of the agent steps of every
+    (``dopt.lab.console``: an estimate of the time up front, a bar of the agent steps of every
     trial, a trial's budget its timeout, each trial's cost as it finishes); a stored trial is
     reused only when it fits ``schema``; a trial keeps its controls as --keep-controls says
     (``kept_controls``, ``KeptControls``). Returns their records and the sweep's result
@@ -550,7 +547,8 @@ def _main(args, argv) -> int:
                         for t in trials for row in [row_label(t.params)]},
                **fields, "failed": failed, "trial_commits": res.commits,
                "trial_keys": sorted(t.key for t in trials),
-               "blowups": blowup_captures(args.out, [t.key for t in trials])}
+               "blowups": print_captures(args.out,
+                                         captures_of(args.out, [t.key for t in trials]))}
     if getattr(args, "authors_data", None) is not None:
         summary["authors_rows"] = authors_travel(args.authors_data / TASK_DIRS[args.task],
                                                  args.layouts)

@@ -34,23 +34,20 @@ import numpy as np
 
 os.environ.setdefault("MUJOCO_GL", "egl")   # offscreen renders; read when mujoco is imported
 
-from cli_args import (
+from dopt import atomic
+from dopt.blowup import captures_of, retire_captures
+from dopt.lab.cli import (
     EPILOG,
     ArgumentParser,
-    blowup_captures,
-    check_outputs,
     choices_type,
     guarded,
     nonneg_int,
     output_dir,
     output_file,
     positive_int,
-    write_summary,
 )
-from sweep_console import print_outputs, run_with_console
-
-from dopt import atomic
-from dopt.blowup import retire_captures
+from dopt.lab.console import print_captures, print_outputs, run_with_console
+from dopt.lab.record import check_outputs, write_summary
 from dopt.lab.stats import mean_ci
 from dopt.lab.sweep import Schema, Trial, is_finished
 from planners.pick_place import PickPlaceSettings, make_planner, make_problem, run_problem
@@ -283,7 +280,7 @@ def main(argv=None) -> int:
                    "physics": {g: settings_of(g, args).resolved_physics()
                                for g in args.goals},
                    "failed": res.failed, "trial_commits": res.commits,
-                   "blowups": blowup_captures(args.out, keys)},
+                   "blowups": print_captures(args.out, captures_of(args.out, keys))},
                   args.out, args.record, "experiments/panda_execute.py", argv)
     for goal, e in goals.items():
         print(f"{goal}: picker {e['picker_final_cost_mean'] * 1e3:.1f} mm, panda "

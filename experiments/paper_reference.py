@@ -37,10 +37,9 @@ import re
 import sys
 from pathlib import Path
 
-from cli_args import EPILOG, ArgumentParser, existing_dir, guarded, output_file
-
 from dopt import atomic
 from dopt.lab import jsonio
+from dopt.lab.cli import EPILOG, ArgumentParser, existing_dir, guarded, output_file
 from planners.svr_mpc import TABLE1_ROWS, row_name
 from planners.svr_mpc.authors_data import RAND_MIN_RHO, RAND_THETA, TASK_DIRS, authors_table1
 

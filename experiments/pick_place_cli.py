@@ -24,11 +24,15 @@ from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
-from cli_args import (
+from pick_sweep import BUDGET_FLAGS, SCHEMA, add_move_argument
+from pick_sweep import iterations_held as _iterations_held
+from pick_sweep import run_trials as _run
+
+from dopt import atomic
+from dopt.blowup import captures_of
+from dopt.lab.cli import (
     EPILOG,
     ArgumentParser,
-    blowup_captures,
-    check_outputs,
     choices_type,
     guarded,
     nonneg_int,
@@ -36,14 +40,9 @@ from cli_args import (
     output_file,
     positive_float,
     positive_int,
-    write_summary,
 )
-from pick_sweep import BUDGET_FLAGS, SCHEMA, add_move_argument
-from pick_sweep import iterations_held as _iterations_held
-from pick_sweep import run_trials as _run
-from sweep_console import duration, print_outputs, sweep_session
-
-from dopt import atomic
+from dopt.lab.console import duration, print_captures, print_outputs, sweep_session
+from dopt.lab.record import check_outputs, write_summary
 from dopt.lab.stats import mean_ci
 from dopt.lab.sweep import Trial, is_finished
 from dopt.rollout import share_cores
@@ -222,8 +221,8 @@ def _experiment(task: str, script: str, args, settings: PickPlaceSettings, argv)
                "physics": settings.resolved_physics(),
                "methods": summarize(results, args.methods, problem.metric_names),
                "failed": failed, "trial_commits": res.commits,
-               "blowups": blowup_captures(out, [capture_label(t.key, s.name) for t in trials
-                                                for s in problem.stages]),
+               "blowups": print_captures(out, captures_of(
+                   out, [capture_label(t.key, s.name) for t in trials for s in problem.stages])),
                # this run's wall time (a resumed run reuses finished trials), and the trials'
                # own wall times summed, wherever and whenever they ran
                "wall_s": time.perf_counter() - start,

@@ -1,5 +1,5 @@
 """The sweep of the key-particle experiments (cloth_fold.py, rope.py): their trials run through
-``dopt.lab.sweep`` with the sweep's console (``sweep_console``), their schema (what a stored
+``dopt.lab.sweep`` with the sweep's console (``dopt.lab.console``), their schema (what a stored
 result and checkpoint must hold to be reused or resumed), the CEM iterations a folder already
 holds, and the flags ``planners.pick_place.budget`` may name. ``pick_place_cli`` is the command line
 around it. The trials write their blow-up captures under the sweep's folder
@@ -10,8 +10,7 @@ from __future__ import annotations
 import functools
 from pathlib import Path
 
-from sweep_console import run_with_console
-
+from dopt.lab.console import run_with_console
 from dopt.lab.sweep import Checkpoint, Schema, SweepResult, Trial, is_finished
 from planners.pick_place import run_trial
 from planners.pick_place.run import checkpoint_problem, trial_identity

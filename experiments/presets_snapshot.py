@@ -37,11 +37,11 @@ import tarfile
 import tempfile
 from pathlib import Path
 
-from cli_args import EPILOG, ArgumentParser, existing_dir, guarded
 from report_base import ROOT, load_results
 from report_stale import SNAPSHOT, base_commit, needs_backfill
 
 from dopt import atomic
+from dopt.lab.cli import EPILOG, ArgumentParser, existing_dir, guarded
 
 #: resolves the pick-and-place presets of the code it is run in (this checkout, or a commit's
 #: code extracted elsewhere): prints {"physics", "protocols", "resolved"} as JSON

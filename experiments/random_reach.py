@@ -19,17 +19,8 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from cli_args import (
-    EPILOG,
-    ArgumentParser,
-    existing_dir,
-    guarded,
-    output_dir,
-    positive_float,
-    record_problem,
-    write_summary,
-)
-
+from dopt.lab.cli import EPILOG, ArgumentParser, existing_dir, guarded, output_dir, positive_float
+from dopt.lab.record import record_problem, write_summary
 from dopt.lab.sweep import load_finished
 from planners.pick_place.random_reach import MOVING, random_reach, reach_summary
 

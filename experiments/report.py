@@ -57,8 +57,6 @@ import sys
 from dataclasses import dataclass, field
 from pathlib import Path
 
-# experiments/ is on the path: it is the script's folder (pytest: pythonpath in pyproject)
-from cli_args import EPILOG, ArgumentParser, existing_dir, file_problem, guarded
 from report_base import (
     BEGIN,
     END,
@@ -142,6 +140,9 @@ from report_sweeps import mpc_sweeps_in_progress_section, sweeps_in_progress_sec
 from report_trials import first_params, summary_trials, trials_line, uncommitted_note
 
 from dopt import atomic
+
+# experiments/ is on the path: it is the script's folder (pytest: pythonpath in pyproject)
+from dopt.lab.cli import EPILOG, ArgumentParser, existing_dir, file_problem, guarded
 
 
 @dataclass(frozen=True)

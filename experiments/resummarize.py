@@ -44,12 +44,12 @@ import sys
 from collections import Counter
 from pathlib import Path
 
-from cli_args import EPILOG, ArgumentParser, existing_dir, guarded, output_dir
 from report_base import ROOT, Result, load_results
 from report_trials import TrialInfo, summary_trials, uncommitted
 
 from dopt import atomic
 from dopt.lab import jsonio
+from dopt.lab.cli import EPILOG, ArgumentParser, existing_dir, guarded, output_dir
 
 #: the fields each kind of summary computes from its trials
 TRIAL_FIELDS = {

@@ -25,10 +25,11 @@ from pathlib import Path
 
 import mpc as table1
 import numpy as np
-from cli_args import EPILOG, ArgumentParser, guarded, number_list, record_figure, write_summary
-from sweep_console import out_lock, print_outputs
 
 from dopt import atomic
+from dopt.lab.cli import EPILOG, ArgumentParser, guarded, number_list
+from dopt.lab.console import out_lock, print_outputs
+from dopt.lab.record import record_figure, write_summary
 from planners.svr_mpc import fig4_fields, row_label
 
 

@@ -35,10 +35,11 @@ import sys
 
 import mpc as table1
 import numpy as np
-from cli_args import EPILOG, ArgumentParser, guarded, positive_int, write_summary
-from sweep_console import out_lock, print_outputs
 
 from dopt import atomic
+from dopt.lab.cli import EPILOG, ArgumentParser, guarded, positive_int
+from dopt.lab.console import out_lock, print_outputs
+from dopt.lab.record import write_summary
 from dopt.lab.sweep import Schema
 from planners.svr_mpc import row_label, run_svr_mpc, split_params
 

@@ -28,10 +28,11 @@ import tempfile
 from pathlib import Path
 
 import numpy as np
-from cli_args import EPILOG, ArgumentParser, guarded, positive_int, write_summary
 from report_base import Result
 from report_trials import summary_trials
 
+from dopt.lab.cli import EPILOG, ArgumentParser, guarded, positive_int
+from dopt.lab.record import write_summary
 from planners.svr_mpc import run_trial
 
 #: where the verifications lie under the results folder

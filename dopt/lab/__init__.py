@@ -15,6 +15,9 @@ runs sweeps reads this room. Modules:
     provenance.py           command, commit, versions of a result; the recording and reuse rules
     stats.py, multiple.py   means and intervals; Holm's correction
     cli.py                  the command lines' shared types and ``guarded()``
+    record.py               what a run writes and when: OUT/summary.json, --record and its
+                            refusals, --reuse-any
+    console.py              a sweep's console: progress bar, estimates, finished lines
     scripts.py              the console scripts (dopt-fold, dopt-mpc, ...) over experiments/
     dicts.py                small helpers on nested JSON-like dicts
 

@@ -15,7 +15,6 @@ import sys
 from pathlib import Path
 from types import SimpleNamespace
 
-import cli_args
 import clock_check
 import cloth_fold
 import key_particles
@@ -30,6 +29,7 @@ import rope
 import svr_explain
 
 import dopt.lab.cli
+from dopt.lab import cli
 
 ROOT = Path(__file__).resolve().parents[2]
 EXPERIMENTS = ROOT / "experiments"
@@ -243,14 +243,14 @@ def test_a_runtime_failure_is_one_line_and_exit_1(tmp_path, capsys, monkeypatch)
     def full_disk(*args, **kwargs):
         raise OSError("No space left on device\nwhile writing")
     monkeypatch.setattr(key_particles, "write_curve", full_disk)
-    monkeypatch.delenv(cli_args.TRACEBACK_ENV, raising=False)
+    monkeypatch.delenv(cli.TRACEBACK_ENV, raising=False)
     argv = ["--quick", "--task", "rope_straighten", "--out", str(tmp_path / "kp")]
     assert key_particles.main(argv) == 1
     err = capsys.readouterr().err
     assert err.strip().splitlines()[-1] == ("key_particles.py: error: OSError: No space left "
                                             "on device while writing")
     assert "Traceback" not in err
-    monkeypatch.setenv(cli_args.TRACEBACK_ENV, "1")             # the traceback on request
+    monkeypatch.setenv(cli.TRACEBACK_ENV, "1")             # the traceback on request
     assert key_particles.main(argv) == 1
     err = capsys.readouterr().err
     assert "Traceback (most recent call last)" in err and "full_disk" in err
@@ -493,7 +493,7 @@ def test_help_lists_every_flag(script, capsys):
     assert {"--out", "--help"} <= flags or script == "report"
     missing = [f for f in flags if f not in text]
     assert not missing, missing
-    assert cli_args.TRACEBACK_ENV in text                   # how to see a traceback
+    assert cli.TRACEBACK_ENV in text                   # how to see a traceback
 
 
 def test_report_names_a_result_file_without_full_provenance(tmp_path, capsys):

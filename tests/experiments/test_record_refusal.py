@@ -7,9 +7,9 @@ import json
 import subprocess
 
 import pytest
-from cli_args import add_reuse_argument, record_problem, reuse_mode, write_summary
 
 from dopt.lab import provenance
+from dopt.lab.record import add_reuse_argument, record_problem, reuse_mode, write_summary
 from dopt.lab.sweep import Trial, run_sweep, take_deliberate_reuse
 from tests.dopt.lab.sweep_trials import square
 
@@ -113,7 +113,7 @@ def test_record_figure_lands_where_results_md_shows_it(tmp_path):
     """With --record in a "results" folder the figure goes to the sibling images/ folder under
     the record's name (what RESULTS.md links); elsewhere beside the record; nothing without a
     record or without the figure."""
-    from cli_args import record_figure
+    from dopt.lab.record import record_figure
 
     fig = tmp_path / "out" / "scaling.png"
     fig.parent.mkdir()

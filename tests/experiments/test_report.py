@@ -50,7 +50,7 @@ def test_the_script_needs_only_the_standard_library():
     dopt.lab that holds them, and
     planners.trial_progress (the reader of a trial's checkpoint), standard library themselves,
     and nothing else of the project or of its dependencies."""
-    # as `python experiments/report.py`: the script's folder (its sibling cli_args) on the path
+    # as `python experiments/report.py`: the script's folder (its sibling modules) on the path
     code = ("import sys, runpy; sys.argv = ['report.py', '--help']\n"
             f"sys.path.insert(0, {str(SCRIPT.parent)!r})\n"
             f"try:\n    runpy.run_path({str(SCRIPT)!r}, run_name='__main__')\n"

@@ -195,7 +195,7 @@ def test_the_console_counts_and_keeps_warnings_off_the_bar(tmp_path):
     script = textwrap.dedent(f"""
         import logging, sys
         sys.path[:0] = [{str(ROOT / "experiments")!r}, {str(ROOT)!r}]
-        from sweep_console import run_with_console
+        from dopt.lab.console import run_with_console
         from dopt.lab.sweep import Trial
         from tests.dopt.lab.sweep_trials import walk, warn
         logging.basicConfig(format="%(levelname)s %(name)s: %(message)s")

@@ -167,3 +167,12 @@ def print_outputs(out: Path, pictures=(), view: Path | None = None,
     if viewer:
         print(f"replay its trials in the browser: dopt-view {view or out}   "
               f"(the viewer: pip install -e \".[viz]\")")
+
+
+def print_captures(out: Path, captures: list[dict]) -> list[dict]:
+    """One console line per blow-up capture of a run (``dopt.blowup.captures_of``); returns
+    ``captures``, a summary's "blowups"."""
+    for c in captures:
+        print(f"blow-up capture {Path(out) / c['path']}: trial {c['trial']}, step {c['step']}"
+              f", {c['reason']}, body {c['body']} (dopt-view opens it at that step)")
+    return captures

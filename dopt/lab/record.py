@@ -1,15 +1,14 @@
-"""Command-line helpers of the experiment scripts: the shared argparse types and one-line
-errors of ``dopt.lab.cli`` (re-exported here, so a script imports its CLI pieces from one place),
-plus what only experiments do: check --record (not the --out folder, and only from committed
-code), the sweeps' --reuse-any flag, and write OUT/summary.json with the run's provenance.
+"""What a run writes and when it may: ``--record`` checked (not the --out folder, only from
+committed code), the sweeps' --reuse-any flag, and OUT/summary.json with the run's provenance.
+The shared argparse types and one-line errors are ``dopt.lab.cli``'s.
 
 Settings: every summary records the settings it ran with in full (``settings_dict``: every
-field of the resolved settings objects, not only a preset's name): Fig. 7 (pick_place_cli.py)
-its ``PickPlaceSettings`` and their resolved scene, picker and stability bounds ("physics");
-the Panda's execution the same per goal; key_particles.py its reduction configs and the
-scenes of its simulated goals; rho_sweep.py the protocol and each row's ``SVRMPCSettings``. The
-Table 1 experiments (mpc.py, svr_explain.py, clock_check.py) record the protocol's fields in
-the summary and every ``SVRMPCSettings`` field in each trial's params.
+field of the resolved settings objects, not only a preset's name): Fig. 7 its
+``PickPlaceSettings`` and their resolved scene, picker and stability bounds ("physics"); the
+Panda's execution the same per goal; the key-particle experiment its reduction configs and the
+scenes of its simulated goals; Fig. 4 the protocol and each row's ``SVRMPCSettings``. The
+Table 1 experiments record the protocol's fields in the summary and every ``SVRMPCSettings``
+field in each trial's params.
 
 Recording: ``--record PATH`` is refused, one line naming the changed files, when files that can
 change a result (dopt/, deformables/, planners/, experiments/, pyproject.toml, setup.py; the
@@ -20,16 +19,11 @@ A run with --out only is never refused. ``record_problem`` also tries the places
 (the --record file and the --out folder: a file created and removed, nothing overwritten), so
 that a path the user cannot write fails before the first trial, not after the run.
 
-Strict JSON: ``write_summary`` writes with ``dopt.lab.jsonio`` (a value that is not a finite number
-is ``null`` with its reason beside it under "<field>_undefined"; no bare NaN).
+Strict JSON: ``write_summary`` writes with ``dopt.lab.jsonio`` (a value that is not a finite
+number is ``null`` with its reason beside it under "<field>_undefined"; no bare NaN).
 
-Blow-up captures: ``blowup_captures`` names the captures of a run's trials (OUT/blowups,
-``dopt.blowup``) on the console and for its summary's "blowups".
-
-Standard library and ``dopt.lab.cli`` / ``dopt.lab.provenance`` / ``dopt.lab.sweep`` only (all
-pure Python),
-so the MuJoCo-free key-particle experiment can use them without importing torch or MuJoCo
-(``blowup_captures`` imports MuJoCo when called).
+Standard library and the lab only (pure Python), so the MuJoCo-free key-particle experiment
+can use them without importing torch or MuJoCo.
 """
 from __future__ import annotations
 
@@ -37,28 +31,7 @@ import json
 import sys
 from pathlib import Path
 
-from dopt.lab.cli import (  # noqa: F401  (re-exported for the scripts)
-    EPILOG,
-    TRACEBACK_ENV,
-    ArgumentParser,
-    choices_list,
-    choices_type,
-    existing_dir,
-    file_problem,
-    folder_problem,
-    guarded,
-    int_at_least,
-    no_repeats,
-    nonneg_float,
-    nonneg_int,
-    number_in,
-    number_list,
-    one_line,
-    output_dir,
-    output_file,
-    positive_float,
-    positive_int,
-)
+from dopt.lab.cli import file_problem, folder_problem
 
 
 def write_problem(path: Path, folder: bool = False) -> str | None:
@@ -166,25 +139,6 @@ def reuse_mode(args) -> str:
     """``run_sweep``'s ``reuse`` for parsed ``args``: "any" with --reuse-any, else
     "same-code"."""
     return "any" if getattr(args, "reuse_any", False) else "same-code"
-
-
-def blowup_captures(out: Path, labels) -> list[dict]:
-    """The blow-up captures under OUT/blowups of the trials ``labels`` (their capture labels,
-    ``dopt.blowup``), one console line each: a summary's "blowups", each {"trial",
-    "path" (relative to OUT), "step", "reason", "body"}. Loads MuJoCo: only the experiments
-    that write captures call it."""
-    import os
-
-    from dopt.blowup import list_captures
-
-    labels = set(labels)
-    found = [{"trial": c["label"], "path": os.path.relpath(c["path"], out), "step": c["step"],
-              "reason": c["reason"], "body": c["body"]}
-             for c in list_captures(out) if c.get("label") in labels]
-    for c in found:
-        print(f"blow-up capture {Path(out) / c['path']}: trial {c['trial']}, step {c['step']}"
-              f", {c['reason']}, body {c['body']} (dopt-view opens it at that step)")
-    return found
 
 
 def write_summary(summary: dict, out: Path, record: Path | None, script: str, argv,

@@ -1,14 +1,15 @@
-"""cli_args.blowup_captures: the blow-up captures of a run's trials, named on the console and
-listed for its summary; dopt.blowup.retire_captures moves a rerun trial's old ones
-aside; a pick-and-place run (rope.py) lists the captures of its flagged plans."""
+"""dopt.blowup.captures_of and dopt.lab.console.print_captures: the blow-up captures of a run's
+trials, listed for its summary and named on the console; dopt.blowup.retire_captures moves a
+rerun trial's old ones aside; a pick-and-place run (rope.py) lists the captures of its
+flagged plans."""
 
 import json
 
 import mujoco
 import numpy as np
-from cli_args import blowup_captures
 
-from dopt.blowup import capture_dir, list_captures, retire_captures, save_blowup
+from dopt.blowup import capture_dir, captures_of, list_captures, retire_captures, save_blowup
+from dopt.lab.console import print_captures
 
 BALL = ("<mujoco><worldbody><body name='ball'><freejoint/><geom size='.1'/></body>"
         "</worldbody></mujoco>")
@@ -27,7 +28,7 @@ def test_the_run_names_its_trials_captures_and_a_rerun_retires_them(tmp_path, ca
     capture(tmp_path, "another-run")
     (tmp_path / "blowups" / "broken").mkdir()
     (tmp_path / "blowups" / "broken" / "blowup.json").write_text("{")
-    found = blowup_captures(tmp_path, ["clutter-seed0", "clutter-seed1"])
+    found = print_captures(tmp_path, captures_of(tmp_path, ["clutter-seed0", "clutter-seed1"]))
     assert found == [
         {"trial": "clutter-seed0", "path": "blowups/clutter-seed0", "step": 3,
          "reason": "speed 9 m/s > 5 m/s (body ball)", "body": "ball"},
@@ -44,7 +45,7 @@ def test_the_run_names_its_trials_captures_and_a_rerun_retires_them(tmp_path, ca
     assert [c["label"] for c in list_captures(tmp_path)] == ["another-run"]
     assert sorted(p.name for p in (tmp_path / "blowups" / "outdated").iterdir()) == [
         "clutter-seed0", "clutter-seed0-2"]
-    assert blowup_captures(tmp_path, ["clutter-seed0"]) == []
+    assert captures_of(tmp_path, ["clutter-seed0"]) == []
     capture(tmp_path, "clutter-seed0")                   # run again and failed again
     assert retire_captures(tmp_path, ["clutter-seed0"]) == [
         tmp_path / "blowups" / "outdated" / "clutter-seed0-3"]         # none overwritten

@@ -1,10 +1,10 @@
 """The sweep console's time estimate, its revision on each finished line and the trial's
-result on that line (experiments/sweep_console.py)."""
+result on that line (dopt.lab.console)."""
 
 import numpy as np
 import pytest
-from sweep_console import duration, estimate_line, left_line, print_outputs, run_with_console
 
+from dopt.lab.console import duration, estimate_line, left_line, print_outputs, run_with_console
 from dopt.lab.sweep import Trial
 
 
