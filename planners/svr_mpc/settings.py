@@ -5,13 +5,11 @@ is stored and reported under (``trial_params``, ``trial_key``, ``row_label``).""
 
 from __future__ import annotations
 
-import functools
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Literal
 
 import mujoco
-import numpy as np
 
 from dopt.lab.provenance import root_relative, rooted
 from dopt.mpc import CLOCKS, EXECUTORS, MAX_CONTROL_NOISE
@@ -381,12 +379,11 @@ class SVRMPCSettings:
                                keep_costed=bool(self.keep_costed))
 
 
-@functools.cache
 def task_defaults(task: str) -> tuple[float, int]:
-    """The slowdown and timeout (agent steps) of ``task``'s own instance (``PUSH_TASKS``, seed
-    0; the paper's), what a trial's settings without them run with."""
-    built = get_task(task)(np.random.default_rng(0))
-    return float(built.slowdown), int(built.timeout)
+    """The slowdown and timeout (agent steps) of ``task`` (its ``PushTaskSpec``; the paper's),
+    what a trial's settings without them run with; builds no model."""
+    spec = get_task(task)
+    return float(spec.slowdown), int(spec.timeout)
 
 
 def trial_params(settings: SVRMPCSettings, seed: int,
