@@ -12,6 +12,7 @@ from scipy import stats
 
 from dopt.lab.multiple import holm
 from dopt.lab.stats import mean_ci
+from planners.ilqr import Derivatives
 from planners.svr_mpc.authors_data import authors_statistic
 from planners.svr_mpc.choice import choice_fields
 from planners.svr_mpc.settings import TABLE1_ROWS, row_label
@@ -247,8 +248,7 @@ def derivatives_effect(records: list[dict], level: float = 0.90) -> dict:
     over the paired trials)}}.
     """
     def plain(p):
-        return row_label({**p, "keypoints": "every", "fd_skip": 1, "box_qp": False,
-                          "fd_centered": False, "fd_eps": 1e-3, "keep_costed": False,
+        return row_label({**p, **Derivatives().fields(), "keep_costed": False,
                           "mu_reset": False})
 
     def mean(results, field):
