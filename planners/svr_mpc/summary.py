@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 from scipy import stats
 
-from dopt.lab.multiple import holm
+from dopt.lab.multiple import holm_named
 from dopt.lab.stats import mean_ci
 from planners.ilqr import Derivatives
 from planners.svr_mpc.authors_data import authors_statistic
@@ -163,8 +163,7 @@ def versus(records: list[dict], references: tuple[str, ...] = VERSUS_REFERENCES,
                 logs[row, ref] = np.log([by[row][k] / by[ref][k] for k in seeds])
     m = len(logs)
     pvals = {k: _t_test_p(x) for k, x in logs.items()}
-    tested = [k for k in logs if pvals[k] is not None]
-    adjusted = dict(zip(tested, holm([pvals[k] for k in tested]), strict=True))
+    adjusted = holm_named(pvals)
     pairs = {}
     for (row, ref), x in logs.items():
         p_holm = adjusted.get((row, ref))
