@@ -26,6 +26,8 @@ Shapes: T horizon, nu controls, ns state row, c = |C| active DoFs.
     settings.py  SVRMPCSettings, Derivatives (planners.ilqr's typed derivative options;
                  spell_derivatives, their one spelling), TABLE1_ROWS, rows
                  by name (parse_row -> Row), task_defaults, trial params, keys and row labels
+    presets.py   the protocols (ours, paper, authors) and TABLE1_ROWS, each number with its
+                 source (the paper's section, the authors' file)
     optimisers.py  OPTIMISERS by name, register_optimiser, OptimiserContext, svr_optimiser
     episode.py   build_controller, wire_controller, run_svr_mpc -> SVRMPCResult, run_trial
                  and CapturingTrial (for dopt.lab.sweep; keep_controls: for an exact replay)

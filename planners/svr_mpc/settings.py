@@ -23,30 +23,25 @@ from planners.ilqr import FINITE_DIFFERENCES, Derivatives, ILQRConfig
 from planners.keypoints import KeypointConfig
 from planners.svr import METHODS, SelectionConfig, paper_theta
 from planners.svr_mpc.optimisers import DEFAULT_OPTIMISER, optimiser_names
-
-#: the nine rows of the paper's Table 1 by name: (method, theta, rho)
-TABLE1_ROWS = {
-    "baseline": ("baseline", 0, 1.0),
-    "rand-t5": ("rand", 5, 1.0),
-    "naive": ("naive", 0, 1.0),
-    "svd-t10-r1": ("svr-svd", 10, 1.0),
-    "svd-t10-r500": ("svr-svd", 10, 500.0),
-    "svd-t5-r1": ("svr-svd", 5, 1.0),
-    "sum-t10-r1": ("svr-sum", 10, 1.0),
-    "sum-t10-r500": ("svr-sum", 10, 500.0),
-    "sum-t5-r1": ("svr-sum", 5, 1.0),
-}
+from planners.svr_mpc.presets import (
+    DEFAULT_ROW,
+    PAPER,
+    PROTOCOLS,
+    TABLE1_ROWS,
+    protocol_fields,
+    row_fields,
+)
 
 #: the problems a trial can run on: ``ours`` (dopt's own scenes, ``dopt.tasks.PUSH_TASKS``) or
 #: ``authors`` (the authors' scenes, objects and contacts, ``dopt.tasks.push.authors``)
 PROBLEMS = PUSH_PROBLEMS
 
-#: the protocols by name (``SVRMPCSettings.preset``)
-PRESETS = ("ours", "paper", "authors")
+#: the protocols by name (``SVRMPCSettings.preset``; ``planners.svr_mpc.presets``)
+PRESETS = tuple(PROTOCOLS)
 
-#: the authors' cost per task where it is not Eq. 2 alone (``COST_PRESETS["paper"]``): their
-#: push_soft task file adds a terminal reach residual (``dopt.tasks.push.costs``)
-PAPER_COSTS = {"soft": "paper-reach"}
+#: the paper's cost per task where it is not Eq. 2 alone (``COST_PRESETS["paper"]``): their
+#: push_soft task file adds a terminal reach residual (``presets.PAPER["cost"]``)
+PAPER_COSTS = dict(PAPER["cost"].per_task)
 
 #: the clocks a trial can run on: ``dopt.mpc.CLOCKS`` and ``authors``, the model clock fitted
 #: to the authors' own optimisation times (``planners.svr_mpc.authors_clock``)
@@ -299,36 +294,30 @@ class SVRMPCSettings:
                              f"with it, not {self.clock!r}")
 
     @classmethod
-    def paper(cls, task: str, row: str = "sum-t10-r1", **overrides) -> SVRMPCSettings:
-        """The paper's protocol for ``row`` (a name of ``TABLE1_ROWS``) on ``task``: the
-        authors' cost for the task (``PAPER_COSTS``: Eq. 2, on soft with their reach
-        residual), their initial plan, 5 % control noise, the virtual clock."""
-        if row not in TABLE1_ROWS:
-            raise ValueError(f"unknown Table 1 row {row!r}; choose from {tuple(TABLE1_ROWS)}")
-        method, theta, rho = TABLE1_ROWS[row]
-        return cls(**{"task": task, "method": method, "theta": theta, "rho": rho,
-                      "cost": PAPER_COSTS.get(task, "paper"), "warm_start": True,
-                      "control_noise": 0.05,
-                      "clock": "virtual", **overrides})
+    def paper(cls, task: str, row: str = DEFAULT_ROW, **overrides) -> SVRMPCSettings:
+        """The paper's protocol for ``row`` (a name of ``TABLE1_ROWS``) on ``task``
+        (``planners.svr_mpc.presets.PAPER``, each number with its source): the authors' cost
+        for the task (Eq. 2, on soft with their reach residual), their initial plan, 5 %
+        control noise, the virtual clock."""
+        return cls(**{"task": task, **row_fields(row), **protocol_fields("paper", task),
+                      **overrides})
 
     @classmethod
-    def authors(cls, task: str, row: str = "sum-t10-r1", layouts: str | Path | None = None,
+    def authors(cls, task: str, row: str = DEFAULT_ROW, layouts: str | Path | None = None,
                 **overrides) -> SVRMPCSettings:
-        """The authors' regime for ``row`` on their own problem ``task``: their scenes
-        (clutter: scene ``seed`` of ``layouts``), objects and contacts, their cost weights
-        without a control cost (``dopt.tasks.push.costs.AUTHORS_COSTS``), their initial plan
-        (``dopt.tasks.push.warm_start``), no control noise (every run of their paper data
-        records ``controls_noise: 0``), their data generator's executor (``authors``: hold
+        """The authors' regime for ``row`` on their own problem ``task``
+        (``planners.svr_mpc.presets.AUTHORS`` over ``PAPER``, each number with its source):
+        their scenes (clutter: scene ``seed`` of ``layouts``), objects and contacts, their
+        cost weights without a control cost (``dopt.tasks.push.costs.AUTHORS_COSTS``), their
+        initial plan, no control noise, their data generator's executor (``authors``: hold
         after 80 controls, nearest-state landing) and the clock fitted to their times
         (``authors``). Where the paper's text (Alg. 1) and their code differ, this follows
         the code, which generated their data; ``executor="alg1"`` is the text's reading.
         ``layouts`` (relative to the current folder) is recorded relative to the checkout's
         root (``dopt.lab.provenance.root_relative``)."""
         layouts = None if layouts is None else root_relative(layouts)
-        return cls.paper(task, row, **{"problem": "authors", "layouts": layouts,
-                                       "cost": f"authors-{task}", "control_noise": 0.0,
-                                       "executor": "authors", "clock": "authors",
-                                       **overrides})
+        return cls(**{"task": task, **row_fields(row), **protocol_fields("authors", task),
+                      "layouts": layouts, **overrides})
 
     @classmethod
     def preset(cls, name: str, task: str, layouts: str | Path | None = None) -> SVRMPCSettings:
@@ -338,13 +327,13 @@ class SVRMPCSettings:
         if layouts is not None and name != "authors":
             raise ValueError(f"layouts are the authors' clutter scenes: only preset 'authors' "
                              f"reads them, not {name!r}")
+        if name not in PROTOCOLS:
+            raise ValueError(f"unknown preset {name!r}; choose from {PRESETS}")
         if name == "authors":
             return cls.authors(task, layouts=layouts)
         if name == "paper":
             return cls.paper(task)
-        if name == "ours":
-            return cls(task=task)
-        raise ValueError(f"unknown preset {name!r}; choose from {PRESETS}")
+        return cls(task=task)
 
     def build_task(self, seed: int) -> TaskModel:
         """The task instance of ``seed`` under these settings (``problem``, ``layouts``,
