@@ -592,9 +592,8 @@ def paper_svr_section(results: list[Result], page: Path) -> list[str]:
     return section("The state-vector-reduction authors' own data",
                    "Their run summaries (`experiments/paper_reference.py`): per Table 1 row the "
                    "runs, the median final cost over the baseline's (a robust summary; their "
-                   "Table 1's statistic is the fenced mean, "
-                   "`dopt.lab.stats.authors_mean_ci`, which "
-                   "reproduces the printed table), mean final goal distance, mean DoFs and "
+                   "Table 1's statistic is the fenced mean, `dopt.lab.stats.authors_mean_ci`, "
+                   "which reproduces the printed table), mean final goal distance, mean DoFs and "
                    "optimisation time, rows named by their settings here (rand and naive are "
                    "identified by `planners.svr_mpc.authors_data.authors_rows`: rand the Sum run "
                    "with theta 5 and rho >= 1e6, naive the faster plain iLQR run).",
