@@ -14,7 +14,7 @@ statistics, the failures, the provenance), OUT/encoding.png where matplotlib is 
 (with --record also copied beside the record). Exits 1 if a trial failed, 2 on bad flags.
 
     python experiments/fig7_encoding.py --goal diagonal --points 100,400,1600,10000 \\
-        --seeds 5 --out docs/results/runs/fig7-encoding-diagonal \\
+        --trials 5 --out docs/results/runs/fig7-encoding-diagonal \\
         --record docs/results/fig7-encoding-diagonal.json
 """
 
@@ -26,14 +26,12 @@ import sys
 import time
 from dataclasses import replace
 
-from fig7_scaling import plot
-from pick_sweep import SCHEMA, cem_trial, describe_result, iterations_held
-
 from dopt.lab.cli import (
     EPILOG,
     ArgumentParser,
     choices_type,
     guarded,
+    nonneg_int,
     number_list,
     output_dir,
     output_file,
@@ -41,7 +39,15 @@ from dopt.lab.cli import (
     positive_int,
 )
 from dopt.lab.console import print_outputs, run_with_console, sweep_session
-from dopt.lab.record import check_outputs, record_figure, settings_dict, write_summary
+from dopt.lab.flags import SettingsFlags, add_alias, apply
+from dopt.lab.record import (
+    add_reuse_argument,
+    check_outputs,
+    record_figure,
+    reuse_mode,
+    settings_dict,
+    write_summary,
+)
 from dopt.rollout import share_cores
 from planners.pick_place.drag_settings import DragSettings
 from planners.pick_place.encoding import (
@@ -51,29 +57,51 @@ from planners.pick_place.encoding import (
     encoding_summary,
     encoding_trials,
 )
+from planners.pick_place.experiments.scaling import plot
+from planners.pick_place.experiments.sweep import (
+    SCHEMA,
+    cem_trial,
+    describe_result,
+    iterations_held,
+)
+
+#: candidate counts N by default, and with --quick (a smoke run)
+DEFAULT_POINTS, QUICK_POINTS = "100,400,1600,10000", "4,9"
+#: trials per method and N by default
+DEFAULT_TRIALS = 5
+#: the DragSettings of --quick (besides its points): CEM's smallest useful budget
+QUICK_DRAG = {"population": 8, "iterations": 2}
+
+
+def drag_flags() -> SettingsFlags:
+    """The flags of the drag encoding's CEM budget and substeps, derived from
+    ``DragSettings``."""
+    d = DragSettings()
+    return SettingsFlags(DragSettings, ["population", "iterations", "substeps"],
+                         defaults=lambda path: str(getattr(d, path)))
 
 
 def parser() -> argparse.ArgumentParser:
     """The flags of the module docstring."""
-    d = DragSettings()
     ap = ArgumentParser(prog="fig7_encoding.py", description=__doc__, epilog=EPILOG,
                         formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--goal", choices=("diagonal", "side"), required=True,
                     help="the cloth fold")
-    ap.add_argument("--points", type=number_list(int, 4, "points"),
-                    default="100,400,1600,10000",
+    ap.add_argument("--points", type=number_list(int, 4, "points"), default=None,
                     help="candidate counts N (perfect squares), comma-separated "
-                         "(default %(default)s)")
-    ap.add_argument("--seeds", type=positive_int, default=5,
-                    help="seeds 0 .. SEEDS-1 per method and N (default %(default)s)")
+                         f"(default {DEFAULT_POINTS}; {QUICK_POINTS} with --quick)")
+    ap.add_argument("--trials", type=positive_int, default=None,
+                    help="trials per method and N, seeds SEED .. SEED+TRIALS-1 (default "
+                         f"{DEFAULT_TRIALS}; 1 with --quick)")
+    add_alias(ap, "--seeds", "--trials")
+    ap.add_argument("--seed", type=nonneg_int, default=0, help="the first seed (default 0)")
+    ap.add_argument("--quick", action="store_true",
+                    help=f"smoke-sized run: N {QUICK_POINTS}, CEM population "
+                         f"{QUICK_DRAG['population']} and {QUICK_DRAG['iterations']} "
+                         "iterations (unless given), one trial (unless --trials)")
     ap.add_argument("--methods", type=choices_type(tuple(BASE), "methods"),
                     default=",".join(BASE), help="comma-separated subset of " + ", ".join(BASE))
-    ap.add_argument("--population", type=positive_int, default=d.population,
-                    help="CEM samples per iteration (default %(default)s; the authors' 333)")
-    ap.add_argument("--iterations", type=positive_int, default=d.iterations,
-                    help="CEM iterations (default %(default)s)")
-    ap.add_argument("--substeps", type=positive_int, default=d.substeps,
-                    help="MuJoCo steps per 1 cm substep (default %(default)s)")
+    drag_flags().add_to(ap, config=False)
     ap.add_argument("--cost", choices=("best", "final"), default="best",
                     help="a plan's cost: its best decision (the authors') or after the whole "
                          "plan (default %(default)s)")
@@ -81,12 +109,16 @@ def parser() -> argparse.ArgumentParser:
                     help="the sheet's side in m (default %(default)s: SoftGym's 100 x 100)")
     ap.add_argument("--workers", type=positive_int, default=1,
                     help="trials at once (processes; default 1)")
+    ap.add_argument("--threads", type=nonneg_int, default=0,
+                    help="simulation threads per trial (0, the default: the cores shared out "
+                         "over the trials that run at once)")
     ap.add_argument("--out", type=output_dir, default=None,
                     help="the run's folder (default results/fig7_encoding_<goal>)")
     ap.add_argument("--record", type=output_file, default=None,
                     help="also write the summary here (committed code only)")
     ap.add_argument("--fresh", action="store_true", help="recompute every trial")
-    ap.add_argument("-v", "--verbose", action="store_true")
+    add_reuse_argument(ap)
+    ap.add_argument("-v", "--verbose", action="store_true", help="log the cost of each stage")
     return ap
 
 
@@ -96,10 +128,13 @@ def parse(argv=None) -> argparse.Namespace:
     args = ap.parse_args(argv)
     if "simple-drag" not in args.methods:
         ap.error("argument --methods: the gains are against simple-drag, which it must name")
+    args.points = args.points or number_list(int, 4, "points")(
+        QUICK_POINTS if args.quick else DEFAULT_POINTS)
+    if args.trials is None:                   # an explicit --trials stands with --quick
+        args.trials = 1 if args.quick else DEFAULT_TRIALS
     try:
-        args.drag = DragSettings(population=args.population, iterations=args.iterations,
-                                 substeps=args.substeps,
-                                 best_over_trajectory=args.cost == "best")
+        budget = {**(QUICK_DRAG if args.quick else {}), **drag_flags().overrides(args)}
+        args.drag = apply(DragSettings(best_over_trajectory=args.cost == "best"), budget)
         for n in args.points:
             replace(args.drag, n_points=n)
     except (TypeError, ValueError) as e:
@@ -122,22 +157,23 @@ def _main(argv=None) -> int:
 def _experiment(args, argv) -> int:
     """The sweep, the summary, the plot and the printed verdict."""
     start, out = time.perf_counter(), args.out
-    threads = share_cores(args.workers)
-    trials = encoding_trials(args.goal, args.points, range(args.seeds), args.methods,
-                             args.drag, args.side, threads)
+    threads = args.threads or share_cores(args.workers)
+    seeds = range(args.seed, args.seed + args.trials)
+    trials = encoding_trials(args.goal, args.points, seeds, args.methods, args.drag,
+                             args.side, threads)
     settings = {n: encoding_settings(args.goal, replace(args.drag, n_points=n), args.side,
                                      threads) for n in args.points}
     res = run_with_console(
         functools.partial(cem_trial, blowup_out=str(out)), trials, out, unit="it",
         desc="CEM iterations", workers=args.workers, fresh=args.fresh, schema=SCHEMA,
-        steps=lambda t: args.iterations,
-        held=lambda t: iterations_held([t], args.iterations, out),
+        reuse=reuse_mode(args), steps=lambda t: args.drag.iterations,
+        held=lambda t: iterations_held([t], args.drag.iterations, out),
         describe=describe_result)
     keys = {t.key for t in trials}
     stats = encoding_summary([r for k, r in res.records.items() if k in keys], args.points)
     summary = {"experiment": "fig7_encoding", "task": "cloth", "goal": args.goal,
                "protocol": "paper", "encoding": "drag", "points": list(args.points),
-               "seeds": list(range(args.seeds)), "methods_run": list(args.methods),
+               "seeds": list(seeds), "methods_run": list(args.methods),
                "settings": {str(n): settings_dict(s) for n, s in settings.items()},
                "physics": {str(n): s.resolved_physics() for n, s in settings.items()},
                **stats, "failed": res.failed, "trial_commits": res.commits,

@@ -67,7 +67,8 @@ TASK_FIELDS = {"cloth": SETTINGS_FIELDS + ("fold_start",), "rope": SETTINGS_FIEL
 #: the script file of each task (its usage line; a console script shows its own name)
 SCRIPTS = {"cloth": "cloth_fold.py", "rope": "rope.py"}
 
-DOCS = {"cloth": """Fig. 7 (c-f) of the key-particle paper: cloth folds planned by CEM over key particles.
+DOCS = {"cloth": """Fig. 7 (c-f) of the key-particle paper: cloth folds planned by CEM over key
+particles.
 
 Four methods (default all) on one fold goal: CEM(Simple) over the key particles of the goal,
 CEM(Original) over all particles, CEM(Random) over a random subset as large as the key set, and
@@ -104,7 +105,8 @@ stderr).
     python experiments/cloth_fold.py --goal reflective --preset paper --fold-start chained
     python experiments/cloth_fold.py --config results/cloth_diagonal/summary.json --trials 5
 """,
-        "rope": """Fig. 7 (a-b) of the key-particle paper: rope straightening and rope folding with CEM.
+        "rope": """Fig. 7 (a-b) of the key-particle paper: rope straightening and rope folding
+with CEM.
 
 Four methods (default all) over several seeds: CEM(Simple) over the key particles of the goal
 (the two ends for a straight rope, the four corners of the crossed triangle), CEM(Original)

@@ -41,8 +41,6 @@ from deformables.cloth import PANEL_MODES
 from deformables.goals import CLOTH_REFERENCE_KEYS, TRIANGULATIONS, check_cloth_size
 from dopt import atomic
 from dopt.lab import jsonio
-
-# experiments/ is on the path: it is the script's folder (pytest: pythonpath in pyproject)
 from dopt.lab.cli import (
     EPILOG,
     ArgumentParser,
@@ -57,6 +55,7 @@ from dopt.lab.cli import (
     positive_int,
 )
 from dopt.lab.console import print_outputs
+from dopt.lab.flags import add_alias
 from dopt.lab.provenance import code_version
 from dopt.lab.record import check_outputs, settings_dict, write_summary
 from dopt.tasks.pick.cloth_scene import PHYSICS_PRESETS
@@ -360,9 +359,10 @@ def parser() -> argparse.ArgumentParser:
                          "noise sweep uses goal seeds 0..--noise-seeds-1)")
     ap.add_argument("--quick", action="store_true",
                     help="smoke-sized run: 16 x 16 cloth, no robustness sweep")
-    ap.add_argument("--cloth-n", type=int_at_least(MIN_CLOTH_N), default=None,
+    ap.add_argument("--n", type=int_at_least(MIN_CLOTH_N), default=None,
                     help=f"cloth particles per side, >= {MIN_CLOTH_N} (default 25, or 16 with "
                          "--quick)")
+    add_alias(ap, "--cloth-n", "--n")
     ap.add_argument("--noise-n", type=number_list(int, MIN_CLOTH_N, "particles per side"),
                     default=[16, 25, 40],
                     help="cloth particles per side of the goal-noise sweep (comma-separated, "
@@ -395,7 +395,7 @@ def parser() -> argparse.ArgumentParser:
 def check_sizes(ap: argparse.ArgumentParser, args) -> None:
     """A usage error naming the flag when a cloth size of the flags needs more memory than
     this machine has (``deformables.goals.check_cloth_size``), before any goal is built."""
-    for flag, sizes in (("--cloth-n", [args.cloth_n or 2]), ("--noise-n", args.noise_n),
+    for flag, sizes in (("--n", [args.n or 2]), ("--noise-n", args.noise_n),
                         ("--simulated-n", args.simulated_n)):
         for n in sizes:
             try:
@@ -503,7 +503,7 @@ def main(argv=None) -> int:
     logging.basicConfig(level=logging.INFO, format="%(levelname)s %(name)s: %(message)s")
 
     rng = np.random.default_rng(args.seed)
-    cloth_n = args.cloth_n or (16 if args.quick else 25)
+    cloth_n = args.n or (16 if args.quick else 25)
     rope_config, cloth_config = RopeConfig(), ClothConfig()
     # the Fig. 4 curves need every size's error in full (the default stops at the threshold);
     # the sweeps only count keys, and python -m deformables.bench times the default

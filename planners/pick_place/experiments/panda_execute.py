@@ -1,7 +1,7 @@
 """The key-particle paper's real-robot part (Sec. IV-D) in simulation: a Franka Panda with a
 parallel gripper executes CEM(Simple)'s cloth plans open-loop through inverse kinematics.
 
-For each goal (``--goals``, default the paper's two: diagonal and side) and seed, one trial
+For each goal (``--goal``, default the paper's two: diagonal and side) and seed, one trial
 plans with CEM(Simple) on the floating picker (``planners.pick_place``, the goal's preset),
 then replays the executed plan's actions with the arm (``dopt.tasks.pick.panda_gripper``) from
 the same start. Trials are resumable files under OUT/trials.
@@ -17,7 +17,7 @@ first seed's execution as a strip (start, then grasp / carry / release of each a
 each panel labelled, the goal shape as blue dots, the final costs below; MUJOCO_GL=egl,
 skipped with --no-render). Exits 1 if a trial failed, 2 on a bad flag.
 
-    python experiments/panda_execute.py --seeds 3 --out results/panda \\
+    python experiments/panda_execute.py --trials 3 --out results/panda \\
         --record docs/results/panda-execute.json
 """
 
@@ -32,8 +32,6 @@ from dataclasses import replace
 
 import numpy as np
 
-os.environ.setdefault("MUJOCO_GL", "egl")   # offscreen renders; read when mujoco is imported
-
 from dopt import atomic
 from dopt.blowup import captures_of, retire_captures
 from dopt.lab.cli import (
@@ -47,7 +45,8 @@ from dopt.lab.cli import (
     positive_int,
 )
 from dopt.lab.console import print_captures, print_outputs, run_with_console
-from dopt.lab.record import check_outputs, write_summary
+from dopt.lab.flags import add_alias
+from dopt.lab.record import add_reuse_argument, check_outputs, reuse_mode, write_summary
 from dopt.lab.stats import mean_ci
 from dopt.lab.sweep import Schema, Trial, is_finished
 from planners.pick_place import PickPlaceSettings, make_planner, make_problem, run_problem
@@ -58,19 +57,29 @@ GOALS = ("diagonal", "side")
 def parser() -> argparse.ArgumentParser:
     ap = ArgumentParser(prog="panda_execute.py", description=__doc__, epilog=EPILOG,
                         formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--goals", type=choices_type(GOALS, "goal(s)"), default=",".join(GOALS),
-                    help="comma-separated cloth goals (default %(default)s, the paper's)")
-    ap.add_argument("--seeds", type=positive_int, default=None,
-                    help="seeds per goal (default 3; 1 with --quick)")
+    ap.add_argument("--goal", dest="goals", type=choices_type(GOALS, "goal(s)"),
+                    default=",".join(GOALS),
+                    help="a cloth goal or a comma list (default %(default)s, the paper's)")
+    add_alias(ap, "--goals", "--goal")
+    ap.add_argument("--trials", type=positive_int, default=None,
+                    help="trials (seeds) per goal (default 3; 1 with --quick)")
+    add_alias(ap, "--seeds", "--trials")
     ap.add_argument("--seed", type=nonneg_int, default=0, help="first seed (default 0)")
     ap.add_argument("--n", type=positive_int, default=None,
                     help="cloth particles per side (default: the goal's preset)")
     ap.add_argument("--quick", action="store_true",
-                    help="smoke run: one seed (unless --seeds), 8 x 8 cloth, 2 CEM iterations")
+                    help="smoke run: one trial (unless --trials), 8 x 8 cloth, 2 CEM "
+                         "iterations")
     ap.add_argument("--out", type=output_dir, default=None,
                     help="output folder (default results/panda_execute); finished trials are "
                          "kept under OUT/trials")
     ap.add_argument("--fresh", action="store_true", help="recompute every trial")
+    add_reuse_argument(ap)
+    ap.add_argument("--workers", type=positive_int, default=1,
+                    help="trials run at once on a local process pool (default %(default)s)")
+    ap.add_argument("--threads", type=nonneg_int, default=0,
+                    help="simulation threads per trial (default 0: one per core)")
+    ap.add_argument("-v", "--verbose", action="store_true", help="log each stage's cost")
     ap.add_argument("--record", type=output_file, default=None, metavar="PATH",
                     help="also write the summary to PATH (docs/results/...)")
     ap.add_argument("--no-render", action="store_true", help="skip the PNG strips")
@@ -78,7 +87,8 @@ def parser() -> argparse.ArgumentParser:
 
 
 def settings_of(goal: str, args) -> PickPlaceSettings:
-    s = PickPlaceSettings.preset("cloth", goal, quick=args.quick)
+    s = replace(PickPlaceSettings.preset("cloth", goal, quick=args.quick),
+                threads=args.threads)
     return s if args.n is None else replace(s, n=args.n)
 
 
@@ -238,17 +248,17 @@ def parse_args(argv=None) -> argparse.Namespace:
     """Parsed flags; exit 2 with one line on a bad one."""
     ap = parser()
     args = ap.parse_args(argv)
-    if args.seeds is None:                      # an explicit --seeds stands with --quick
-        args.seeds = 1 if args.quick else 3
+    if args.trials is None:                     # an explicit --trials stands with --quick
+        args.trials = 1 if args.quick else 3
     check_outputs(ap, args, "panda_execute")
     return args
 
 
 @guarded("panda_execute.py")
 def main(argv=None) -> int:
-    logging.basicConfig(level=logging.WARNING)
     args = parse_args(argv)
-    seeds = range(args.seed, args.seed + args.seeds)
+    logging.basicConfig(level=logging.INFO if args.verbose else logging.WARNING)
+    seeds = range(args.seed, args.seed + args.trials)
     trials = []
     for goal in args.goals:
         s = settings_of(goal, args)
@@ -267,7 +277,7 @@ def main(argv=None) -> int:
             args.out, t.key, schema=SCHEMA, params=t.params) else 0,
         describe=lambda rec: (f"picker {rec['result']['picker_final_cost'] * 1e3:.1f} mm, "
                               f"Panda {rec['result']['panda_final_cost'] * 1e3:.1f} mm"),
-        workers=1, fresh=args.fresh, schema=SCHEMA)
+        workers=args.workers, fresh=args.fresh, schema=SCHEMA, reuse=reuse_mode(args))
     for key, err in res.failed.items():
         print(f"FAILED {key}: {err}", file=sys.stderr)
     wanted = {t.key for t in trials}

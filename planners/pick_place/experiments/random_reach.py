@@ -26,13 +26,15 @@ from planners.pick_place.random_reach import MOVING, random_reach, reach_summary
 
 
 def parse_args(argv):
-    ap = ArgumentParser(description=__doc__.split("\n\n")[0], epilog=EPILOG)
+    ap = ArgumentParser(prog="random_reach.py", description=__doc__.split("\n\n")[0],
+                        epilog=EPILOG)
     ap.add_argument("runs", nargs="+", type=existing_dir,
                     help="Fig. 7 run folders (each with trials/ of a pick-and-place sweep)")
     ap.add_argument("--moving", type=positive_float, default=MOVING,
                     help=f"metres a particle must move in a stage to count (default {MOVING})")
-    ap.add_argument("--out", type=output_dir, required=True)
-    ap.add_argument("--record", type=Path, default=None)
+    ap.add_argument("--out", type=output_dir, required=True, help="the output folder")
+    ap.add_argument("--record", type=Path, default=None,
+                    help="also write the summary to this path (committed code only)")
     return ap.parse_args(argv)
 
 

@@ -24,9 +24,9 @@ the gaps against the particle count, 95 % bars; only where matplotlib is install
 --record also copied to docs/images/<record's name>.png, which RESULTS.md shows beside it).
 Exits 1 if a trial failed, 2 on bad flags (one line).
 
-    python experiments/fig7_scaling.py --goal diagonal --sizes 10,15,20,30 --seeds 5 \\
+    python experiments/fig7_scaling.py --goal diagonal --sizes 10,15,20,30 --trials 5 \\
         --out results/scaling-diagonal --reuse-from docs/results/runs/fig7-cloth-diagonal
-    python experiments/fig7_scaling.py --goal side --mode size --seeds 5 \\
+    python experiments/fig7_scaling.py --goal side --mode size --trials 5 \\
         --out results/scaling-spacing-side --reuse-from docs/results/runs/fig7-cloth-side
 """
 
@@ -38,20 +38,20 @@ import sys
 import time
 from pathlib import Path
 
-from pick_sweep import SCHEMA, add_move_argument, cem_trial, describe_result, iterations_held
-
 from dopt import atomic
 from dopt.lab.cli import (
     EPILOG,
     ArgumentParser,
     choices_type,
     guarded,
+    nonneg_int,
     number_list,
     output_dir,
     output_file,
     positive_int,
 )
 from dopt.lab.console import print_outputs, run_with_console, sweep_session
+from dopt.lab.flags import SettingsFlags, add_alias
 from dopt.lab.record import (
     add_reuse_argument,
     check_outputs,
@@ -62,6 +62,12 @@ from dopt.lab.record import (
 )
 from dopt.lab.trialpack import is_stored_trial, read_trial_text
 from dopt.rollout import share_cores
+from planners.pick_place.experiments.sweep import (
+    SCHEMA,
+    cem_trial,
+    describe_result,
+    iterations_held,
+)
 from planners.pick_place.scaling import (
     COMPARED,
     SCALING_MODES,
@@ -70,6 +76,7 @@ from planners.pick_place.scaling import (
     scaling_summary,
     scaling_trials,
 )
+from planners.pick_place.settings import PickPlaceSettings
 from planners.pick_place.tasks import GOALS
 
 #: the goals with a scaling run (the single-layer folds: no self-collision)
@@ -80,6 +87,15 @@ COLOURS = {"simple": "tab:blue", "original": "tab:red", "random": "tab:green"}
 #: the sizes of each mode by default (n per side): the size mode's are 0.14-0.38 m at the
 #: 20 x 20 preset's spacing (issue 89; 30, 0.46 m, where the budget allows)
 DEFAULT_SIZES = {"resolution": "10,15,20,30", "size": "10,15,20,25"}
+#: the sizes of --quick (a smoke run: the preset's quick CEM budget, one trial)
+QUICK_SIZES = "4,5"
+#: trials per method and size by default
+DEFAULT_TRIALS = 5
+
+
+def move_flag() -> SettingsFlags:
+    """--move: the picker's move rule (``PickPlaceSettings.picker_move``), derived from it."""
+    return SettingsFlags(PickPlaceSettings, ["picker_move"], names={"picker_move": "--move"})
 
 
 def parser() -> argparse.ArgumentParser:
@@ -94,16 +110,26 @@ def parser() -> argparse.ArgumentParser:
                          "bound, the workspace and the mass scaled with its side")
     ap.add_argument("--sizes", type=number_list(int, 3, "sizes"), default=None,
                     help="particles per side, comma-separated (default: "
-                         + "; ".join(f"{k} {v}" for k, v in DEFAULT_SIZES.items()) + ")")
-    ap.add_argument("--seeds", type=positive_int, default=5,
-                    help="seeds 0 .. SEEDS-1 per method and size (default %(default)s)")
+                         + "; ".join(f"{k} {v}" for k, v in DEFAULT_SIZES.items())
+                         + f"; {QUICK_SIZES} with --quick)")
+    ap.add_argument("--trials", type=positive_int, default=None,
+                    help="trials per method and size, seeds SEED .. SEED+TRIALS-1 (default "
+                         f"{DEFAULT_TRIALS}; 1 with --quick)")
+    add_alias(ap, "--seeds", "--trials")
+    ap.add_argument("--seed", type=nonneg_int, default=0, help="the first seed (default 0)")
+    ap.add_argument("--quick", action="store_true",
+                    help="smoke-sized run: the preset's quick CEM budget (population 8, 2 "
+                         f"iterations), sizes {QUICK_SIZES}, one trial (unless --trials)")
     ap.add_argument("--methods", type=choices_type(SCALING_METHODS, "methods"),
                     default=",".join(SCALING_METHODS),
                     help="comma-separated subset of " + ", ".join(SCALING_METHODS))
     ap.add_argument("--workers", type=positive_int, default=1,
                     help="trials at once (processes; default 1); the cores are shared out "
                          "over them as simulation threads")
-    add_move_argument(ap)
+    ap.add_argument("--threads", type=nonneg_int, default=0,
+                    help="simulation threads per trial (0, the default: the cores shared out "
+                         "over the trials that run at once)")
+    move_flag().add_to(ap, config=False)
     ap.add_argument("--out", type=output_dir, default=None,
                     help="the run's folder (default results/fig7_scaling_<goal>)")
     ap.add_argument("--record", type=output_file, default=None,
@@ -112,7 +138,7 @@ def parser() -> argparse.ArgumentParser:
                     help="a Fig. 7 sweep folder (with trials/) whose matching finished "
                          "trials are copied into OUT/trials first")
     ap.add_argument("--fresh", action="store_true", help="recompute every trial")
-    ap.add_argument("-v", "--verbose", action="store_true")
+    ap.add_argument("-v", "--verbose", action="store_true", help="log the cost of each stage")
     add_reuse_argument(ap)
     return ap
 
@@ -122,7 +148,11 @@ def parse(argv=None) -> argparse.Namespace:
     ap = parser()
     args = ap.parse_args(argv)
     if args.sizes is None:
-        args.sizes = number_list(int, 3, "sizes")(DEFAULT_SIZES[args.mode])
+        args.sizes = number_list(int, 3, "sizes")(QUICK_SIZES if args.quick
+                                                  else DEFAULT_SIZES[args.mode])
+    if args.trials is None:                   # an explicit --trials stands with --quick
+        args.trials = 1 if args.quick else DEFAULT_TRIALS
+    args.move = move_flag().overrides(args).get("picker_move")
     if "simple" not in args.methods:
         ap.error("argument --methods: the gains are against simple, which it must name")
     if args.reuse_from is not None and not (args.reuse_from / "trials").is_dir():
@@ -162,14 +192,15 @@ def _experiment(args, argv) -> int:
     """The sweep, the summary, the plot and the printed verdict."""
     start = time.perf_counter()
     out = args.out
-    n_trials = len(args.sizes) * args.seeds * len(args.methods)
-    threads = share_cores(min(args.workers, n_trials))
-    trials = scaling_trials(args.goal, args.sizes, range(args.seeds), args.methods, threads,
-                            args.move, args.mode)
+    n_trials = len(args.sizes) * args.trials * len(args.methods)
+    threads = args.threads or share_cores(min(args.workers, n_trials))
+    seeds = range(args.seed, args.seed + args.trials)
+    trials = scaling_trials(args.goal, args.sizes, seeds, args.methods, threads, args.move,
+                            args.mode, args.quick)
     if args.reuse_from is not None:
         print(f"copied {copy_finished(trials, args.reuse_from, out)} finished trials from "
               f"{args.reuse_from}")
-    settings = {n: scaling_settings(args.goal, n, threads, args.move, args.mode)
+    settings = {n: scaling_settings(args.goal, n, threads, args.move, args.mode, args.quick)
                 for n in args.sizes}
     flat = {n: flat_cost(s) for n, s in settings.items()}
     per_trial = next(iter(settings.values())).cem.iterations   # one stage: diagonal, side
@@ -187,7 +218,7 @@ def _experiment(args, argv) -> int:
     summary = {"experiment": "fig7_scaling", "task": "cloth", "goal": args.goal,
                "protocol": "paper", "mode": args.mode,
                "physics_preset": any_settings.physics,
-               "sizes": list(args.sizes), "seeds": list(range(args.seeds)),
+               "sizes": list(args.sizes), "seeds": list(seeds),
                "methods_run": list(args.methods),
                "settings": {str(n): settings_dict(s) for n, s in settings.items()},
                "physics": {str(n): s.resolved_physics() for n, s in settings.items()},
