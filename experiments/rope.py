@@ -4,12 +4,7 @@ import os
 
 os.environ.setdefault("MUJOCO_GL", "egl")     # offscreen renders: read when MuJoCo loads
 
-from planners.pick_place.experiments import fig7  # noqa: E402
-
-
-def main(argv=None) -> int:
-    return fig7.main(argv, task="rope")
-
+from planners.pick_place.experiments.fig7 import rope as main  # noqa: E402
 
 if __name__ == "__main__":
     raise SystemExit(main())

@@ -46,7 +46,7 @@ def test_unknown_panel_mode_is_refused_by_name():
 
 
 def test_noise_sweep_journals_each_goal_and_a_rerun_resumes(tmp_path):
-    import key_particles  # experiments/ is on the path (pytest's pythonpath)
+    from planners.pick_place.experiments import key_particles
 
     from deformables import ClothConfig, RopeConfig
 

@@ -275,6 +275,16 @@ def main(argv=None, task: str = "cloth") -> int:
     return guarded(SCRIPTS[task])(_main)(task, argv)
 
 
+def cloth(argv=None) -> int:
+    """experiments/cloth_fold.py: ``main(argv, task="cloth")``."""
+    return main(argv, task="cloth")
+
+
+def rope(argv=None) -> int:
+    """experiments/rope.py: ``main(argv, task="rope")``."""
+    return main(argv, task="rope")
+
+
 def _main(task: str, argv=None) -> int:
     ap = parser(task)
     args, settings = parse(ap, task, argv)
