@@ -46,9 +46,8 @@ def test_unknown_panel_mode_is_refused_by_name():
 
 
 def test_noise_sweep_journals_each_goal_and_a_rerun_resumes(tmp_path):
-    from planners.pick_place.experiments import key_particles
-
     from deformables import ClothConfig, RopeConfig
+    from planners.pick_place.experiments import key_particles
 
     journal = tmp_path / "noise.jsonl"
     args = (RopeConfig(), ClothConfig(), [1e-3], [12], 1, ["auto", "off"])

@@ -49,8 +49,9 @@ def test_strip_labels_follow_the_snapshots():
 
 def test_scaling_plot_ticks_every_size(tmp_path):
     pytest.importorskip("matplotlib")
-    from planners.pick_place.experiments import scaling as fig7_scaling
     import matplotlib.pyplot as plt
+
+    from planners.pick_place.experiments import scaling as fig7_scaling
 
     record = ROOT / "docs" / "results" / "fig7-scaling-diagonal.json"
     if not record.is_file():
