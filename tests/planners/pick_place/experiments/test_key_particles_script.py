@@ -4,7 +4,7 @@ import subprocess
 import sys
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[2]
+ROOT = Path(__file__).resolve().parents[4]
 
 
 def test_quick_run_writes_summary_curves_and_plots(tmp_path):
@@ -33,7 +33,7 @@ def test_quick_run_writes_summary_curves_and_plots(tmp_path):
 def test_help_explains_every_flag():
     out = subprocess.run([sys.executable, str(ROOT / "experiments" / "key_particles.py"),
                           "--help"], check=True, capture_output=True, text=True).stdout
-    for flag in ["--task", "--out", "--seed", "--quick", "--cloth-n", "--noise-n",
+    for flag in ["--task", "--out", "--seed", "--quick", "--n", "--noise-n",
                  "--noise-seeds", "--noise-panels"]:
         assert flag in out
 
