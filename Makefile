@@ -28,7 +28,7 @@ $(STAMP): pyproject.toml setup.py dopt/_rollout_kernels.c
 install: $(STAMP)
 
 demo: $(STAMP)
-	MUJOCO_GL=egl $(PY) experiments/cloth_fold.py --goal diagonal --seeds 1 --out results/cloth_diagonal
+	MUJOCO_GL=egl $(PY) experiments/cloth_fold.py --goal diagonal --trials 1 --out results/cloth_diagonal
 
 test: $(STAMP)
 	$(VENV)/bin/ruff check .

@@ -37,12 +37,22 @@ def check_config(config, *, positive: Iterable[str] = (), minimum: Mapping | Non
     ``tuple[X, ...]`` / ``tuple[X, X, X]`` (a tuple, list or 1-D array of that length, each
     entry checked). Then: ``positive`` fields must be > 0 (every entry of a tuple), ``minimum``
     / ``maximum`` map a field to its inclusive bound, ``choices`` a field to its allowed values.
-    Call it from ``__post_init__``; messages name ``Class.field``.
+    A field's metadata adds its own: ``"above"`` (> it), ``"at_least"`` (>= it), ``"choices"``
+    (one of them, None aside); the flags derived from the field read the same
+    (``dopt.lab.flags``). Call it from ``__post_init__``; messages name ``Class.field``.
     """
     cls = type(config).__name__
+    above = dict.fromkeys(positive, 0)
+    minimum, choices = dict(minimum or {}), dict(choices or {})
     for f in dataclasses.fields(config):
         kind = f.type if isinstance(f.type, str) else getattr(f.type, "__name__", str(f.type))
         _check_value(getattr(config, f.name), kind.replace(" ", ""), f"{cls}.{f.name}")
+        if "above" in f.metadata:
+            above[f.name] = f.metadata["above"]
+        if "at_least" in f.metadata:
+            minimum[f.name] = f.metadata["at_least"]
+        if "choices" in f.metadata and getattr(config, f.name) is not None:
+            choices[f.name] = tuple(f.metadata["choices"])
 
     def entries(name):
         value = getattr(config, name)
@@ -50,16 +60,16 @@ def check_config(config, *, positive: Iterable[str] = (), minimum: Mapping | Non
             return []
         return list(value) if isinstance(value, (tuple, list, np.ndarray)) else [value]
 
-    for name in positive:
-        if any(not v > 0 for v in entries(name)):
-            raise ValueError(f"{cls}.{name} must be > 0, got {getattr(config, name)!r}")
-    for name, lo in (minimum or {}).items():
+    for name, lo in above.items():
+        if any(not v > lo for v in entries(name)):
+            raise ValueError(f"{cls}.{name} must be > {lo}, got {getattr(config, name)!r}")
+    for name, lo in minimum.items():
         if any(not v >= lo for v in entries(name)):
             raise ValueError(f"{cls}.{name} must be >= {lo}, got {getattr(config, name)!r}")
     for name, hi in (maximum or {}).items():
         if any(not v <= hi for v in entries(name)):
             raise ValueError(f"{cls}.{name} must be <= {hi}, got {getattr(config, name)!r}")
-    for name, allowed in (choices or {}).items():
+    for name, allowed in choices.items():
         if getattr(config, name) not in allowed:
             raise ValueError(f"{cls}.{name} must be one of {sorted(allowed)}, "
                              f"got {getattr(config, name)!r}")

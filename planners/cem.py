@@ -27,7 +27,7 @@ from __future__ import annotations
 import logging
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from typing import Protocol
 
 import numpy as np
@@ -60,10 +60,11 @@ class CEMConfig:
     distribution parameters.
 
     Attributes:
-        population: P, sequences sampled per iteration.
-        elites: E, sequences the distribution is refitted to.
-        iterations: refits.
-        horizon: H, actions per sequence.
+        population: P, CEM's sequences sampled per iteration.
+        elites: E, the sequences the distribution is refitted to.
+        iterations: CEM iterations (refits of the distribution); a pick-and-place goal's per
+            stage.
+        horizon: H, actions per sequence (a plan).
         smoothing: weight of the previous distribution in each refit (0: plain refit).
         init_std: initial displacement std, as a fraction of the bound (1: the whole bound,
             so the first population spans the workspace).
@@ -75,10 +76,10 @@ class CEMConfig:
         keep_best: put the best sequence found so far back into every population.
     """
 
-    population: int = 32
-    elites: int = 6
-    iterations: int = 15
-    horizon: int = 3
+    population: int = field(default=32, metadata={"at_least": 1})
+    elites: int = field(default=6, metadata={"at_least": 1})
+    iterations: int = field(default=15, metadata={"at_least": 1})
+    horizon: int = field(default=3, metadata={"at_least": 1})
     smoothing: float = 0.3
     init_std: float = 1.0
     min_std: float = 0.05
@@ -86,14 +87,12 @@ class CEMConfig:
     keep_best: bool = True
 
     def __post_init__(self):
-        # types: ints (not bools), finite numbers, keep_best a bool (TypeError / ValueError)
+        # types: ints (not bools), finite numbers, keep_best a bool; the fields' bounds
+        # (their metadata) (TypeError / ValueError)
         check_config(self)
-        if not (1 <= self.elites <= self.population):
+        if not self.elites <= self.population:
             raise ValueError(f"need 1 <= elites <= population, got elites={self.elites}, "
                              f"population={self.population}")
-        if self.iterations < 1 or self.horizon < 1:
-            raise ValueError(f"iterations and horizon must be >= 1, got {self.iterations}, "
-                             f"{self.horizon}")
         if not 0.0 <= self.smoothing < 1.0:
             raise ValueError(f"smoothing must be in [0, 1), got {self.smoothing}")
         if not (self.init_std > 0 and 0 <= self.min_std <= self.init_std):

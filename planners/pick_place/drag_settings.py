@@ -37,8 +37,9 @@ class DragSettings:
             its decisions, and the executed plan stops at that decision (the authors':
             ``get_cost`` is -100 max_t reward, and the run script stops at the best step);
             False: Eq. 2 after the whole plan and the settle.
-        population, iterations: CEM's (the authors': 10000 // 30 = 333 and 30; ours, chosen:
-            32, the project's population, at 30 iterations).
+        population: CEM samples per iteration (the authors': 10000 // 30 = 333; ours,
+            chosen: 32, the project's population).
+        iterations: CEM iterations (the authors': 30; ours the same).
         elites_fraction: elites per population (the authors': population // 10).
     """
 

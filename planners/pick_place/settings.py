@@ -13,7 +13,7 @@ from __future__ import annotations
 import dataclasses
 import hashlib
 import json
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
@@ -64,7 +64,8 @@ class PickPlaceSettings:
         cem: the CEM settings of every stage (``horizon`` is H).
         scripted: the scripted policy's settings.
         selfcollide: cloth self-collision (the multi-layer folds need it).
-        side: cloth edge length (m); length: rope length (m).
+        side: cloth edge length (m).
+        length: rope length (m).
         physics: the scene's physics preset (``ClothSceneConfig.preset`` /
             ``RopeSceneConfig.preset``: "fast", "default", "accurate").
         planning_physics: a preset for CEM's sampled rollouts only (a cheaper planning model);
@@ -97,24 +98,27 @@ class PickPlaceSettings:
             (``planners.pick_place.drag``); None: none (the macro methods ignore it).
     """
 
+    # the bounds and choices of a field are its metadata (``check_config`` and the flags of
+    # ``dopt.lab.flags`` read them); its documentation is the Attributes section above
     task: str
     goal: str
-    n: int
-    bound: float
+    n: int = field(metadata={"at_least": 3})
+    bound: float = field(metadata={"above": 0})
     cem: CEMConfig
     scripted: ScriptedConfig = ScriptedConfig()
     selfcollide: bool = False
-    side: float = 0.3
-    length: float = 0.5
-    physics: str = "default"
-    threads: int = 0
-    planning_physics: str | None = None
-    max_stretch: float | None = None
-    picker_speed: float | None = None
-    rest_speed: float | None = None
-    picker_move: str | None = None
-    fold_start: str | None = None
-    mass: float | None = None
+    side: float = field(default=0.3, metadata={"above": 0})
+    length: float = field(default=0.5, metadata={"above": 0})
+    physics: str = field(default="default", metadata={"choices": tuple(PHYSICS_PRESETS)})
+    threads: int = field(default=0, metadata={"at_least": 0})
+    planning_physics: str | None = field(default=None,
+                                         metadata={"choices": tuple(PHYSICS_PRESETS)})
+    max_stretch: float | None = field(default=None, metadata={"above": 0})
+    picker_speed: float | None = field(default=None, metadata={"above": 0})
+    rest_speed: float | None = field(default=None, metadata={"above": 0})
+    picker_move: str | None = field(default=None, metadata={"choices": MOVE_RULES})
+    fold_start: str | None = field(default=None, metadata={"choices": FOLD_STARTS})
+    mass: float | None = field(default=None, metadata={"above": 0})
     drag: DragSettings | None = None
 
     def __post_init__(self):
@@ -124,15 +128,9 @@ class PickPlaceSettings:
         if not isinstance(self.scripted, ScriptedConfig):
             raise TypeError(f"PickPlaceSettings.scripted must be a ScriptedConfig, got "
                             f"{self.scripted!r}")
-        # n an int >= 3, bound / side / length finite > 0 (m), threads an int >= 0 (0: one
-        # per core), selfcollide a bool; TypeError or ValueError naming the field
-        check_config(self, positive=("bound", "side", "length", "max_stretch", "picker_speed",
-                               "rest_speed", "mass"),
-                     minimum={"n": 3, "threads": 0},
-                     choices={"physics": tuple(PHYSICS_PRESETS)})
-        if self.picker_move not in (None, *MOVE_RULES):
-            raise ValueError(f"PickPlaceSettings.picker_move must be None or one of "
-                             f"{list(MOVE_RULES)}, got {self.picker_move!r}")
+        # the annotations and the fields' metadata (bounds, choices); TypeError or ValueError
+        # naming the field
+        check_config(self)
         if self.drag is not None and not isinstance(self.drag, DragSettings):
             raise TypeError(f"PickPlaceSettings.drag must be DragSettings or None, got "
                             f"{self.drag!r}")
@@ -144,14 +142,8 @@ class PickPlaceSettings:
         if self.mass is not None and "mass" not in PICK_TASKS[self.task].scene_fields:
             raise ValueError(f"PickPlaceSettings.mass: the {self.task} scene takes no mass "
                              f"from the settings (its physics preset sets it)")
-        if self.fold_start not in (None, *FOLD_STARTS):
-            raise ValueError(f"PickPlaceSettings.fold_start must be None or one of "
-                             f"{list(FOLD_STARTS)}, got {self.fold_start!r}")
         if self.fold_start == "chained" or pick_task(self.task).goal(self.goal).prepared is None:
             object.__setattr__(self, "fold_start", None)     # the same trial as the default's
-        if self.planning_physics is not None and self.planning_physics not in PHYSICS_PRESETS:
-            raise ValueError(f"PickPlaceSettings.planning_physics must be None or one of "
-                             f"{sorted(PHYSICS_PRESETS)}, got {self.planning_physics!r}")
         for name in ("n", "threads"):          # numpy scalars -> Python (JSON-able to_dict)
             object.__setattr__(self, name, int(getattr(self, name)))
         for name in ("bound", "side", "length"):

@@ -5,6 +5,7 @@ are named, moved aside and recomputed; --help shows every flag. The scripts' mai
 in-process (their trial functions patched where a run would take long), a subprocess only where the
 exit status of a real process is the point."""
 
+import argparse
 import ast
 import json
 import logging
@@ -17,11 +18,8 @@ from types import SimpleNamespace
 
 import clock_check
 import cloth_fold
-import key_particles
 import mpc
 import numpy as np
-import pick_place_cli
-import pick_sweep
 import pytest
 import report
 import rho_sweep
@@ -30,9 +28,11 @@ import svr_explain
 
 import dopt.lab.cli
 from dopt.lab import cli
+from planners.pick_place.experiments import fig7, key_particles, sweep
 
 ROOT = Path(__file__).resolve().parents[2]
 EXPERIMENTS = ROOT / "experiments"
+PICK = ROOT / "planners" / "pick_place" / "experiments"
 SCRIPTS = {"cloth_fold": cloth_fold, "rope": rope, "mpc": mpc, "rho_sweep": rho_sweep,
            "key_particles": key_particles, "report": report, "svr_explain": svr_explain,
            "clock_check": clock_check}
@@ -44,7 +44,7 @@ def no_run(monkeypatch):
     returns 1 instead of running an experiment (and the test, expecting exit 2, fails)."""
     def stop(*args, **kwargs):
         raise AssertionError("the arguments were accepted")
-    monkeypatch.setattr(pick_place_cli, "make_problem", stop)
+    monkeypatch.setattr(fig7, "make_problem", stop)
     monkeypatch.setattr(mpc, "make_trials", stop)
     monkeypatch.setattr(key_particles, "goal_sequence", stop)
     monkeypatch.setattr(report, "generate", stop)
@@ -141,7 +141,7 @@ BAD = [
                                       "2 actions x 271 steps per action on 10000000000 "
                                       "particles) needs about"),
     ("cloth_fold", ["--horizon", "1000000"], "argument --horizon: one CEM population's"),
-    ("key_particles", ["--cloth-n", "100000"], "argument --cloth-n=100000: a cloth of 100000 x "
+    ("key_particles", ["--n", "100000"], "argument --n=100000: a cloth of 100000 x "
                                                "100000 = 1e+10 particles needs about 37.3 TiB,"
                                                " more than this machine's memory"),
     ("key_particles", ["--noise-n", "16,100000"], "argument --noise-n=100000: a cloth of"),
@@ -271,7 +271,7 @@ def test_a_runtime_failure_in_a_real_process(tmp_path):
     assert "report.py: error:" in proc.stderr and "broken.json" in proc.stderr
     code = ("import sys\n"
             f"sys.path.insert(0, {str(EXPERIMENTS)!r})\n"
-            "import key_particles\n"
+            "from planners.pick_place.experiments import key_particles\n"
             "def boom(*a, **k):\n"
             "    raise RuntimeError('the plot failed')\n"
             "key_particles.plot_task = boom\n"
@@ -320,7 +320,7 @@ def test_rho_sweep_with_a_failing_trial_exits_1(tmp_path, monkeypatch):
 
 
 def test_pick_place_with_failing_trials_exits_1(tmp_path, monkeypatch):
-    monkeypatch.setattr(pick_sweep, "run_trial", _impossible)
+    monkeypatch.setattr(sweep, "run_trial", _impossible)
     out = tmp_path / "rope"
     assert rope.main(["--quick", "--methods", "scripted,random", "--out", str(out),
                       "--no-render"]) == 1
@@ -449,8 +449,7 @@ def test_truncated_and_stray_trial_files_are_named_and_recomputed(tmp_path, capl
 # ------------------------------------------------------------------------------- --help
 def _parsers() -> dict:
     """{script: its parser} and, per source file, the parsers its add_argument calls build."""
-    return {"cloth_fold": pick_place_cli.parser("cloth", "", cloth_fold.HELP),
-            "rope": pick_place_cli.parser("rope", "", rope.HELP), "mpc": mpc.parser(),
+    return {"cloth_fold": fig7.parser("cloth"), "rope": fig7.parser("rope"), "mpc": mpc.parser(),
             "rho_sweep": rho_sweep.parser(), "key_particles": key_particles.parser(),
             "report": report.parser(), "svr_explain": svr_explain.parser(),
             "clock_check": clock_check.parser()}
@@ -472,11 +471,12 @@ def _literal_flags(path: Path) -> set:
 
 def test_every_add_argument_is_in_a_parser():
     parsers = _parsers()
-    sources = {"pick_place_cli.py": ["cloth_fold", "rope"], "mpc.py": ["mpc", "rho_sweep"],
-               "rho_sweep.py": ["rho_sweep"], "key_particles.py": ["key_particles"],
-               "report.py": ["report"]}
+    sources = {PICK / "fig7.py": ["cloth_fold", "rope"],
+               EXPERIMENTS / "mpc.py": ["mpc", "rho_sweep"],
+               EXPERIMENTS / "rho_sweep.py": ["rho_sweep"],
+               PICK / "key_particles.py": ["key_particles"], EXPERIMENTS / "report.py": ["report"]}
     for name, scripts in sources.items():
-        literal = _literal_flags(EXPERIMENTS / name)
+        literal = _literal_flags(name)
         assert literal, name
         covered = set().union(*(_flags(parsers[s]) for s in scripts))
         assert literal <= covered, (name, literal - covered)
@@ -489,7 +489,8 @@ def test_help_lists_every_flag(script, capsys):
         SCRIPTS[script].main(["--help"])
     text = capsys.readouterr().out
     assert exc.value.code == 0
-    flags = _flags(_parsers()[script])
+    flags = {s for a in _parsers()[script]._actions if a.help != argparse.SUPPRESS
+             for s in a.option_strings}               # hidden old spellings aside
     assert {"--out", "--help"} <= flags or script == "report"
     missing = [f for f in flags if f not in text]
     assert not missing, missing

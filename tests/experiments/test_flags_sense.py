@@ -2,20 +2,15 @@
 make a non-finite cost (1e300: the trial was stored with mpc_cost null and every rerun died in
 the summary), --layouts where the preset or the task never reads them (silently ignored), a
 --layouts scene that makes no sense (found by its trial alone), --quick dropping an explicit
---trials or --seeds, and OUT/summary.json being a folder (reported after every trial ran).
+--trials, and OUT/summary.json being a folder (reported after every trial ran).
 Each is a usage error (one line naming the flag, exit 2) that creates nothing, or, for
 --quick, the explicit count kept."""
 
 import mpc
-import panda_execute
-import pick_place_cli
 import pytest
 import rho_sweep
-import rope
 
 from tests.dopt.tasks.test_authors_layout_sense import CYLINDER_XY, _layout
-
-REAL_MAKE_PROBLEM = pick_place_cli.make_problem
 
 
 @pytest.fixture(autouse=True)
@@ -24,9 +19,7 @@ def no_run(monkeypatch):
     (the test, expecting 2, fails) instead of running a sweep."""
     def stop(*args, **kwargs):
         raise AssertionError("the arguments were accepted")
-    monkeypatch.setattr(pick_place_cli, "make_problem", stop)
     monkeypatch.setattr(mpc, "run", stop)
-    monkeypatch.setattr(panda_execute, "run_with_console", stop)
 
 
 def usage_error(capsys, main, argv) -> str:
@@ -81,52 +74,7 @@ def test_a_senseless_layout_is_refused_before_any_trial(tmp_path, capsys):
     assert f"argument --layouts: no {layouts / '2.csv'}" in err
 
 
-class Trials(SystemExit):
-    """Raised in place of the sweep (past the scripts' one-line error handler, as an exit
-    is): the trials the run would run."""
-
-    def __init__(self, trials):
-        super().__init__(0)
-        self.trials = trials
-
-
-def _seeds(trials) -> list:
-    return sorted({t.params["seed"] for t in trials})
-
-
-def test_quick_keeps_an_explicit_trial_count(tmp_path, monkeypatch):
-    out = str(tmp_path / "o")
-    assert mpc.parse_args(["--quick", "--trials", "3", "--out", out]).trials == 3
-    assert mpc.parse_args(["--quick", "--out", out]).trials == 1
-    assert mpc.parse_args(["--out", out]).trials == mpc.DEFAULT_TRIALS
-
-    def capture(fn, trials, *args, **kwargs):
-        raise Trials(trials)
-    monkeypatch.setattr(panda_execute, "run_with_console", capture)
-    for flags, seeds in [(["--seeds", "2"], [0, 1]), ([], [0])]:
-        with pytest.raises(Trials) as run:
-            panda_execute.main(["--quick", "--goals", "diagonal", *flags, "--out", out])
-        assert _seeds(run.value.trials) == seeds
-
-
-@pytest.mark.parametrize("flags, seeds", [(["--quick", "--seeds", "2"], [0, 1]),
-                                          (["--quick"], [0]),
-                                          (["--quick", "--preset", "ours", "--seeds", "3"],
-                                           [0, 1, 2])])
-def test_quick_keeps_explicit_seeds(tmp_path, monkeypatch, flags, seeds):
-    """The seeds the run's trials have (the sweep stopped just before it starts)."""
-    def capture(problem, settings, trials, *args):
-        raise Trials(trials)
-    monkeypatch.setattr(pick_place_cli, "make_problem", REAL_MAKE_PROBLEM)
-    monkeypatch.setattr(pick_place_cli, "estimate_line", capture)
-    with pytest.raises(Trials) as run:
-        rope.main([*flags, "--methods", "scripted", "--out", str(tmp_path / "o")])
-    assert _seeds(run.value.trials) == seeds
-
-
-@pytest.mark.parametrize("main, argv", [
-    (mpc.main, ["--quick"]), (rope.main, ["--quick", "--methods", "scripted"]),
-    (panda_execute.main, ["--quick"])])
+@pytest.mark.parametrize("main, argv", [(mpc.main, ["--quick"])])
 @pytest.mark.parametrize("name", ["summary.json"])
 def test_an_output_file_that_is_a_folder_is_refused_before_any_trial(tmp_path, capsys, main,
                                                                      argv, name):
@@ -138,8 +86,7 @@ def test_an_output_file_that_is_a_folder_is_refused_before_any_trial(tmp_path, c
     assert not (out / "trials").exists()
 
 
-@pytest.mark.parametrize("main, argv, name", [(mpc.main, ["--quick"], "table1.md"),
-                                              (rope.main, ["--quick"], "curves.csv")])
+@pytest.mark.parametrize("main, argv, name", [(mpc.main, ["--quick"], "table1.md")])
 def test_every_file_a_run_writes_is_checked(tmp_path, capsys, main, argv, name):
     out = tmp_path / "out"
     (out / name).mkdir(parents=True)

@@ -9,10 +9,10 @@ import json
 
 import mpc_outputs
 import pytest
-from pick_place_cli import write_curves
 
 from dopt.lab import provenance
 from dopt.lab.record import record_figure, write_summary
+from planners.pick_place.experiments.pictures import write_curves
 from tests.dopt.lab.test_atomic_write import BIG, file_size_limit
 
 

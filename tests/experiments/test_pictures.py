@@ -39,7 +39,7 @@ def test_goal_tilt_is_the_angle_of_a_rotation_about_a_horizontal_axis(degrees):
 
 
 def test_strip_labels_follow_the_snapshots():
-    import panda_execute
+    from planners.pick_place.experiments import panda_execute
 
     assert panda_execute.strip_labels(1) == ["start"]
     labels = panda_execute.strip_labels(7)
@@ -49,8 +49,9 @@ def test_strip_labels_follow_the_snapshots():
 
 def test_scaling_plot_ticks_every_size(tmp_path):
     pytest.importorskip("matplotlib")
-    import fig7_scaling
     import matplotlib.pyplot as plt
+
+    from planners.pick_place.experiments import scaling as fig7_scaling
 
     record = ROOT / "docs" / "results" / "fig7-scaling-diagonal.json"
     if not record.is_file():

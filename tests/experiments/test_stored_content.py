@@ -10,7 +10,6 @@ import logging
 import math
 
 import mpc
-import pick_sweep
 import pytest
 import rope
 import torch
@@ -18,6 +17,7 @@ import torch
 from dopt.lab import jsonio
 from dopt.lab.provenance import COMMIT_ENV
 from dopt.lab.sweep import Checkpoint
+from planners.pick_place.experiments import sweep as pick_sweep
 
 QUICK_ROPE = ["--quick", "--no-render"]
 

@@ -3,8 +3,8 @@
 ``replay(scene, start_state, actions)`` steps a ``DeformableScene`` with plain ``mj_step`` through
 a trial's recorded actions (the picker's control rows, ``CONTROL_SPEC``) and returns a ``Replay``:
 at most ``max_frames`` evenly spaced states with their step, stage and action. Rendering the
-frames is ``dopt.render``'s (which knows no task); experiments/pick_place_cli.py composes the
-GIF. Shapes: F frames, ns state row, H actions per stage.
+frames is ``dopt.render``'s (which knows no task); ``planners.pick_place.experiments.pictures``
+composes the GIF. Shapes: F frames, ns state row, H actions per stage.
 """
 
 from __future__ import annotations

@@ -100,7 +100,7 @@ def test_committed_20x20_trials_have_the_scaling_keys(goal):
     (["--goal", "diagonal", "--mode", "spacing"], "--mode"),
 ])
 def test_bad_flags_exit_2_with_one_line(argv, flag, tmp_path, capsys):
-    import fig7_scaling
+    from planners.pick_place.experiments import scaling as fig7_scaling
 
     with pytest.raises(SystemExit) as exc:
         fig7_scaling.main([*argv, "--out", str(tmp_path / "out")])

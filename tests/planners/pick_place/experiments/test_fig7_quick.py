@@ -8,13 +8,13 @@ import subprocess
 import sys
 from pathlib import Path
 
-import cloth_fold
 import imageio.v3 as iio
 import numpy as np
 import pytest
-import rope
 
-ROOT = Path(__file__).resolve().parents[2]
+from planners.pick_place.experiments import fig7
+
+ROOT = Path(__file__).resolve().parents[4]
 
 
 def _check_summary(out: Path, goal: str, extra=()):
@@ -58,7 +58,7 @@ def _check_summary(out: Path, goal: str, extra=()):
 
 def test_cloth_fold_quick_writes_everything_and_resumes(tmp_path, capsys):
     out = tmp_path / "diag"
-    assert cloth_fold.main(["--quick", "--goal", "diagonal", "--out", str(out)]) == 0
+    assert fig7.cloth(["--quick", "--goal", "diagonal", "--out", str(out)]) == 0
     first = _check_summary(out, "diagonal")
     assert first["blowups"] == [] and not (out / "blowups").exists()     # every plan stable
     # said before the run: how long, from a calibration rollout
@@ -77,7 +77,7 @@ def test_cloth_fold_quick_writes_everything_and_resumes(tmp_path, capsys):
         assert gif.stat().st_size <= 2_000_000
     assert not (out / "goal.png").exists()
     stamps = {p.name: p.stat().st_mtime_ns for p in (out / "trials").glob("*.json")}
-    assert cloth_fold.main(["--quick", "--goal", "diagonal", "--out", str(out),
+    assert fig7.cloth(["--quick", "--goal", "diagonal", "--out", str(out),
                             "--no-render"]) == 0
     assert {p.name: p.stat().st_mtime_ns for p in (out / "trials").glob("*.json")} == stamps
     assert "every trial is finished" in capsys.readouterr().out
@@ -87,7 +87,7 @@ def test_cloth_fold_quick_writes_everything_and_resumes(tmp_path, capsys):
 
 def test_rope_straighten_quick(tmp_path):
     out = tmp_path / "rope"
-    assert rope.main(["--quick", "--goal", "straighten", "--out", str(out), "--no-render"]) == 0
+    assert fig7.rope(["--quick", "--goal", "straighten", "--out", str(out), "--no-render"]) == 0
     summary = _check_summary(out, "straighten", extra=("end_to_end_ratio_mean",))
     assert summary["departures"] == {}                  # the quick preset as it stands
     assert not list(out.glob("goal_vs_*.png")) and not list(out.glob("*.gif"))  # --no-render
@@ -99,8 +99,8 @@ def test_workers_run_the_trials_on_a_pool_with_the_same_results(tmp_path):
     results a run in this process gives, under the same trial keys."""
     inline, pool = tmp_path / "inline", tmp_path / "pool"
     flags = ["--quick", "--goal", "fold", "--methods", "simple,scripted", "--no-render"]
-    assert rope.main([*flags, "--out", str(inline)]) == 0
-    assert rope.main([*flags, "--workers", "2", "--out", str(pool)]) == 0
+    assert fig7.rope([*flags, "--out", str(inline)]) == 0
+    assert fig7.rope([*flags, "--workers", "2", "--out", str(pool)]) == 0
     assert (sorted(p.name for p in (inline / "trials").glob("*.json"))
             == sorted(p.name for p in (pool / "trials").glob("*.json")))
     a, b = (json.loads((d / "summary.json").read_text())["methods"] for d in (inline, pool))
@@ -114,36 +114,35 @@ def test_help_explains_every_flag(script):
     text = subprocess.run([sys.executable, str(ROOT / "experiments" / script), "--help"],
                           capture_output=True, text=True, check=True,
                           env={**os.environ, "PYTHONPATH": str(ROOT)}).stdout
-    for flag in ("--goal", "--methods", "--seeds", "--seed", "--out", "--quick", "--threads"):
+    for flag in ("--goal", "--methods", "--trials", "--seed", "--out", "--quick", "--threads"):
         assert flag in text
 
 
 def test_paper_protocol_runs_the_papers_budget():
     """--preset paper: the paper's 30 CEM iterations per stage and ten runs per method
     (Sec. IV-C.2), on a 20 x 20 cloth; flags still override it; ours keeps its own."""
-    import pick_place_cli
-
     from planners.pick_place import PickPlaceSettings
+    from planners.pick_place.experiments import fig7
 
-    ap = pick_place_cli.parser("cloth", "", cloth_fold.HELP)
+    ap = fig7.parser("cloth")
     for goal in ("diagonal", "side", "reflective", "underneath"):
-        args, s = pick_place_cli.parse(ap, "cloth", ["--preset", "paper", "--goal", goal,
+        args, s = fig7.parse(ap, "cloth", ["--preset", "paper", "--goal", goal,
                                                      "--out", "results/x"])
-        assert (args.seeds, s.cem.iterations, s.n, s.physics) == (10, 30, 20, "default")
+        assert (args.trials, s.cem.iterations, s.n, s.physics) == (10, 30, 20, "default")
         assert s.selfcollide == PickPlaceSettings.preset("cloth", goal).selfcollide
-    args, s = pick_place_cli.parse(ap, "cloth", ["--preset", "paper", "--seeds", "2",
+    args, s = fig7.parse(ap, "cloth", ["--preset", "paper", "--seeds", "2",
                                                  "--n", "16", "--out", "results/x"])
-    assert (args.seeds, s.n) == (2, 16)
+    assert (args.trials, s.n) == (2, 16)
     # the bare command: ours's settings, one seed (a first answer); --preset ours: its three
-    args, s = pick_place_cli.parse(ap, "cloth", ["--out", "results/x"])
-    assert (args.preset, args.seeds, s.cem.iterations, s.n) == ("ours", 1, 15, 12)
-    args, s2 = pick_place_cli.parse(ap, "cloth", ["--preset", "ours", "--out", "results/x"])
-    assert (args.seeds, s2) == (3, s)
-    rope_ap = pick_place_cli.parser("rope", "", rope.HELP)
-    _, s = pick_place_cli.parse(rope_ap, "rope", ["--preset", "paper", "--goal", "fold",
+    args, s = fig7.parse(ap, "cloth", ["--out", "results/x"])
+    assert (args.preset, args.trials, s.cem.iterations, s.n) == ("ours", 1, 15, 12)
+    args, s2 = fig7.parse(ap, "cloth", ["--preset", "ours", "--out", "results/x"])
+    assert (args.trials, s2) == (3, s)
+    rope_ap = fig7.parser("rope")
+    _, s = fig7.parse(rope_ap, "rope", ["--preset", "paper", "--goal", "fold",
                                                   "--out", "results/x"])
     assert s.cem.iterations == 30 and s.departures("paper") == {}
-    _, s = pick_place_cli.parse(rope_ap, "rope", ["--preset", "paper", "--goal", "fold",
+    _, s = fig7.parse(rope_ap, "rope", ["--preset", "paper", "--goal", "fold",
                                                   "--population", "200", "--elites", "20",
                                                   "--out", "results/x"])
     assert s.departures("paper") == {"cem.population": 200, "cem.elites": 20}
@@ -156,27 +155,26 @@ def test_trial_key_follows_what_the_preset_and_picker_mean(monkeypatch):
     preset or the picker gives another key (the old trial is not reused), threads do not."""
     from dataclasses import replace
 
-    import pick_place_cli
-
     from dopt.tasks.pick import cloth_scene, picker
     from planners.pick_place import PickPlaceSettings
+    from planners.pick_place.experiments import fig7
 
     s = PickPlaceSettings.preset("cloth", "diagonal")
-    key = pick_place_cli.trial_key("simple", 0, s)
-    assert pick_place_cli.trial_key("simple", 0, replace(s, threads=7)) == key
+    key = fig7.trial_key("simple", 0, s)
+    assert fig7.trial_key("simple", 0, replace(s, threads=7)) == key
     monkeypatch.setitem(cloth_scene.PHYSICS_PRESETS, "default", {"young": 1e5})
-    assert pick_place_cli.trial_key("simple", 0, s) != key
+    assert fig7.trial_key("simple", 0, s) != key
     monkeypatch.setitem(cloth_scene.PHYSICS_PRESETS, "default", {"passive": True})
-    assert pick_place_cli.trial_key("simple", 0, s) != key
+    assert fig7.trial_key("simple", 0, s) != key
     # an option at its unset value (UNSET_SCENE_FIELDS) is not part of the identity
     monkeypatch.setitem(cloth_scene.PHYSICS_PRESETS, "default", {"passive": False})
     assert "passive" not in s.resolved_physics()["scene"]
-    assert pick_place_cli.trial_key("simple", 0, s) == key
+    assert fig7.trial_key("simple", 0, s) == key
     monkeypatch.setitem(cloth_scene.PHYSICS_PRESETS, "default", {})
-    assert pick_place_cli.trial_key("simple", 0, s) == key
+    assert fig7.trial_key("simple", 0, s) == key
     monkeypatch.setattr(PickPlaceSettings, "picker",
                         lambda self: picker.PickerConfig(bound=(self.bound,) * 3, snap=0.015))
-    assert pick_place_cli.trial_key("simple", 0, s) != key
+    assert fig7.trial_key("simple", 0, s) != key
 
 
 def test_picker_speed_sets_the_steps_of_an_action_and_the_key():
@@ -186,19 +184,19 @@ def test_picker_speed_sets_the_steps_of_an_action_and_the_key():
     from dataclasses import replace
 
     import numpy as np
-    import pick_place_cli
 
     from planners.pick_place import PickPlaceSettings, make_problem
+    from planners.pick_place.experiments import fig7
 
-    ap = pick_place_cli.parser("cloth", "", cloth_fold.HELP)
-    _, s = pick_place_cli.parse(ap, "cloth", ["--quick", "--out", "results/x"])
-    _, fast = pick_place_cli.parse(ap, "cloth", ["--quick", "--picker-speed", "1.25",
+    ap = fig7.parser("cloth")
+    _, s = fig7.parse(ap, "cloth", ["--quick", "--out", "results/x"])
+    _, fast = fig7.parse(ap, "cloth", ["--quick", "--picker-speed", "1.25",
                                                  "--out", "results/x"])
     assert s.picker_speed is None and fast.picker_speed == 1.25
     assert s.picker().speed == 0.5 and fast.picker().speed == 1.25
-    key = pick_place_cli.trial_key("simple", 0, s)
-    assert pick_place_cli.trial_key("simple", 0, replace(s, picker_speed=None)) == key
-    assert pick_place_cli.trial_key("simple", 0, fast) != key
+    key = fig7.trial_key("simple", 0, s)
+    assert fig7.trial_key("simple", 0, replace(s, picker_speed=None)) == key
+    assert fig7.trial_key("simple", 0, fast) != key
     steps = {}
     for name, settings in (("slow", s), ("fast", fast)):
         picker = make_problem(settings, 0).scene.picker
@@ -207,6 +205,6 @@ def test_picker_speed_sets_the_steps_of_an_action_and_the_key():
         steps[name] = picker.steps_per_action
     assert steps["fast"] < steps["slow"]
     with pytest.raises(SystemExit):
-        pick_place_cli.parse(ap, "cloth", ["--picker-speed", "0", "--out", "results/x"])
+        fig7.parse(ap, "cloth", ["--picker-speed", "0", "--out", "results/x"])
     with pytest.raises(ValueError, match="picker_speed"):
         replace(PickPlaceSettings.preset("cloth", "diagonal"), picker_speed=-1.0)

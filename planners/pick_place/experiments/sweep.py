@@ -1,8 +1,7 @@
-"""The sweep of the key-particle experiments (cloth_fold.py, rope.py): their trials run through
-``dopt.lab.sweep`` with the sweep's console (``dopt.lab.console``), their schema (what a stored
-result and checkpoint must hold to be reused or resumed), the CEM iterations a folder already
-holds, and the flags ``planners.pick_place.budget`` may name. ``pick_place_cli`` is the command line
-around it. The trials write their blow-up captures under the sweep's folder
+"""The sweep of the key-particle experiments (``fig7``, ``scaling``, ``encoding``): their trials
+run through ``dopt.lab.sweep`` with the sweep's console (``dopt.lab.console``), their schema
+(what a stored result and checkpoint must hold to be reused or resumed) and the CEM iterations
+a folder already holds. The trials write their blow-up captures under the sweep's folder
 (``planners.pick_place.run_trial``'s ``blowup_out``)."""
 
 from __future__ import annotations
@@ -21,9 +20,6 @@ from planners.trial_progress import (
     result_problem,
 )
 
-#: the flag of each setting ``planners.pick_place.budget`` may name
-BUDGET_FLAGS = {"n": "--n", "bound": "--bound", "picker_speed": "--picker-speed",
-                "cem.population": "--population", "cem.horizon": "--horizon"}
 #: what a stored trial and its checkpoint must hold to be reused or resumed (``dopt.lab.sweep``):
 #: their fields, a cost history as long as its stages' list, a CEM progress that can resume,
 #: and params that name the trial they are stored for (the key they hash to)
@@ -32,17 +28,19 @@ SCHEMA = Schema(result=RESULT_FIELDS, progress=PROGRESS_FIELDS, check_result=res
 
 
 def run_trials(trials: list[Trial], iterations_per_trial: int, out: Path,
-               fresh: bool = False, workers: int = 1) -> tuple[list, SweepResult]:
+               fresh: bool = False, workers: int = 1,
+               reuse: str = "same-code") -> tuple[list, SweepResult]:
     """Every trial not finished yet under ``out`` (all of them when ``fresh``), inline or on a
     pool of ``workers`` processes, with the sweep's console (a bar of the CEM iterations of
     every trial, the running ones of the pool included). Returns the results of the given
     trials and the sweep's result (``failed``: {key: error}, ``commits``: the code versions of
-    the results); a trial's blow-up captures go to ``out``/blowups."""
+    the results); a trial's blow-up captures go to ``out``/blowups. ``reuse``: the sweep's
+    (``dopt.lab.sweep.run_sweep``; "any" with --reuse-any)."""
     cem = {t.key for t in trials if t.params["method"] != "scripted"}
     res = run_with_console(
         functools.partial(cem_trial, blowup_out=str(out)), trials, out, unit="it",
         desc="CEM iterations", workers=workers,
-        fresh=fresh, schema=SCHEMA,
+        fresh=fresh, schema=SCHEMA, reuse=reuse,
         steps=lambda t: iterations_per_trial if t.key in cem else 0,
         held=lambda t: iterations_held([t], iterations_per_trial, out) if t.key in cem else 0,
         describe=describe_result)
@@ -76,13 +74,3 @@ def iterations_held(trials: list[Trial], iterations_per_trial: int, out: Path) -
             held += iterations_done(progress)
     return held
 
-
-def add_move_argument(ap) -> None:
-    """--move: how long each pick-and-place action's move lasts (``PickerConfig.move``)."""
-    from dopt.tasks.pick.picker import MOVE_RULES
-
-    ap.add_argument("--move", choices=MOVE_RULES, default=None,
-                    help="how long each action's move lasts: fixed (the default), as long as "
-                         "the bound box's diagonal takes at the picker's speed; sized, as long "
-                         "as the action's own displacement takes (fewer steps; not with "
-                         "--rest-speed; PickPlaceSettings.picker_move)")

@@ -4,7 +4,7 @@ import subprocess
 import sys
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[2]
+ROOT = Path(__file__).resolve().parents[4]
 
 
 def test_quick_run_writes_summary_curves_and_plots(tmp_path):
@@ -33,7 +33,7 @@ def test_quick_run_writes_summary_curves_and_plots(tmp_path):
 def test_help_explains_every_flag():
     out = subprocess.run([sys.executable, str(ROOT / "experiments" / "key_particles.py"),
                           "--help"], check=True, capture_output=True, text=True).stdout
-    for flag in ["--task", "--out", "--seed", "--quick", "--cloth-n", "--noise-n",
+    for flag in ["--task", "--out", "--seed", "--quick", "--n", "--noise-n",
                  "--noise-seeds", "--noise-panels"]:
         assert flag in out
 
@@ -46,9 +46,8 @@ def test_unknown_panel_mode_is_refused_by_name():
 
 
 def test_noise_sweep_journals_each_goal_and_a_rerun_resumes(tmp_path):
-    import key_particles  # experiments/ is on the path (pytest's pythonpath)
-
     from deformables import ClothConfig, RopeConfig
+    from planners.pick_place.experiments import key_particles
 
     journal = tmp_path / "noise.jsonl"
     args = (RopeConfig(), ClothConfig(), [1e-3], [12], 1, ["auto", "off"])

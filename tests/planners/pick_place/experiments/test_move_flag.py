@@ -5,18 +5,17 @@ usage error. The threads per trial share the cores out over the trials that run 
 
 from dataclasses import replace
 
-import cloth_fold
-import pick_place_cli
 import pytest
 
 from dopt.rollout import share_cores
 from planners.pick_place import PickPlaceSettings, trial_key
+from planners.pick_place.experiments import fig7
 from planners.pick_place.scaling import scaling_trials
 
 
 def _parse(*flags):
-    ap = pick_place_cli.parser("cloth", "", cloth_fold.HELP)
-    return pick_place_cli.parse(ap, "cloth", [*flags, "--out", "results/x"])
+    ap = fig7.parser("cloth")
+    return fig7.parse(ap, "cloth", [*flags, "--out", "results/x"])
 
 
 def test_move_sized_is_a_setting_with_its_own_key_and_fixed_is_the_default():

@@ -1,16 +1,14 @@
 """--fold-start of cloth_fold.py: the protocol's start by default (paper: prepared; ours:
 chained), either by name, a usage error otherwise; rope.py has no such flag."""
 
-import cloth_fold
-import pick_place_cli
 import pytest
-import rope
+
+from planners.pick_place.experiments import fig7
 
 
 def _parse(*flags, task="cloth"):
-    help_ = cloth_fold.HELP if task == "cloth" else rope.HELP
-    ap = pick_place_cli.parser(task, "", help_)
-    return pick_place_cli.parse(ap, task, [*flags, "--out", "results/x"])[1]
+    ap = fig7.parser(task)
+    return fig7.parse(ap, task, [*flags, "--out", "results/x"])[1]
 
 
 def test_fold_start_defaults_to_the_protocols_and_takes_either_start():

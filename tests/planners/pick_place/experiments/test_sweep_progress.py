@@ -2,10 +2,9 @@
 a finished trial, those of a checkpoint it resumes, none of a checkpoint it cannot resume (not
 a trial's progress: the pick-and-place schema refuses it)."""
 
-from pick_sweep import SCHEMA
-from pick_sweep import iterations_held as _iterations_held
-
 from dopt.lab.sweep import Checkpoint, Trial, run_sweep
+from planners.pick_place.experiments.sweep import SCHEMA
+from planners.pick_place.experiments.sweep import iterations_held as _iterations_held
 from planners.trial_progress import RESULT_FIELDS
 
 

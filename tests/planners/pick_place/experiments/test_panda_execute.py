@@ -3,8 +3,9 @@ renders, resumes; bad flags are usage errors."""
 
 import json
 
-import panda_execute
 import pytest
+
+from planners.pick_place.experiments import panda_execute
 
 
 def test_quick_run_writes_both_goals_and_resumes(tmp_path, capsys):
