@@ -141,7 +141,7 @@ def _svr_explain(d: dict, records: list[dict], info: TrialInfo) -> dict:
 
 
 def _panda(d: dict, records: list[dict], info: TrialInfo) -> dict:
-    import panda_execute
+    from planners.pick_place.experiments import panda_execute
 
     return {"goals": panda_execute.summarize(records), "trial_commits": commits_of(records)}
 
