@@ -10,14 +10,10 @@ from __future__ import annotations
 import statistics
 from pathlib import Path
 
-from report_base import (
+from dopt.lab.report.base import (
     Result,
     _and,
     _finite,
-    _label,
-    _methods_in_order,
-    _panel,
-    _panel_rank,
     failed_lines,
     link,
     mm,
@@ -27,13 +23,19 @@ from report_base import (
     source_lines,
     table,
 )
-from report_stats import (
+from dopt.lab.report.stats import (
     CORRECTION,
     FAMILY_ALPHA,
     holm_family,
     pval,
     welch_p,
     welch_p_from_intervals,
+)
+from planners.pick_place.experiments.report_paper import (
+    _label,
+    _methods_in_order,
+    _panel,
+    _panel_rank,
 )
 
 #: how the claims' sentences name the correction (RESULTS.md and the README)

@@ -18,10 +18,9 @@ import json
 import statistics
 from pathlib import Path
 
-from report_base import ReportError, Result, num, pm, section, table
-from report_svr import protocol_line
-
+from dopt.lab.report.base import ReportError, Result, num, pm, section, table
 from dopt.lab.trialpack import PackError, stored_trials
+from planners.svr_mpc.experiments.report_svr import protocol_line
 
 #: a scene whose ratio reaches this ran on a machine this much slower than the reference's
 SLOW = 1.5

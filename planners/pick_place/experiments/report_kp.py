@@ -9,8 +9,9 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from report_base import Result, _finite, cell, clip, mm, num, pm, sci, section, table
-from report_stats import scaling_families, scaling_key
+from dopt.lab.report.base import Result, _finite, cell, clip, mm, num, pm, sci, section, table
+from planners.bench.cem import SHARES
+from planners.pick_place.experiments.report_paper import scaling_families, scaling_key
 
 
 # ------------------------------------------------------------------------ physics presets
@@ -105,8 +106,6 @@ def cloth_steps_section(results: list[Result], page: Path) -> list[str]:
 
 
 # ------------------------------------------------- a CEM iteration against its limit (KP)
-#: the pieces of an iteration's time (planners.bench.cem.SHARES; copied: no torch here)
-CEM_LIMIT_SHARES = ("simulate", "service", "stability", "encode", "cost", "cem", "python")
 
 
 def cem_limit_section(results: list[Result], page: Path) -> list[str]:
@@ -116,14 +115,14 @@ def cem_limit_section(results: list[Result], page: Path) -> list[str]:
                  num(row["mj_step_ms"], 3), str(row["cores"]), num(row["limit_s"], 2),
                  num(row["iteration_s"], 2), num(row["ratio"], 2),
                  num(row["simulate_ratio"], 2), num(row.get("cpu_ratio"), 2),
-                 *[num(row["shares"][k], 1, 100) for k in CEM_LIMIT_SHARES]]
+                 *[num(row["shares"][k], 1, 100) for k in SHARES]]
                 for row in d["rows"]]
         return [f"### `{r.name}`: {d.get('task')} {d.get('goal')}, protocol "
                 f"{d.get('protocol')}, candidates {d.get('candidates')}, "
                 f"{d.get('iterations')} iterations per size", "",
                 *table(["cloth", "candidates", "steps / iteration", "ms / mj_step", "cores",
                         "limit s", "iteration s", "ratio", "simulation / limit",
-                        "CPU / steps", *[f"{k} %" for k in CEM_LIMIT_SHARES]], rows)]
+                        "CPU / steps", *[f"{k} %" for k in SHARES]], rows)]
 
     return section("Key particles: a CEM iteration against its physical limit",
                    "`python -m planners.bench cem-limit`: per cloth size, CEM iterations of the "

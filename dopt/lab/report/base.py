@@ -1,9 +1,8 @@
-"""The common part of experiments/report.py: the result files (``Result``, ``load_results``),
-the Markdown helpers every section uses, and the Fig. 7 labels and panels.
+"""The common part of the report engine: the result files (``Result``, ``load_results``) and
+the Markdown helpers every section uses (the paper slices' report modules use them too).
 
-Standard library only (report.py's rule: it runs without torch, numpy or MuJoCo), with
-``dopt.lab.provenance.recorded_command``: a recorded command is shown naming no folder of the
-machine that recorded it.
+A recorded command is shown naming no folder of the machine that recorded it
+(``dopt.lab.provenance.recorded_command``).
 """
 
 from __future__ import annotations
@@ -15,42 +14,24 @@ import statistics
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from dopt.lab.experiment import bench_kind
 from dopt.lab.provenance import recorded_command
 
-ROOT = Path(__file__).resolve().parents[1]
+#: the checkout the default folders are in
+ROOT = Path(__file__).resolve().parents[3]
 BEGIN, END = "<!-- results:begin -->", "<!-- results:end -->"
 REGENERATE = "python experiments/report.py"
 
-#: method labels of the key-particle experiments (planners.pick_place.LABELS; copied here so
-#: that this script needs no torch), in the order of the paper's figures
-FIG7_LABELS = {"simple": "CEM(Simple)", "original": "CEM(Original)",
-               "random": "CEM(Random)", "scripted": "Scripted"}
-#: Fig. 7 panel of each (task, goal) of the key-particle paper
-FIG7_PANELS = {("rope", "straighten"): "(a) rope straightening",
-               ("rope", "fold"): "(b) rope folding",
-               ("cloth", "diagonal"): "(c) cloth diagonal fold",
-               ("cloth", "side"): "(d) cloth side fold",
-               ("cloth", "reflective"): "(e) cloth reflective fold",
-               ("cloth", "underneath"): "(f) cloth underneath fold"}
 #: what every result file's "provenance" holds (``dopt.lab.provenance.provenance()``)
 PROVENANCE_FIELDS = ("command", "git_commit", "versions")
 PROVENANCE_VERSIONS = ("dopt", "mujoco", "torch")
-KP = "key particles"
-SVR = "state-vector reduction"
-
-
-#: result files of the benchmarks (field "bench") -> the section that renders them
-BENCH_KINDS = {"cloth": "physics", "rope": "physics",          # python -m planners.bench
-               "key-particles-compare": "kp_compare",          # python -m deformables.bench
-               "key-particles-paper-scale": "kp_paper_scale",
-               "key-particles-authors": "kp_authors"}
 
 
 # ------------------------------------------------------------------------------ loading
 @dataclass(frozen=True)
 class Result:
     """A result file: its path, its "experiment" kind and its contents; ``notes``: what
-    report.py's ``generate`` found about it besides (its committed trials, "trials"; whether
+    the engine's ``generate`` found about it besides (its committed trials, "trials"; whether
     today's presets still give its settings, "stale")."""
 
     path: Path
@@ -59,8 +40,12 @@ class Result:
 
     @property
     def kind(self) -> str:
-        if "experiment" not in self.data and self.data.get("bench") in BENCH_KINDS:
-            return BENCH_KINDS[self.data["bench"]]
+        """Its "experiment" field; a benchmark's file (a "bench" field instead): the kind of
+        the registered experiment that reads that bench (``Experiment.benches``)."""
+        if "experiment" not in self.data and isinstance(self.data.get("bench"), str):
+            kind = bench_kind(self.data["bench"])
+            if kind is not None:
+                return kind
         return str(self.data.get("experiment", "(none)"))
 
     @property
@@ -250,37 +235,6 @@ def section(title: str, intro: str | None, results: list[Result], page: Path, bo
     for r in sorted(results, key=key):
         lines += [*body(r), "", *source_lines([r], page), *failed_lines(r), ""]
     return lines[:-1]
-
-
-def _label(method: str) -> str:
-    return FIG7_LABELS.get(method, method)
-
-
-def _in_label_order(methods) -> list[str]:
-    """The distinct ``methods`` in the figures' order (``FIG7_LABELS``), unknown ones after,
-    sorted."""
-    seen = set(methods)
-    known = [m for m in FIG7_LABELS if m in seen]
-    return known + sorted(seen - set(known))
-
-
-def _methods_in_order(results: list[Result]) -> list[str]:
-    return _in_label_order(m for r in results for m in r.data["methods"])
-
-
-def _panel_of(task, goal) -> str:
-    return FIG7_PANELS.get((task, goal), f"{task} {goal}")
-
-
-def _panel_rank(task, goal) -> int:
-    """The place of (task, goal) in the paper's Fig. 7 (``FIG7_PANELS``); unknown ones last."""
-    order = list(FIG7_PANELS)
-    return order.index((task, goal)) if (task, goal) in order else len(order)
-
-
-def _panel(r: Result) -> str:
-    return _panel_of(r.data.get("task"), r.data.get("goal"))
-
 
 
 def _median(xs: list) -> float | None:

@@ -1,6 +1,7 @@
-"""p-values of the differences experiments/report.py judges, and Holm's correction of a family.
+"""p-values of the differences the report judges, and Holm's correction of a family.
 
-The report is standard library only, so the distributions are here in pure Python:
+The distributions are in pure Python (the numbers of the committed pages depend on them to the
+last digit, so they stay these functions):
 
 - ``t_sf2(t, df)``: the two-sided tail P(|T| >= |t|) of Student's t with ``df`` (real) degrees
   of freedom, from the regularized incomplete beta function (continued fraction, as in
@@ -14,9 +15,8 @@ The report is standard library only, so the distributions are here in pure Pytho
   Table 1 statistic, 1.645 std / sqrt(n)).
 
 ``kendall_tau_b(x, y)``: Kendall's tau-b rank correlation (how two columns order the same
-rows). ``holm_family`` applies ``dopt.lab.multiple.holm`` (pure Python) to a family of p-values;
-``scaling_families`` groups the scaling studies' trend tests into families by what they vary.
-The tests check every function against scipy.
+rows). ``holm_family`` applies ``dopt.lab.multiple.holm`` (pure Python) to a family of
+p-values. The tests check every function against scipy.
 """
 
 from __future__ import annotations
@@ -24,7 +24,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 
-from dopt.lab.multiple import holm, holm_slopes
+from dopt.lab.multiple import holm
 
 #: the family-wise error rate the report's families are judged at
 FAMILY_ALPHA = 0.05
@@ -186,25 +186,3 @@ def kendall_tau_b(x: list[float], y: list[float]) -> float | None:
     pairs = n * (n - 1) // 2
     denom = math.sqrt((pairs - tx) * (pairs - ty))
     return (c - d) / denom if denom else None
-
-
-# ------------------------------------------------------------- the scaling studies
-def scaling_key(r) -> str:
-    """A scaling file's name among the others: its fold, and "at fixed spacing" for a sweep
-    that grows the sheet (``fig7_scaling.py --mode size``; a file without a mode refined the
-    fixed sheet)."""
-    return r.data.get("goal") + (" at fixed spacing" if r.data.get("mode") == "size" else "")
-
-
-def scaling_families(results: list) -> tuple[dict, dict]:
-    """({scaling_key: file} of the scaling files, {(key, test): Holm over the trend tests of
-    the files of one mode together, ``holm_slopes``, with "folds": how many files}); a mode
-    with one file has no family."""
-    files = {scaling_key(r): r for r in results if r.kind == "fig7_scaling"}
-    family = {}
-    for mode in {r.data.get("mode", "resolution") for r in files.values()}:
-        group = {k: r.data["trend"] for k, r in files.items()
-                 if r.data.get("mode", "resolution") == mode}
-        if len(group) > 1:
-            family.update({k: {**v, "folds": len(group)} for k, v in holm_slopes(group).items()})
-    return files, family

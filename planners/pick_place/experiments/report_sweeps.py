@@ -1,34 +1,22 @@
-"""Sweeps in progress in experiments/report.py: committed trials that no recorded summary holds
-yet: Fig. 7's seed by seed with the checkpoints of trials stopped part-way, the MPC sweeps'
-counted per row and scene.
-
-Standard library only (and ``planners.trial_progress`` and ``dopt.lab.trialpack``, the reader of
-committed trials, standard library themselves).
+"""Fig. 7 sweeps in progress (RESULTS.md): committed trials that no recorded summary holds yet,
+seed by seed, with the checkpoints of trials stopped part-way.
 """
 
 from __future__ import annotations
 
 import json
-from collections import Counter
+import re
 from pathlib import Path
 
-from report_base import (
-    ReportError,
-    Result,
-    _finite,
+from dopt.lab.report.base import ReportError, Result, _finite, _median, mm, num, table
+from dopt.lab.report.trials import own_trials
+from dopt.lab.trialpack import PackError, StoredTrial, stored_trials
+from planners.pick_place.experiments.report_paper import (
     _in_label_order,
     _label,
-    _median,
     _panel_of,
     _panel_rank,
-    mm,
-    num,
-    short_commit,
-    table,
 )
-from report_trials import TrialInfo, machines_text, out_folder, record_stamp
-
-from dopt.lab.trialpack import PackError, stored_trials
 from planners.trial_progress import RUN_ONLY_SETTINGS, iterations_done
 
 
@@ -200,45 +188,37 @@ def sweeps_in_progress_section(results_dir: Path, results: list[Result]) -> list
     return lines
 
 
-def mpc_sweeps_in_progress_section(results_dir: Path, results: list[Result]) -> list[str]:
-    """Per MPC sweep folder ``runs/<sweep>`` (Table 1, Fig. 4: not ``fig7-*``) with committed
-    trials that no recorded summary's ``--out`` names: its trials counted per row (method,
-    rho, theta) and scene, their commits and machines. No costs: means, intervals and claims
-    wait for the summary the sweep's command records."""
-    named = {out_folder(results_dir, r.origin_command) for r in results}
-    lines = []
-    for folder in sorted(Path(results_dir).glob("runs/*")):
-        if folder.name.startswith("fig7-") or folder in named or not folder.is_dir():
-            continue
-        try:
-            files = stored_trials(folder / "trials")
-            records = [json.loads(p.read_text()) for p in files]        # each read once
-            params = [rec.get("params") or {} for rec in records]
-        except (PackError, OSError, ValueError, AttributeError) as e:
-            raise ReportError(f"{folder}: its trials cannot be read: {e}") from e
-        if not files or not all(p.get("method") and "seed" in p for p in params):
-            continue                                  # not an MPC sweep's trials
-        rows: dict[tuple, set] = {}
-        for p in params:
-            rows.setdefault((p["method"], p.get("rho"), p.get("theta")), set()).add(p["seed"])
-        scenes = sorted(len(s) for s in rows.values())
-        seeds = sorted(set().union(*rows.values()))
-        methods = Counter(method for method, _, _ in rows)
-        stamps = [record_stamp(rec) for rec in records]
-        info = TrialInfo(folder.name, files, machines=Counter(m for _, m in stamps))
-        commits = Counter(c for c, _ in stamps)
-        first = params[0]
-        problem = "the authors' problem" if first.get("problem") == "authors" else "our problem"
-        lines += ["", f"### `{folder.name}`: {first.get('task')}, {problem}",
-                  "", f"{len(files)} trials over {len(rows)} rows (method, rho, theta: "
-                  + ", ".join(f"{m} {n}" for m, n in sorted(methods.items()))
-                  + f"), {scenes[0]}" + (f"-{scenes[-1]}" if scenes[-1] != scenes[0] else "")
-                  + f" scenes each (seeds {seeds[0]}-{seeds[-1]}); written at "
-                  + ", ".join(f"`{short_commit(c)}` ({n})" for c, n in commits.most_common())
-                  + f"; {machines_text(info)}."]
-    if not lines:
-        return []
-    return ["## MPC sweeps in progress", "",
-            "Trials committed under `docs/results/runs/<sweep>/trials/` that no recorded "
-            "summary holds yet, counted per row and scene; costs, intervals and claims wait for "
-            "the summary the sweep's command records (the same command resumes it).", *lines]
+# ------------------------------------------------------- the trials a summary holds
+#: a pick-and-place trial's key (``planners.pick_place.experiments`` sweeps' ``trial_key``)
+FIG7_KEY = re.compile(r"^(?P<method>[a-z]+)-seed(?P<seed>\d+)-[0-9a-f]{8}$")
+
+
+def fig7_trials(folder: Path, r: Result) -> list[StoredTrial]:
+    """The trials of ``folder`` a Fig. 7 summary holds: those its "trial_keys" names, else
+    its methods' seeds (the key is ``<method>-seed<seed>-<settings hash>``)."""
+    if isinstance(r.data.get("trial_keys"), list):
+        return own_trials(folder, r)
+    held = {m: set(e.get("seeds") or ()) for m, e in (r.data.get("methods") or {}).items()}
+    return [p for p in stored_trials(folder / "trials") if (m := FIG7_KEY.match(p.stem))
+            and int(m["seed"]) in held.get(m["method"], ())]
+
+
+def scaling_trials(folder: Path, r: Result) -> list[StoredTrial]:
+    """The trials of ``folder`` a scaling summary holds: those its "trial_keys" names, else
+    its methods, seeds and cloth sizes (each trial's settings "n")."""
+    if isinstance(r.data.get("trial_keys"), list):
+        return own_trials(folder, r)
+    d = r.data
+    methods, seeds = set(d.get("methods_run") or ()), set(d.get("seeds") or ())
+    sizes = set(d.get("sizes") or ())
+    return [p for p in stored_trials(folder / "trials") if (m := FIG7_KEY.match(p.stem))
+            and m["method"] in methods and int(m["seed"]) in seeds and _cloth_size(p) in sizes]
+
+
+def _cloth_size(path: Path | StoredTrial) -> int | None:
+    """The particles per side a pick-and-place trial ran on (its params' settings "n")."""
+    try:
+        n = json.loads(path.read_text())["params"]["settings"]["n"]
+    except (OSError, ValueError, KeyError, TypeError):
+        return None
+    return n if isinstance(n, int) else None

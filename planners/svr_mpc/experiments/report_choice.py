@@ -7,8 +7,8 @@ Standard library only.
 
 from __future__ import annotations
 
-from report_base import num, table
-from report_stats import pval
+from dopt.lab.report.base import num, table
+from dopt.lab.report.stats import pval
 
 #: the fields ``choice_fields`` ranks against the rows' cost, with their words
 FIELDS = {"goal_held_share": "share of optimisations whose C held the goal object",

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from report_base import Result, num, section, table
+from dopt.lab.report.base import Result, num, section, table
 
 #: per check: its error field, the reference it is against, and what the error measures
 CHECKS = {"catenary": ("sag_error", "the inextensible catenary (cosseratbench)",

@@ -5,18 +5,15 @@ A summary's trials lie in the folder its command wrote them to (``--out
 docs/results/runs/<sweep>``, read from the command of the run whose trials it holds, also for a
 re-summarised file): ``trials/*.json`` there and the records packed in ``trials/pack.jsonl``
 and ``pack.jsonl.gz`` (``dopt.lab.trialpack``, the one reader: a loose file overrides them), and
-``real/`` and ``virtual/`` below it for the clock check. Where several summaries share a
-folder, or a folder holds more than one summary used, only the summary's own are taken: a
-Fig. 7 summary's methods and seeds (the trial key is ``<method>-seed<seed>-<settings hash>``),
-a scaling summary's methods, seeds and cloth sizes (each trial's settings "n"), a clock check's
-seeds. Everything else in the folder is the summary's (the docs/results test
-checks the counts against "trial_commits").
+other folders where an experiment keeps them elsewhere. Where several summaries share a
+folder, only the summary's own are taken: those its "trial_keys" names, else those its
+experiment's ``trial_files`` hook picks (``dopt.lab.experiment``: a Fig. 7 summary's methods
+and seeds, a clock check's seeds). Everything else in the folder is the summary's (the
+docs/results test checks the counts against "trial_commits").
 
 A trial's commit is read from its record's "code" (``dopt.lab.sweep`` writes it last, so the tail
 of the file is enough; the whole file is parsed when it is not there). "-dirty", "unknown",
 "no git" or no commit at all: uncommitted code, which no one can check out to rerun.
-
-Standard library only (experiments/report.py's rule; ``dopt.lab.trialpack`` is standard library).
 """
 
 from __future__ import annotations
@@ -27,13 +24,10 @@ from collections import Counter
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from report_base import ReportError, Result, short_commit
-
+from dopt.lab.experiment import experiment_of
+from dopt.lab.report.base import ReportError, Result, short_commit
 from dopt.lab.trialpack import PackError, StoredTrial, stored_trials
 
-#: a Fig. 7 trial's key (experiments/pick_place_cli.py's ``trial_key``)
-FIG7_KEY = re.compile(r"^(?P<method>[a-z]+)-seed(?P<seed>\d+)-[0-9a-f]{8}$")
-SEED = re.compile(r"-seed(?P<seed>\d+)(-|$)")
 #: a trial record's last keys: its code stamp, then (since 7b3eb64) its machine
 TAIL = re.compile(r'"code":\s*(?P<code>\{[^{}]*\})\s*'
                   r'(?:,\s*"machine":\s*(?P<machine>null|\{[^{}]*\})\s*)?\}\s*$')
@@ -87,37 +81,15 @@ def out_folder(results_dir: Path, command: str) -> Path | None:
     return Path(results_dir).joinpath(*parts[parts.index("runs"):])
 
 
-def _files(folder: Path, r: Result) -> list[StoredTrial]:
-    """The trials of ``folder`` that summary ``r`` holds (loose files and packed records,
-    ``dopt.lab.trialpack``), sorted by folder and name."""
-    d = r.data
-    if r.kind == "clock_check":
-        seeds = set(d.get("seeds") or ())
-        files = [p for sub in ("real", "virtual") for p in stored_trials(folder / sub / "trials")]
-        return [p for p in files if (m := SEED.search(p.stem)) and int(m["seed"]) in seeds]
+def own_trials(folder: Path, r: Result) -> list[StoredTrial]:
+    """The trials under ``folder``/trials (loose files and packed records,
+    ``dopt.lab.trialpack``) that summary ``r`` holds: those its "trial_keys" names (a run that
+    shares its folder with others), else all of them."""
     files = stored_trials(folder / "trials")
-    if isinstance(d.get("trial_keys"), list):      # a run that shares its folder with others
-        keys = set(d["trial_keys"])
+    if isinstance(r.data.get("trial_keys"), list):
+        keys = set(r.data["trial_keys"])
         return [p for p in files if p.stem in keys]
-    if r.kind == "fig7":
-        held = {m: set(e.get("seeds") or ()) for m, e in (d.get("methods") or {}).items()}
-        return [p for p in files if (m := FIG7_KEY.match(p.stem))
-                and int(m["seed"]) in held.get(m["method"], ())]
-    if r.kind == "fig7_scaling":
-        methods, seeds = set(d.get("methods_run") or ()), set(d.get("seeds") or ())
-        sizes = set(d.get("sizes") or ())
-        return [p for p in files if (m := FIG7_KEY.match(p.stem)) and m["method"] in methods
-                and int(m["seed"]) in seeds and _cloth_size(p) in sizes]
     return files
-
-
-def _cloth_size(path: Path | StoredTrial) -> int | None:
-    """The particles per side a pick-and-place trial ran on (its params' settings "n")."""
-    try:
-        n = json.loads(path.read_text())["params"]["settings"]["n"]
-    except (OSError, ValueError, KeyError, TypeError):
-        return None
-    return n if isinstance(n, int) else None
 
 
 def trial_stamp(path: Path | StoredTrial) -> tuple[str, str | None]:
@@ -167,7 +139,9 @@ def summary_trials(results_dir: Path, r: Result) -> TrialInfo | None:
     if folder is None or not folder.is_dir():
         return None
     try:
-        files = _files(folder, r)
+        experiment = experiment_of(r)
+        files = (experiment.trial_files(folder, r) if experiment is not None
+                 else own_trials(folder, r))
     except PackError as e:
         raise ReportError(f"{r.path.name}: its trials cannot be read: {e}") from e
     stamps = [trial_stamp(p) for p in files]
