@@ -2,16 +2,16 @@
 gives its recorded outcome to the last bit.
 
 A Table 1-protocol result is stale when a file that computes its trials changed since their
-commit (``dopt.lab.report.stale.code_findings``), even where the change cannot alter them (a new option
-off by default). A deterministic clock (``model``, ``authors``) makes a trial a pure function of
-its params and the code, so rerunning some of them settles it: this script draws ``--sample``
-of the result's trials (a seeded generator: the same draw every time), reruns each with its
-stored params, and writes ``<results dir>/verified/<result>.json`` (``VERIFIED_DIR``): the
-result, HEAD's commit, per trial its key, recorded and rerun MPC cost and whether the whole
+commit (``dopt.lab.report.stale.code_findings``), even where the change cannot alter them (a
+new option off by default). A deterministic clock (``model``, ``authors``) makes a trial a pure
+function of its params and the code, so rerunning some of them settles it: this script draws
+``--sample`` of the result's trials (a seeded generator: the same draw every time), reruns each
+with its stored params, and writes ``<results dir>/verified/<result>.json`` (``VERIFIED_DIR``):
+the result, HEAD's commit, per trial its key, recorded and rerun MPC cost and whether the whole
 record's outcome (cost, |C| per optimisation, steps held) is the same, and provenance. The
-report then treats the result as current while no file that computes trials changed since
-that commit and every rerun matched. Trials on a host-dependent clock (``real``, ``virtual``)
-cannot be verified so: refused. Only from committed code (the file is a result).
+report then treats the result as current while no file that computes trials changed since that
+commit and every rerun matched. Trials on a host-dependent clock (``real``, ``virtual``) cannot
+be verified so: refused. Only from committed code (the file is a result).
 
     python experiments/verify_trials.py docs/results/table1-clutter-authors-executor.json \\
         --sample 10
