@@ -63,7 +63,6 @@ def today() -> dict:
     return json.loads(json.dumps(out, default=str))
 
 
-@functools.cache
 def _at_commits(results_dir: str) -> dict:
     path = Path(results_dir) / AT_COMMIT
     try:
@@ -164,7 +163,7 @@ def pick_stale(r: Result, results_dir: Path) -> list[str] | None:
 
 def _key_particles(d: dict, at: dict | None) -> list[str]:
     scenes = (d.get("settings") or {}).get("simulated_scenes")
-    physics_now = today()["physics"].get("cloth") or {}
+    physics_now = (today().get("physics") or {}).get("cloth") or {}
     names = sorted({row.get("physics") for row in (d.get("robustness") or {})
                     .get("simulated") or [] if row.get("physics")})
     out = []

@@ -1,12 +1,13 @@
-"""report_stale.code_findings: a Table 1-protocol result is stale when a file that computes
-its trials (``SVR_COMPUTE_PATHS``) changed between its trials' commit and HEAD, and not when
-only a summary, report or lab file changed; checked on a git repository built here."""
+"""The SVR experiments' code findings (their ``stale`` hook, ``code_findings`` over
+``SVR_COMPUTE_PATHS``): a Table 1-protocol result is stale when a file that computes its trials
+changed between its trials' commit and HEAD, and not when only a summary, report or lab file
+changed; checked on a git repository built here."""
 
 import subprocess
 from pathlib import Path
 
-from report_base import Result
-from report_stale import code_findings
+from dopt.lab.experiment import experiment_of
+from dopt.lab.report.base import Result
 
 
 def git(root, *args):
@@ -22,6 +23,12 @@ def commit(root, files: dict, message: str) -> str:
     git(root, "add", "-A")
     git(root, "-c", "user.name=t", "-c", "user.email=t@t", "commit", "-qm", message)
     return git(root, "rev-parse", "HEAD")
+
+
+def code_findings(r: Result, results: Path) -> list[str]:
+    """What the registered experiment of ``r`` finds stale about it (its hook: for an MPC
+    result its settings against today's preset, none here, then its trials' code)."""
+    return experiment_of(r).stale(r, results, None)
 
 
 def result(commit_sha: str, kind="table1") -> Result:
@@ -42,7 +49,8 @@ def test_a_change_to_the_runtime_makes_the_trials_stale_a_summary_change_does_no
     (finding,) = code_findings(result(first), results)
     assert finding.startswith(f"the code that computes its trials changed since {first[:8]}")
     assert "dopt/mpc.py" in finding and "summary.py" not in finding
-    assert code_findings(result(first, kind="fig7"), results) == []     # not an MPC result
+    # not an MPC result: no code finding (None: its presets not checked, it records none)
+    assert code_findings(result(first, kind="fig7"), results) in (None, [])
 
 
 def test_an_unknown_commit_or_no_git_says_nothing(tmp_path):

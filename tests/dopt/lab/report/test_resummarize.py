@@ -11,13 +11,13 @@ import pytest
 pytest.importorskip("torch")
 pytest.importorskip("mujoco")
 
-import resummarize  # noqa: E402
-from report_base import load_results  # noqa: E402
-
+from dopt.lab.experiment import experiment_of  # noqa: E402
 from dopt.lab.provenance import COMMIT_ENV  # noqa: E402
+from dopt.lab.report import resummarize  # noqa: E402
+from dopt.lab.report.base import load_results  # noqa: E402
 from tests.external import LAYOUTS  # noqa: E402
 
-ROOT = Path(__file__).resolve().parents[2]
+ROOT = Path(__file__).resolve().parents[4]
 RESULTS = ROOT / "docs" / "results"
 #: committed summaries today's code cannot rebuild from their trials, and why: their trials
 #: predate the fields svr_explain.py's summarize_rows reads (the importance "bins")
@@ -56,12 +56,12 @@ def test_every_committed_summary_is_what_its_committed_trials_give(tmp_path, cap
     mismatched = {}
     for name in sorted(rebuilt):
         new, old = json.loads((out / name).read_text()), committed[name]
-        fields = {k: old.data[k] for k in resummarize.TRIAL_FIELDS[old.kind] if k in old.data}
+        fields = {k: old.data[k] for k in experiment_of(old).trial_fields if k in old.data}
         diff = resummarize.compare(fields, new)
         if diff["differs"] or diff["missing"]:
             mismatched[name] = diff
         for k, v in old.data.items():          # everything else is the committed file's
-            if k not in resummarize.TRIAL_FIELDS[old.kind] and k != "provenance":
+            if k not in experiment_of(old).trial_fields and k != "provenance":
                 assert new[k] == v, (name, k)
         assert new["resummarized_from"] == old.origin
         assert new["provenance"]["command"].startswith("python experiments/resummarize.py")
@@ -142,9 +142,8 @@ def test_in_place_brings_a_clean_summary_of_an_older_format_up_to_date(tmp_path,
 def test_a_committed_nan_written_as_null_with_its_note_is_compared_as_nan():
     """A summary's mean over no kept pair is NaN, written null with a note beside it
     (dopt.lab.jsonio); the rebuild holds NaN and no note, and the two match."""
-    from report_base import Result
-
     from dopt.lab import jsonio
+    from dopt.lab.report.base import Result
 
     methods = {"naive": {"mpc_cost_normalised_mean": float("nan"), "n_trials": 20}}
     written = json.loads(jsonio.dumps({"methods": methods}))

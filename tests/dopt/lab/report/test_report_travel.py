@@ -1,7 +1,7 @@
-"""report_base.travel_cell: the goal object's travel beside the paper, the authors' run of a row
+"""base.travel_cell: the goal object's travel beside the paper, the authors' run of a row
 against ours, in cm, and "-" for what a summary does not hold."""
 
-from report_base import travel_cell
+from dopt.lab.report.base import travel_cell
 
 
 def test_travel_in_cm_authors_first():

@@ -5,9 +5,28 @@ import json
 
 import numpy as np
 import pytest
-import report
 
-from .report_site import _trial, block, headlines, mpc_row, provenance, run, snapshot, table1, write
+from dopt.lab.report import base
+from planners.svr_mpc.experiments import report_map as svr_map
+from planners.svr_mpc.experiments import report_svr
+from tests.dopt.lab.report.report_site import (
+    _trial,
+    block,
+    headlines,
+    make_site,
+    mpc_row,
+    provenance,
+    run,
+    snapshot,
+    table1,
+    write,
+)
+
+
+@pytest.fixture
+def site(tmp_path, monkeypatch):
+    """A results site (``report_site.make_site``)."""
+    return make_site(tmp_path, monkeypatch)
 
 
 def test_table1_renders_its_rows(site):
@@ -47,7 +66,7 @@ def test_kendall_tau_b_equals_scipys(seed):
     x = rng.integers(0, 5, n).astype(float).tolist()      # ties in both lists
     y = rng.integers(0, 5, n).astype(float).tolist()
     want = kendalltau(x, y).statistic
-    got = report.kendall_tau_b(x, y)
+    got = report_svr.kendall_tau_b(x, y)
     if np.isnan(want):
         assert got is None
     else:
@@ -57,7 +76,7 @@ def test_kendall_tau_b_equals_scipys(seed):
 def test_orderings_name_reversed_pairs_and_those_with_separate_intervals():
     paper = {"a": (0.80, 0.02), "b": (0.90, 0.02), "c": (1.00, 0.02), "d": (0.85, None)}
     ours = {"a": (0.95, 0.01), "b": (0.70, 0.01), "c": (0.96, 0.10), "e": (0.1, 0.1)}
-    o = report.orderings(paper, ours)
+    o = report_svr.orderings(paper, ours)
     assert o["rows"] == ["a", "b", "c"]                    # d, e: in one column only
     assert o["paper_order"] == ["a", "b", "c"] and o["our_order"] == ["b", "a", "c"]
     assert o["reversed"] == [("a", "b")]
@@ -66,9 +85,9 @@ def test_orderings_name_reversed_pairs_and_those_with_separate_intervals():
     assert o["reversed_holm"] == [("a", "b")]
     assert o["holm"]["paper"]["a", "b"][2] and o["holm"]["ours"]["a", "b"][2]
     ours["b"] = (0.94, 0.01)                               # ours now within the intervals
-    assert report.orderings(paper, ours)["reversed_separate"] == []
-    assert report.orderings(paper, ours)["reversed_holm"] == []
-    assert report.orderings(paper, ours)["kendall_tau"] == pytest.approx(1 / 3)
+    assert report_svr.orderings(paper, ours)["reversed_separate"] == []
+    assert report_svr.orderings(paper, ours)["reversed_holm"] == []
+    assert report_svr.orderings(paper, ours)["kendall_tau"] == pytest.approx(1 / 3)
 
 
 def test_table1_of_the_paper_protocol_is_shown_beside_the_published_table(site):
@@ -167,7 +186,7 @@ def test_a_derivative_variant_run_has_its_own_row_not_table1s(site):
     assert "not recorded yet" in table1_row
     assert "| sum-t10-r1 +skip5 | sum-t10-r1 | 0.97 | 0.94-1.01 | 61/100 | 7.5 / 13.4 | 30 / 54 |" \
         in site["md"].read_text()
-    assert report.paper_preset_table1(report.load_results(site["results"]), "clutter") is None
+    assert report_svr.paper_preset_table1(base.load_results(site["results"]), "clutter") is None
 
 
 def test_a_run_of_other_optimisers_rows_is_never_taken_for_table1(site):
@@ -183,7 +202,7 @@ def test_a_run_of_other_optimisers_rows_is_never_taken_for_table1(site):
                                             "unoptimised": mpc_row(0.98, 0.02, 0.0, 0.0)})
     write(site["results"], "table1-clutter-authors_other.json", other)
     assert run(site) == 0
-    chosen = report.paper_preset_table1(report.load_results(site["results"]), "clutter")
+    chosen = report_svr.paper_preset_table1(base.load_results(site["results"]), "clutter")
     assert chosen.path.name == "table1-clutter-authors.json"
     assert "| unoptimised | 0.98 ± 0.02 |" in site["md"].read_text()
 
@@ -212,7 +231,6 @@ def test_a_table1_result_is_checked_on_its_trials_settings(site):
 def test_fig4_rows_read_the_authors_sweep_with_the_most_scenes_and_ours_apart(site):
     """The authors' Fig. 4 row reads the authors' sweep with the most scenes per point (a
     5-scene sweep beside a 100-scene one), with its interval; dopt's own clutter has its row."""
-    import report_map
 
     def fig4(problem, trials, cost, command):
         points = [dict(rho=r, theta=10, n_trials=trials, **mpc_row(c, 0.1, 50.0, 20.0, trials))
@@ -228,11 +246,11 @@ def test_fig4_rows_read_the_authors_sweep_with_the_most_scenes_and_ours_apart(si
     write(site["results"], "fig4-ours.json",
           fig4("ours", 20, 0.5, "python experiments/rho_sweep.py --preset paper"))
     assert run(site) == 0
-    results = report.load_results(site["results"])
-    assert report_map.fig4_line(results, "authors") == (
+    results = base.load_results(site["results"])
+    assert svr_map.fig4_line(results, "authors") == (
         "clutter: lowest cost / baseline 0.90 ± 0.10 (90 % CI) at rho 100, theta 10; 2 rho "
         "from 1 to 100; 100 scenes per point")
-    assert report_map.fig4_line(results).startswith("clutter: lowest cost / baseline 0.50")
+    assert svr_map.fig4_line(results).startswith("clutter: lowest cost / baseline 0.50")
     # with every point against the baseline (one Holm family) the row counts the verdicts
     data = fig4("authors", 100, 0.9, "python experiments/rho_sweep.py --preset authors")
     data["versus"] = {"alpha": 0.05, "family_size": 2, "references": ["baseline"], "pairs": {
@@ -240,7 +258,7 @@ def test_fig4_rows_read_the_authors_sweep_with_the_most_scenes_and_ours_apart(si
                                       "verdict": v} for r, v in [(1, "no difference shown"),
                                                                  (100, "cheaper")]}}
     write(site["results"], "fig4-a-full.json", data)
-    assert report_map.fig4_line(report.load_results(site["results"]), "authors").endswith(
+    assert svr_map.fig4_line(base.load_results(site["results"]), "authors").endswith(
         "; 100 scenes per point; Holm: 1/2 points cheaper, 0 dearer")
     readme = block(site["readme"])
     assert readme.index("| Fig. 4 on the authors' clutter: rho and theta |") < \
@@ -373,7 +391,6 @@ def test_a_table1_file_with_flagged_episodes_says_so_and_the_map_reads_no_means_
     """The headline counts each row's episodes flagged unstable (they are left out of the
     means); the README map gives no mean of a task whose baseline is kept (neither outlier
     nor unstable) in under half its episodes, and no Kendall tau for it."""
-    import report_map
 
     def soft(unstable_baseline):
         data = table1()
@@ -389,12 +406,12 @@ def test_a_table1_file_with_flagged_episodes_says_so_and_the_map_reads_no_means_
     assert run(site) == 0
     assert ("episodes flagged unstable (left out of the means): baseline 18/20, "
             "sum-t10-r1 18/20") in headlines(site)
-    results = report.load_results(site["results"])
-    assert report_map.table1_line(results, "paper") == (
+    results = base.load_results(site["results"])
+    assert svr_map.table1_line(results, "paper") == (
         "cheapest reduced row / baseline: soft n/a (baseline kept 1/20)")
     write(site["results"], "table1-soft.json", soft(9))     # kept 10 of 20: half, enough
-    results = report.load_results(site["results"])
-    assert report_map.table1_line(results, "paper") == (
+    results = base.load_results(site["results"])
+    assert svr_map.table1_line(results, "paper") == (
         "cheapest reduced row / baseline: soft rand-t5 0.39")
     # with verdicts against rand: those stand, the baseline's are n/a when it is kept too little
     pair = {"row": "sum-t10-r1", "reference": "rand-t5", "verdict": "dearer"}
@@ -402,13 +419,13 @@ def test_a_table1_file_with_flagged_episodes_says_so_and_the_map_reads_no_means_
                                    ["baseline", "rand-t5"],
                                    "pairs": {"sum-t10-r1 vs rand-t5": pair}}}
     write(site["results"], "table1-soft.json", data)
-    results = report.load_results(site["results"])
-    assert report_map.table1_line(results, "paper") == (
+    results = base.load_results(site["results"])
+    assert svr_map.table1_line(results, "paper") == (
         "SVR cheaper:dearer/n vs baseline, rand-t5 (Holm): soft n/a (kept 1/20), 0:1/1")
 
 
 def test_the_protocol_line_says_when_the_push_plan_ends_braking():
-    from report_svr import protocol_line
+    from planners.svr_mpc.experiments.report_svr import protocol_line
 
     d = {"preset": "paper", "cost": "paper-reach", "warm_start": True, "clock": "real",
          "control_noise": 0.05, "fd": "forward", "slowdown": 3.0}

@@ -5,17 +5,25 @@ import json
 
 import numpy as np
 import pytest
-import report
 
-from .report_site import (
+from dopt.lab.report import base
+from planners.pick_place.experiments import report_fig7, report_paper
+from tests.dopt.lab.report.report_site import (
     block,
     fig7,
     headlines,
+    make_site,
     mpc_row,
     provenance,
     run,
     write,
 )
+
+
+@pytest.fixture
+def site(tmp_path, monkeypatch):
+    """A results site (``report_site.make_site``)."""
+    return make_site(tmp_path, monkeypatch)
 
 
 def test_fig7_renders_mm_with_one_decimal(site):
@@ -176,7 +184,7 @@ def test_panda_execution_renders_its_goals(site):
 def test_fig7_comparison_names_order_and_interval_overlap(a, b, want):
     def entry(mean_ci):
         return {"final_cost_mean": mean_ci[0], "final_cost_ci95": mean_ci[1]}
-    assert report.comparison(entry(a), entry(b)) == want
+    assert report_fig7.comparison(entry(a), entry(b)) == want
 
 
 def test_fig7_claims_check_whether_the_gap_grows_with_difficulty(site):
@@ -186,7 +194,7 @@ def test_fig7_claims_check_whether_the_gap_grows_with_difficulty(site):
         data["methods"]["original"]["final_cost_mean"] = (
             data["methods"]["simple"]["final_cost_mean"] + gap)
         write(site["results"], f"fig7-cloth-{goal}.json", data)
-    (claims,) = report.fig7_claims(report.load_results(site["results"]))["cloth"]
+    (claims,) = report_fig7.fig7_claims(base.load_results(site["results"]))["cloth"]
     assert [g for _, g in claims["gaps"]] == pytest.approx(list(gaps.values()))
     assert claims["grows"] is False                      # side 20 > reflective 15
     assert run(site) == 0
@@ -194,11 +202,11 @@ def test_fig7_claims_check_whether_the_gap_grows_with_difficulty(site):
     write(site["results"], "fig7-cloth-reflective.json", fig7(goal="reflective", methods={
         **fig7()["methods"], "original": {**fig7()["methods"]["original"],
                                           "final_cost_mean": 0.013649 + 0.025}}))
-    (claims,) = report.fig7_claims(report.load_results(site["results"]))["cloth"]
+    (claims,) = report_fig7.fig7_claims(base.load_results(site["results"]))["cloth"]
     assert claims["grows"] is True
     # three folds of four: no verdict on a trend the missing fold could break
     (site["results"] / "fig7-cloth-underneath.json").unlink()
-    (claims,) = report.fig7_claims(report.load_results(site["results"]))["cloth"]
+    (claims,) = report_fig7.fig7_claims(base.load_results(site["results"]))["cloth"]
     assert claims["grows"] is None
     assert run(site) == 0
     assert "; whether it grows cannot be judged until underneath is run (the paper" in \
@@ -214,7 +222,7 @@ def test_fig7_gap_is_not_judged_across_cloth_sizes(site):
         data["methods"]["original"]["final_cost_mean"] = (
             data["methods"]["simple"]["final_cost_mean"] + gap)
         write(site["results"], f"fig7-cloth-{goal}.json", data)
-    (claims,) = report.fig7_claims(report.load_results(site["results"]))["cloth"]
+    (claims,) = report_fig7.fig7_claims(base.load_results(site["results"]))["cloth"]
     assert claims["grows"] is None
     assert claims["sizes"] == [("diagonal", 20), ("side", 12), ("reflective", 12),
                                ("underneath", 12)]
@@ -266,10 +274,10 @@ def test_rope_panels_are_judged_on_the_papers_metric(site):
     write(site["results"], "fig7-rope-fold.json",
           fig7(task="rope", goal="fold", methods=methods,
                settings={**fig7()["settings"], "task": "rope", "goal": "fold", "n": 40}))
-    panels = report.fig7_claims(report.load_results(site["results"]))["panels"]
+    panels = report_fig7.fig7_claims(base.load_results(site["results"]))["panels"]
     (panel,) = panels.values()
     # the mean particle distance puts Simple below Original; the matching distance does not
-    assert report.comparison(methods["simple"], methods["original"]) == "yes (separate)"
+    assert report_fig7.comparison(methods["simple"], methods["original"]) == "yes (separate)"
     assert (panel["metric"], panel["simple_vs_original"]) == ("matching_distance",
                                                               "no (separate)")
     assert run(site) == 0
@@ -340,12 +348,12 @@ def test_fig7_settings_say_what_the_physics_preset_meant():
     commit at which its preset name was defined."""
     scene = {"young": 5e5, "timestep": 0.005, "triangulation": "alternating"}
     with_scene = {"settings": {"physics": "default"}, "physics": {"scene": scene}}
-    assert report._fig7_physics(with_scene) == \
+    assert report_fig7._fig7_physics(with_scene) == \
         "preset default (5e+05 Pa, dt 5 ms, alternating triangles, no energy bound in the verdict)"
     judged = {**with_scene, "physics": {"scene": scene, "stability": {"max_energy_gain": 0.5}}}
-    assert report._fig7_physics(judged).endswith("energy bound 0.5 J/kg)")
+    assert report_fig7._fig7_physics(judged).endswith("energy bound 0.5 J/kg)")
     old = {"settings": {"physics": "default"}, "provenance": {"git_commit": "b22f11ba0123"}}
-    assert report._fig7_physics(old) == "preset default as defined at b22f11ba"
+    assert report_fig7._fig7_physics(old) == "preset default as defined at b22f11ba"
 
 
 def test_cloth_warp_bench_renders_world_steps_per_cpu_step(site):
@@ -391,7 +399,7 @@ def test_fig7_claims_give_the_welch_difference_and_which_gap_intervals_are_separ
         o["final_cost_minus_simple_mean"], o["final_cost_minus_simple_ci95"] = gap, half
         data["trials_wall_s"] = 3600.0 * (1 + list(gaps).index(goal))      # 1, 2, 3, 4 h
         write(site["results"], f"fig7-cloth-{goal}.json", data)
-    (claims,) = report.fig7_claims(report.load_results(site["results"]))["cloth"]
+    (claims,) = report_fig7.fig7_claims(base.load_results(site["results"]))["cloth"]
     # |a - b| > 8 mm: diagonal-side, diagonal-underneath, side-underneath, reflective-underneath
     assert claims["separate"] == [("diagonal", "side"), ("diagonal", "underneath"),
                                   ("side", "underneath"), ("reflective", "underneath")]
@@ -417,8 +425,9 @@ def test_fig7_claims_give_the_welch_difference_and_which_gap_intervals_are_separ
 def test_welch_p_values_equal_scipys(seed):
     """report_stats' pure-Python Welch test, from samples and from (mean, t half-width, n)
     as a summary records them, is scipy's."""
-    from report_stats import t_ppf, welch_p, welch_p_from_intervals
     from scipy import stats
+
+    from dopt.lab.report.stats import t_ppf, welch_p, welch_p_from_intervals
 
     rng = np.random.default_rng(seed)
     na, nb = (int(n) for n in rng.integers(2, 25, 2))
@@ -440,7 +449,7 @@ def test_fig7_cloth_claims_are_judged_as_one_family_with_holm(site):
     from dopt.lab.multiple import holm
 
     rng = np.random.default_rng(3)
-    simple = {g: rng.normal(0.02, 0.004, 10) for g in report.FIG7_PANELS if g[0] == "cloth"}
+    simple = {g: rng.normal(0.02, 0.004, 10) for g in report_paper.FIG7_PANELS if g[0] == "cloth"}
     shift = {"original": {"diagonal": 0.015, "side": 0.02, "reflective": 0.005,
                           "underneath": 0.01},
              "random": {"diagonal": 0.03, "side": 0.002, "reflective": 0.012,
@@ -468,7 +477,7 @@ def test_fig7_cloth_claims_are_judged_as_one_family_with_holm(site):
         write(site["results"], f"fig7-cloth-{goal}.json", data)
     adjusted = holm(pvalues)
     kept = [n for n, a in zip(names, adjusted, strict=True) if a > 0.05]
-    (family,) = report.fig7_claims(report.load_results(site["results"]))["families"]
+    (family,) = report_fig7.fig7_claims(base.load_results(site["results"]))["families"]
     assert family["m"] == 8 and len(family["kept"]) == len(kept) > 0
     assert family["uncorrected"] == sum(p <= 0.05 for p in pvalues)
     assert family["bonferroni"] == sum(8 * p <= 0.05 for p in pvalues)
@@ -591,9 +600,9 @@ def test_a_run_that_departs_from_its_protocol_is_judged_apart_and_seed_by_seed(s
     write(site["results"], "fig7-cloth-diagonal-pop200.json",
           fig7(protocol="paper", settings=paper["settings"], methods=methods,
                departures={"cem.population": 200, "cem.elites": 20}))
-    claims = report.fig7_claims(report.load_results(site["results"]))
+    claims = report_fig7.fig7_claims(base.load_results(site["results"]))
     assert set(claims["panels"]) == {
-        *(f"{report.FIG7_PANELS['cloth', g]}, preset ours" for g in gaps),
+        *(f"{report_paper.FIG7_PANELS['cloth', g]}, preset ours" for g in gaps),
         "(c) cloth diagonal fold, preset paper",
         "(c) cloth diagonal fold, preset paper, population 200, elites 20"}
     by_setup = {c["setup"]: c for c in claims["cloth"]}

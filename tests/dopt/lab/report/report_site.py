@@ -1,11 +1,39 @@
-"""Synthetic result files and a results site for the tests of experiments/report.py."""
+"""Synthetic result files and a results site (the ``site`` fixture) for the tests of the
+report (``dopt.lab.report``, experiments/report.py)."""
 import json
 from pathlib import Path
 
-import report
+import pytest
 
-ROOT = Path(__file__).resolve().parents[2]
+import planners.pick_place.experiments.report_stale as pick_stale
+import planners.svr_mpc.experiments.report_stale as svr_stale
+from dopt.lab.report import cli as report
+from dopt.lab.report.base import BEGIN, END
+from dopt.lab.report.map import HEADLINES_TITLE
+
+ROOT = Path(__file__).resolve().parents[4]
 SCRIPT = ROOT / "experiments" / "report.py"
+
+
+@pytest.fixture
+def site(tmp_path, monkeypatch):
+    """The site of ``make_site``."""
+    return make_site(tmp_path, monkeypatch)
+
+
+def make_site(tmp_path, monkeypatch) -> dict:
+    """A results folder, a README with the markers and the paths report.py writes; today's
+    presets (what the stale check compares with) are ``site["presets"]``, none until
+    ``snapshot`` sets them."""
+    readme = tmp_path / "README.md"
+    readme.write_text(f"# project\n\nintro\n\n{BEGIN}\nstale\n{END}\n\nmore\n")
+    results = tmp_path / "docs" / "results"
+    results.mkdir(parents=True)
+    presets = {"pick": {}, "svr_mpc": {}}
+    monkeypatch.setattr(pick_stale, "today", lambda: presets["pick"])
+    monkeypatch.setattr(svr_stale, "svr_presets", lambda: presets["svr_mpc"])
+    return {"results": results, "md": tmp_path / "docs" / "RESULTS.md", "readme": readme,
+            "presets": presets}
 
 
 def provenance(command: str) -> dict:
@@ -68,13 +96,13 @@ def run(site, *extra) -> int:
 def headlines(site) -> str:
     """RESULTS.md's headline of every result file (what README's block held before its map)."""
     text = site["md"].read_text()
-    start = text.index(f"## {report.HEADLINES_TITLE}")
+    start = text.index(f"## {HEADLINES_TITLE}")
     return text[start:text.index("\n## ", start + 1)]
 
 
 def block(readme: Path) -> str:
     text = readme.read_text()
-    return text[text.index(report.BEGIN):text.index(report.END)]
+    return text[text.index(BEGIN):text.index(END)]
 
 
 def trial_record(method: str, seed: int, final_cost: float, wall_s: float, goal="side") -> dict:
@@ -98,9 +126,10 @@ def _trial(folder: Path, key: str, params: dict, commit: str) -> None:
          "code": {"version": "0.2.0", "commit": commit}}))
 
 
-def snapshot(site, **extra) -> None:
-    """A presets snapshot: cloth preset default at 5e5 Pa, 5 ms; protocol ours of the
-    diagonal fold; the SVR paper protocol on clutter."""
+def snapshot(site, at_commit=None) -> None:
+    """Today's presets: cloth preset default at 5e5 Pa, 5 ms; protocol ours of the diagonal
+    fold; the SVR paper protocol on clutter; ``at_commit``: what the presets meant at a
+    result's commit ({commit: {"pick": ...}}, the results folder's presets/at-commit.json)."""
     scene = {"n": 16, "side": 0.3, "young": 5e5, "timestep": 0.005, "selfcollide": False}
     settings = fig7()["settings"]
     data = {"pick": {"physics": {"cloth": {"default": scene}},
@@ -110,6 +139,7 @@ def snapshot(site, **extra) -> None:
                          "scene": scene, "picker": {"speed": 0.5, "bound": [0.3] * 3},
                          "stability": {"max_energy_gain": 0.5}}}}},
             "svr_mpc": {"paper": {"clutter": {"cost": "paper", "clock": "virtual",
-                                              "control_noise": 0.05}}},
-            **extra}
-    write(site["results"] / "presets", "resolved.json", data)
+                                              "control_noise": 0.05}}}}
+    site["presets"].update(data)
+    if at_commit is not None:
+        write(site["results"] / "presets", "at-commit.json", {"at_commit": at_commit})

@@ -8,13 +8,12 @@ import shutil
 from pathlib import Path
 
 import pytest
-import verify_trials
 
 from dopt.lab.provenance import COMMIT_ENV
+from planners.svr_mpc.experiments import verify_trials
+from tests.external import LAYOUTS
 
-from ..external import LAYOUTS
-
-ROOT = Path(__file__).resolve().parents[2]
+ROOT = Path(__file__).resolve().parents[4]
 NAME = "table1-clutter-authors-executor-pilot.json"
 TRIAL = ("clutter-rand-rho1-theta5-slow1-Y0-seed3-costauthors-clutter-ws-clockauthors-"
          "execauthors-authors.json")
