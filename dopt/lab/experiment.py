@@ -24,11 +24,15 @@ import importlib
 import logging
 import os
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
-if TYPE_CHECKING:
-    from dopt.lab.report.base import Result
-    from dopt.lab.report.trials import TrialInfo
+from dopt.lab.trialpack import StoredTrial, stored_trials
+
+#: a result file (``dopt.lab.report.base.Result``: ``path``, ``kind``, ``data``, ...) and the
+#: committed trials of one (``dopt.lab.report.trials.TrialInfo``): the report's types, named
+#: here only, so that the protocol imports nothing of the engine
+Result = Any
+TrialInfo = Any
 
 log = logging.getLogger(__name__)
 
@@ -115,11 +119,9 @@ class Experiment:
         return []
 
     # ------------------------------------------------------------ trials, staleness
-    def trial_files(self, folder: Path, result: Result) -> list:
+    def trial_files(self, folder: Path, result: Result) -> list[StoredTrial]:
         """The committed trials under the sweep ``folder`` that ``result`` holds (default:
-        those of ``trials/``, only the summary's "trial_keys" where it names them)."""
-        from dopt.lab.report.trials import own_trials
-
+        ``own_trials``)."""
         return own_trials(folder, result)
 
     def stale(self, result: Result, results_dir: Path, trials: TrialInfo | None
@@ -131,6 +133,17 @@ class Experiment:
     def rebuild(self, data: dict, records: list[dict], info: TrialInfo) -> dict | None:
         """Its ``trial_fields`` computed again from its trial records (None: no rebuild)."""
         return None
+
+
+def own_trials(folder: Path, r: Result) -> list[StoredTrial]:
+    """The trials under ``folder``/trials (loose files and packed records,
+    ``dopt.lab.trialpack``) that summary ``r`` holds: those its "trial_keys" names (a run that
+    shares its folder with others), else all of them."""
+    files = stored_trials(Path(folder) / "trials")
+    if isinstance(r.data.get("trial_keys"), list):
+        keys = set(r.data["trial_keys"])
+        return [p for p in files if p.stem in keys]
+    return files
 
 
 def register_experiment(experiment: Experiment) -> Experiment:

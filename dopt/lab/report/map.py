@@ -2,8 +2,8 @@
 
 One row per figure or table of the two papers: the command that reproduces it, one headline
 sentence read from the result files, and a link to its claim on its paper's page
-(``MapRow.claim``, ``report_pages``) or, for a row beyond the papers' claims, to its section
-of RESULTS.md, where every table, per-seed number, setting and recorded command is. No cell
+(``MapRow.claim``, ``dopt.lab.report.pages``) or, for a row beyond the papers' claims, to its
+section of RESULTS.md, where every table, per-seed number, setting and recorded command is. No cell
 is longer than ``MAX_CELL`` characters. A row whose files are stale or hold trials from
 uncommitted code says so in its link cell. The rows are the registered experiments'
 (``Experiment.map_rows``), in registration order.
@@ -39,7 +39,7 @@ class MapRow:
     """A figure or table of a paper: the command that reproduces it (the short form; the
     recorded commands are in RESULTS.md), the RESULTS.md section with its details, the
     headline sentence from the result files, which files the row reads, and the title of its
-    claim on its paper's page (``report_claims``; None: the row links to its section)."""
+    claim on its paper's page (``dopt.lab.report.claims``; None: the row links to its section)."""
 
     paper: str
     item: str

@@ -24,9 +24,9 @@ from collections import Counter
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from dopt.lab.experiment import experiment_of
+from dopt.lab.experiment import experiment_of, own_trials
 from dopt.lab.report.base import ReportError, Result, short_commit
-from dopt.lab.trialpack import PackError, StoredTrial, stored_trials
+from dopt.lab.trialpack import PackError, StoredTrial
 
 #: a trial record's last keys: its code stamp, then (since 7b3eb64) its machine
 TAIL = re.compile(r'"code":\s*(?P<code>\{[^{}]*\})\s*'
@@ -79,17 +79,6 @@ def out_folder(results_dir: Path, command: str) -> Path | None:
             != "results":
         return None
     return Path(results_dir).joinpath(*parts[parts.index("runs"):])
-
-
-def own_trials(folder: Path, r: Result) -> list[StoredTrial]:
-    """The trials under ``folder``/trials (loose files and packed records,
-    ``dopt.lab.trialpack``) that summary ``r`` holds: those its "trial_keys" names (a run that
-    shares its folder with others), else all of them."""
-    files = stored_trials(folder / "trials")
-    if isinstance(r.data.get("trial_keys"), list):
-        keys = set(r.data["trial_keys"])
-        return [p for p in files if p.stem in keys]
-    return files
 
 
 def trial_stamp(path: Path | StoredTrial) -> tuple[str, str | None]:

@@ -1,8 +1,6 @@
-"""The key-particle paper's Fig. 7 in experiments/report.py: the results table, each file's
+"""The key-particle paper's Fig. 7 in RESULTS.md: the results table, each file's
 detail, and the paper's claims checked on the recorded files (``fig7_claims``), each family of
-Simple-vs-other comparisons judged with Holm's correction (``report_stats``).
-
-Standard library only (and ``dopt.lab.multiple``, pure Python).
+Simple-vs-other comparisons judged with Holm's correction (``dopt.lab.report.stats``).
 """
 
 from __future__ import annotations

@@ -1,8 +1,6 @@
-"""The key-particle sections of experiments/report.py besides Fig. 7: the key particles of
+"""The key-particle sections of RESULTS.md besides Fig. 7: the key particles of
 each goal, the physics presets, the cloth step benchmarks and a CEM iteration against its
 physical limit, and the Panda's execution.
-
-Standard library only.
 """
 
 from __future__ import annotations

@@ -1,6 +1,6 @@
 """RESULTS.md's section on the physics against analytic references (``python -m planners.bench
 reference``): each preset's error against the catenary, the cantilever and a sagging sheet, and
-what it costs against ``default``. Standard library only."""
+what it costs against ``default``."""
 
 from __future__ import annotations
 

@@ -8,8 +8,8 @@ import json
 import re
 from pathlib import Path
 
+from dopt.lab.experiment import own_trials
 from dopt.lab.report.base import ReportError, Result, _finite, _median, mm, num, table
-from dopt.lab.report.trials import own_trials
 from dopt.lab.trialpack import PackError, StoredTrial, stored_trials
 from planners.pick_place.experiments.report_paper import (
     _in_label_order,

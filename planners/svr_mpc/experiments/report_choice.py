@@ -1,8 +1,6 @@
 """The Table 1 section's lines on what each row's C held (``planners.svr_mpc.choice``): how
 often it held the goal object, how long the authors' executor held the arm, and which of those
 orders the rows' costs.
-
-Standard library only.
 """
 
 from __future__ import annotations

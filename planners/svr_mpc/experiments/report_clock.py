@@ -9,8 +9,6 @@ scene measures the machine there. Sweeps whose baseline trials have the same set
 group; the one with the most baseline scenes is the group's reference, and each other sweep
 gets, per scene both ran, the ratio of its baseline's mean optimisation time to the
 reference's (2: twice as slow).
-
-Standard library only, like the rest of experiments/report.py.
 """
 from __future__ import annotations
 

@@ -1,6 +1,6 @@
-"""The state-vector-reduction sections of experiments/report.py: Table 1 (and beside the
+"""The state-vector-reduction sections of RESULTS.md: Table 1 (and beside the
 paper's, its pairwise orderings judged with Holm's correction), Fig. 4, the SVR explanation, the
-iLQR bench and the authors' data (the clocks: report_clock.py). Standard library only."""
+(the clocks: report_clock.py, the iLQR bench and the authors' data: report_bench.py)."""
 
 from __future__ import annotations
 
