@@ -111,8 +111,8 @@ def settings_dict(settings) -> dict:
     """Every field of a settings object as plain JSON values: a dataclass (nested ones as
     dicts, ``dataclasses.asdict``), or a dict of them (per goal, per row), or a dict already.
     What a summary records under "settings": the resolved fields, not only a preset's name,
-    so that the report can tell when the preset no longer gives them (experiments/
-    report_stale.py)."""
+    so that the report can tell when the preset no longer gives them (an experiment's
+    ``stale``, ``dopt.lab.experiment``)."""
     import dataclasses
 
     def plain(x):

@@ -7,8 +7,9 @@ docs/RESULTS.md give the measurements). ``PickPlaceSettings.preset(task, goal, q
 protocol)`` reads them: ``PRESETS`` is the protocol "ours", one row per goal; the paper's
 protocol (``PAPER_PRESETS``) and the smoke run (``QUICK``) are the same rows with the
 per-task changes below. ``register_goal`` (``planners.pick_place.tasks``) adds a new goal's row
-to both protocols. ``experiments/presets_snapshot.py`` records what they resolve to, so that a
-changed number shows up as a failing test and a stale result.
+to both protocols. The report compares each result with what they resolve to today
+(``planners.pick_place.experiments.report_stale``), so that a changed number shows up as a
+stale result.
 """
 
 from __future__ import annotations

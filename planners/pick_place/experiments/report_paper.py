@@ -1,0 +1,72 @@
+"""What the key-particle paper's report modules share: the paper's name, Fig. 7's panels and
+method labels (the library's own, ``planners.pick_place.LABELS``), and the scaling studies'
+trend tests grouped into Holm families.
+"""
+
+from __future__ import annotations
+
+from dopt.lab.multiple import holm_slopes
+from dopt.lab.report.base import Result
+from planners.pick_place import LABELS
+
+#: the paper, as the pages, the catalogue and the map name it
+KP = "key particles"
+#: Fig. 7 panel of each (task, goal) of the key-particle paper
+FIG7_PANELS = {("rope", "straighten"): "(a) rope straightening",
+               ("rope", "fold"): "(b) rope folding",
+               ("cloth", "diagonal"): "(c) cloth diagonal fold",
+               ("cloth", "side"): "(d) cloth side fold",
+               ("cloth", "reflective"): "(e) cloth reflective fold",
+               ("cloth", "underneath"): "(f) cloth underneath fold"}
+
+
+def _label(method: str) -> str:
+    return LABELS.get(method, method)
+
+
+def _in_label_order(methods) -> list[str]:
+    """The distinct ``methods`` in the figures' order (``LABELS``), unknown ones after,
+    sorted."""
+    seen = set(methods)
+    known = [m for m in LABELS if m in seen]
+    return known + sorted(seen - set(known))
+
+
+def _methods_in_order(results: list[Result]) -> list[str]:
+    return _in_label_order(m for r in results for m in r.data["methods"])
+
+
+def _panel_of(task, goal) -> str:
+    return FIG7_PANELS.get((task, goal), f"{task} {goal}")
+
+
+def _panel_rank(task, goal) -> int:
+    """The place of (task, goal) in the paper's Fig. 7 (``FIG7_PANELS``); unknown ones last."""
+    order = list(FIG7_PANELS)
+    return order.index((task, goal)) if (task, goal) in order else len(order)
+
+
+def _panel(r: Result) -> str:
+    return _panel_of(r.data.get("task"), r.data.get("goal"))
+
+
+# ------------------------------------------------------------- the scaling studies
+def scaling_key(r) -> str:
+    """A scaling file's name among the others: its fold, and "at fixed spacing" for a sweep
+    that grows the sheet (``fig7_scaling.py --mode size``; a file without a mode refined the
+    fixed sheet)."""
+    return r.data.get("goal") + (" at fixed spacing" if r.data.get("mode") == "size" else "")
+
+
+def scaling_families(results: list) -> tuple[dict, dict]:
+    """({scaling_key: file} of the scaling files, {(key, test): Holm over the trend tests of
+    the files of one mode together, ``holm_slopes``, with "folds": how many files}); a mode
+    with one file has no family."""
+    files = {scaling_key(r): r for r in results if r.kind == "fig7_scaling"}
+    family = {}
+    for mode in {r.data.get("mode", "resolution") for r in files.values()}:
+        group = {k: r.data["trend"] for k, r in files.items()
+                 if r.data.get("mode", "resolution") == mode}
+        if len(group) > 1:
+            family.update({k: {**v, "folds": len(group)} for k, v in holm_slopes(group).items()})
+    return files, family

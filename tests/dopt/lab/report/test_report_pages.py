@@ -1,0 +1,207 @@
+"""experiments/report.py's per-paper pages (report_pages, report_claims): a page per paper
+beside RESULTS.md, short, naming each claim with the verdict the constructed result files give
+it (the expected verdicts worked out here from the numbers the tests write), regenerated
+identically and checked by --check like the index."""
+import random
+
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from dopt.lab.experiment import pages as registered_pages
+from dopt.lab.report import base, claims
+from dopt.lab.report import pages as lab_pages
+from dopt.lab.report.base import Result
+from planners.pick_place.experiments.report_paper import KP
+from planners.svr_mpc.experiments.report_svr import SVR
+from tests.dopt.lab.report.report_site import provenance, run, write
+
+#: the longest a paper's page may be (lines): a page a person reads
+MAX_LINES = 300
+FOLDS = ("diagonal", "side", "reflective", "underneath")
+
+
+def pages(site) -> dict:
+    return {paper: path for paper, path in lab_pages.page_paths(site["md"]).items()}
+
+
+def section(text: str, title: str) -> str:
+    """A claim's section of a page: from its heading to the next heading."""
+    start = text.index(f"### {title}\n")
+    end = text.find("\n#", start + 1)
+    return text[start:end if end > 0 else None]
+
+
+def verdict_of(text: str, title: str) -> str:
+    body = section(text, title)
+    if "Not recorded yet" in body:
+        return "not recorded yet"
+    return body.split("*Verdict:* **", 1)[1].split("**", 1)[0]
+
+
+def method(costs: list[float]) -> dict:
+    """A Fig. 7 method entry over the given per-seed final costs (m)."""
+    n = len(costs)
+    mean = sum(costs) / n
+    sd = (sum((c - mean) ** 2 for c in costs) / (n - 1)) ** 0.5
+    return {"final_cost_mean": mean, "final_cost_ci95": 2.262 * sd / n ** 0.5,
+            "final_costs": costs, "seeds": list(range(n)), "n": n, "n_candidates": 4}
+
+
+def fig7_fold(goal: str, means: dict, rng: random.Random, task: str = "cloth") -> dict:
+    """A Fig. 7 file of the paper's protocol: ten seeds per method around ``means`` (m)."""
+    return {"experiment": "fig7", "task": task, "goal": goal, "protocol": "paper",
+            "settings": {"task": task, "goal": goal, "n": 20},
+            "methods": {m: method([mu + rng.gauss(0, 0.0005) for _ in range(10)])
+                        for m, mu in means.items()},
+            "failed": {}, "provenance": provenance(f"python experiments/cloth_fold.py "
+                                                   f"--preset paper --goal {goal}")}
+
+
+def key_counts(reflective: int) -> dict:
+    """A key_particles file: the library's counts, the reflective fold's triangles given."""
+    tasks = {"rope_straighten": {"n_keys": 2, "n_elements": 1},
+             "cloth_diagonal": {"n_keys": 4, "n_elements": 4},
+             "cloth_reflective": {"n_keys": 8, "n_elements": reflective}}
+    paper = {"rope_straighten": {"keys": 2}, "cloth_diagonal": {"triangles": 4, "keys": 4},
+             "cloth_reflective": {"triangles": 12}}
+    return {"experiment": "key_particles", "tasks": tasks, "paper": paper,
+            "provenance": provenance("python experiments/key_particles.py --task all")}
+
+
+def table1_authors(task: str, verdicts: dict[str, list[str]]) -> dict:
+    """A Table 1 file on the authors' problems whose SVR rows Holm judges as ``verdicts``
+    ({reference: one verdict per SVR row})."""
+    rows = [f"sum-t10-r{i}" for i in range(len(next(iter(verdicts.values()))))]
+    row = {"mpc_cost_normalised_mean": 1.0, "mpc_cost_normalised_ci90": 0.05,
+           "opt_ms_mean": 100.0, "n_dofs_mean": 20.0, "n_trials": 20, "outliers": 0}
+    ratio = {"cheaper": 0.8, "same": 1.0, "dearer": 1.2}
+    pairs = {f"{r} vs {ref}": {"row": r, "reference": ref, "verdict": v,
+                               "ratio_geomean": ratio[v], "ratio_ci_simultaneous":
+                               [ratio[v] - 0.1, ratio[v] + 0.1], "p": 0.01, "p_holm": 0.02,
+                               "better": 10, "pairs": 20, "excluded": 0}
+             for ref, vs in verdicts.items() for r, v in zip(rows, vs, strict=True)}
+    return {"experiment": "table1", "task": task, "preset": "authors", "problem": "authors",
+            "methods": {"baseline": {**row, "opt_ms_mean": 400.0, "n_dofs_mean": 55.0},
+                        **{r: row for r in rows}},
+            "versus": {"alpha": 0.05, "references": list(verdicts), "pairs": pairs,
+                       "family_size": len(pairs)},
+            "provenance": provenance(f"python experiments/mpc.py --task {task} "
+                                     "--preset authors")}
+
+
+# --------------------------------------------------------------------------------- pages
+def test_a_page_per_paper_names_every_claim_even_before_any_result(site):
+    assert run(site) == 0
+    for paper, path in pages(site).items():
+        text = path.read_text()
+        assert text.splitlines()[2].startswith("*Generated by `experiments/report.py`")
+        found = [c for c in claims.all_claims() if c.paper == paper]
+        assert found
+        for c in found:
+            assert verdict_of(text, c.title) == "not recorded yet"
+            assert c.says in section(text, c.title)
+        assert len(text.splitlines()) <= MAX_LINES
+    # the index names both pages
+    index = site["md"].read_text()
+    assert all(f"({p.name})" in index for p in pages(site).values())
+    assert run(site, "--check") == 0
+
+
+def test_the_pages_give_the_verdicts_the_files_make(site):
+    rng = random.Random(7)
+    # Simple far below Original on every fold, the gap shrinking with difficulty; Random
+    # below Original on the first two folds only
+    gaps = {"diagonal": 0.040, "side": 0.030, "reflective": 0.020, "underneath": 0.010}
+    for i, goal in enumerate(FOLDS):
+        random_mean = 0.005 + gaps[goal] + (-0.005 if i < 2 else 0.005)
+        write(site["results"], f"fig7-cloth-{goal}.json",
+              fig7_fold(goal, {"simple": 0.005, "original": 0.005 + gaps[goal],
+                               "random": random_mean}, rng))
+    write(site["results"], "key-particles.json", key_counts(reflective=10))
+    write(site["results"], "table1-clutter-authors.json",
+          table1_authors("clutter", {"baseline": ["cheaper", "cheaper"],
+                                     "rand-t5": ["dearer", "same"]}))
+    write(site["results"], "table1-soft-authors.json",
+          table1_authors("soft", {"baseline": ["same", "dearer"],
+                                  "rand-t5": ["dearer", "dearer"]}))
+    assert run(site) == 0
+    kp, svr = (pages(site)[p].read_text() for p in (KP, SVR))
+    assert verdict_of(kp, "Cloth: Simple beats Original on every fold") == "holds"
+    assert verdict_of(kp, "Cloth: the gap grows with difficulty") == "does not hold"
+    assert verdict_of(kp, "Cloth: Random beats Original") == "partly holds"
+    assert verdict_of(kp, "Few key particles per goal") == "partly holds"
+    assert "2 of 3 goals" in section(kp, "Few key particles per goal")
+    assert verdict_of(kp, "Rope: Simple beats Original, Random is worst") == "not recorded yet"
+    assert verdict_of(svr, "SVR costs less than the baseline") == "partly holds"
+    assert verdict_of(svr, "SVR costs less than a random choice") == "does not hold"
+    assert verdict_of(svr, "SVR optimises faster") == "holds"       # 100 ms against 400
+    # an equal-time run beside clutter's: said beside the verdict it does not change
+    equal = table1_authors("clutter", {"baseline": ["same", "same"],
+                                       "rand-t5": ["cheaper", "same"]})
+    write(site["results"], "table1-clutter-authors-ms150.json", {**equal, "clock_ms": 150.0})
+    assert run(site) == 0
+    svr = pages(site)[SVR].read_text()
+    assert verdict_of(svr, "SVR costs less than a random choice") == "does not hold"
+    assert ("clutter 0 of 2 SVR rows cheaper, 1 dearer (at equal time, every optimisation "
+            "150 ms: 1 of 2 cheaper, 0 dearer)") in section(svr, "SVR costs less than a random "
+                                                            "choice")
+    assert "0.25-0.25 of the baseline's" in section(svr, "SVR optimises faster")
+    # each claim names its files and links to its details in the index
+    fold = section(kp, "Cloth: Simple beats Original on every fold")
+    assert all(f"[fig7-cloth-{g}.json](results/fig7-cloth-{g}.json)" in fold for g in FOLDS)
+    assert "(RESULTS.md#key-particles-fig-7-final-cost-of-pick-and-place)" in fold
+    for path in pages(site).values():
+        assert len(path.read_text().splitlines()) <= MAX_LINES
+    # the README map links the cloth row to its claim on the page
+    assert "(docs/KEY-PARTICLES.md#cloth-simple-beats-original-on-every-fold)" in \
+        site["readme"].read_text()
+    assert run(site, "--check") == 0
+
+
+def test_check_fails_when_a_page_is_edited_or_a_verdict_changes(site, capsys):
+    write(site["results"], "key-particles.json", key_counts(reflective=12))
+    assert run(site) == 0
+    kp = pages(site)[KP]
+    assert verdict_of(kp.read_text(), "Few key particles per goal") == "holds"
+    kp.write_text(kp.read_text().replace("**holds**", "**does not hold**"))
+    capsys.readouterr()
+    assert run(site, "--check") == 1
+    assert "KEY-PARTICLES.md differs" in capsys.readouterr().err
+    write(site["results"], "key-particles.json", key_counts(reflective=9))
+    assert run(site) == 0 and run(site, "--check") == 0
+    assert verdict_of(kp.read_text(), "Few key particles per goal") == "partly holds"
+
+
+# -------------------------------------------------------------------------------- claims
+@settings(max_examples=40, deadline=None)
+@given(st.lists(st.floats(0.001, 0.05), min_size=4, max_size=4), st.integers(0, 2 ** 31))
+def test_the_gap_grows_exactly_when_each_fold_s_gap_exceeds_the_last(gaps, seed):
+    """Judged on four folds of one size: "holds" iff the mean gap Original - Simple rises from
+    each fold to the next in the paper's order of difficulty, else "does not hold"."""
+    rng = random.Random(seed)
+    results = [Result(base.ROOT / f"fig7-{g}.json",
+                      fig7_fold(g, {"simple": 0.005, "original": 0.005 + gap}, rng))
+               for g, gap in zip(FOLDS, gaps, strict=True)]
+    means = [r.data["methods"]["original"]["final_cost_mean"]
+             - r.data["methods"]["simple"]["final_cost_mean"] for r in results]
+    grows = all(b > a for a, b in zip(means, means[1:], strict=False))
+    finding = claims.claim_of("Cloth: the gap grows with difficulty").judge(results)
+    assert finding.verdict == ("holds" if grows else "does not hold")
+    assert sorted(r.name for r in finding.files) == sorted(r.name for r in results)
+
+
+@pytest.mark.parametrize("k,n,verdict", [(0, 0, "not judged"), (0, 3, "does not hold"),
+                                         (1, 3, "partly holds"), (3, 3, "holds")])
+def test_a_claim_holds_in_all_of_its_cases_or_in_part(k, n, verdict):
+    assert claims.share(k, n) == verdict
+
+
+def test_claims_are_well_formed_and_bad_names_are_refused():
+    titles = [c.title for c in claims.all_claims()]
+    assert len(set(titles)) == len(titles)             # a title is a heading: one each
+    assert {c.paper for c in claims.all_claims()} == set(registered_pages())
+    with pytest.raises(ValueError, match="no claim titled 'nope'"):
+        claims.claim_of("nope")
+    with pytest.raises(ValueError, match="verdict must be one of"):
+        claims.Finding("probably", "x", ())
