@@ -1,19 +1,13 @@
-"""Flags checked for sense at parse time, each once accepted: a control noise that can only
-make a non-finite cost (1e300: the trial was stored with mpc_cost null and every rerun died in
-the summary), --layouts where the preset or the task never reads them (silently ignored), a
---layouts scene that makes no sense (found by its trial alone), --quick dropping an explicit
---trials or --seeds, and OUT/summary.json being a folder (reported after every trial ran).
-Each is a usage error (one line naming the flag, exit 2) that creates nothing, or, for
---quick, the explicit count kept."""
+"""Flags checked for sense at parse time, each once accepted (the SVR experiments' in
+tests/planners/svr_mpc/experiments/test_flags_sense.py): --quick dropping an explicit --trials
+or --seeds, and OUT/summary.json being a folder (reported after every trial ran). Each is a
+usage error (one line naming the flag, exit 2) that creates nothing, or, for --quick, the
+explicit count kept."""
 
-import mpc
 import panda_execute
 import pick_place_cli
 import pytest
-import rho_sweep
 import rope
-
-from tests.dopt.tasks.test_authors_layout_sense import CYLINDER_XY, _layout
 
 REAL_MAKE_PROBLEM = pick_place_cli.make_problem
 
@@ -25,7 +19,6 @@ def no_run(monkeypatch):
     def stop(*args, **kwargs):
         raise AssertionError("the arguments were accepted")
     monkeypatch.setattr(pick_place_cli, "make_problem", stop)
-    monkeypatch.setattr(mpc, "run", stop)
     monkeypatch.setattr(panda_execute, "run_with_console", stop)
 
 
@@ -36,49 +29,6 @@ def usage_error(capsys, main, argv) -> str:
     assert exc.value.code == 2, err
     assert len(err.strip().splitlines()) == 1 and "Traceback" not in err, err
     return err
-
-
-@pytest.mark.parametrize("main", [mpc.main, rho_sweep.main])
-@pytest.mark.parametrize("noise", ["1e300", "2"])
-def test_a_control_noise_beyond_the_control_range_is_refused(tmp_path, capsys, main, noise):
-    out = tmp_path / "out"
-    err = usage_error(capsys, main, ["--quick", "--control-noise", noise, "--out", out])
-    assert f"argument --control-noise: must be <= 1, got {noise}" in err
-    assert not out.exists()
-
-
-def test_the_largest_control_noise_is_accepted(tmp_path):
-    args = mpc.parse_args(["--quick", "--control-noise", "1", "--out", str(tmp_path / "o")])
-    assert mpc.make_trials(args)[0].params["control_noise"] == 1.0
-
-
-@pytest.mark.parametrize("flags", [["--preset", "ours"], ["--preset", "paper"],
-                                   ["--preset", "authors", "--task", "soft"],
-                                   ["--preset", "authors", "--task", "soft_rigid"]])
-def test_layouts_where_nothing_reads_them_are_refused(tmp_path, capsys, flags):
-    _layout(tmp_path)
-    out = tmp_path / "out"
-    err = usage_error(capsys, mpc.main, [*flags, "--layouts", tmp_path, "--out", out])
-    assert "argument --layouts: only --preset authors on --task clutter" in err
-    assert not out.exists()
-
-
-def test_a_senseless_layout_is_refused_before_any_trial(tmp_path, capsys):
-    layouts = tmp_path / "layouts"
-    layouts.mkdir()
-    _layout(layouts, name="0.csv")
-    _layout(layouts, goal=CYLINDER_XY, name="1.csv")            # the goal on its cylinder
-    out = tmp_path / "out"
-    err = usage_error(capsys, mpc.main, ["--preset", "authors", "--layouts", layouts,
-                                         "--trials", "2", "--out", out])
-    assert f"argument --layouts: {layouts / '1.csv'}: the goal" in err
-    assert "on the goal cylinder" in err and not out.exists()
-    err = usage_error(capsys, mpc.main, ["--preset", "authors", "--layouts", layouts,
-                                         "--trials", "3", "--seed", "1", "--out", out])
-    assert "on the goal cylinder" in err                         # the first bad one
-    err = usage_error(capsys, mpc.main, ["--preset", "authors", "--layouts", layouts,
-                                         "--seed", "2", "--trials", "1", "--out", out])
-    assert f"argument --layouts: no {layouts / '2.csv'}" in err
 
 
 class Trials(SystemExit):
@@ -96,10 +46,6 @@ def _seeds(trials) -> list:
 
 def test_quick_keeps_an_explicit_trial_count(tmp_path, monkeypatch):
     out = str(tmp_path / "o")
-    assert mpc.parse_args(["--quick", "--trials", "3", "--out", out]).trials == 3
-    assert mpc.parse_args(["--quick", "--out", out]).trials == 1
-    assert mpc.parse_args(["--out", out]).trials == mpc.DEFAULT_TRIALS
-
     def capture(fn, trials, *args, **kwargs):
         raise Trials(trials)
     monkeypatch.setattr(panda_execute, "run_with_console", capture)
@@ -125,7 +71,7 @@ def test_quick_keeps_explicit_seeds(tmp_path, monkeypatch, flags, seeds):
 
 
 @pytest.mark.parametrize("main, argv", [
-    (mpc.main, ["--quick"]), (rope.main, ["--quick", "--methods", "scripted"]),
+    (rope.main, ["--quick", "--methods", "scripted"]),
     (panda_execute.main, ["--quick"])])
 @pytest.mark.parametrize("name", ["summary.json"])
 def test_an_output_file_that_is_a_folder_is_refused_before_any_trial(tmp_path, capsys, main,
@@ -138,8 +84,7 @@ def test_an_output_file_that_is_a_folder_is_refused_before_any_trial(tmp_path, c
     assert not (out / "trials").exists()
 
 
-@pytest.mark.parametrize("main, argv, name", [(mpc.main, ["--quick"], "table1.md"),
-                                              (rope.main, ["--quick"], "curves.csv")])
+@pytest.mark.parametrize("main, argv, name", [(rope.main, ["--quick"], "curves.csv")])
 def test_every_file_a_run_writes_is_checked(tmp_path, capsys, main, argv, name):
     out = tmp_path / "out"
     (out / name).mkdir(parents=True)
