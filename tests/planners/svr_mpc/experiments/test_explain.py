@@ -95,7 +95,7 @@ def test_goal_held_split_separates_optimisations_by_whether_c_holds_the_goal():
 def test_short_run_writes_summary_and_plot(tmp_path):
     out = tmp_path / "ex"
     env = dict(os.environ, PYTHONPATH=str(ROOT))
-    proc = subprocess.run([sys.executable, str(ROOT / "experiments" / "explain.py"),
+    proc = subprocess.run([sys.executable, str(ROOT / "experiments" / "svr_explain.py"),
                            "--preset", "paper", "--rows", "rand-t5,sum-t10-r1", "--trials", "1",
                            "--timeout", "60", "--bins", "3", "--out", str(out)],
                           capture_output=True, text=True, env=env, timeout=300)
@@ -112,7 +112,7 @@ def test_short_run_writes_summary_and_plot(tmp_path):
     # the first optimisation holds every DoF, so the goal's importance there is recorded
     assert svr["goal_importance"]["first_median"] >= 0
     assert "goal_importance" not in d["rows"]["rand-t5"]
-    assert (out / "explain.png").stat().st_size > 10_000
+    assert (out / "svr_explain.png").stat().st_size > 10_000
     # the first seed keeps its controls (--keep-controls' default): dopt-view's MPC source
     # claims each trial and its replay ends on the recorded final state
     from planners.view import MPC
@@ -120,4 +120,4 @@ def test_short_run_writes_summary_and_plot(tmp_path):
         record = json.loads(path.read_text())
         assert MPC.claims(path, record) and len(record["result"]["controls"]) == 60
         assert MPC.load(path).replay_error <= 1e-9
-    assert f"dopt-view {out}" in proc.stdout and str(out / "explain.png") in proc.stdout
+    assert f"dopt-view {out}" in proc.stdout and str(out / "svr_explain.png") in proc.stdout
