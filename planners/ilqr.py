@@ -14,6 +14,7 @@ from __future__ import annotations
 import logging
 import time
 from dataclasses import dataclass, field
+from typing import Literal
 
 import numpy as np
 import torch
@@ -21,6 +22,7 @@ import torch
 from dopt.costs import QuadraticCost
 from dopt.rollout import FDConfig, RolloutService
 from dopt.validation import check_config, check_int, check_real, float_array
+from planners.keypoints import METHODS as KEYPOINT_METHODS
 from planners.keypoints import KeypointConfig, interpolate, key_steps
 
 log = logging.getLogger(__name__)
@@ -31,22 +33,87 @@ def _default_alphas() -> tuple[float, ...]:
     return tuple((i / 7) ** 2 for i in range(7, 0, -1))
 
 
+#: the finite differences by name: forward eps 1e-3 (``FDConfig``'s default, where its
+#: docstring says why not the authors' step) or the authors' central differences, eps 1e-6
+FINITE_DIFFERENCES = {"forward": FDConfig(), "central": FDConfig(1e-6, centered=True)}
+
+
+@dataclass(frozen=True)
+class Derivatives:
+    """How iLQR differentiates the dynamics, one typed value from a command line's flags to
+    the backward pass (``ILQRConfig.derivatives``).
+
+    Attributes:
+        fd: the finite differences, a name of ``FINITE_DIFFERENCES`` (``forward``,
+            ``central``).
+        keypoints: the timesteps they cover (``planners.keypoints``): ``every``, ``skip``
+            (every ``fd_skip``-th) or ``adaptive`` (its default rules); A and B linear
+            between.
+        fd_skip: the interval of ``skip`` (1 with the other two).
+        box_qp: the backward pass solves a box-constrained QP per step for the control limits
+            (``mujoco.mju_boxQP``; the gains of clamped controls are 0, as in MuJoCo MPC's
+            iLQG), instead of leaving the limits to the clamping of the simulator.
+        fd_eps: the finite-difference step where it is not the named difference's own; None
+            (also what the named step normalises to): the named one's.
+    """
+
+    fd: Literal["forward", "central"] = "forward"
+    keypoints: Literal["every", "skip", "adaptive"] = "every"
+    fd_skip: int = 1
+    box_qp: bool = False
+    fd_eps: float | None = None
+
+    def __post_init__(self):
+        check_config(self, positive=("fd_eps",), minimum={"fd_skip": 1},
+                     choices={"fd": tuple(FINITE_DIFFERENCES), "keypoints": KEYPOINT_METHODS})
+        if self.keypoints != "skip" and self.fd_skip != 1:
+            raise ValueError(f"Derivatives.fd_skip must be 1 with keypoints "
+                             f"{self.keypoints!r} (a skip needs keypoints 'skip'), got "
+                             f"{self.fd_skip}")
+        if self.fd_eps is not None:
+            FDConfig(float(self.fd_eps))                       # ValueError: a step too small
+            if float(self.fd_eps) == FINITE_DIFFERENCES[self.fd].eps:
+                object.__setattr__(self, "fd_eps", None)
+
+    @property
+    def fd_config(self) -> FDConfig:
+        """The finite differences as the rollout service takes them."""
+        named = FINITE_DIFFERENCES[self.fd]
+        return named if self.fd_eps is None else FDConfig(float(self.fd_eps), named.centered)
+
+    @property
+    def keypoint_config(self) -> KeypointConfig:
+        """The key timesteps as ``planners.keypoints.key_steps`` takes them."""
+        return KeypointConfig(self.keypoints, skip=self.fd_skip)
+
+    def fields(self) -> dict:
+        """These options as flat fields (the MPC settings' and a trial's params): fd_centered,
+        fd_eps, keypoints, fd_skip, box_qp; ``from_fields`` reads them back."""
+        fd = self.fd_config
+        return {"fd_centered": fd.centered, "fd_eps": fd.eps, "keypoints": self.keypoints,
+                "fd_skip": self.fd_skip, "box_qp": self.box_qp}
+
+    @classmethod
+    def from_fields(cls, fields) -> Derivatives:
+        """The options of flat fields (``fields``' names; a missing one at its default, as
+        in older params): ``Derivatives.from_fields(d.fields()) == d``."""
+        plain = cls().fields()
+        get = {k: fields.get(k, v) for k, v in plain.items()}
+        fd = "central" if get["fd_centered"] else "forward"
+        return cls(fd, get["keypoints"], get["fd_skip"], get["box_qp"], get["fd_eps"])
+
+
 @dataclass(frozen=True)
 class ILQRConfig:
-    """fd: finite differences of the dynamics (default: FDConfig's forward eps 1e-3, where its
-    docstring says why not the authors' centred 1e-6). keypoints: the timesteps the finite
-    differences cover (``planners.keypoints``; default every one), A and B linear in between.
-    box_qp: the backward pass solves a box-constrained QP per step for the control limits
-    (``mujoco.mju_boxQP``; the gains of clamped controls are 0, as in MuJoCo MPC's iLQG),
-    instead of leaving the limits to the clamping of the simulator.
+    """derivatives: how the dynamics are differentiated (``Derivatives``: the finite
+    differences, default forward eps 1e-3; the timesteps they cover, default every one; the
+    box-QP backward pass for the control limits).
     mu_init/mu_min/mu_max/mu_factor: Levenberg-Marquardt regularisation of Q_uu (authors:
     0.1, 1e-4..10, x10); mu_reset: every ``iterate`` starts from mu_init (beyond the paper: in
     MPC a mu left at its cap by rejected steps makes later steps nil; the authors' and the
     default keep mu between calls). alphas: line-search step sizes tried in parallel."""
 
-    fd: FDConfig = FDConfig()
-    keypoints: KeypointConfig = KeypointConfig()
-    box_qp: bool = False
+    derivatives: Derivatives = Derivatives()
     mu_init: float = 0.1
     mu_min: float = 1e-4
     mu_max: float = 10.0
@@ -55,11 +122,9 @@ class ILQRConfig:
     alphas: tuple[float, ...] = field(default_factory=_default_alphas)
 
     def __post_init__(self):
-        if not isinstance(self.fd, FDConfig):
-            raise TypeError(f"ILQRConfig.fd must be an FDConfig, got {self.fd!r}")
-        if not isinstance(self.keypoints, KeypointConfig):
-            raise TypeError(f"ILQRConfig.keypoints must be a KeypointConfig, got "
-                            f"{self.keypoints!r}")
+        if not isinstance(self.derivatives, Derivatives):
+            raise TypeError(f"ILQRConfig.derivatives must be a Derivatives, got "
+                            f"{self.derivatives!r}")
         check_config(self)
         if not 0 <= self.mu_min <= self.mu_init <= self.mu_max:
             raise ValueError("need 0 <= mu_min <= mu_init <= mu_max")
@@ -166,15 +231,16 @@ class ILQR:
         J0 = float(self.cost.total(X, U))
 
         t0 = time.perf_counter()
-        keys = key_steps(self.config.keypoints, scene, X, C)
-        D = svc.derivatives(X[keys], C, self.config.fd)
+        how = self.config.derivatives
+        keys = key_steps(how.keypoint_config, scene, X, C)
+        D = svc.derivatives(X[keys], C, how.fd_config)
         if D.stability is not None and D.stability.n_unstable:
             log.warning("iLQR: derivatives around an unstable nominal state (key step %d: %s)",
                         keys[D.stability.step[0]], D.stability.reason[0])
         F = interpolate(torch.from_numpy(D.F), keys, len(U))     # part of the derivatives' time
         t1 = time.perf_counter()
         cd = self.cost.derivatives(X, U, C)
-        limits = _limits(scene.model, U) if self.config.box_qp else None
+        limits = _limits(scene.model, U) if how.box_qp else None
         with torch.inference_mode():   # no autograd bookkeeping: ~20 % of a small op's cost
             while True:
                 gains = backward_pass(F, cd.lx, cd.lxx, cd.lu, cd.luu, self.mu, limits)

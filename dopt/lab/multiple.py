@@ -21,7 +21,8 @@ from __future__ import annotations
 import math
 from numbers import Real
 
-__all__ = ["NO_TREND", "TREND_LEVEL", "holm", "holm_reject", "holm_slopes", "slope_verdict"]
+__all__ = ["NO_TREND", "TREND_LEVEL", "holm", "holm_named", "holm_reject", "holm_slopes",
+           "slope_verdict"]
 
 #: the family-wise confidence level of a slope test's verdict
 TREND_LEVEL = 0.95
@@ -71,6 +72,22 @@ def holm(pvalues) -> list[float]:
     return adjusted
 
 
+def holm_named(pvalues) -> dict:
+    """Holm-adjusted p-values of a named family: {name: p or None} -> {name: adjusted p} over
+    the names whose p is not None (a test too small to give one is left out of the family and
+    of the result), in the order given; the one way the summaries and reports adjust a family.
+
+    Raises:
+        TypeError: ``pvalues`` is not a mapping; a p-value as ``holm``.
+        ValueError: as ``holm``.
+    """
+    if not hasattr(pvalues, "items"):
+        raise TypeError(f"pvalues must be a mapping of name to p-value, got "
+                        f"{type(pvalues).__name__}")
+    tested = [k for k, p in pvalues.items() if p is not None]
+    return dict(zip(tested, holm([pvalues[k] for k in tested]), strict=True))
+
+
 def holm_reject(pvalues, alpha: float = 0.05) -> list[bool]:
     """Which hypotheses Holm's procedure rejects at family-wise level ``alpha``, in the order
     given: the step-down procedure itself (ascending p, reject while p_(j) <= alpha / (m - j + 1),
@@ -110,10 +127,9 @@ def holm_slopes(groups: dict) -> dict:
     summary's "trend" per fold). Returns {(group, test): {"p_holm": adjusted over the whole
     family (None where the test had no p), "verdict": ``slope_verdict`` at that p, "m": the
     family's size}}."""
-    tested = [(g, k) for g, tests in groups.items() for k, t in tests.items()
-              if t.get("p") is not None]
-    adjusted = dict(zip(tested, holm([groups[g][k]["p"] for g, k in tested]), strict=True))
+    adjusted = holm_named({(g, k): t.get("p") for g, tests in groups.items()
+                           for k, t in tests.items()})
     return {(g, k): {"p_holm": adjusted.get((g, k)),
                      "verdict": slope_verdict(t.get("slope"), adjusted.get((g, k))),
-                     "m": len(tested)}
+                     "m": len(adjusted)}
             for g, tests in groups.items() for k, t in tests.items()}

@@ -1,8 +1,9 @@
 """The tasks of the two papers, in two wings, registered by name here.
 
 ``push`` (state-vector reduction, iLQR-SVR): a Franka Panda pushes rigid cylinders and soft
-bodies on a table. ``PUSH_TASKS[name](rng)`` (or ``get_task(name)(rng)``) builds a fresh task
-instance from an explicit ``numpy.random.Generator`` and returns a ``TaskModel``: the compiled
+bodies on a table. ``PUSH_TASKS[name]`` (or ``get_task(name)``) is the task's ``PushTaskSpec``:
+its horizon, dt, timeout, slowdown and nv, read without building anything; called with an
+explicit ``numpy.random.Generator`` it builds a fresh instance, a ``TaskModel``: the compiled
 MuJoCo model, its initial state and the declarative facts a cost needs; the costs are in
 ``dopt.tasks.push.costs`` (which imports torch, so it is not re-exported here).
 
@@ -61,19 +62,17 @@ from dopt.tasks.push.authors import (
     build_soft_authors,
     build_soft_rigid_authors,
 )
-from dopt.tasks.push.clutter import build_clutter
-from dopt.tasks.push.soft import build_soft, build_soft_rigid
-from dopt.tasks.push.task_model import TaskModel, planar_dofs, require_generator
+from dopt.tasks.push.clutter import CLUTTER
+from dopt.tasks.push.soft import SOFT, SOFT_RIGID
+from dopt.tasks.push.task_model import PushTaskSpec, TaskModel, planar_dofs, require_generator
 from dopt.validation import check_int
 
 TaskBuilder = Callable[[np.random.Generator], TaskModel]
 SceneBuilder = Callable[..., DeformableScene]
 
-PUSH_TASKS: dict[str, TaskBuilder] = {
-    "clutter": build_clutter,
-    "soft": build_soft,
-    "soft_rigid": build_soft_rigid,
-}
+#: the push tasks by CLI name: each a ``PushTaskSpec``, whose constants (T, dt, Y, slowdown,
+#: nv) read without compiling a model and which, called with a generator, builds an instance
+PUSH_TASKS: dict[str, PushTaskSpec] = {spec.name: spec for spec in (CLUTTER, SOFT, SOFT_RIGID)}
 
 #: the authors' scenes by task name: clutter's builder takes one of their layout files (a
 #: path), the soft tasks' a ``numpy.random.Generator`` (see ``build_push_task``)
@@ -131,9 +130,9 @@ def build_push_task(name: str, problem: str, seed: int,
     return AUTHORS_PUSH_TASKS[name](path)
 
 
-def get_task(name: str) -> TaskBuilder:
-    """The push-task builder registered under the CLI name ``name``; ValueError listing the
-    known names."""
+def get_task(name: str) -> PushTaskSpec:
+    """The push task registered under the CLI name ``name`` (a ``PushTaskSpec``: call it with
+    a generator to build an instance); ValueError listing the known names."""
     try:
         return PUSH_TASKS[name]
     except (KeyError, TypeError):
@@ -143,6 +142,6 @@ def get_task(name: str) -> TaskBuilder:
 
 __all__ = ["AUTHORS_PUSH_TASKS", "ClothSceneConfig", "DeformableScene", "NONE",
            "N_AUTHORS_LAYOUTS", "PICK_SCENES", "PUSH_PROBLEMS", "PUSH_TASKS", "PickPlaceTask",
-           "PickerConfig", "RopeSceneConfig", "SceneBuilder", "TaskBuilder", "TaskModel",
-           "build_push_task", "end_to_end", "get_task", "make_cloth", "make_rope",
+           "PickerConfig", "PushTaskSpec", "RopeSceneConfig", "SceneBuilder", "TaskBuilder",
+           "TaskModel", "build_push_task", "end_to_end", "get_task", "make_cloth", "make_rope",
            "matching_distance", "mean_distance", "planar_dofs", "require_generator"]

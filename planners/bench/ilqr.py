@@ -9,7 +9,7 @@ import numpy as np
 import torch
 
 from dopt.tasks import get_task
-from planners.ilqr import ILQRConfig
+from planners.ilqr import Derivatives, ILQRConfig
 from planners.keypoints import KeypointConfig, interpolate, key_steps
 from planners.svr import SelectionConfig, paper_theta
 from planners.svr_mpc import build_controller
@@ -38,8 +38,10 @@ def bench_ilqr(task: str, methods: list[str], rho: float, theta: int | None, ite
     out = []
     for method in methods:
         for variant in variants:
-            out.append(_one(tm, x0, U0, method, rho, theta, KeypointConfig.parse(variant),
-                            box_qp, iterations, warmup, threads, seed))
+            kp = KeypointConfig.parse(variant)
+            how = Derivatives(keypoints=kp.method, fd_skip=kp.skip, box_qp=box_qp)
+            out.append(_one(tm, x0, U0, method, rho, theta, how, iterations, warmup, threads,
+                            seed))
     base = next((r["ms_per_iteration"] for r in out
                  if r["method"] == "baseline" and r["keypoints"] == "every"), None)
     every = {r["method"]: r["ms_per_iteration"] for r in out if r["keypoints"] == "every"}
@@ -50,12 +52,12 @@ def bench_ilqr(task: str, methods: list[str], rho: float, theta: int | None, ite
     return out
 
 
-def _one(tm, x0, U0, method, rho, theta, keypoints, box_qp, iterations, warmup, threads,
-         seed) -> dict:
+def _one(tm, x0, U0, method, rho, theta, how, iterations, warmup, threads, seed) -> dict:
     th = paper_theta(method) if theta is None else theta
     ctl = build_controller(tm, SelectionConfig(method, rho=rho, theta=th),
                            np.random.default_rng(seed), threads,
-                           ILQRConfig(keypoints=keypoints, box_qp=box_qp))
+                           ILQRConfig(derivatives=how))
+    keypoints = how.keypoint_config
     svc, ilqr, sel = ctl.service, ctl.ilqr, ctl.selector
     U, walls, splits, sizes, fd_steps = U0, [], [], [], []
     for i in range(warmup + iterations):
@@ -83,7 +85,7 @@ def _one(tm, x0, U0, method, rho, theta, keypoints, box_qp, iterations, warmup, 
         per_step = torch.linalg.matrix_norm(approx - full) / norms
         error, error_median = float(per_step.mean()), float(per_step.median())
     row = {"bench": "ilqr", "task": tm.name, "method": method, "keypoints": keypoints.name,
-           "box_qp": box_qp, "ms_per_iteration": ms, "n_dofs": float(np.mean(sizes)),
+           "box_qp": how.box_qp, "ms_per_iteration": ms, "n_dofs": float(np.mean(sizes)),
            "split_ms": split, "derivative_share": split["derivatives"] / ms,
            "fd_steps": float(np.mean(fd_steps)), "horizon": tm.horizon,
            "interp_error": error, "interp_error_median": error_median, "threads": svc.threads,

@@ -24,7 +24,8 @@ Modules, one job each (every name is re-exported here):
     tasks.py     the tasks and goals, registered once: PICK_TASKS (PickTaskSpec: scene,
                  sizes, goals), PickGoal (stages, start, metrics, prepared start),
                  PICK_METRICS,
-                 register_goal (a new goal and its budget in one call), GOALS
+                 register_goal (a new goal and its budget in one call), GOALS;
+                 GOAL_NAMES (goal_name), the one table of every name a goal goes by
     presets.py   the presets of both protocols with the source of every number: PRESETS
                  (ours), PAPER_PRESETS (the paper's), QUICK_CHANGES, PROTOCOL_SEEDS
     settings.py  PickPlaceSettings: presets, scene and picker configs, a trial's identity
@@ -94,16 +95,19 @@ from planners.pick_place.settings import (
 from planners.pick_place.summary import last_improvement, summarize
 from planners.pick_place.tasks import (
     CRUMPLE_TURN,
+    GOAL_NAMES,
     GOALS,
     PICK_METRICS,
     PICK_TASKS,
     PREPARED_LIFT,
     PREPARED_SETTLE,
+    GoalName,
     PickGoal,
     PickTaskSpec,
     Stage,
     cloth_prepared,
     cloth_sequence,
+    goal_name,
     metric_names,
     pick_task,
     register_goal,
@@ -112,14 +116,14 @@ from planners.pick_place.tasks import (
 )
 
 __all__ = [
-    "CEM_CANDIDATES", "CRUMPLE_TURN", "FOLD_STARTS", "GOALS", "LABELS", "METHODS", "PAPER_CHANGES",
-    "PAPER_PRESETS", "PICK_METRICS", "PICK_TASKS", "PREPARED_LIFT", "PREPARED_SETTLE", "PRESETS",
-    "PROTOCOLS", "PROTOCOL_SEEDS", "QUICK_CHANGES", "UNSET_SCENE_FIELDS", "UNSET_SETTINGS",
-    "CEMPlanner", "PickGoal", "PickPlaceResult", "PickPlaceSettings", "PickPlanner",
-    "PickTaskSpec", "Preset", "Problem", "ScriptedPlanner", "Stage", "StagePlan", "TrialProgress",
-    "capture_label", "cloth_prepared", "cloth_sequence", "last_improvement", "make_planner",
-    "make_problem", "metric_names", "paper_preset", "pick_task", "quick_preset", "register_goal",
-    "register_planner", "register_task",
-    "rope_stage", "run_problem", "run_trial", "seconds_per_action", "solve", "summarize",
-    "trial_key",
+    "CEM_CANDIDATES", "CRUMPLE_TURN", "FOLD_STARTS", "GOAL_NAMES", "GOALS", "LABELS", "METHODS",
+    "PAPER_CHANGES", "PAPER_PRESETS", "PICK_METRICS", "PICK_TASKS", "PREPARED_LIFT",
+    "PREPARED_SETTLE", "PRESETS", "PROTOCOLS", "PROTOCOL_SEEDS", "QUICK_CHANGES",
+    "UNSET_SCENE_FIELDS", "UNSET_SETTINGS", "CEMPlanner", "GoalName", "PickGoal",
+    "PickPlaceResult", "PickPlaceSettings", "PickPlanner", "PickTaskSpec", "Preset", "Problem",
+    "ScriptedPlanner", "Stage", "StagePlan", "TrialProgress", "capture_label", "cloth_prepared",
+    "cloth_sequence", "goal_name", "last_improvement", "make_planner", "make_problem",
+    "metric_names", "paper_preset", "pick_task", "quick_preset", "register_goal",
+    "register_planner", "register_task", "rope_stage", "run_problem", "run_trial",
+    "seconds_per_action", "solve", "summarize", "trial_key",
 ]

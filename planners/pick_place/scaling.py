@@ -20,9 +20,10 @@ The trend test: the paired difference of the final cost, method minus CEM(Simple
 common to both at each size, regressed on log N (N = n * n particles) by ordinary least squares
 (``scipy.stats.linregress``; the slope's 95 % interval from the t quantile with n_points - 2
 degrees of freedom); the p-values of Original - Simple and Random - Simple are Holm-adjusted
-together (``dopt.lab.multiple.holm``); a claim over several folds judges all their tests as one
-family (``dopt.lab.multiple.holm_slopes``). A positive slope: the gain of CEM(Simple) grows with
-the particle count. Means and differences are over the stable trials only (as ``summarize``).
+together (``dopt.lab.multiple.holm_named``); a claim over several folds judges all their tests
+as one family (``dopt.lab.multiple.holm_slopes``). A positive slope: the gain of CEM(Simple)
+grows with the particle count. Means and differences are over the stable trials only (as
+``summarize``).
 """
 
 from __future__ import annotations
@@ -33,7 +34,7 @@ from dataclasses import replace
 import numpy as np
 from scipy import stats
 
-from dopt.lab.multiple import NO_TREND, TREND_LEVEL, holm, slope_verdict
+from dopt.lab.multiple import NO_TREND, TREND_LEVEL, holm_named, slope_verdict
 from dopt.lab.stats import mean_ci
 from dopt.lab.sweep import Trial
 from planners.pick_place.settings import PickPlaceSettings, trial_key
@@ -195,8 +196,7 @@ def _statistics(data: dict, scale: dict) -> tuple[dict, dict]:
             points[m][1].extend(values)
         per_size[str(n)] = entry
     fits = {m: trend(*points[m]) for m in COMPARED}
-    tested = [m for m in COMPARED if fits[m]["p"] is not None]
-    adjusted = dict(zip(tested, holm([fits[m]["p"] for m in tested]), strict=True))
+    adjusted = holm_named({m: fits[m]["p"] for m in COMPARED})
     out_trend = {}
     for m in COMPARED:
         p_holm = adjusted.get(m)

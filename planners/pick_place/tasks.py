@@ -182,6 +182,47 @@ class PickTaskSpec:
         return self.goals[name]
 
 
+# -------------------------------------------------------------------- the goals' names
+@dataclass(frozen=True)
+class GoalName:
+    """Every name one goal goes by: ``shape``, its key in ``deformables.goals.GOALS``;
+    ``task`` and ``goal``, the names the pick settings, trial files and results use;
+    ``panel``, its panel of the key-particle paper's Fig. 7 (None: not in the paper);
+    ``title``, how figures and pages name it. ``label``: panel and title together."""
+
+    shape: str
+    task: str
+    goal: str
+    panel: str | None
+    title: str
+
+    @property
+    def label(self) -> str:
+        """"(c) cloth diagonal fold": the figure's panel and the title."""
+        return self.title if self.panel is None else f"{self.panel} {self.title}"
+
+
+#: the one goal-name table, in the order of the paper's Fig. 7 (a)-(f): the pick tasks' goals
+#: below read their shapes here, the report its panels and titles (without building a goal)
+GOAL_NAMES: tuple[GoalName, ...] = (
+    GoalName("rope_straighten", "rope", "straighten", "(a)", "rope straightening"),
+    GoalName("rope_fold", "rope", "fold", "(b)", "rope folding"),
+    GoalName("cloth_diagonal", "cloth", "diagonal", "(c)", "cloth diagonal fold"),
+    GoalName("cloth_side", "cloth", "side", "(d)", "cloth side fold"),
+    GoalName("cloth_reflective", "cloth", "reflective", "(e)", "cloth reflective fold"),
+    GoalName("cloth_underneath", "cloth", "underneath", "(f)", "cloth underneath fold"),
+)
+
+
+def goal_name(task: str, goal: str) -> GoalName:
+    """The ``GOAL_NAMES`` row of ``task``'s goal ``goal``; ValueError naming the known ones."""
+    for row in GOAL_NAMES:
+        if (row.task, row.goal) == (task, goal):
+            return row
+    raise ValueError(f"no goal {goal!r} of task {task!r} in GOAL_NAMES; known: "
+                     f"{', '.join(f'{r.task}/{r.goal}' for r in GOAL_NAMES)}")
+
+
 # ----------------------------------------------------------------------- the goals' stages
 def cloth_sequence(sequence: str) -> StageBuilder:
     """The stages of the registered goal sequence ``sequence`` (``deformables.goals.
@@ -335,10 +376,10 @@ register_task(PickTaskSpec(
     "cloth", scene="cloth", config=ClothSceneConfig,
     scene_fields=("n", "side", "selfcollide", "mass"),
     extent="side", dims=2,
-    goals={**{name: PickGoal(name, cloth_sequence(f"cloth_{name}"))
+    goals={**{name: PickGoal(name, cloth_sequence(goal_name("cloth", name).shape))
               for name in ("diagonal", "side")},
-           **{name: PickGoal(name, cloth_sequence(f"cloth_{name}"),
-                             prepared=cloth_prepared(f"cloth_{name}"))
+           **{name: PickGoal(name, cloth_sequence(goal_name("cloth", name).shape),
+                             prepared=cloth_prepared(goal_name("cloth", name).shape))
               for name in ("reflective", "underneath")}}))
 register_task(PickTaskSpec(
     "rope", scene="rope", config=RopeSceneConfig, scene_fields=("n", "length"),

@@ -23,8 +23,11 @@ plan (``dopt.tasks.push.warm_start``), their 5 % control noise, and the virtual 
 
 Shapes: T horizon, nu controls, ns state row, c = |C| active DoFs.
 
-    settings.py  SVRMPCSettings, Derivatives (typed derivative options), TABLE1_ROWS, rows
+    settings.py  SVRMPCSettings, Derivatives (planners.ilqr's typed derivative options;
+                 spell_derivatives, their one spelling), TABLE1_ROWS, rows
                  by name (parse_row -> Row), task_defaults, trial params, keys and row labels
+    presets.py   the protocols (ours, paper, authors) and TABLE1_ROWS, each number with its
+                 source (the paper's section, the authors' file)
     optimisers.py  OPTIMISERS by name, register_optimiser, OptimiserContext, svr_optimiser
     episode.py   build_controller, wire_controller, run_svr_mpc -> SVRMPCResult, run_trial
                  and CapturingTrial (for dopt.lab.sweep; keep_controls: for an exact replay)
@@ -79,6 +82,7 @@ from planners.svr_mpc.settings import (
     parse_variants,
     row_label,
     row_name,
+    spell_derivatives,
     split_params,
     task_defaults,
     trial_key,
@@ -104,6 +108,6 @@ __all__ = ["CLOCK_MODEL_MS", "CONTROLS_FIELDS", "DEFAULT_OPTIMISER", "FINITE_DIF
            "derivatives_effect", "derivatives_tag", "dofs_mask", "dofs_of_mask", "feedback_effect",
            "fig4_fields", "optimiser_factory", "optimiser_names", "paired", "paired_ratio",
            "parse_row", "parse_variants", "register_optimiser", "row_label", "row_name",
-           "run_svr_mpc", "run_trial", "split_params", "summarize", "svr_optimiser",
-           "table1_fields", "task_defaults", "trial_key", "trial_params", "versus",
+           "run_svr_mpc", "run_trial", "spell_derivatives", "split_params", "summarize",
+           "svr_optimiser", "table1_fields", "task_defaults", "trial_key", "trial_params", "versus",
            "wire_controller"]

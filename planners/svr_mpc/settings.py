@@ -1,17 +1,16 @@
-"""The settings of one iLQR-SVR MPC trial (``SVRMPCSettings``), its derivative options as
-typed fields (``Derivatives``), the paper's Table 1 rows by name (``parse_row`` -> ``Row``), a
-task's own slowdown and timeout (``task_defaults``), and the params, key and row label a trial
-is stored and reported under (``trial_params``, ``trial_key``, ``row_label``)."""
+"""The settings of one iLQR-SVR MPC trial (``SVRMPCSettings``), the one spelling of its
+derivative options (``planners.ilqr.Derivatives``: ``spell_derivatives``), the paper's Table 1
+rows by name (``parse_row`` -> ``Row``), a task's own slowdown and timeout
+(``task_defaults``), and the params, key and row label a trial is stored and reported under
+(``trial_params``, ``trial_key``, ``row_label``)."""
 
 from __future__ import annotations
 
-import functools
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Literal
 
 import mujoco
-import numpy as np
 
 from dopt.lab.provenance import root_relative, rooted
 from dopt.mpc import CLOCKS, EXECUTORS, MAX_CONTROL_NOISE
@@ -20,35 +19,29 @@ from dopt.tasks import PUSH_PROBLEMS, build_push_task, get_task
 from dopt.tasks.push.costs import COST_PRESETS
 from dopt.tasks.push.task_model import TaskModel
 from dopt.validation import check_config
-from planners.ilqr import ILQRConfig
-from planners.keypoints import METHODS as KEYPOINT_METHODS
+from planners.ilqr import FINITE_DIFFERENCES, Derivatives, ILQRConfig
 from planners.keypoints import KeypointConfig
 from planners.svr import METHODS, SelectionConfig, paper_theta
 from planners.svr_mpc.optimisers import DEFAULT_OPTIMISER, optimiser_names
-
-#: the nine rows of the paper's Table 1 by name: (method, theta, rho)
-TABLE1_ROWS = {
-    "baseline": ("baseline", 0, 1.0),
-    "rand-t5": ("rand", 5, 1.0),
-    "naive": ("naive", 0, 1.0),
-    "svd-t10-r1": ("svr-svd", 10, 1.0),
-    "svd-t10-r500": ("svr-svd", 10, 500.0),
-    "svd-t5-r1": ("svr-svd", 5, 1.0),
-    "sum-t10-r1": ("svr-sum", 10, 1.0),
-    "sum-t10-r500": ("svr-sum", 10, 500.0),
-    "sum-t5-r1": ("svr-sum", 5, 1.0),
-}
+from planners.svr_mpc.presets import (
+    DEFAULT_ROW,
+    PAPER,
+    PROTOCOLS,
+    TABLE1_ROWS,
+    protocol_fields,
+    row_fields,
+)
 
 #: the problems a trial can run on: ``ours`` (dopt's own scenes, ``dopt.tasks.PUSH_TASKS``) or
 #: ``authors`` (the authors' scenes, objects and contacts, ``dopt.tasks.push.authors``)
 PROBLEMS = PUSH_PROBLEMS
 
-#: the protocols by name (``SVRMPCSettings.preset``)
-PRESETS = ("ours", "paper", "authors")
+#: the protocols by name (``SVRMPCSettings.preset``; ``planners.svr_mpc.presets``)
+PRESETS = tuple(PROTOCOLS)
 
-#: the authors' cost per task where it is not Eq. 2 alone (``COST_PRESETS["paper"]``): their
-#: push_soft task file adds a terminal reach residual (``dopt.tasks.push.costs``)
-PAPER_COSTS = {"soft": "paper-reach"}
+#: the paper's cost per task where it is not Eq. 2 alone (``COST_PRESETS["paper"]``): their
+#: push_soft task file adds a terminal reach residual (``presets.PAPER["cost"]``)
+PAPER_COSTS = dict(PAPER["cost"].per_task)
 
 #: the clocks a trial can run on: ``dopt.mpc.CLOCKS`` and ``authors``, the model clock fitted
 #: to the authors' own optimisation times (``planners.svr_mpc.authors_clock``)
@@ -67,40 +60,6 @@ def row_name(method: str, theta: int, rho: float) -> str:
     if method == "rand":
         return f"rand-t{theta}"
     return f"{method[4:]}-t{theta}-r{rho:g}"
-
-
-#: the finite differences by name: (centred, eps): forward eps 1e-3 (``FDConfig``'s default)
-#: or the authors' central differences, eps 1e-6
-FINITE_DIFFERENCES = {"forward": (False, 1e-3), "central": (True, 1e-6)}
-
-
-@dataclass(frozen=True)
-class Derivatives:
-    """iLQR's derivative options, typed: ``fd`` the finite differences (a name of
-    ``FINITE_DIFFERENCES``), ``keypoints`` the timesteps they cover (``every``, ``skip`` every
-    ``fd_skip``-th, ``adaptive``; ``planners.keypoints``; fd_skip is 1 unless ``skip``),
-    ``box_qp`` control limits in the backward pass. ``fields()``: the ``SVRMPCSettings``
-    fields they set. The command lines' flags build one, a row's variants (``parse_variants``)
-    replace some of its fields; ``derivatives_tag`` and ``trial_key`` spell them."""
-
-    fd: Literal["forward", "central"] = "forward"
-    keypoints: Literal["every", "skip", "adaptive"] = "every"
-    fd_skip: int = 1
-    box_qp: bool = False
-
-    def __post_init__(self):
-        check_config(self, minimum={"fd_skip": 1},
-                     choices={"fd": tuple(FINITE_DIFFERENCES), "keypoints": KEYPOINT_METHODS})
-        if self.keypoints != "skip" and self.fd_skip != 1:
-            raise ValueError(f"Derivatives.fd_skip must be 1 with keypoints "
-                             f"{self.keypoints!r} (a skip needs keypoints 'skip'), got "
-                             f"{self.fd_skip}")
-
-    def fields(self) -> dict:
-        """The ``SVRMPCSettings`` fields: fd_centered, fd_eps, keypoints, fd_skip, box_qp."""
-        centred, eps = FINITE_DIFFERENCES[self.fd]
-        return {"fd_centered": centred, "fd_eps": eps, "keypoints": self.keypoints,
-                "fd_skip": self.fd_skip, "box_qp": self.box_qp}
 
 
 #: the fixes beyond the paper a row can name (``sum-t10-r500+costdofs``): the
@@ -172,18 +131,43 @@ def parse_row(spec: str) -> Row:
                      + (f", or an optimiser: {', '.join(extra)}" if extra else ""))
 
 
+def spell_derivatives(d: Derivatives, form: Literal["key", "label", "row"]) -> tuple[str, ...]:
+    """The words naming where ``d`` departs from the default (forward eps 1e-3 at every
+    timestep, a plain backward pass), in the one order fd, keypoints, box QP: the spelling of
+    the derivative options everywhere they are written out.
+
+    form: ``key`` (``trial_key``'s parts: ``fdc1e-06`` or ``fdf<eps>``, ``skip<K>`` or
+    ``kpadaptive``, ``boxqp``), ``label`` (``row_label``'s ``+`` suffixes: ``central`` or
+    ``fd<eps>``, ``skip<K>`` for K > 1 or ``adaptive``, ``boxqp``) or ``row`` (the variants a
+    row names, ``parse_variants``' words: ``central``, ``skip<K>`` or ``adaptive``,
+    ``boxqp``; ValueError for a step no row can name).
+    """
+    fd, words = d.fd_config, []
+    if fd != FDConfig():
+        if form == "key":
+            words.append(f"fd{'c' if fd.centered else 'f'}{fd.eps:g}")
+        elif fd.centered and (form == "label" or d.fd_eps is None):
+            words.append("central")
+        elif form == "label":
+            words.append(f"fd{fd.eps:g}")
+        else:
+            raise ValueError(f"no row variant names finite differences of eps {fd.eps:g} "
+                             f"({'central' if fd.centered else 'forward'}): a row names "
+                             f"{', '.join(FINITE_DIFFERENCES)} at their own steps")
+    if d.keypoints == "adaptive":
+        words.append("kpadaptive" if form == "key" else "adaptive")
+    elif d.keypoints == "skip" and (form != "label" or d.fd_skip > 1):
+        words.append(f"skip{d.fd_skip}")
+    if d.box_qp:
+        words.append("boxqp")
+    return tuple(words)
+
+
 def derivatives_tag(p: dict) -> str:
-    """The derivative variant of a trial's params as a row-label suffix: `` +central``
-    (central differences), `` +skip<K>`` or `` +adaptive`` (key timesteps), `` +boxqp``; ''
-    for forward differences (eps 1e-3) at every timestep and a plain backward pass."""
-    tag = ""
-    if p.get("fd_centered") or p.get("fd_eps", 1e-3) != 1e-3:
-        tag += " +central" if p.get("fd_centered") else f" +fd{p['fd_eps']:g}"
-    if p.get("keypoints", "every") == "adaptive":
-        tag += " +adaptive"
-    elif p.get("keypoints", "every") == "skip" and p.get("fd_skip", 1) > 1:
-        tag += f" +skip{p['fd_skip']}"
-    return tag + (" +boxqp" if p.get("box_qp") else "")
+    """The derivative options of a trial's params as a row-label suffix
+    (``spell_derivatives``' labels): `` +central``, `` +skip<K>`` or `` +adaptive``,
+    `` +boxqp``; '' for the defaults."""
+    return "".join(f" +{w}" for w in spell_derivatives(Derivatives.from_fields(p), "label"))
 
 
 def fixes_tag(p: dict) -> str:
@@ -221,8 +205,9 @@ class SVRMPCSettings:
             centred 1e-6).
         keypoints, fd_skip: the timesteps the finite differences cover (``every``, ``skip``
             every fd_skip-th, ``adaptive``; ``planners.keypoints``), A and B linear between.
-        box_qp: control limits in the backward pass (``ILQRConfig.box_qp``). The five set
-            together: ``replace(settings, **Derivatives(...).fields())``.
+        box_qp: control limits in the backward pass. The five are ``derivatives``
+            (``planners.ilqr.Derivatives``) spelled flat, as a trial's params keep them; set
+            them together: ``replace(settings, **Derivatives(...).fields())``.
         problem: ``ours`` or ``authors`` (``PROBLEMS``): whose scenes the task builds.
         layouts: the folder of the authors' clutter scenes (``push_mcl_layouts``, one CSV per
             scene; seed i loads scene i); needed by problem ``authors`` on clutter only. A
@@ -301,7 +286,7 @@ class SVRMPCSettings:
             raise ValueError(f"layouts: only the authors' clutter reads them (problem "
                              f"'authors', task 'clutter'), not problem {self.problem!r} on "
                              f"{self.task}")
-        _ = self.ilqr                              # ValueError naming a bad keypoint method
+        _ = self.ilqr                  # ValueError naming a bad keypoint method or fd_skip
         if self.synchronous and self.clock != "real":
             raise ValueError("synchronous runs have no clock: use clock='real' with it")
         if self.clock_ms is not None and self.clock != "model":
@@ -309,36 +294,30 @@ class SVRMPCSettings:
                              f"with it, not {self.clock!r}")
 
     @classmethod
-    def paper(cls, task: str, row: str = "sum-t10-r1", **overrides) -> SVRMPCSettings:
-        """The paper's protocol for ``row`` (a name of ``TABLE1_ROWS``) on ``task``: the
-        authors' cost for the task (``PAPER_COSTS``: Eq. 2, on soft with their reach
-        residual), their initial plan, 5 % control noise, the virtual clock."""
-        if row not in TABLE1_ROWS:
-            raise ValueError(f"unknown Table 1 row {row!r}; choose from {tuple(TABLE1_ROWS)}")
-        method, theta, rho = TABLE1_ROWS[row]
-        return cls(**{"task": task, "method": method, "theta": theta, "rho": rho,
-                      "cost": PAPER_COSTS.get(task, "paper"), "warm_start": True,
-                      "control_noise": 0.05,
-                      "clock": "virtual", **overrides})
+    def paper(cls, task: str, row: str = DEFAULT_ROW, **overrides) -> SVRMPCSettings:
+        """The paper's protocol for ``row`` (a name of ``TABLE1_ROWS``) on ``task``
+        (``planners.svr_mpc.presets.PAPER``, each number with its source): the authors' cost
+        for the task (Eq. 2, on soft with their reach residual), their initial plan, 5 %
+        control noise, the virtual clock."""
+        return cls(**{"task": task, **row_fields(row), **protocol_fields("paper", task),
+                      **overrides})
 
     @classmethod
-    def authors(cls, task: str, row: str = "sum-t10-r1", layouts: str | Path | None = None,
+    def authors(cls, task: str, row: str = DEFAULT_ROW, layouts: str | Path | None = None,
                 **overrides) -> SVRMPCSettings:
-        """The authors' regime for ``row`` on their own problem ``task``: their scenes
-        (clutter: scene ``seed`` of ``layouts``), objects and contacts, their cost weights
-        without a control cost (``dopt.tasks.push.costs.AUTHORS_COSTS``), their initial plan
-        (``dopt.tasks.push.warm_start``), no control noise (every run of their paper data
-        records ``controls_noise: 0``), their data generator's executor (``authors``: hold
+        """The authors' regime for ``row`` on their own problem ``task``
+        (``planners.svr_mpc.presets.AUTHORS`` over ``PAPER``, each number with its source):
+        their scenes (clutter: scene ``seed`` of ``layouts``), objects and contacts, their
+        cost weights without a control cost (``dopt.tasks.push.costs.AUTHORS_COSTS``), their
+        initial plan, no control noise, their data generator's executor (``authors``: hold
         after 80 controls, nearest-state landing) and the clock fitted to their times
         (``authors``). Where the paper's text (Alg. 1) and their code differ, this follows
         the code, which generated their data; ``executor="alg1"`` is the text's reading.
         ``layouts`` (relative to the current folder) is recorded relative to the checkout's
         root (``dopt.lab.provenance.root_relative``)."""
         layouts = None if layouts is None else root_relative(layouts)
-        return cls.paper(task, row, **{"problem": "authors", "layouts": layouts,
-                                       "cost": f"authors-{task}", "control_noise": 0.0,
-                                       "executor": "authors", "clock": "authors",
-                                       **overrides})
+        return cls(**{"task": task, **row_fields(row), **protocol_fields("authors", task),
+                      "layouts": layouts, **overrides})
 
     @classmethod
     def preset(cls, name: str, task: str, layouts: str | Path | None = None) -> SVRMPCSettings:
@@ -348,13 +327,13 @@ class SVRMPCSettings:
         if layouts is not None and name != "authors":
             raise ValueError(f"layouts are the authors' clutter scenes: only preset 'authors' "
                              f"reads them, not {name!r}")
+        if name not in PROTOCOLS:
+            raise ValueError(f"unknown preset {name!r}; choose from {PRESETS}")
         if name == "authors":
             return cls.authors(task, layouts=layouts)
         if name == "paper":
             return cls.paper(task)
-        if name == "ours":
-            return cls(task=task)
-        raise ValueError(f"unknown preset {name!r}; choose from {PRESETS}")
+        return cls(task=task)
 
     def build_task(self, seed: int) -> TaskModel:
         """The task instance of ``seed`` under these settings (``problem``, ``layouts``,
@@ -366,12 +345,14 @@ class SVRMPCSettings:
         return task
 
     @property
+    def derivatives(self) -> Derivatives:
+        """The five derivative fields as one typed value (``Derivatives.from_fields``)."""
+        return Derivatives.from_fields({k: getattr(self, k) for k in Derivatives().fields()})
+
+    @property
     def ilqr(self) -> ILQRConfig:
-        """iLQR's config: the finite differences, their key timesteps, the box QP, mu's
-        reset."""
-        return ILQRConfig(fd=FDConfig(eps=float(self.fd_eps), centered=bool(self.fd_centered)),
-                          keypoints=KeypointConfig(self.keypoints, skip=int(self.fd_skip)),
-                          box_qp=bool(self.box_qp), mu_reset=bool(self.mu_reset))
+        """iLQR's config: its derivatives (``derivatives``) and mu's reset."""
+        return ILQRConfig(derivatives=self.derivatives, mu_reset=bool(self.mu_reset))
 
     @property
     def selection(self) -> SelectionConfig:
@@ -381,12 +362,11 @@ class SVRMPCSettings:
                                keep_costed=bool(self.keep_costed))
 
 
-@functools.cache
 def task_defaults(task: str) -> tuple[float, int]:
-    """The slowdown and timeout (agent steps) of ``task``'s own instance (``PUSH_TASKS``, seed
-    0; the paper's), what a trial's settings without them run with."""
-    built = get_task(task)(np.random.default_rng(0))
-    return float(built.slowdown), int(built.timeout)
+    """The slowdown and timeout (agent steps) of ``task`` (its ``PushTaskSpec``; the paper's),
+    what a trial's settings without them run with; builds no model."""
+    spec = get_task(task)
+    return float(spec.slowdown), int(spec.timeout)
 
 
 def trial_params(settings: SVRMPCSettings, seed: int,
@@ -434,13 +414,7 @@ def trial_key(p: dict) -> str:
         parts.append(f"ms{p['clock_ms']:g}")
     if p.get("synchronous"):
         parts.append("sync")
-    if p.get("fd_centered") or p.get("fd_eps", 1e-3) != 1e-3:
-        parts.append(f"fd{'c' if p.get('fd_centered') else 'f'}{p.get('fd_eps', 1e-3):g}")
-    if p.get("keypoints", "every") != "every":
-        parts.append("kpadaptive" if p["keypoints"] == "adaptive"
-                     else f"skip{p.get('fd_skip', 1)}")
-    if p.get("box_qp"):
-        parts.append("boxqp")
+    parts += spell_derivatives(Derivatives.from_fields(p), "key")
     if p.get("problem", "ours") != "ours":
         parts.append(p["problem"])
     if not p.get("islands", True):

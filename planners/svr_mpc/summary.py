@@ -10,8 +10,9 @@ from __future__ import annotations
 import numpy as np
 from scipy import stats
 
-from dopt.lab.multiple import holm
+from dopt.lab.multiple import holm_named
 from dopt.lab.stats import mean_ci
+from planners.ilqr import Derivatives
 from planners.svr_mpc.authors_data import authors_statistic
 from planners.svr_mpc.choice import choice_fields
 from planners.svr_mpc.settings import TABLE1_ROWS, row_label
@@ -162,8 +163,7 @@ def versus(records: list[dict], references: tuple[str, ...] = VERSUS_REFERENCES,
                 logs[row, ref] = np.log([by[row][k] / by[ref][k] for k in seeds])
     m = len(logs)
     pvals = {k: _t_test_p(x) for k, x in logs.items()}
-    tested = [k for k in logs if pvals[k] is not None]
-    adjusted = dict(zip(tested, holm([pvals[k] for k in tested]), strict=True))
+    adjusted = holm_named(pvals)
     pairs = {}
     for (row, ref), x in logs.items():
         p_holm = adjusted.get((row, ref))
@@ -247,8 +247,7 @@ def derivatives_effect(records: list[dict], level: float = 0.90) -> dict:
     over the paired trials)}}.
     """
     def plain(p):
-        return row_label({**p, "keypoints": "every", "fd_skip": 1, "box_qp": False,
-                          "fd_centered": False, "fd_eps": 1e-3, "keep_costed": False,
+        return row_label({**p, **Derivatives().fields(), "keep_costed": False,
                           "mu_reset": False})
 
     def mean(results, field):

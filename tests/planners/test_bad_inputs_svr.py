@@ -121,7 +121,7 @@ def test_ilqr_solve_options(lq, kwargs, error, match):
     (dict(alphas=(np.nan,)), ValueError, r"ILQRConfig.alphas\[0\].*finite"),
     (dict(alphas=()), ValueError, "alphas must be in"),
     (dict(alphas=0.5), TypeError, "ILQRConfig.alphas.*tuple"),
-    (dict(fd=None), TypeError, "ILQRConfig.fd must be an FDConfig"),
+    (dict(derivatives=None), TypeError, "ILQRConfig.derivatives must be a Derivatives"),
 ])
 def test_ilqr_config_fields(kwargs, error, match):
     with pytest.raises(error, match=match):

@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 import torch
 
-from dopt import FDConfig, RolloutConfig, RolloutService, Scene
+from dopt import RolloutConfig, RolloutService, Scene
 from dopt.costs import QuadraticCost
-from planners.ilqr import ILQR, ILQRConfig, backward_pass
+from planners.ilqr import ILQR, Derivatives, ILQRConfig, backward_pass
 from tests.dopt.models import ACTUATED_ARENA, MIXED_JOINTS
 
 # two damped point masses on slides, no gravity, no contacts: linear dynamics under Euler
@@ -50,7 +50,7 @@ def test_lq_converges_in_one_iteration_to_the_qp_solution():
     r = np.array([1e-2, 5e-3])
     cost = QuadraticCost(scene, q_ref, w, w_f, r)
     svc = RolloutService(scene)
-    ilqr = ILQR(svc, cost, ILQRConfig(fd=FDConfig(1e-6, centered=True), mu_init=0.0,
+    ilqr = ILQR(svc, cost, ILQRConfig(Derivatives("central"), mu_init=0.0,
                                       mu_min=0.0))
     step = ilqr.iterate(x0, np.zeros((T, m.nu)))
     assert step.alpha == 1.0
@@ -116,7 +116,7 @@ def test_all_dofs_equal_plain_ilqr_on_transitionFD():
     rng = np.random.default_rng(0)
     U = rng.uniform(-0.3, 0.3, (T, scene.nu))
     svc = RolloutService(scene)
-    ilqr = ILQR(svc, cost, ILQRConfig(fd=FDConfig(1e-6, centered=False), mu_init=0.1))
+    ilqr = ILQR(svc, cost, ILQRConfig(Derivatives(fd_eps=1e-6), mu_init=0.1))
     step = ilqr.iterate(x0, U)
     X = svc.trajectory(x0, U).states
     K_ref, k_ref = numpy_ilqr_gains(scene, X, U, cost, 1e-6, 0.1)
@@ -137,7 +137,7 @@ def test_reduced_gains_match_subset_problem_and_solve_descends():
     assert step.K.shape == (T, scene.nu, 2 * len(C))
     # the same backward pass fed the rows/columns of the full derivatives gives the same gains
     X = svc.trajectory(x0, U).states
-    full = svc.derivatives(X[:-1], None, ILQRConfig().fd)
+    full = svc.derivatives(X[:-1], None, ILQRConfig().derivatives.fd_config)
     idx = scene.tangent_indices(C)
     cd = cost.derivatives(X, U, C)
     F = np.concatenate([full.A[:, idx][:, :, idx], full.B[:, idx]], axis=2)

@@ -43,5 +43,5 @@ def test_tiny_eps_falls_into_the_trap(clutter_gains):
     tm, scene, step = clutter_gains
     svc = RolloutService(scene, RolloutConfig(threads=1))
     small = svc.derivatives(step.states[:-1], None, FDConfig(eps=1e-6))
-    default = svc.derivatives(step.states[:-1], None, ILQRConfig().fd)
+    default = svc.derivatives(step.states[:-1], None, ILQRConfig().derivatives.fd_config)
     assert np.abs(small.A).max() > 50 * np.abs(default.A).max()

@@ -9,7 +9,7 @@ import torch
 
 from dopt import RolloutService, Scene
 from dopt.costs import QuadraticCost
-from planners.ilqr import ILQR, ILQRConfig, _box_step, backward_pass
+from planners.ilqr import ILQR, Derivatives, ILQRConfig, _box_step, backward_pass
 from planners.keypoints import KeypointConfig, interpolate, key_steps
 from tests.dopt.models import MIXED_JOINTS
 
@@ -39,7 +39,7 @@ def pendula():
 def test_skip_one_is_plain_finite_differences_bit_for_bit(pendula):
     scene, svc, cost, x0, U = pendula
     plain = ILQR(svc, cost).iterate(x0, U)
-    skip1 = ILQR(svc, cost, ILQRConfig(keypoints=KeypointConfig("skip", skip=1))).iterate(x0, U)
+    skip1 = ILQR(svc, cost, ILQRConfig(Derivatives(keypoints="skip", fd_skip=1))).iterate(x0, U)
     assert torch.equal(plain.K, skip1.K) and torch.equal(plain.k, skip1.k)
     np.testing.assert_array_equal(plain.controls, skip1.controls)
 
@@ -127,7 +127,7 @@ def test_box_backward_pass_with_inactive_bounds_is_the_plain_one():
 
 def test_box_qp_ilqr_keeps_its_feedforward_step_within_the_limits(pendula):
     scene, svc, cost, x0, U = pendula
-    step = ILQR(svc, cost, ILQRConfig(box_qp=True)).iterate(x0, U)
+    step = ILQR(svc, cost, ILQRConfig(Derivatives(box_qp=True))).iterate(x0, U)
     lo, hi = scene.model.actuator_ctrlrange.T
     u = U + step.k.numpy()
     assert np.all(u >= lo - 1e-9) and np.all(u <= hi + 1e-9)
@@ -141,8 +141,8 @@ def test_keypoint_config_errors():
         KeypointConfig("adaptive", min_interval=5, max_interval=2)
     with pytest.raises(ValueError, match="skip"):
         KeypointConfig("skip", skip=0)
-    with pytest.raises(TypeError, match="KeypointConfig"):
-        ILQRConfig(keypoints="skip")
+    with pytest.raises(TypeError, match="ILQRConfig.derivatives must be a Derivatives"):
+        ILQRConfig(derivatives=KeypointConfig("skip"))
 
 
 def test_free_joint_model_works_with_skip():

@@ -95,7 +95,9 @@ from dopt.tasks.push.clutter import (
 )
 from dopt.tasks.push.soft import (
     DT,
+    SOFT,
     SOFT_BODY,
+    SOFT_RIGID,
     SoftMaterial,
     _draw_block,
     _finish,
@@ -395,7 +397,7 @@ def build_soft_authors(rng: np.random.Generator) -> TaskModel:
     spec = table_scene_spec(DT, mujoco.mjtIntegrator.mjINT_DISCRETE)
     add_soft_block(spec, block.points, block.tets, block.centre, block.heading, SOFT_MATERIAL)
     goal = add_goal_marker(spec, goal_xy, radius=0.05, height=0.002)
-    return _finish("soft", spec, block, goal, SOFT_BODY, horizon=50, slowdown=3,
+    return _finish(SOFT, spec, block, goal, SOFT_BODY,
                    settle_steps=SOFT_SETTLE_STEPS, stability=SOFT_BOUNDS)
 
 
@@ -427,6 +429,6 @@ def build_soft_rigid_authors(rng: np.random.Generator) -> TaskModel:
     add_object(spec, GOAL_CYLINDER, CYLINDER_SHAPE, cylinder_xy, block.heading, GOAL_RGBA,
                CYLINDER_SOLREF, CYLINDER_SOLIMP, slides=True)
     goal = add_goal_marker(spec, goal_xy, radius, 2 * CYLINDER_SHAPE.half_height)
-    return _finish("soft_rigid", spec, block, goal, GOAL_CYLINDER, horizon=100, slowdown=5,
+    return _finish(SOFT_RIGID, spec, block, goal, GOAL_CYLINDER,
                    settle_steps=SOFT_SETTLE_STEPS, stability=SOFT_BOUNDS,
                    push_height=SOFT_RIGID_PUSH_HEIGHT)

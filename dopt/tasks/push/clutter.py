@@ -20,7 +20,7 @@ import mujoco
 import numpy as np
 
 from dopt.tasks.panda import TOOL_RADIUS, ik_pointing_down, rest_state, table_scene_spec
-from dopt.tasks.push.task_model import EE_HEIGHT, TaskModel, require_generator
+from dopt.tasks.push.task_model import EE_HEIGHT, PushTaskSpec, TaskModel, require_generator
 
 log = logging.getLogger(__name__)
 
@@ -163,8 +163,13 @@ def clutter_task(model: mujoco.MjModel, state: np.ndarray, goal: np.ndarray) -> 
         goal_position=goal,
         distractors=DISTRACTORS,
         soft_body=None,
-        horizon=HORIZON,
-        dt=DT,
-        timeout=TIMEOUT,
-        slowdown=SLOWDOWN,
+        horizon=CLUTTER.horizon,
+        dt=CLUTTER.dt,
+        timeout=CLUTTER.timeout,
+        slowdown=CLUTTER.slowdown,
     )
+
+
+#: the clutter task by name (``dopt.tasks.PUSH_TASKS``): nv = 7 + 8 x 6
+CLUTTER = PushTaskSpec("clutter", horizon=HORIZON, dt=DT, timeout=TIMEOUT, slowdown=SLOWDOWN,
+                       nv=55, build=build_clutter)

@@ -38,7 +38,7 @@ from dopt.tasks.push.clutter import (
     add_goal_marker,
     draw_heading,
 )
-from dopt.tasks.push.task_model import TaskModel, require_generator
+from dopt.tasks.push.task_model import PushTaskSpec, TaskModel, require_generator
 
 log = logging.getLogger(__name__)
 
@@ -184,28 +184,30 @@ def _half_depth(points: np.ndarray, radius: float = VERTEX_RADIUS) -> float:
     return float(points[:, 0].max()) + radius
 
 
-def _finish(name: str, spec: mujoco.MjSpec, block: _Block, goal: np.ndarray, goal_object: str,
-            horizon: int, slowdown: int, settle_steps: int = SETTLE_STEPS,
+def _finish(task: PushTaskSpec, spec: mujoco.MjSpec, block: _Block, goal: np.ndarray,
+            goal_object: str, settle_steps: int = SETTLE_STEPS,
             stability: StabilityBounds = StabilityBounds(),
             push_height: float = EE_HEIGHT) -> TaskModel:
     """Compile the scene, settle it with the pusher tip at ``block.tip`` (``settle_steps`` of
-    zero control), and describe the task (``stability``: its rollouts' bounds;
+    zero control), and describe it as an instance of ``task`` (its name, T, dt, Y and
+    slowdown; ``stability``: its rollouts' bounds;
     ``push_height``: the initial plans' tip height, m)."""
     model = spec.compile()
     state = rest_state(model, ik_pointing_down(np.array([*block.tip, EE_HEIGHT])), settle_steps)
-    log.debug("%s: block at %s, heading %.3f, goal %s", name, block.centre, block.heading, goal)
+    log.debug("%s: block at %s, heading %.3f, goal %s", task.name, block.centre, block.heading,
+              goal)
     return TaskModel(
-        name=name,
+        name=task.name,
         model=model,
         initial_state=state,
         goal_object=goal_object,
         goal_position=goal,
         distractors=(),
         soft_body=SOFT_BODY,
-        horizon=horizon,
-        dt=DT,
-        timeout=TIMEOUT,
-        slowdown=slowdown,
+        horizon=task.horizon,
+        dt=task.dt,
+        timeout=task.timeout,
+        slowdown=task.slowdown,
         pushed_object_name=SOFT_BODY,
         stability=stability,
         push_height=push_height,
@@ -224,7 +226,7 @@ def build_soft(rng: np.random.Generator) -> TaskModel:
     spec = table_scene_spec(DT, mujoco.mjtIntegrator.mjINT_DISCRETE)
     add_soft_block(spec, block.points, block.tets, block.centre, block.heading)
     goal = add_goal_marker(spec, goal_xy, radius=0.05, height=0.002)
-    return _finish("soft", spec, block, goal, SOFT_BODY, horizon=50, slowdown=3)
+    return _finish(SOFT, spec, block, goal, SOFT_BODY)
 
 
 def build_soft_rigid(rng: np.random.Generator) -> TaskModel:
@@ -242,4 +244,12 @@ def build_soft_rigid(rng: np.random.Generator) -> TaskModel:
     add_soft_block(spec, block.points, block.tets, block.centre, block.heading)
     add_cylinder(spec, GOAL_CYLINDER, cylinder_xy, GOAL_RGBA)
     goal = add_goal_marker(spec, goal_xy, CYLINDER_RADIUS, 2 * CYLINDER_HALF_HEIGHT)
-    return _finish("soft_rigid", spec, block, goal, GOAL_CYLINDER, horizon=100, slowdown=5)
+    return _finish(SOFT_RIGID, spec, block, goal, GOAL_CYLINDER)
+
+
+#: the soft tasks by name (``dopt.tasks.PUSH_TASKS``): soft nv = 7 + 36 x 3, soft_rigid
+#: nv = 7 + 47 x 3 + 6
+SOFT = PushTaskSpec("soft", horizon=50, dt=DT, timeout=TIMEOUT, slowdown=3, nv=115,
+                    build=build_soft)
+SOFT_RIGID = PushTaskSpec("soft_rigid", horizon=100, dt=DT, timeout=TIMEOUT, slowdown=5, nv=154,
+                          build=build_soft_rigid)

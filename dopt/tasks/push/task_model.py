@@ -1,8 +1,9 @@
-"""TaskModel: one instance of a pushing task, and helpers shared by the task builders."""
+"""TaskModel: one instance of a pushing task; PushTaskSpec: a task by name, its constants
+readable without building a model; and helpers shared by the task builders."""
 
 from __future__ import annotations
 
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 
 import mujoco
@@ -10,6 +11,7 @@ import numpy as np
 
 from dopt.stability import StabilityBounds
 from dopt.tasks.panda import BODY_NAMES, EE_SITE, JOINT_NAMES
+from dopt.validation import check_config
 
 #: start height of the pusher tip's centre above the table (m), and the height the initial
 #: plans push at unless a task sets its own (``TaskModel.push_height``)
@@ -103,6 +105,45 @@ class TaskModel:
             return [m.body(name).id]
         start = m.flex_vertadr[flex]
         return [int(b) for b in m.flex_vertbodyid[start:start + m.flex_vertnum[flex]]]
+
+
+@dataclass(frozen=True)
+class PushTaskSpec:
+    """A push task, registered by name (``dopt.tasks.PUSH_TASKS``): what every instance of it
+    shares, readable without compiling a model, and its builder.
+
+    Calling the spec builds an instance: ``spec(rng)`` is ``spec.build(rng)``, a fresh
+    ``TaskModel`` whose horizon, dt, timeout and slowdown are the spec's and whose
+    ``model.nv`` is ``nv`` (tests/dopt/tasks/push/test_specs.py holds every task to it).
+
+    Attributes:
+        name: the CLI name (``TaskModel.name``, trial params' "task").
+        horizon: T, the optimisation horizon (control steps).
+        dt: the model time step (s).
+        timeout: Y, agent time steps until the task ends.
+        slowdown: how many times slower than real time the paper ran the agent thread.
+        nv: the model's DoF count (the arm's 7 and the objects').
+        build: ``(numpy.random.Generator) -> TaskModel``, one instance per call.
+    """
+
+    name: str
+    horizon: int
+    dt: float
+    timeout: int
+    slowdown: int
+    nv: int
+    build: Callable[[np.random.Generator], TaskModel]
+
+    def __post_init__(self):
+        check_config(self, positive=("horizon", "dt", "timeout", "slowdown", "nv"))
+        if not self.name:
+            raise ValueError("PushTaskSpec.name must be a non-empty str")
+        if not callable(self.build):
+            raise TypeError(f"PushTaskSpec.build must be callable, got {self.build!r}")
+
+    def __call__(self, rng: np.random.Generator) -> TaskModel:
+        """A fresh instance drawn from ``rng`` (``build``)."""
+        return self.build(rng)
 
 
 def require_generator(rng: object) -> np.random.Generator:

@@ -6,7 +6,7 @@ import random
 
 import pytest
 
-from dopt.lab.multiple import NO_TREND, holm, holm_reject, holm_slopes
+from dopt.lab.multiple import NO_TREND, holm, holm_named, holm_reject, holm_slopes
 
 
 def test_the_worked_example_by_hand():
@@ -60,6 +60,24 @@ def test_against_the_definition_on_random_families():
             assert {i for i, a in enumerate(adjusted) if a <= alpha} == expected
             bonferroni = {i for i in range(m) if p[i] <= alpha / m}
             assert bonferroni <= expected                      # never rejects less
+
+
+def test_a_named_family_leaves_out_the_untested_and_keeps_its_order():
+    """holm_named: the names with a p, adjusted as one family by the definition, in the order
+    given; a None (too few points for a test) neither joins the family nor appears."""
+    rng = random.Random(1)
+    for _ in range(200):
+        names = rng.sample(range(100), rng.randint(0, 10))
+        family = {(n, "t"): (None if rng.random() < 0.3 else rng.random() ** 3) for n in names}
+        out = holm_named(family)
+        tested = [k for k, p in family.items() if p is not None]
+        assert list(out) == tested
+        assert list(out.values()) == pytest.approx(
+            _adjusted_by_definition([family[k] for k in tested]), rel=1e-12, abs=0)
+    with pytest.raises(TypeError, match="pvalues must be a mapping"):
+        holm_named([0.1, 0.2])
+    with pytest.raises(ValueError, match=r"pvalues\[1\] must be a probability"):
+        holm_named({"a": 0.1, "b": 1.5})
 
 
 def test_slope_tests_over_folds_are_one_holm_family():

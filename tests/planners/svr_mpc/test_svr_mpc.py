@@ -397,7 +397,8 @@ def test_derivatives_are_typed_fields_of_the_settings():
     assert d.fields() == {"fd_centered": True, "fd_eps": 1e-6, "keypoints": "skip",
                           "fd_skip": 5, "box_qp": True}
     s = replace(SVRMPCSettings(), **d.fields())
-    assert (s.ilqr.fd.centered, s.ilqr.fd.eps, s.ilqr.keypoints.skip, s.ilqr.box_qp) == \
+    how = s.ilqr.derivatives
+    assert (how.fd_config.centered, how.fd_config.eps, how.keypoint_config.skip, how.box_qp) == \
         (True, 1e-6, 5, True)
     assert parse_variants(["central", "skip5", "boxqp"]) == {
         "fd": "central", "keypoints": "skip", "fd_skip": 5, "box_qp": True}
