@@ -6,12 +6,9 @@ exact replay (``kept_controls``)."""
 
 from __future__ import annotations
 
-import functools
 import sys
 from dataclasses import replace
 from pathlib import Path
-
-import numpy as np
 
 from dopt.lab.console import run_with_console
 from dopt.lab.record import reuse_mode
@@ -80,11 +77,10 @@ def kept_controls(args) -> tuple[bool, tuple[int, ...]]:
     return mode == "all", ((int(args.seed),) if mode == "first" else ())
 
 
-@functools.cache
 def _sizes(task: str) -> tuple[float, int]:
-    """dt (s) and nv of the task's own instance (seed 0)."""
-    built = PUSH_TASKS[task](np.random.default_rng(0))
-    return float(built.dt), int(built.model.nv)
+    """dt (s) and nv of the task (its ``PushTaskSpec``: no model is built)."""
+    spec = PUSH_TASKS[task]
+    return float(spec.dt), int(spec.nv)
 
 
 def agent_seconds(params: dict) -> float:
