@@ -41,6 +41,7 @@ Shapes: T horizon, nu controls, ns state row, c = |C| active DoFs.
                  exact replay), the first seed's or every one's
     choice.py    what each row's C held (the goal object's share) beside its lag and held
                  steps, from stored active sets (choice_fields)
+    experiments/  the paper's experiments (Table 1, Fig. 4, ...) behind experiments/*.py
 """
 
 from planners.svr_mpc.episode import (

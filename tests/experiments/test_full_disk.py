@@ -7,12 +7,12 @@ empty, with only "OSError: [Errno 27] File too large".)"""
 import errno
 import json
 
-import mpc_outputs
 import pytest
 
 from dopt.lab import provenance
 from dopt.lab.record import record_figure, write_summary
 from planners.pick_place.experiments.pictures import write_curves
+from planners.svr_mpc.experiments import outputs
 from tests.dopt.lab.test_atomic_write import BIG, file_size_limit
 
 
@@ -44,7 +44,7 @@ def curves_csv(out, big: bool):
 
 
 def table_csv(out, big: bool):
-    mpc_outputs.write_table(out, "push", table_methods(200 if big else 1))
+    outputs.write_table(out, "push", table_methods(200 if big else 1))
 
 
 def figure_copy(out, big: bool):

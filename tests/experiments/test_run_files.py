@@ -1,4 +1,5 @@
-"""What the experiment scripts read and write under --out: trial records and checkpoints of
+"""What the experiment scripts read and write under --out (the SVR experiments': in
+tests/planners/svr_mpc/experiments/test_run_files.py): trial records and checkpoints of
 another format are named, moved aside and recomputed (each experiment's schema); a second run
 on the same --out refuses, naming the first; every JSON file a --quick run writes parses with
 a strict parser (no bare NaN: null with its reason); what a run needs is checked before its
@@ -13,9 +14,7 @@ import sys
 import textwrap
 from pathlib import Path
 
-import mpc
 import pytest
-import rho_sweep
 import rope
 
 from dopt.lab.provenance import COMMIT_ENV
@@ -81,28 +80,6 @@ def test_a_checkpoint_of_another_format_is_moved_aside_and_its_trial_starts_afre
     assert again["cost_history"] == first["cost_history"] and again["segments"] == 1
 
 
-def test_the_mpc_experiment_passes_its_schema(tmp_path, capsys):
-    """A stored MPC trial without a field the summary reads is recomputed, not summarised."""
-    args = mpc.parse_args(["--quick", "--methods", "baseline", "--out", str(tmp_path)])
-    (trial,) = mpc.make_trials(args)
-    full = dict.fromkeys(mpc.SCHEMA.result, 0)
-    (tmp_path / "trials").mkdir()
-    (tmp_path / "trials" / f"{trial.key}.json").write_text(json.dumps(
-        {"key": trial.key, "params": trial.params, "code": {"version": "0", "commit": "c0ffee"},
-         "result": {k: v for k, v in full.items() if k != "unstable"}}))
-    records, res = mpc.run(args, [trial], fn=_fake_episode)
-    assert res.ran == [trial.key] and records[0]["result"]["unstable"] is False
-    assert "its result lacks 'unstable'" in res.recomputed[trial.key]
-    assert "sweep: 1 trials: 0 reused, 0 resumed from a checkpoint, 1 run from the start (1 " \
-           "recomputed" in capsys.readouterr().err
-
-
-def _fake_episode(params, report=None, keep_controls=False):
-    for _ in range(3):
-        report()
-    return {**dict.fromkeys(mpc.SCHEMA.result, 0), "unstable": False}
-
-
 # ---------------------------------------------------------------------------------- lock
 def test_a_second_run_on_the_same_out_refuses_naming_the_first(tmp_path, capsys):
     out = tmp_path / "rope"
@@ -122,24 +99,6 @@ def test_a_second_run_on_the_same_out_refuses_naming_the_first(tmp_path, capsys)
 
 
 # ---------------------------------------------------------- what a run needs, checked first
-@pytest.mark.parametrize("text, message", [
-    ("{not json", "is not experiments/paper_reference.py's file (JSONDecodeError"),
-    ('{"rows": []}', "is not experiments/paper_reference.py's file (KeyError"),
-    ('{"tasks": {"clutter": {"fig4": [{"theta": 0, "rho": 1}]}}}',
-     "1 of the clutter Fig. 4 points lack a number"),
-])
-def test_a_bad_paper_reference_is_refused_before_the_sweep(tmp_path, capsys, text, message):
-    """rho_sweep read --paper-reference only after the whole sweep."""
-    ref, out = tmp_path / "ref.json", tmp_path / "out"
-    ref.write_text(text)
-    with pytest.raises(SystemExit) as exc:
-        rho_sweep.main(["--quick", "--rhos", "1", "--thetas", "0", "--paper-reference",
-                        str(ref), "--out", str(out)])
-    err = capsys.readouterr().err
-    assert exc.value.code == 2 and f"argument --paper-reference: {ref}" in err
-    assert message in err and not out.exists()
-
-
 def test_a_missing_plots_package_is_refused_before_the_first_trial(tmp_path, capsys,
                                                                    monkeypatch):
     """The plots and bars come after the trials: without matplotlib a run failed at its end."""
@@ -165,27 +124,16 @@ def run_script(name: str, *args) -> None:
 
 @pytest.mark.slow
 def test_every_file_of_a_quick_run_parses_strictly(tmp_path):
-    """mpc.py and rho_sweep.py wrote bare NaN (13 in a --quick run); every JSON file of the
-    four scripts' --quick runs parses strictly, and an undefined value is null with its
-    reason under "<field>_undefined"."""
-    runs = {"mpc": ("mpc.py", "--quick", "--methods", "baseline,svr-sum", "--no-render"),
-            "rho": ("rho_sweep.py", "--quick", "--rhos", "1", "--thetas", "0"),
-            "explain": ("svr_explain.py", "--quick", "--rows", "sum-t10-r1", "--bins", "2"),
-            "cloth": ("cloth_fold.py", "--quick", "--methods", "simple,scripted",
-                      "--no-render")}
-    for name, (script, *flags) in runs.items():
-        run_script(script, *flags, "--out", tmp_path / name)
+    """Every JSON file of a --quick run parses strictly (the SVR scripts' in
+    tests/planners/svr_mpc/experiments/test_run_files.py)."""
+    run_script("cloth_fold.py", "--quick", "--methods", "simple,scripted", "--no-render",
+               "--out", tmp_path / "cloth")
     files = [p for p in tmp_path.rglob("*.json*") if p.is_file()]
-    assert len(files) >= 11                      # 4 summaries, 7 trial records
+    assert len(files) >= 3                       # the summary, 2 trial records
     for path in files:
         lines = path.read_text().splitlines() if path.suffix == ".jsonl" else [path.read_text()]
         for line in filter(None, lines):
             strict(line)                                    # raises on a bare NaN
-    methods = strict((tmp_path / "mpc" / "summary.json").read_text())["methods"]
-    row = methods["svr-sum-t10-r1"] if "svr-sum-t10-r1" in methods else next(iter(methods.values()))
-    assert row["mpc_cost_normalised_ci90"] is None                      # one trial: no CI
-    assert row["mpc_cost_normalised_ci90_undefined"] == \
-        "NaN: a confidence interval needs two or more values"
 
 
 # ------------------------------------------------------------------------------ console

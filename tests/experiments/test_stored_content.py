@@ -1,20 +1,18 @@
-"""The experiments' stored trials judged by content (each experiment's ``Schema``): a record
-of another goal or seed stored under a trial's name, a shortened cost history, a non-finite
-MPC cost and a checkpoint whose CEM probabilities are negative are moved aside and recomputed
-(each once failed every rerun: KeyError 'matching_distance', a zip() ValueError, the
-summary's non-finite ValueError, the trial's own ValueError); and the flags that could only
-make such content are refused at parse time."""
+"""The experiments' stored trials judged by content (each experiment's ``Schema``; the SVR
+ones' in tests/planners/svr_mpc/experiments/test_stored_content.py): a record of another goal
+stored under a trial's name, a shortened cost history and a checkpoint whose CEM probabilities
+are negative are moved aside and recomputed (each once failed every rerun: KeyError
+'matching_distance', a zip() ValueError, the trial's own ValueError); and the flags that
+could only make such content are refused at parse time."""
 
 import json
 import logging
 import math
 
-import mpc
 import pytest
 import rope
 import torch
 
-from dopt.lab import jsonio
 from dopt.lab.provenance import COMMIT_ENV
 from dopt.lab.sweep import Checkpoint
 from planners.pick_place.experiments import sweep as pick_sweep
@@ -126,34 +124,3 @@ def test_a_checkpoint_with_a_negative_cem_probability_is_moved_aside(tmp_path, c
     assert (moved / path.name).exists() and (moved / f"{path.stem}.reason.txt").exists()
     assert json.loads(path.read_text())["result"]["cost_history"] == \
         rec["result"]["cost_history"]
-
-
-# ---------------------------------------------------------------------------------- MPC
-def _fake_episode(params, report=None, keep_controls=False):
-    return {**dict.fromkeys(mpc.SCHEMA.result, 0.5), "unstable": False, "seed": params["seed"]}
-
-
-def test_a_non_finite_mpc_cost_is_moved_aside_and_recomputed(tmp_path):
-    """A stored mpc_cost of +inf (null with its reason) reached the summary: every rerun
-    died there (authors_kept: 1 non-finite value(s))."""
-    args = mpc.parse_args(["--quick", "--methods", "baseline", "--out", str(tmp_path)])
-    (trial,) = mpc.make_trials(args)
-    jsonio.write_atomic(tmp_path / "trials" / f"{trial.key}.json", {
-        "key": trial.key, "params": trial.params, "code": {"version": "0", "commit": "c0ffee"},
-        "result": {**dict.fromkeys(mpc.SCHEMA.result, 0.5), "mpc_cost": math.inf}})
-    records, res = mpc.run(args, [trial], fn=_fake_episode)
-    assert res.ran == [trial.key] and records[0]["result"]["mpc_cost"] == 0.5
-    assert "'mpc_cost' is inf" in res.recomputed[trial.key]
-
-
-def test_an_mpc_record_of_another_seed_under_a_trials_name_is_recomputed(tmp_path):
-    args = mpc.parse_args(["--quick", "--methods", "baseline", "--out", str(tmp_path),
-                           "--trials", "2"])
-    first, second = mpc.make_trials(args)
-    (tmp_path / "trials").mkdir()
-    (tmp_path / "trials" / f"{first.key}.json").write_text(json.dumps({
-        "key": first.key, "params": second.params,
-        "code": {"version": "0", "commit": "c0ffee"}, "result": _fake_episode(second.params)}))
-    records, res = mpc.run(args, [first], fn=_fake_episode)
-    assert res.ran == [first.key] and records[0]["result"]["seed"] == first.params["seed"]
-    assert "another trial's" in res.recomputed[first.key]

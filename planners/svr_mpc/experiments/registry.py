@@ -67,7 +67,8 @@ class Table1(OnProtocol):
 
     kind, rank, script = "table1", 6, "python experiments/mpc.py"
     trial_fields = ("methods", "paired", "authors_statistic", "versus", "feedback_effect",
-                    "derivatives_effect", "row_settings", "trial_commits")
+                    "derivatives_effect", "row_settings", "lag_cost_tau", "choice",
+                    "versus_unstable_kept", "trial_commits")
 
     def section(self, results, page):
         return table1_section(results, page)

@@ -5,7 +5,6 @@ reproduce their printed Table 1)."""
 from pathlib import Path
 
 import numpy as np
-import paper_reference
 import pytest
 
 from dopt.lab.stats import authors_kept, authors_mean_ci
@@ -15,6 +14,7 @@ from planners.svr_mpc.authors_data import (
     authors_statistic,
     authors_table1,
 )
+from planners.svr_mpc.experiments import paper_reference
 
 SHARED = Path(__file__).resolve().parents[3] / ".." / "shared"
 PAPER_DATA = SHARED / "external" / "ilqr_svr" / "paper_data"

@@ -64,17 +64,17 @@ def test_feedback_trials_get_their_own_rows_normalised_by_open_loop_baseline():
 
 
 def test_feedback_both_pairs_every_trial_back_to_back():
-    import mpc
-    args = mpc.parse_args(["--task", "clutter", "--methods", "baseline,svr-sum", "--trials", "2",
-                           "--feedback", "both", "--slowdown", "1", "--out", "unused"])
-    trials = mpc.make_trials(args)
+    from planners.svr_mpc.experiments import mapping, table1
+    args = table1.parse_args(["--task", "clutter", "--rules", "baseline,svr-sum", "--trials",
+                              "2", "--feedback", "both", "--slowdown", "1", "--out", "unused"])
+    trials = mapping.make_trials(args)
     assert len(trials) == 8 and len({t.key for t in trials}) == 8
     # open loop, then the same trial with feedback
     for a, b in zip(trials[0::2], trials[1::2], strict=True):
         assert (a.params["feedback"], b.params["feedback"]) == (False, True)
         assert {k: v for k, v in a.params.items() if k != "feedback"} == \
             {k: v for k, v in b.params.items() if k != "feedback"}
-    assert mpc.parse_args(["--feedback", "--out", "x"]).feedback == "on"
+    assert table1.parse_args(["--feedback", "--out", "x"]).feedback == "on"
 
 
 def test_feedback_effect_is_the_paired_ratio():

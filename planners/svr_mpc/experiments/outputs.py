@@ -1,7 +1,7 @@
-"""The files experiments/mpc.py writes besides its summary: OUT/table1.md and table1.csv
-(``write_table``), the first seed's |C| and goal-distance curves per row (``write_plots``:
-mpc_dofs.png, mpc_goal_distance.png) and each row's final scene (final_<row>.png,
-``write_final``)."""
+"""The files Table 1 (``table1``, experiments/mpc.py) writes besides its summary:
+OUT/table1.md and table1.csv (``write_table``), the first seed's |C| and goal-distance curves
+per row (``write_plots``: mpc_dofs.png, mpc_goal_distance.png) and each row's final scene
+(final_<row>.png, ``write_final``)."""
 
 from __future__ import annotations
 

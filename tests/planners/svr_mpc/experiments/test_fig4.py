@@ -1,4 +1,5 @@
-"""experiments/rho_sweep.py (Fig. 4): a tiny grid end to end, with the authors' curves."""
+"""experiments/rho_sweep.py (Fig. 4, planners.svr_mpc.experiments.fig4): a tiny grid end to
+end, with the authors' curves."""
 
 import json
 import os
@@ -6,7 +7,9 @@ import subprocess
 import sys
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[2]
+from planners.svr_mpc.experiments import fig4, runner
+
+ROOT = Path(__file__).resolve().parents[4]
 
 
 def test_tiny_grid_writes_points_and_the_plot_with_the_authors_curves(tmp_path):
@@ -41,18 +44,15 @@ def test_tiny_grid_writes_points_and_the_plot_with_the_authors_curves(tmp_path):
 def test_the_sweep_runs_scene_by_scene(tmp_path, monkeypatch, capsys):
     """Trials run seed by seed, each seed's baseline with its grid points, so a sweep stopped
     part way holds every point on the same first scenes."""
-    sys.path.insert(0, str(ROOT / "experiments"))
-    import rho_sweep
-
     seen = []
 
     def fake_run(args, trials, *a, **k):
         seen.extend((t.params["seed"], t.params["method"]) for t in trials)
         raise RuntimeError("stopped after ordering")
 
-    monkeypatch.setattr(rho_sweep.table1, "run", fake_run)
-    rc = rho_sweep.main(["--preset", "paper", "--rhos", "0,1", "--thetas", "0,5",
-                         "--trials", "3", "--out", str(tmp_path / "rho")])
+    monkeypatch.setattr(runner, "run", fake_run)
+    rc = fig4.main(["--preset", "paper", "--rhos", "0,1", "--thetas", "0,5",
+                    "--trials", "3", "--out", str(tmp_path / "rho")])
     assert rc != 0 and "stopped after ordering" in capsys.readouterr().err
     seeds = [s for s, _ in seen]
     assert seeds == sorted(seeds) and len(seen) == 3 * (1 + 4)

@@ -1,5 +1,5 @@
-"""experiments/svr_explain.py: the importance counts and the timelines it reports, and one
-short episode end to end."""
+"""experiments/svr_explain.py (planners.svr_mpc.experiments.explain): the importance counts
+and the timelines it reports, and one short episode end to end."""
 
 import json
 import os
@@ -9,14 +9,15 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-import svr_explain
 
-ROOT = Path(__file__).resolve().parents[2]
+from planners.svr_mpc.experiments import explain
+
+ROOT = Path(__file__).resolve().parents[4]
 
 
 def test_importance_counts_split_at_the_rho_cuts_and_decades():
     values = [0.0, 0.0, 1e-9, 0.5, 1.0, 499.0, 500.0, 3e7]
-    c = svr_explain.importance_counts(values)
+    c = explain.importance_counts(values)
     assert c["n"] == 8 and c["zero"] == 2 and c["below"] == 1 and c["above"] == 1
     assert (c["lt_1"], c["1_to_500"], c["ge_500"]) == (4, 2, 2)
     assert c["decades"]["-1"] == 1 and c["decades"]["0"] == 1 and c["decades"]["2"] == 2
@@ -30,12 +31,12 @@ def test_timelines_average_over_seeds_per_bin():
         return {"params": {"method": "svr-sum", "theta": 10, "rho": 1.0, "seed": seed},
                 "result": {"steps": 100, "opt_step": steps, "n_dofs": n_dofs,
                            "goal_share": share,
-                           "importance": svr_explain.importance_counts([0.0, 2.0]),
+                           "importance": explain.importance_counts([0.0, 2.0]),
                            "rel_improvement": [0.1, 1e-6], "goal_distance_at_opt": [0.2, 0.01],
                            "alpha": [1.0, 0.0], "mu": [0.1, 1.0], "contact_steps": [3, 0],
                            "travel": 0.1 + seed, "goal_distance_end": 0.01,
                            "lag_steps_mean": 10.0, "horizon": 80}}
-    rows = svr_explain.summarize_rows(
+    rows = explain.summarize_rows(
         [rec(0, [0, 60], [55, 20], [1.0, 0.0]), rec(1, [10, 90], [45, 10], [0.5, 0.5])], bins=2)
     r = rows["sum-t10-r1"]
     assert r["bin_edges"] == [0.0, 50.0, 100.0]
@@ -53,20 +54,20 @@ def test_timelines_average_over_seeds_per_bin():
 def test_goal_importance_is_the_least_of_the_goal_dofs_held_whole():
     # an optimisation's record: its active set and each DoF's importance (None: not SVR)
     h = {"dofs": [0, 1, 7, 8, 9], "importance": [5.0, 6.0, 30.0, 0.2, 4.0]}
-    assert svr_explain.goal_importances(h, np.array([8, 7])) == [0.2, 30.0]
-    assert svr_explain.goal_importances(h, np.array([12, 13])) == []
-    assert svr_explain.goal_importances({"dofs": [0, 7], "importance": None}, [7]) is None
+    assert explain.goal_importances(h, np.array([8, 7])) == [0.2, 30.0]
+    assert explain.goal_importances(h, np.array([12, 13])) == []
+    assert explain.goal_importances({"dofs": [0, 7], "importance": None}, [7]) is None
     # episode 1 holds both goal DoFs first (least 3), then one of them (skipped), then both
     # (least 40); episode 2 both first (least 9), then none; a rand episode has no importances
     ep1 = [[3.0, 700.0], [50.0], [40.0, 41.0]]
     ep2 = [[9.0, 10.0], []]
-    s = svr_explain.goal_importance_summary(
+    s = explain.goal_importance_summary(
         [{"goal_importance": ep1}, {"goal_importance": ep2}, {"goal_importance": [None]}])
     assert s["first_median"] == 6.0 and (s["first_min"], s["first_max"]) == (3.0, 9.0)
     assert s["later_median"] == 40.0 and s["later_held_share"] == pytest.approx(1 / 3)
     # rows without importances, or trials recorded before the field, have no summary
-    assert svr_explain.goal_importance_summary([{"goal_importance": [None, None]}]) is None
-    assert svr_explain.goal_importance_summary([{}]) is None
+    assert explain.goal_importance_summary([{"goal_importance": [None, None]}]) is None
+    assert explain.goal_importance_summary([{}]) is None
 
 
 def test_goal_held_split_separates_optimisations_by_whether_c_holds_the_goal():
@@ -77,7 +78,7 @@ def test_goal_held_split_separates_optimisations_by_whether_c_holds_the_goal():
            "goal_distance_at_opt": [0.2, 0.2, 0.1, 0.06, 0.01],
            "goal_importance": [[700.0, 900.0], [4.0], [0.5, 30.0], [], [1e-16, 2.0]],
            "contact_steps": [10, 0, 4, 0, 0]}
-    s = svr_explain.goal_held_split([res])
+    s = explain.goal_held_split([res])
     assert s["goal_held_share_away"] == 0.5                # 2 of the 4 away
     assert s["rel_improvement_median_away_held"] == pytest.approx(2e-2)
     assert s["rel_improvement_median_away_dropped"] == pytest.approx(1.5e-6)
@@ -86,9 +87,9 @@ def test_goal_held_split_separates_optimisations_by_whether_c_holds_the_goal():
     assert s["n_goal_importances"] == {"contact": 2, "no_contact": 1}
     # a row without importances (rand, baseline, older trials) has no cut shares
     plain = dict(res, goal_importance=[None] * 5)
-    assert svr_explain.goal_held_split([plain])["goal_cut_share_contact"] is None
+    assert explain.goal_held_split([plain])["goal_cut_share_contact"] is None
     older = {k: v for k, v in res.items() if k != "goal_importance"}
-    assert svr_explain.goal_held_split([older])["goal_held_share_away"] == 0.5
+    assert explain.goal_held_split([older])["goal_held_share_away"] == 0.5
 
 
 def test_short_run_writes_summary_and_plot(tmp_path):
@@ -105,7 +106,7 @@ def test_short_run_writes_summary_and_plot(tmp_path):
     svr = d["rows"]["sum-t10-r1"]
     assert svr["importance"]["n"] > 0 and 0 <= svr["goal_share_mean"] <= 1
     assert np.isclose(sum(svr["importance_share"].values()), 1)
-    assert set(svr["importance_share"]) == set(svr_explain.SHARE_BINS)
+    assert set(svr["importance_share"]) == set(explain.SHARE_BINS)
     mech = svr["mechanism"]
     assert 0 <= mech["contact_share"] <= 1 and mech["travel_median"] >= 0
     # the first optimisation holds every DoF, so the goal's importance there is recorded

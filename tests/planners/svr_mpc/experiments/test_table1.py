@@ -1,4 +1,5 @@
-"""experiments/mpc.py end to end (quick), its resume, its Ray path and its input errors."""
+"""experiments/mpc.py (planners.svr_mpc.experiments.table1) end to end (quick), its resume,
+its Ray path and its input errors."""
 
 import json
 import os
@@ -9,7 +10,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-ROOT = Path(__file__).resolve().parents[2]
+from planners.svr_mpc.experiments import mapping, table1
+
+ROOT = Path(__file__).resolve().parents[4]
 SCRIPT = ROOT / "experiments" / "mpc.py"
 
 
@@ -24,7 +27,7 @@ def run(*args, check=True):
 
 def test_quick_run_writes_table_and_resumes(tmp_path):
     out = tmp_path / "mpc"
-    run("--quick", "--methods", "baseline,svr-sum", "--out", str(out))
+    run("--quick", "--rules", "baseline,svr-sum", "--out", str(out))
     summary = json.loads((out / "summary.json").read_text())
     assert summary["task"] == "clutter"
     assert set(summary["methods"]) == {"baseline", "sum-t10-r1"}
@@ -46,7 +49,7 @@ def test_quick_run_writes_table_and_resumes(tmp_path):
     assert len(result["final_state"]) > 0
     assert result["blowups"] == [] and summary["blowups"] == []      # no blow-up to capture
     stamps = [f.stat().st_mtime_ns for f in files]
-    run("--quick", "--methods", "baseline,svr-sum", "--out", str(out))
+    run("--quick", "--rules", "baseline,svr-sum", "--out", str(out))
     assert [f.stat().st_mtime_ns for f in files] == stamps     # nothing was redone
 
 
@@ -59,7 +62,7 @@ def test_keep_controls_reaches_the_trials_and_reruns_those_without(tmp_path):
     from planners.view import load_mpc
 
     out = tmp_path / "mpc"
-    flags = ("--preset", "paper", "--clock", "model", "--timeout", "8", "--methods",
+    flags = ("--preset", "paper", "--clock", "model", "--timeout", "8", "--rules",
              "baseline", "--no-render", "--out", str(out))
     run(*flags, "--trials", "2", "--seed", "3")
     first, plain = sorted((out / "trials").glob("*.json"))      # seed3 before seed4
@@ -129,7 +132,7 @@ def test_quick_is_a_short_episode_where_svr_visibly_acts(tmp_path):
 def test_ray_path(tmp_path):
     pytest.importorskip("ray")
     out = tmp_path / "ray"
-    run("--quick", "--methods", "naive", "--ray", "--out", str(out), "--no-render")
+    run("--quick", "--rules", "naive", "--ray", "--out", str(out), "--no-render")
     summary = json.loads((out / "summary.json").read_text())
     assert summary["methods"]["naive"]["n_trials"] == 1
     # no baseline in this sweep: nothing to normalise by, said so in the table
@@ -139,7 +142,7 @@ def test_ray_path(tmp_path):
 
 @pytest.mark.parametrize("args, message", [
     (["--task", "nope"], "argument --task: invalid choice: 'nope'"),
-    (["--methods", "baseline,svr"], "unknown method"),
+    (["--rules", "baseline,svr"], "unknown rule"),
     (["--rows", "baseline,sum-t7"], "sum-t7"),
     (["--clock", "wall"], "argument --clock: invalid choice"),
     (["--clock", "virtual", "--clock-ms", "150"], "--clock-ms sets the model clock's duration"),
@@ -162,12 +165,11 @@ def test_bad_arguments(tmp_path, args, message):
 def test_trials_of_the_default_flags_are_valid_settings(tmp_path, flags):
     """Every trial the flags make (the task's own timeout when --timeout is not given) builds
     valid SVRMPCSettings, so a full run cannot fail on its parameters alone."""
-    import mpc
 
     from planners.svr_mpc import SVRMPCSettings
 
-    args = mpc.parse_args(["--out", str(tmp_path / "o"), "--trials", "2", *flags])
-    trials = mpc.make_trials(args)
+    args = table1.parse_args(["--out", str(tmp_path / "o"), "--trials", "2", *flags])
+    trials = mapping.make_trials(args)
     assert len(trials) == 2 * 5 * (2 if "both" in flags else 1)
     for t in trials:
         p = {k: v for k, v in t.params.items() if k != "seed"}
@@ -178,12 +180,11 @@ def test_trials_of_the_default_flags_are_valid_settings(tmp_path, flags):
 def test_paper_preset_runs_the_nine_rows_by_name(tmp_path):
     """--preset paper makes the nine Table 1 rows with the authors' protocol; flags override
     it; --rows picks rows; the trial keys say what differs from the defaults."""
-    import mpc
 
     from planners.svr_mpc import TABLE1_ROWS, row_label
 
-    args = mpc.parse_args(["--preset", "paper", "--trials", "2", "--out", str(tmp_path / "p")])
-    trials = mpc.make_trials(args)
+    args = table1.parse_args(["--preset", "paper", "--trials", "2", "--out", str(tmp_path / "p")])
+    trials = mapping.make_trials(args)
     assert len(trials) == 18 and len({t.key for t in trials}) == 18
     assert [row_label(t.params) for t in trials[:9]] == list(TABLE1_ROWS)
     for t in trials:
@@ -191,10 +192,10 @@ def test_paper_preset_runs_the_nine_rows_by_name(tmp_path):
         assert (p["cost"], p["warm_start"], p["clock"], p["control_noise"]) == \
             ("paper", True, "virtual", 0.05)
         assert "-costpaper-ws-clockvirtual2" in t.key
-    args = mpc.parse_args(["--preset", "paper", "--rows", "rand-t5,svd-t5-r1", "--cost", "ee",
+    args = table1.parse_args(["--preset", "paper", "--rows", "rand-t5,svd-t5-r1", "--cost", "ee",
                            "--trials", "1",
                            "--clock", "model", "--fd", "central", "--out", str(tmp_path / "q")])
-    trials = mpc.make_trials(args)
+    trials = mapping.make_trials(args)
     assert [row_label(t.params) for t in trials] == ["rand-t5 +central", "svd-t5-r1 +central"]
     assert trials[0].params["cost"] == "ee" and trials[0].params["clock"] == "model"
     assert trials[0].params["fd_centered"] and trials[0].params["fd_eps"] == 1e-6
@@ -202,16 +203,15 @@ def test_paper_preset_runs_the_nine_rows_by_name(tmp_path):
 
 
 def test_derivative_options_reach_the_trials(tmp_path):
-    import mpc
 
-    args = mpc.parse_args(["--preset", "paper", "--rows", "sum-t10-r1", "--trials", "1",
+    args = table1.parse_args(["--preset", "paper", "--rows", "sum-t10-r1", "--trials", "1",
                            "--fd-skip", "5", "--box-qp", "--out", str(tmp_path / "a")])
-    (t,) = mpc.make_trials(args)
+    (t,) = mapping.make_trials(args)
     assert (t.params["keypoints"], t.params["fd_skip"], t.params["box_qp"]) == ("skip", 5, True)
     assert t.key.endswith("-skip5-boxqp")
-    args = mpc.parse_args(["--rows", "sum-t10-r1", "--trials", "1", "--keypoints", "adaptive",
+    args = table1.parse_args(["--rows", "sum-t10-r1", "--trials", "1", "--keypoints", "adaptive",
                            "--out", str(tmp_path / "b")])
-    (t,) = mpc.make_trials(args)
+    (t,) = mapping.make_trials(args)
     assert t.params["keypoints"] == "adaptive" and t.key.endswith("-kpadaptive")
 
 
@@ -219,36 +219,35 @@ def test_rows_carry_their_own_derivative_variants(tmp_path):
     """--rows sum-t10-r1,sum-t10-r1+skip5: the plain row's trials are those of a Table 1 run
     (same keys, so a run in the same folder reuses them); the variant row differs only in its
     derivatives, and its label says so; the baseline label follows the global flags."""
-    import mpc
 
     from planners.svr_mpc import row_label
 
-    table1 = mpc.make_trials(mpc.parse_args(
+    plain = mapping.make_trials(table1.parse_args(
         ["--preset", "paper", "--rows", "baseline,sum-t10-r1", "--trials", "2",
          "--out", str(tmp_path / "a")]))
-    args = mpc.parse_args(["--preset", "paper", "--rows",
+    args = table1.parse_args(["--preset", "paper", "--rows",
                            "baseline,sum-t10-r1,sum-t10-r1+skip5,sum-t10-r1+adaptive+boxqp",
                            "--trials", "2", "--out", str(tmp_path / "a")])
-    trials = mpc.make_trials(args)
+    trials = mapping.make_trials(args)
     labels = [row_label(t.params) for t in trials[:4]]
     assert labels == ["baseline", "sum-t10-r1", "sum-t10-r1 +skip5",
                       "sum-t10-r1 +adaptive +boxqp"]
-    assert {t.key for t in table1} <= {t.key for t in trials}
+    assert {t.key for t in plain} <= {t.key for t in trials}
     skip = trials[2].params
     assert (skip["keypoints"], skip["fd_skip"], skip["box_qp"]) == ("skip", 5, False)
     assert {k: v for k, v in skip.items() if k not in ("keypoints", "fd_skip")} == \
         {k: v for k, v in trials[1].params.items() if k not in ("keypoints", "fd_skip")}
-    assert mpc.baseline_label(args) == "baseline"
-    glob = mpc.parse_args(["--preset", "paper", "--rows", "baseline,sum-t10-r1+adaptive",
+    assert mapping.baseline_label(args) == "baseline"
+    glob = table1.parse_args(["--preset", "paper", "--rows", "baseline,sum-t10-r1+adaptive",
                            "--fd-skip", "2", "--trials", "1", "--out", str(tmp_path / "b")])
-    assert mpc.baseline_label(glob) == "baseline +skip2"
-    central = mpc.make_trials(mpc.parse_args(
+    assert mapping.baseline_label(glob) == "baseline +skip2"
+    central = mapping.make_trials(table1.parse_args(
         ["--preset", "paper", "--rows", "sum-t10-r1+central+skip5", "--trials", "1",
          "--out", str(tmp_path / "c")]))[0]
     assert row_label(central.params) == "sum-t10-r1 +central +skip5"
     assert (central.params["fd_centered"], central.params["fd_eps"]) == (True, 1e-6)
     assert central.key.endswith("-fdc1e-06-skip5")
-    assert [row_label(t.params) for t in mpc.make_trials(glob)] == \
+    assert [row_label(t.params) for t in mapping.make_trials(glob)] == \
         ["baseline +skip2", "sum-t10-r1 +adaptive"]          # the row's variant wins
 
 
@@ -261,10 +260,9 @@ def test_rows_carry_their_own_derivative_variants(tmp_path):
     ("sum-t10-r1+skip5,sum-t10-r1+skip5", "given twice"),
 ])
 def test_bad_row_variants_are_usage_errors(rows, message, capsys):
-    import mpc
 
     with pytest.raises(SystemExit) as e:
-        mpc.parse_args(["--rows", rows, "--out", "unused"])
+        table1.parse_args(["--rows", rows, "--out", "unused"])
     assert e.value.code == 2 and message in capsys.readouterr().err
 
 
@@ -282,18 +280,16 @@ def test_committed_variant_rows_find_their_trials_by_key(name, tmp_path):
     import shlex
     from pathlib import Path
 
-    import mpc
-
     from dopt.lab.sweep import load_finished
 
-    root = Path(__file__).resolve().parents[2]
+    root = Path(__file__).resolve().parents[4]
     argv = shlex.split(json.loads((root / "docs" / "results" / f"{name}.json").read_text())
                        ["provenance"]["command"])[2:]
     runs = Path(argv[argv.index("--out") + 1])
     argv[argv.index("--out") + 1] = str(tmp_path / "o")
     del argv[argv.index("--record"):argv.index("--record") + 2]
     assert any("+" in row for row in argv[argv.index("--rows") + 1].split(","))
-    trials = mpc.make_trials(mpc.parse_args(argv))
+    trials = mapping.make_trials(table1.parse_args(argv))
     committed = load_finished(root / runs)                         # loose or packed
     missing = [t.key for t in trials if t.key not in committed]
     assert trials and not missing, missing[:3]
@@ -313,10 +309,9 @@ def test_committed_variant_rows_find_their_trials_by_key(name, tmp_path):
 def test_derivative_flags_and_row_variants_make_the_same_trials(flags, row, tmp_path):
     """The flags build typed ``Derivatives``, a row's variants replace some of its fields:
     both routes give the same params and keys for the same options."""
-    import mpc
 
     def trials(*argv):
-        return [(t.key, t.params) for t in mpc.make_trials(mpc.parse_args(
+        return [(t.key, t.params) for t in mapping.make_trials(table1.parse_args(
             ["--preset", "paper", "--trials", "2", "--out", str(tmp_path / "o"), *argv]))]
 
     assert trials("--rows", "sum-t10-r1", *flags) == trials("--rows", row)
@@ -325,22 +320,21 @@ def test_derivative_flags_and_row_variants_make_the_same_trials(flags, row, tmp_
 def test_a_registered_optimiser_is_a_row_of_the_command_line(tmp_path, monkeypatch):
     """--rows baseline,NAME: the optimiser's trials name it in their params and keys, have a
     row of their own and are normalised by the iLQR baseline; its variants apply to it."""
-    import mpc
 
     from planners.svr_mpc import OPTIMISERS, row_label, svr_optimiser
 
     monkeypatch.setitem(OPTIMISERS, "mine", svr_optimiser)
-    args = mpc.parse_args(["--preset", "paper", "--rows", "baseline,mine,mine+skip5",
+    args = table1.parse_args(["--preset", "paper", "--rows", "baseline,mine,mine+skip5",
                            "--trials", "1", "--out", str(tmp_path / "o")])
-    base, mine, skip = mpc.make_trials(args)
+    base, mine, skip = mapping.make_trials(args)
     assert [row_label(t.params) for t in (base, mine, skip)] == \
         ["baseline", "mine", "mine +skip5"]
     assert "optimiser" not in base.params and mine.params["optimiser"] == "mine"
     assert mine.key == base.key + "-optmine" and skip.key == base.key + "-skip5-optmine"
-    assert mpc.baseline_label(args) == "baseline"
+    assert mapping.baseline_label(args) == "baseline"
     monkeypatch.setenv("DOPT_OPTIMISERS", "no_such_optimisers_module")
     with pytest.raises(SystemExit) as e:
-        mpc.parse_args(["--rows", "baseline,theirs", "--out", str(tmp_path / "p")])
+        table1.parse_args(["--rows", "baseline,theirs", "--out", str(tmp_path / "p")])
     assert e.value.code == 2
 
 
@@ -348,19 +342,18 @@ def test_the_authors_preset_runs_their_executor_and_clock_and_the_summary_names_
     """--preset authors: the authors' executor and clock, named in the summary's protocol and
     in the trial keys; --executor alg1 --clock virtual is the paper's Alg. 1 on the host's
     clock (the keys of the records made before), and only those flags differ."""
-    import mpc
 
-    args = mpc.parse_args(["--task", "soft", "--preset", "authors", "--rows", "baseline",
+    args = table1.parse_args(["--task", "soft", "--preset", "authors", "--rows", "baseline",
                            "--trials", "1", "--out", str(tmp_path / "a")])
-    (t,) = mpc.make_trials(args)
-    proto = mpc.protocol(args, t.params)
+    (t,) = mapping.make_trials(args)
+    proto = mapping.protocol(args, t.params)
     assert (proto["executor"], proto["clock"]) == ("authors", "authors")
     assert t.key.endswith("-ws-clockauthors-execauthors-authors")
-    args = mpc.parse_args(["--task", "soft", "--preset", "authors", "--rows", "baseline",
+    args = table1.parse_args(["--task", "soft", "--preset", "authors", "--rows", "baseline",
                            "--executor", "alg1", "--clock", "virtual", "--trials", "1",
                            "--out", str(tmp_path / "b")])
-    (old,) = mpc.make_trials(args)
-    assert (mpc.protocol(args, old.params)["executor"], old.params["clock"]) == \
+    (old,) = mapping.make_trials(args)
+    assert (mapping.protocol(args, old.params)["executor"], old.params["clock"]) == \
         ("alg1", "virtual")
     assert old.key.endswith("-ws-clockvirtual2-authors")
     assert {k for k in t.params if t.params[k] != old.params[k]} == {"executor", "clock"}

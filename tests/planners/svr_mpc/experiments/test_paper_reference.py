@@ -3,8 +3,9 @@ their per-episode data through their Table 1 statistic."""
 
 import json
 
-import paper_reference
 import pytest
+
+from planners.svr_mpc.experiments import paper_reference
 
 HEADER = ("task\tmethod\trun_dir\thorizon\ttheta_readd\tK_threshold\tsvd\tn_runs\t"
           "final_cost_mean\tfinal_cost_median\tfinal_dist_mean\tavg_dofs\topt_ms")

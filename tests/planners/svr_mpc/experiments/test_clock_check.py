@@ -1,7 +1,8 @@
 """experiments/clock_check.py: the comparison of the two clocks' trials."""
 
-import clock_check
 import pytest
+
+from planners.svr_mpc.experiments import clock_check, flags
 
 
 def rec(clock, seed, lag, opt_ms, cost):
@@ -28,7 +29,7 @@ def test_ratios_and_verdicts():
 
 
 def test_trials_differ_only_in_clock_and_threads(tmp_path):
-    args = clock_check.table1.parse_args(
+    args = flags.parse_args(
         ["--preset", "paper", "--rows", "baseline", "--trials", "1", "--out", str(tmp_path)],
         clock_check.parser())
     (real,), (virtual,) = (clock_check.clock_trials(args, c) for c in ("real", "virtual"))
