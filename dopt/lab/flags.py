@@ -378,13 +378,12 @@ def default_text(values: dict[str, dict[str, object]],
     """The default of a settings field in its flag's help, from its value per preset and case
     ({preset: {case (a goal, a task): value}}): "32; 16 reflective, underneath" (the commonest
     value, then the others with their cases), per preset ("--preset paper: ...") where the
-    presets differ; None where every value is None (the field's documentation says what
-    unset means). ``show`` spells a value."""
+    presets differ; None where a preset leaves it unset in every case (the field's
+    documentation says what unset means). ``show`` spells a value."""
     texts = {}
     for preset, cases in values.items():
         if all(v is None for v in cases.values()):
-            texts[preset] = None
-            continue
+            return None
         listed = list(cases.values())
         common = max(listed, key=listed.count)
         rest: dict = {}
@@ -393,11 +392,9 @@ def default_text(values: dict[str, dict[str, object]],
                 rest.setdefault(show(v), []).append(case)
         texts[preset] = "; ".join([show(common)] + [f"{v} {', '.join(cs)}"
                                                     for v, cs in rest.items()])
-    if all(t is None for t in texts.values()):
-        return None
     if len(set(texts.values())) == 1:
         return next(iter(texts.values()))
-    return "; ".join(f"--preset {p}: {t or 'none'}" for p, t in texts.items())
+    return "; ".join(f"--preset {p}: {t}" for p, t in texts.items())
 
 
 class SettingsFlags:
