@@ -37,13 +37,14 @@ def check_config(config, *, positive: Iterable[str] = (), minimum: Mapping | Non
     ``tuple[X, ...]`` / ``tuple[X, X, X]`` (a tuple, list or 1-D array of that length, each
     entry checked). Then: ``positive`` fields must be > 0 (every entry of a tuple), ``minimum``
     / ``maximum`` map a field to its inclusive bound, ``choices`` a field to its allowed values.
-    A field's metadata adds its own: ``"above"`` (> it), ``"at_least"`` (>= it), ``"choices"``
+    A field's metadata adds its own: ``"above"`` (> it), ``"at_least"`` (>= it), ``"at_most"``
+    (<= it), ``"choices"``
     (one of them, None aside); the flags derived from the field read the same
     (``dopt.lab.flags``). Call it from ``__post_init__``; messages name ``Class.field``.
     """
     cls = type(config).__name__
     above = dict.fromkeys(positive, 0)
-    minimum, choices = dict(minimum or {}), dict(choices or {})
+    minimum, maximum, choices = dict(minimum or {}), dict(maximum or {}), dict(choices or {})
     for f in dataclasses.fields(config):
         kind = f.type if isinstance(f.type, str) else getattr(f.type, "__name__", str(f.type))
         _check_value(getattr(config, f.name), kind.replace(" ", ""), f"{cls}.{f.name}")
@@ -51,6 +52,8 @@ def check_config(config, *, positive: Iterable[str] = (), minimum: Mapping | Non
             above[f.name] = f.metadata["above"]
         if "at_least" in f.metadata:
             minimum[f.name] = f.metadata["at_least"]
+        if "at_most" in f.metadata:
+            maximum[f.name] = f.metadata["at_most"]
         if "choices" in f.metadata and getattr(config, f.name) is not None:
             choices[f.name] = tuple(f.metadata["choices"])
 
@@ -66,7 +69,7 @@ def check_config(config, *, positive: Iterable[str] = (), minimum: Mapping | Non
     for name, lo in minimum.items():
         if any(not v >= lo for v in entries(name)):
             raise ValueError(f"{cls}.{name} must be >= {lo}, got {getattr(config, name)!r}")
-    for name, hi in (maximum or {}).items():
+    for name, hi in maximum.items():
         if any(not v <= hi for v in entries(name)):
             raise ValueError(f"{cls}.{name} must be <= {hi}, got {getattr(config, name)!r}")
     for name, allowed in choices.items():

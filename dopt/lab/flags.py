@@ -10,13 +10,18 @@ cannot drift from the settings. Field metadata the flags read (``dopt.validation
 checks the same keys, so a bound is written once):
 
 - ``"choices"``: the allowed values of a ``str`` field (None aside);
-- ``"at_least"`` / ``"above"``: the inclusive / exclusive lower bound of a number.
+- ``"at_least"`` / ``"above"``: the inclusive / exclusive lower bound of a number;
+- ``"at_most"``: the inclusive upper bound of a number.
 
-``--config FILE`` (TOML or JSON; a run's ``summary.json`` gives its ``"settings"``) maps
-settings field names (nested as tables / objects, or dotted keys) to values; an unknown key or
-a value of the wrong type is a one-line usage error naming it. A run resolves its settings as
-preset < config < flags (``SettingsFlags.resolve``). Standard library and ``dopt.lab.cli``
-only.
+A ``bool`` field's flag is a switch: ``--x`` / ``--no-x``, or ``--x on`` / ``--x off`` (the
+spelling of recorded commands: ``--push-tail off``).
+
+``--config FILE`` (TOML or JSON; a run's ``summary.json`` gives its ``"settings"``: with one
+settings table per row or size, the values common to them all; ``summary=`` reads another
+layout) maps settings field names (nested as tables / objects, or dotted keys) to values; an
+unknown key or a value of the wrong type is a one-line usage error naming it. A run resolves
+its settings as preset < config < flags (``SettingsFlags.resolve``). Standard library and
+``dopt.lab.cli`` only.
 """
 from __future__ import annotations
 
@@ -49,6 +54,7 @@ class FieldFlag:
         choices: the allowed values of a ``str`` field, or None (any).
         low: a number's lower bound, or None; strict: whether ``low`` itself is refused.
         doc: the field's documentation (``field_docs``).
+        high: a number's inclusive upper bound, or None.
     """
 
     path: str
@@ -59,6 +65,7 @@ class FieldFlag:
     low: float | None
     strict: bool
     doc: str
+    high: float | None = None
 
     @property
     def dest(self) -> str:
@@ -86,7 +93,9 @@ class FieldFlag:
 
     def check(self, value) -> None:
         """ValueError (a phrase: "must be ...") unless the number ``value`` is finite and
-        within the bound."""
+        within the bounds."""
+        if math.isfinite(value) and self.high is not None and value > self.high:
+            raise ValueError(f"must be <= {self.high:g}")
         if not math.isfinite(value) or (self.low is not None and (
                 value <= self.low if self.strict else value < self.low)):
             if self.low is None:
@@ -208,7 +217,8 @@ def derive(cls: type, paths: Iterable[str] | None = None,
         name = tail if tails.count(tail) == 1 else path.replace(".", "-")
         flags.append(FieldFlag(path, f"--{name.replace('_', '-')}", kind, optional,
                                None if choices is None else tuple(choices), bound[0],
-                               bound[1], field_docs(owner).get(f.name, "")))
+                               bound[1], field_docs(owner).get(f.name, ""),
+                               f.metadata.get("at_most")))
     return flags
 
 
@@ -243,10 +253,36 @@ def _flatten(d: dict, prefix: str = "") -> dict:
     return out
 
 
-def read_config(path: Path, cls: type) -> dict:
+def common_settings(tables: dict) -> dict:
+    """The settings a summary records once per row or size ({name: settings table}): the
+    (dotted) fields whose value is the same in every table, as one flat table."""
+    flat = [_flatten(t) for t in tables.values() if isinstance(t, dict)]
+    if not flat:
+        return {}
+    return {k: v for k, v in flat[0].items() if all(k in f and f[k] == v for f in flat[1:])}
+
+
+def summary_settings(data: dict) -> dict:
+    """The settings table of a run's summary.json: its ``"settings"``; where that holds one
+    table per row or size (every value a table), the values common to them
+    (``common_settings``)."""
+    settings = data["settings"]
+    if settings and all(isinstance(v, dict) for v in settings.values()):
+        return common_settings(settings)
+    return settings
+
+
+def is_summary(data) -> bool:
+    """Whether a settings file's content is a run's summary.json (it has "provenance")."""
+    return isinstance(data, dict) and "provenance" in data
+
+
+def read_config(path: Path, cls: type,
+                summary: Callable[[dict], dict] | None = None) -> dict:
     """{dotted path: value} of the settings file ``path`` (TOML by its ``.toml`` suffix, else
-    JSON; a run's summary.json gives its ``"settings"``), each key a field of ``cls`` and each
-    value of its type. Raises ValueError (one line naming the file and the key) otherwise."""
+    JSON; a run's summary.json gives its settings: ``summary(data)``, default
+    ``summary_settings``), each key a field of ``cls`` and each value of its type. Raises
+    ValueError (one line naming the file and the key) otherwise."""
     import tomllib
 
     path = Path(path)
@@ -258,8 +294,12 @@ def read_config(path: Path, cls: type) -> dict:
     if not isinstance(data, dict):
         raise ValueError(f"{path}: a settings file holds a table of settings, not "
                          f"{type(data).__name__}")
-    if isinstance(data.get("settings"), dict) and "provenance" in data:   # a summary.json
-        data = data["settings"]
+    if is_summary(data) and (summary is not None or isinstance(data.get("settings"), dict)):
+        try:
+            data = (summary or summary_settings)(data)
+        except (KeyError, TypeError, ValueError) as e:
+            raise ValueError(f"{path}: a summary without the settings of {cls.__name__} "
+                             f"({type(e).__name__}: {e})") from None
     flags = {f.path: f for f in derive(cls)}
     nested = {p.split(".", 1)[0] for p in flags if "." in p}
     values = {}
@@ -275,6 +315,35 @@ def read_config(path: Path, cls: type) -> dict:
             raise ValueError(f"{path}: {e}") from None
         values[key] = value
     return values
+
+
+#: the words a switch (a ``bool`` field's flag) takes after it
+SWITCH_WORDS = {"on": True, "off": False, "true": True, "false": False, "yes": True,
+                "no": False}
+
+
+def switch_word(text: str) -> bool:
+    """The argparse ``type=`` of a switch's value: ``on``/``off`` (``SWITCH_WORDS``)."""
+    try:
+        return SWITCH_WORDS[text.lower()]
+    except KeyError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not on or off") from None
+
+
+class _Switch(argparse.Action):
+    """A ``bool`` field's flag: ``--x`` (True) or ``--x on|off``; its ``--no-x`` (False) is
+    a second action, ``nargs=0``."""
+
+    def __init__(self, option_strings, dest, off: bool = False, **kwargs):
+        if off:
+            kwargs["nargs"] = 0
+        else:
+            kwargs.update(nargs="?", type=switch_word)
+        super().__init__(option_strings, dest, **kwargs)
+        self.off = off
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        setattr(namespace, self.dest, False if self.off else values is None or values)
 
 
 class _Alias(argparse.Action):
@@ -304,6 +373,30 @@ def add_alias(ap: argparse.ArgumentParser, old: str, new: str) -> None:
                     default=argparse.SUPPRESS, help=argparse.SUPPRESS)
 
 
+def default_text(values: dict[str, dict[str, object]],
+                 show: Callable[[object], str] = str) -> str | None:
+    """The default of a settings field in its flag's help, from its value per preset and case
+    ({preset: {case (a goal, a task): value}}): "32; 16 reflective, underneath" (the commonest
+    value, then the others with their cases), per preset ("--preset paper: ...") where the
+    presets differ; None where a preset leaves it unset in every case (the field's
+    documentation says what unset means). ``show`` spells a value."""
+    texts = {}
+    for preset, cases in values.items():
+        if all(v is None for v in cases.values()):
+            return None
+        listed = list(cases.values())
+        common = max(listed, key=listed.count)
+        rest: dict = {}
+        for case, v in cases.items():
+            if v != common:
+                rest.setdefault(show(v), []).append(case)
+        texts[preset] = "; ".join([show(common)] + [f"{v} {', '.join(cs)}"
+                                                    for v, cs in rest.items()])
+    if len(set(texts.values())) == 1:
+        return next(iter(texts.values()))
+    return "; ".join(f"--preset {p}: {t}" for p, t in texts.items())
+
+
 class SettingsFlags:
     """The flags of some fields of a settings dataclass (``derive``), with ``--config``.
 
@@ -314,11 +407,13 @@ class SettingsFlags:
             field's own name stays a hidden alias.
         defaults: path -> the text of its default ("32; 16 reflective, underneath"), or None
             for none in the help.
+        summary: how a run's summary.json gives the settings (``read_config``).
     """
 
     def __init__(self, cls: type, paths: Iterable[str], names: dict[str, str] | None = None,
-                 defaults: Callable[[str], str | None] | None = None):
-        self.cls, self.names = cls, dict(names or {})
+                 defaults: Callable[[str], str | None] | None = None,
+                 summary: Callable[[dict], dict] | None = None):
+        self.cls, self.names, self.summary = cls, dict(names or {}), summary
         self.flags = [dataclasses.replace(f, flag=self.names.get(f.path, f.flag))
                       for f in derive(cls, paths)]
         self.own = {f.path: f.flag for f in derive(cls, paths)}
@@ -331,8 +426,10 @@ class SettingsFlags:
             default = self.defaults(f.path)
             text = f.doc.rstrip(".") + (f" (default {default})" if default else "")
             if f.kind is bool:
-                ap.add_argument(f.flag, dest=f.dest, action=argparse.BooleanOptionalAction,
-                                default=None, help=text)
+                ap.add_argument(f.flag, dest=f.dest, action=_Switch, default=None,
+                                metavar="on|off", help=f"{text}; --no-{f.flag[2:]}: off")
+                ap.add_argument(f"--no-{f.flag[2:]}", dest=f.dest, action=_Switch, off=True,
+                                default=argparse.SUPPRESS, help=argparse.SUPPRESS)
                 continue
             metavar = None if f.choices is None else "{" + ",".join(f.choices) + "}"
             ap.add_argument(f.flag, dest=f.dest, type=f.parse, default=None, help=text,
@@ -356,7 +453,7 @@ class SettingsFlags:
         if getattr(args, "config", None) is None:
             return {}
         try:
-            return read_config(args.config, self.cls)
+            return read_config(args.config, self.cls, self.summary)
         except ValueError as e:
             ap.error(f"argument --config: {e}")
 

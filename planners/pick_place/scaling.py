@@ -47,18 +47,21 @@ SCALING_MODES = ("resolution", "size")
 
 
 def scaling_settings(goal: str, n: int, threads: int = 0, move: str | None = None,
-                     mode: str = "resolution", quick: bool = False) -> PickPlaceSettings:
+                     mode: str = "resolution", quick: bool = False,
+                     base: PickPlaceSettings | None = None) -> PickPlaceSettings:
     """The paper protocol's cloth settings of ``goal`` with ``n`` particles per side (and the
     simulation ``threads``, not part of a trial's identity; ``move``: the picker's move rule,
     ``PickPlaceSettings.picker_move``, None the fixed move), by ``mode`` (``SCALING_MODES``):
     "size" scales the side, the bound and the mass with (n - 1) / (n0 - 1), the side in the
     preset's spacings (n0 the preset's n; at n0 the preset itself). ``quick``: the preset's
-    smoke-sized CEM budget (``PickPlaceSettings.preset(quick=True)``)."""
+    smoke-sized CEM budget (``PickPlaceSettings.preset(quick=True)``). ``base``: the settings
+    a size starts from in place of that preset (a --config file's changes of it)."""
     if mode not in SCALING_MODES:
         raise ValueError(f"unknown scaling mode {mode!r}; choose from "
                          f"{', '.join(SCALING_MODES)}")
-    base = replace(PickPlaceSettings.preset("cloth", goal, quick=quick, protocol="paper"),
-                   threads=int(threads), picker_move=move)
+    if base is None:
+        base = PickPlaceSettings.preset("cloth", goal, quick=quick, protocol="paper")
+    base = replace(base, threads=int(threads), picker_move=move)
     if mode == "resolution" or int(n) == base.n:
         return replace(base, n=int(n))
     scale = (int(n) - 1) / (base.n - 1)
@@ -80,16 +83,17 @@ def flat_cost(settings: PickPlaceSettings) -> float:
 def scaling_trials(goal: str, sizes: Sequence[int], seeds: Iterable[int],
                    methods: Sequence[str], threads: int = 0,
                    move: str | None = None, mode: str = "resolution",
-                   quick: bool = False) -> list[Trial]:
+                   quick: bool = False, base: PickPlaceSettings | None = None) -> list[Trial]:
     """The ``dopt.lab.sweep`` trials of every (size, seed, method): key ``trial_key(method, seed,
     settings)`` and params {"settings": settings.to_dict(), "method", "seed"}, exactly as the
-    Fig. 7 sweep (``planners.pick_place.experiments.fig7``) builds them, so ``run_trial`` runs them.
+    Fig. 7 sweep (``planners.pick_place.experiments.fig7``) builds them, so ``run_trial`` runs them;
+    each size's settings are ``scaling_settings``' (``base``: where they start).
 
     Returns len(sizes) * len(seeds) * len(methods) trials, size-major."""
     out = []
     seeds = [int(s) for s in seeds]
     for n in sizes:
-        settings = scaling_settings(goal, n, threads, move, mode, quick)
+        settings = scaling_settings(goal, n, threads, move, mode, quick, base)
         out += [Trial(trial_key(m, s, settings),
                       {"settings": settings.to_dict(), "method": m, "seed": s})
                 for s in seeds for m in methods]

@@ -199,8 +199,9 @@ class SVRMPCSettings:
         clock: ``real``, ``virtual`` or ``model`` (``dopt.mpc``; the model clock's
             coefficients are the task's ``CLOCK_MODEL_MS``, fitted on this project's
             machine), or ``authors``: the model clock fitted to the authors' own times
-            (``planners.svr_mpc.authors_clock``); nominal_threads: the thread count a virtual
-            duration divides the CPU time by.
+            (``planners.svr_mpc.authors_clock``).
+        nominal_threads: the thread count a virtual duration divides the CPU time by (2,
+            this project's machine).
         fd_centered, fd_eps: the finite differences (default forward 1e-3; the authors:
             centred 1e-6).
         keypoints, fd_skip: the timesteps the finite differences cover (``every``, ``skip``
@@ -232,29 +233,30 @@ class SVRMPCSettings:
 
     task: str = "clutter"
     method: str = "svr-sum"
-    rho: float = 1.0
-    theta: int | None = None
-    slowdown: float | None = None
-    timeout: int | None = None
+    rho: float = field(default=1.0, metadata={"at_least": 0.0})
+    theta: int | None = field(default=None, metadata={"at_least": 0})
+    slowdown: float | None = field(default=None, metadata={"above": 0})
+    timeout: int | None = field(default=None, metadata={"at_least": 1})
     feedback: bool = False
-    control_noise: float = 0.0
+    control_noise: float = field(default=0.0, metadata={"at_least": 0.0,
+                                                          "at_most": MAX_CONTROL_NOISE})
     synchronous: bool = False
-    threads: int = 0
-    cost: str = "ee"
+    threads: int = field(default=0, metadata={"at_least": 0})
+    cost: str = field(default="ee", metadata={"choices": tuple(COST_PRESETS)})
     warm_start: bool = False
-    clock: str = "real"
-    nominal_threads: float = 2.0
+    clock: str = field(default="real", metadata={"choices": SVR_CLOCKS})
+    nominal_threads: float = field(default=2.0, metadata={"above": 0})
     fd_centered: bool = False
-    fd_eps: float = 1e-3
+    fd_eps: float = field(default=1e-3, metadata={"above": 0})
     keypoints: str = "every"
-    fd_skip: int = 1
+    fd_skip: int = field(default=1, metadata={"at_least": 1})
     box_qp: bool = False
-    problem: str = "ours"
+    problem: str = field(default="ours", metadata={"choices": PROBLEMS})
     layouts: str | None = None
     islands: bool = True
     push_tail: bool = True
-    clock_ms: float | None = None
-    executor: str = "alg1"
+    clock_ms: float | None = field(default=None, metadata={"above": 0})
+    executor: str = field(default="alg1", metadata={"choices": EXECUTORS})
     keep_costed: bool = False
     mu_reset: bool = False
 
@@ -262,26 +264,15 @@ class SVRMPCSettings:
         get_task(self.task)                       # ValueError naming the known tasks
         if self.method not in METHODS:
             raise ValueError(f"unknown method {self.method!r}; choose from {METHODS}")
-        if self.cost not in COST_PRESETS:
-            raise ValueError(f"unknown cost {self.cost!r}; choose from {tuple(COST_PRESETS)}")
-        if self.clock not in SVR_CLOCKS:
-            raise ValueError(f"unknown clock {self.clock!r}; choose from {SVR_CLOCKS}")
-        if self.executor not in EXECUTORS:
-            raise ValueError(f"unknown executor {self.executor!r}; choose from {EXECUTORS}")
-        if self.problem not in PROBLEMS:
-            raise ValueError(f"unknown problem {self.problem!r}; choose from {PROBLEMS}")
+        # every field's type; the bounds and choices of the fields' metadata (the flags
+        # derived from the fields read the same: dopt.lab.flags)
+        check_config(self)
         if self.problem == "authors" and self.task == "clutter" and not self.layouts:
             raise ValueError("problem 'authors' on clutter needs layouts: the folder of the "
                              "authors' scenes (push_mcl_layouts/{0..99}.csv)")
         if self.layouts is not None and not rooted(self.layouts).is_dir():
             raise ValueError(f"layouts: no folder {rooted(self.layouts)} (the authors' "
                              f"push_mcl_layouts, one CSV per scene)")
-        # rho, control_noise finite >= 0; theta an int >= 0 or None; slowdown finite > 0 or
-        # None; timeout an int >= 1 or None; feedback, synchronous bools; threads an int >= 0
-        check_config(self, positive=("slowdown", "nominal_threads", "fd_eps", "clock_ms"),
-                     minimum={"rho": 0.0, "theta": 0, "timeout": 1, "control_noise": 0.0,
-                              "threads": 0, "fd_skip": 1},
-                     maximum={"control_noise": MAX_CONTROL_NOISE})
         if self.layouts is not None and (self.problem, self.task) != ("authors", "clutter"):
             raise ValueError(f"layouts: only the authors' clutter reads them (problem "
                              f"'authors', task 'clutter'), not problem {self.problem!r} on "

@@ -39,7 +39,7 @@ from dopt.lab.cli import (
     positive_int,
 )
 from dopt.lab.console import print_outputs, run_with_console, sweep_session
-from dopt.lab.flags import SettingsFlags, add_alias, apply
+from dopt.lab.flags import SettingsFlags, add_alias, apply, common_settings
 from dopt.lab.record import (
     add_reuse_argument,
     check_outputs,
@@ -73,12 +73,22 @@ DEFAULT_TRIALS = 5
 QUICK_DRAG = {"population": 8, "iterations": 2}
 
 
+def summary_drag(data: dict) -> dict:
+    """The drag settings of a run's summary.json (a --config file): those common to its
+    sizes' settings (``common_settings``), less the candidate count (--points')."""
+    common = common_settings(data["settings"])
+    drag = {k.removeprefix("drag."): v for k, v in common.items() if k.startswith("drag.")}
+    drag.pop("n_points", None)
+    return drag
+
+
 def drag_flags() -> SettingsFlags:
     """The flags of the drag encoding's CEM budget and substeps, derived from
-    ``DragSettings``."""
+    ``DragSettings``, with --config (``DragSettings`` fields; a run's summary gives its
+    drag settings, ``summary_drag``)."""
     d = DragSettings()
     return SettingsFlags(DragSettings, ["population", "iterations", "substeps"],
-                         defaults=lambda path: str(getattr(d, path)))
+                         defaults=lambda path: str(getattr(d, path)), summary=summary_drag)
 
 
 def parser() -> argparse.ArgumentParser:
@@ -101,10 +111,10 @@ def parser() -> argparse.ArgumentParser:
                          "iterations (unless given), one trial (unless --trials)")
     ap.add_argument("--methods", type=choices_type(tuple(BASE), "methods"),
                     default=",".join(BASE), help="comma-separated subset of " + ", ".join(BASE))
-    drag_flags().add_to(ap, config=False)
-    ap.add_argument("--cost", choices=("best", "final"), default="best",
+    drag_flags().add_to(ap)
+    ap.add_argument("--cost", choices=("best", "final"), default=None,
                     help="a plan's cost: its best decision (the authors') or after the whole "
-                         "plan (default %(default)s)")
+                         "plan (default best, or the --config file's best_over_trajectory)")
     ap.add_argument("--side", type=positive_float, default=SIDE,
                     help="the sheet's side in m (default %(default)s: SoftGym's 100 x 100)")
     ap.add_argument("--workers", type=positive_int, default=1,
@@ -132,9 +142,16 @@ def parse(argv=None) -> argparse.Namespace:
         QUICK_POINTS if args.quick else DEFAULT_POINTS)
     if args.trials is None:                   # an explicit --trials stands with --quick
         args.trials = 1 if args.quick else DEFAULT_TRIALS
+    flags = drag_flags()
+    config = flags.config(ap, args)              # DragSettings < --quick < config < flags
+    if "n_points" in config:
+        ap.error(f"argument --config: {args.config}: n_points is --points' (the candidate "
+                 f"counts of the sweep)")
+    if args.cost is not None:
+        config["best_over_trajectory"] = args.cost == "best"
     try:
-        budget = {**(QUICK_DRAG if args.quick else {}), **drag_flags().overrides(args)}
-        args.drag = apply(DragSettings(best_over_trajectory=args.cost == "best"), budget)
+        budget = {**(QUICK_DRAG if args.quick else {}), **config, **flags.overrides(args)}
+        args.drag = apply(DragSettings(), budget)
         for n in args.points:
             replace(args.drag, n_points=n)
     except (TypeError, ValueError) as e:

@@ -34,7 +34,7 @@ from dopt.lab.cli import (
     positive_int,
 )
 from dopt.lab.console import duration, print_captures, print_outputs, sweep_session
-from dopt.lab.flags import SettingsFlags, add_alias
+from dopt.lab.flags import SettingsFlags, add_alias, default_text
 from dopt.lab.record import add_reuse_argument, check_outputs, reuse_mode, write_summary
 from dopt.lab.sweep import Trial, is_finished
 from dopt.rollout import share_cores
@@ -149,24 +149,12 @@ def _get(settings, path: str):
 
 def preset_text(task: str, path: str) -> str | None:
     """The default of a settings field in the help: its value in each protocol's presets of
-    ``task``'s goals ("32; 16 reflective, underneath"; per protocol where they differ), or
-    None where no preset sets it (the field's documentation says what unset means)."""
-    texts = {}
-    for protocol in PROTOCOLS:
-        values = {g: _get(PickPlaceSettings.preset(task, g, protocol=protocol), path)
-                  for g in GOALS[task]}
-        if all(v is None for v in values.values()):
-            return None
-        common = max(values.values(), key=list(values.values()).count)
-        rest = {}
-        for g, v in values.items():
-            if v != common:
-                rest.setdefault(v, []).append(g)
-        texts[protocol] = "; ".join([f"{common}"] + [f"{v} {', '.join(gs)}"
-                                                     for v, gs in rest.items()])
-    if len(set(texts.values())) == 1:
-        return next(iter(texts.values()))
-    return "; ".join(f"--preset {p}: {t}" for p, t in texts.items())
+    ``task``'s goals ("32; 16 reflective, underneath"; per protocol where they differ,
+    ``dopt.lab.flags.default_text``), or None where no preset sets it (the field's
+    documentation says what unset means)."""
+    return default_text({protocol: {g: _get(PickPlaceSettings.preset(task, g, protocol=protocol),
+                                            path) for g in GOALS[task]}
+                         for protocol in PROTOCOLS})
 
 
 def settings_flags(task: str) -> SettingsFlags:

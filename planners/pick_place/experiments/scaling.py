@@ -93,8 +93,14 @@ QUICK_SIZES = "4,5"
 DEFAULT_TRIALS = 5
 
 
+#: the settings a --config file may not set here: the sweep's own flags set them
+CONFIG_REFUSED = {"n": "--sizes", "task": "the experiment (cloth)"}
+
+
 def move_flag() -> SettingsFlags:
-    """--move: the picker's move rule (``PickPlaceSettings.picker_move``), derived from it."""
+    """--move: the picker's move rule (``PickPlaceSettings.picker_move``), derived from it,
+    and --config (``PickPlaceSettings`` fields changing the paper preset every size starts
+    from; a run's summary gives the settings common to its sizes)."""
     return SettingsFlags(PickPlaceSettings, ["picker_move"], names={"picker_move": "--move"})
 
 
@@ -129,7 +135,7 @@ def parser() -> argparse.ArgumentParser:
     ap.add_argument("--threads", type=nonneg_int, default=0,
                     help="simulation threads per trial (0, the default: the cores shared out "
                          "over the trials that run at once)")
-    move_flag().add_to(ap, config=False)
+    move_flag().add_to(ap)
     ap.add_argument("--out", type=output_dir, default=None,
                     help="the run's folder (default results/fig7_scaling_<goal>)")
     ap.add_argument("--record", type=output_file, default=None,
@@ -152,13 +158,33 @@ def parse(argv=None) -> argparse.Namespace:
                                                   else DEFAULT_SIZES[args.mode])
     if args.trials is None:                   # an explicit --trials stands with --quick
         args.trials = 1 if args.quick else DEFAULT_TRIALS
-    args.move = move_flag().overrides(args).get("picker_move")
+    config_base(ap, args)
     if "simple" not in args.methods:
         ap.error("argument --methods: the gains are against simple, which it must name")
     if args.reuse_from is not None and not (args.reuse_from / "trials").is_dir():
         ap.error(f"argument --reuse-from: {args.reuse_from}/trials is not a folder")
     check_outputs(ap, args, f"fig7_scaling_{args.goal}")
     return args
+
+
+def config_base(ap: argparse.ArgumentParser, args) -> None:
+    """``args.move`` and ``args.base``, the settings every size starts from: the paper preset
+    of the goal (quick with --quick) < the --config file's settings < --move; a usage error
+    naming --config for a setting the sweep's own flags give (``CONFIG_REFUSED``), another
+    goal, or one the settings refuse."""
+    flags = move_flag()
+    config = flags.config(ap, args)
+    for key, flag in CONFIG_REFUSED.items():
+        if key in config and (key, config[key]) != ("task", "cloth"):
+            ap.error(f"argument --config: {args.config}: {key} is set by {flag}")
+    if config.pop("goal", args.goal) != args.goal:
+        ap.error(f"argument --config: {args.config} holds settings of another goal, not "
+                 f"{args.goal}")
+    config.pop("task", None)
+    args.config_threads = config.pop("threads", 0)
+    args.move = flags.overrides(args).get("picker_move", config.pop("picker_move", None))
+    preset = PickPlaceSettings.preset("cloth", args.goal, quick=args.quick, protocol="paper")
+    args.base = flags.resolve(ap, args, preset, config) if config else None
 
 
 def copy_finished(trials, source: Path, out: Path) -> int:
@@ -193,15 +219,15 @@ def _experiment(args, argv) -> int:
     start = time.perf_counter()
     out = args.out
     n_trials = len(args.sizes) * args.trials * len(args.methods)
-    threads = args.threads or share_cores(min(args.workers, n_trials))
+    threads = args.threads or args.config_threads or share_cores(min(args.workers, n_trials))
     seeds = range(args.seed, args.seed + args.trials)
     trials = scaling_trials(args.goal, args.sizes, seeds, args.methods, threads, args.move,
-                            args.mode, args.quick)
+                            args.mode, args.quick, args.base)
     if args.reuse_from is not None:
         print(f"copied {copy_finished(trials, args.reuse_from, out)} finished trials from "
               f"{args.reuse_from}")
-    settings = {n: scaling_settings(args.goal, n, threads, args.move, args.mode, args.quick)
-                for n in args.sizes}
+    settings = {n: scaling_settings(args.goal, n, threads, args.move, args.mode, args.quick,
+                                    args.base) for n in args.sizes}
     flat = {n: flat_cost(s) for n, s in settings.items()}
     per_trial = next(iter(settings.values())).cem.iterations   # one stage: diagonal, side
     res = run_with_console(

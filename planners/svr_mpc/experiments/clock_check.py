@@ -104,7 +104,7 @@ def _main(args, argv) -> int:
                    **mapping.protocol(args, trials["virtual"][0].params),
                    "real_threads": args.real_threads,
                    "seeds": sorted({t.params["seed"] for t in trials["virtual"]}),
-                   "rows": compare(records, args.nominal_threads),
+                   "rows": compare(records, trials["virtual"][0].params["nominal_threads"]),
                    "failed": failed, "trial_commits": commits},
                   args.out, args.record, "experiments/clock_check.py", argv)
     print(f"wrote {args.out / 'summary.json'}")

@@ -8,7 +8,10 @@ The flag vocabulary is the project's (issue 91): ``--trials``/``--seed``, ``--ta
 DoF-selection rules, mpc.py's; ``--methods`` its old spelling), and on every sweep ``--out``,
 ``--record``, ``--fresh``, ``--reuse-any``, ``--workers``, ``--threads``, ``--quick``, ``-v``.
 A renamed flag keeps its old spelling as a hidden alias (``add_alias``) so that every
-recorded command still runs.
+recorded command still runs. The flags that set one ``SVRMPCSettings`` field are derived from
+it (``mapping.SETTINGS``, ``dopt.lab.flags``: the field's name, type, bounds, choices and
+documentation, the default under each preset), with ``--config FILE`` (TOML or JSON settings,
+or a run's summary.json) between the preset and the flags.
 """
 
 from __future__ import annotations
@@ -21,23 +24,22 @@ from pathlib import Path
 from dopt.lab.cli import (
     no_repeats,
     nonneg_int,
-    number_in,
     output_dir,
     output_file,
-    positive_float,
     positive_int,
 )
 from dopt.lab.record import add_reuse_argument, check_outputs
-from dopt.mpc import EXECUTORS, MAX_CONTROL_NOISE
 from dopt.tasks import PUSH_TASKS
-from dopt.tasks.push.costs import COST_PRESETS
-from planners.svr_mpc import SVR_CLOCKS, TABLE1_ROWS, parse_row
+from planners.ilqr import FINITE_DIFFERENCES
+from planners.svr_mpc import TABLE1_ROWS, parse_row
 from planners.svr_mpc.authors_data import TASK_DIRS
 from planners.svr_mpc.experiments import mapping
 
 log = logging.getLogger(__name__)
 #: task instances (seeds) per method without --trials (1 with --quick)
 DEFAULT_TRIALS = 20
+#: the task without --task (or a --config file's)
+DEFAULT_TASK = "clutter"
 #: the files a run writes under --out (besides its trials): checked before the first trial
 RUN_FILES = ("summary.json", "table1.md")
 #: --keep-controls: which trials keep their start state and executed controls for dopt-view's
@@ -81,8 +83,8 @@ def add_rows_argument(ap: argparse.ArgumentParser, default: tuple[str, ...] | No
 def add_run_arguments(ap: argparse.ArgumentParser) -> None:
     """The flags of any MPC sweep (every experiment of this package but paper_reference):
     task, protocol, trials, seeds, timing, feedback, workers, output, logging."""
-    ap.add_argument("--task", default="clutter", choices=list(PUSH_TASKS),
-                    help="the pushing task (default %(default)s)")
+    ap.add_argument("--task", default=None, choices=list(PUSH_TASKS),
+                    help=f"the pushing task (default {DEFAULT_TASK}, or the --config file's)")
     ap.add_argument("--preset", default=None, choices=["ours", "paper", "authors"],
                     help="paper: the authors' protocol on our problems (Eq. 2 cost without the "
                          "end-effector term, on soft with their terminal reach residual; their "
@@ -91,7 +93,7 @@ def add_run_arguments(ap: argparse.ArgumentParser) -> None:
                          "(their scenes, objects, contacts and cost weights, no control cost, "
                          "no control noise; clutter needs --layouts); ours: cost with the "
                          "end-effector term, zero initial plan, real clock (default ours; "
-                         "paper with --quick). Flags below override it")
+                         "paper with --quick). --config and the flags below override it")
     ap.add_argument("--layouts", type=Path, default=None, metavar="DIR",
                     help="the authors' clutter scenes (a folder of {0..99}.csv, e.g. "
                          "../shared/external/ilqr_svr/push_mcl_layouts); seed i runs scene i")
@@ -99,48 +101,28 @@ def add_run_arguments(ap: argparse.ArgumentParser) -> None:
                     help="the authors' PaperData folder (e.g. ../shared/external/ilqr_svr/"
                          "paper_data): the summary then holds their rows' goal distances and, "
                          "with --layouts, travel, beside ours (authors_rows)")
-    ap.add_argument("--push-tail", default="on", choices=["on", "off"],
-                    help="the first push plan ends moving forward (default on); off: it ends "
-                         "braking at its end point (dopt.tasks.push.warm_start)")
-    ap.add_argument("--islands", default="on", choices=["on", "off"],
-                    help="MuJoCo's constraint islands (default on); off: one monolithic "
-                         "constraint solve, as the authors' MuJoCo")
-    ap.add_argument("--cost", default=None, choices=list(COST_PRESETS),
-                    help="the cost: paper (Eq. 2), paper-reach (Eq. 2 with the authors' soft-task "
-                         "reach residual) or ee (with the end-effector term)")
-    ap.add_argument("--warm-start", default=None, choices=["on", "off"],
-                    help="start from the authors' set-up state and push plan")
-    add_clock_arguments(ap)
-    ap.add_argument("--fd", default="forward", choices=["forward", "central"],
+    mapping.SETTINGS.add_to(ap)
+    ap.add_argument("--fd", default=None, choices=list(FINITE_DIFFERENCES),
                     help="finite differences: forward eps 1e-3 (default) or the authors' "
                          "central eps 1e-6")
-    ap.add_argument("--fd-skip", type=positive_int, default=1,
+    ap.add_argument("--fd-skip", type=positive_int, default=None,
                     help="finite differences every K-th timestep, A and B linear between "
-                         "(default %(default)s: every timestep)")
+                         "(default 1: every timestep)")
     ap.add_argument("--keypoints", default=None, choices=["adaptive"],
                     help="adaptive key timesteps for the finite differences "
                          "(planners.keypoints) instead of --fd-skip")
-    ap.add_argument("--box-qp", action="store_true",
+    ap.add_argument("--box-qp", action="store_true", default=None,
                     help="control limits in iLQR's backward pass (mju_boxQP)")
     ap.add_argument("--trials", type=positive_int, default=None,
                     help=f"task instances (seeds) per method (default {DEFAULT_TRIALS}; 1 with "
                          f"--quick)")
     ap.add_argument("--seed", type=nonneg_int, default=0,
                     help="first seed; trials use seed..seed+N-1 (default %(default)s)")
-    ap.add_argument("--slowdown", type=positive_float, default=None,
-                    help="agent wall time per step over dt (default: the task's, the paper's)")
-    ap.add_argument("--timeout", type=positive_int, default=None,
-                    help="task timeout Y in agent steps (default: the task's, the paper's)")
     ap.add_argument("--feedback", nargs="?", const="on", default="off",
                     choices=["off", "on", "both"],
                     help="execute u + K (x - x_nom) on the measured state (authors: off); "
                          "'both' runs every trial open-loop and with feedback back to back, "
                          "so the pair sees the same machine load (rows 'METHOD +fb')")
-    ap.add_argument("--control-noise", type=number_in(float, 0.0, MAX_CONTROL_NOISE),
-                    default=None,
-                    help="Gaussian noise on executed controls, fraction of range (authors and "
-                         f"--preset paper: 0.05; ours: 0; at most {MAX_CONTROL_NOISE:g}, the "
-                         "whole range)")
     ap.add_argument("--workers", type=positive_int, default=1,
                     help="local worker processes (default %(default)s)")
     ap.add_argument("--ray", nargs="?", const="local", default=None, metavar="ADDRESS",
@@ -201,31 +183,20 @@ def add_episode_arguments(ap: argparse.ArgumentParser) -> None:
                          "a stored trial without them is rerun), none")
 
 
-def add_clock_arguments(ap: argparse.ArgumentParser) -> None:
-    """The flags of the MPC loop's timing: clock, its fixed duration, executor, threads."""
-    ap.add_argument("--clock", default=None, choices=list(SVR_CLOCKS),
-                    help="real (wall time), virtual (CPU time / --nominal-threads), model "
-                         "(ms = a + b |C| fitted on this project's machine) or authors (ms = a "
-                         "+ b |C| fitted to the authors' own times; --preset authors); model "
-                         "and authors are deterministic, the same on any machine")
-    ap.add_argument("--executor", default=None, choices=list(EXECUTORS),
-                    help="alg1: the paper's Alg. 1 (pad with the last control, land shifted "
-                         "by the lag); authors (--preset authors): their code's (hold after 80 "
-                         "controls, land at the nearest nominal state)")
-    ap.add_argument("--clock-ms", type=positive_float, default=None, metavar="MS",
-                    help="every optimisation lasts MS on the model clock (sets --clock model): "
-                         "every row lags alike, so rows differ only in the DoFs they choose")
-    ap.add_argument("--nominal-threads", type=positive_float, default=2.0,
-                    help="threads a virtual duration divides the CPU time by (default "
-                         "%(default)s, this machine)")
-
-
 def parse_args(argv, ap: argparse.ArgumentParser,
                one_feedback: bool = False) -> argparse.Namespace:
     """The flags ``argv`` (None: this process's) of an experiment's parser ``ap`` (built with
     ``add_run_arguments``) checked as usage errors; ``one_feedback``: the script runs one
     feedback setting, so --feedback both is refused."""
     args = ap.parse_args(argv)
+    try:
+        config = mapping.config_of(args)
+    except ValueError as e:
+        ap.error(f"argument --config: {e}")
+    args.task = args.task or config.get("task") or DEFAULT_TASK
+    if args.task not in PUSH_TASKS:
+        ap.error(f"argument --config: {args.config}: unknown task {args.task!r} (choose from "
+                 f"{', '.join(PUSH_TASKS)})")
     if one_feedback and args.feedback == "both":
         ap.error(f"--feedback both is for experiments/mpc.py; give on or off to {ap.prog}")
     if args.ray is not None and importlib.util.find_spec("ray") is None:
@@ -243,9 +214,10 @@ def parse_args(argv, ap: argparse.ArgumentParser,
         ap.error(f"argument --layouts: only --preset authors on --task clutter reads the "
                  f"authors' clutter scenes, not --preset {args.preset} on --task {args.task} "
                  f"(leave it out)")
-    try:               # the pipeline's own checks of the settings, as usage errors
+    base = settings_checked(ap, args)
+    try:               # the pipeline's own checks of each row's settings, as usage errors
         for row in mapping.grid(args):
-            mapping.settings_of(args, row, args.feedback == "on")
+            mapping.settings_of(args, row, args.feedback == "on", base)
     except (ValueError, TypeError) as e:
         ap.error(str(e))
     if (problem := layouts_problem(args)) is not None:
@@ -254,21 +226,40 @@ def parse_args(argv, ap: argparse.ArgumentParser,
     return args
 
 
+def settings_checked(ap: argparse.ArgumentParser, args):
+    """The run's settings before its rows (``mapping.base_settings``: preset < --config <
+    flags), or a usage error naming the flag (else --config) whose value they refuse."""
+    try:
+        return mapping.base_settings(args)
+    except (ValueError, TypeError) as e:
+        given = mapping.flag_overrides(args)
+        flag = next((f.flag for f in mapping.SETTINGS.flags if f.path in given
+                     and f.path in str(e)), None)
+        if flag is None and mapping.config_of(args):
+            flag = "--config"
+        ap.error(f"argument {flag}: {e}" if flag else str(e))
+
+
 def quick_defaults(args) -> None:
     """Resolve the flags whose default depends on --quick: the preset (ours; ``QUICK``'s with
     --quick) and, with --quick, one trial and each other flag of ``QUICK`` where it is not
     given (--rows only where the script has it and neither --rows nor --rules is given;
-    --clock not beside --clock-ms, which sets the model clock); an explicit --trials stands."""
+    --clock not beside --clock-ms, which sets the model clock; none the --config file sets); an
+    explicit --trials stands. Without --task (nor a --config file's), ``DEFAULT_TASK``."""
+    args.task = args.task or DEFAULT_TASK
+    config = mapping.config_of(args)
     if args.trials is None:                  # an explicit --trials stands with --quick
         args.trials = QUICK["trials"] if args.quick else DEFAULT_TRIALS
     if not args.quick:
         args.preset = args.preset or "ours"
         return
     for name, value in QUICK.items():
-        if name == "trials" or not hasattr(args, name) or getattr(args, name) is not None:
+        if name == "trials" or not hasattr(args, name) or getattr(args, name) is not None \
+                or name in config:
             continue
         if (name == "rows" and getattr(args, "rules", None) is not None) or \
-                (name == "clock" and args.clock_ms is not None):
+                (name == "clock" and (args.clock_ms is not None
+                                      or config.get("clock_ms") is not None)):
             continue
         setattr(args, name, list(value) if isinstance(value, tuple) else value)
 

@@ -1,15 +1,22 @@
-"""The experiments' flags (``flags``) as settings and trials: each Table 1 row's
-``SVRMPCSettings`` under the preset and the flags that override it (``settings_of``), the
-rows of the flags (``grid``), the sweep's trials with their keys (``make_trials``: the keys
-of the committed trials, ``trial_key``) and the protocol a summary records (``protocol``)."""
+"""The experiments' flags (``flags``) as settings and trials: the settings flags derived from
+``SVRMPCSettings`` (``SETTINGS``: preset < ``--config`` < flags), each Table 1 row's settings
+under them (``settings_of``), the rows of the flags (``grid``), the sweep's trials with their
+keys (``make_trials``: the keys of the committed trials, ``trial_key``) and the protocol a
+summary records (``protocol``), which a summary given to ``--config`` gives back
+(``summary_config``)."""
 
 from __future__ import annotations
 
-from dataclasses import asdict, replace
+from dataclasses import asdict, fields, replace
 
+from dopt.lab.flags import SettingsFlags, apply, default_text, read_config
+from dopt.lab.provenance import rooted
 from dopt.lab.sweep import Trial
+from dopt.tasks import PUSH_TASKS
+from planners.ilqr import FINITE_DIFFERENCES
 from planners.svr import METHODS, paper_theta
 from planners.svr_mpc import (
+    PRESETS,
     TABLE1_ROWS,
     Derivatives,
     Row,
@@ -20,35 +27,125 @@ from planners.svr_mpc import (
     trial_key,
     trial_params,
 )
+from planners.svr_mpc.presets import protocol_fields
 
 #: --feedback -> the feedback settings each trial runs under
 FEEDBACK = {"off": (False,), "on": (True,), "both": (False, True)}
+#: the SVRMPCSettings fields with a flag of their own name, derived from the field
+#: (``dopt.lab.flags``); the rest are set by the rows (method, theta, rho, the derivative
+#: variants, the fixes), by flags of the run (--task, --feedback, --threads, --layouts, and
+#: --fd/--fd-skip/--keypoints/--box-qp, which build one ``Derivatives``) or by the preset
+SETTINGS_FIELDS = ("cost", "warm_start", "control_noise", "clock", "clock_ms", "executor",
+                   "nominal_threads", "slowdown", "timeout", "islands", "push_tail")
+#: the fields a --config file may not set: the rows' and those of flags that always decide
+#: (each with the flag that sets it)
+NOT_CONFIG = {"method": "--rows/--rules", "rho": "--rows/--rho", "theta": "--rows/--theta",
+              "feedback": "--feedback", "threads": "--threads"}
 
 
-def settings_of(args, row: Row, feedback: bool) -> SVRMPCSettings:
-    """The settings of one row (``parse_row``) under the flags: the preset's, then the flags
-    that override it, then the row's own derivative variants."""
-    preset = SVRMPCSettings.preset(args.preset, args.task,
-                                   str(args.layouts) if args.layouts else None)
-    if args.islands == "off":
-        preset = replace(preset, islands=False)
-    if args.push_tail == "off":
-        preset = replace(preset, push_tail=False)
-    over = {"cost": args.cost, "control_noise": args.control_noise, "clock": args.clock,
-            "clock_ms": args.clock_ms, "executor": args.executor}
-    if args.clock_ms is not None:
-        over["clock"] = "model"
-    over = {k: v for k, v in over.items() if v is not None}
-    if args.warm_start is not None:
-        over["warm_start"] = args.warm_start == "on"
-    kp = args.keypoints or ("skip" if args.fd_skip > 1 else "every")
-    flags = Derivatives(args.fd, kp, args.fd_skip if kp == "skip" else 1, args.box_qp)
-    over.update(replace(flags, **row.variants).fields(), **row.fixes)
-    return replace(preset, task=args.task, method=row.method, theta=row.theta,
+def _show(value) -> str:
+    """A default in the help: a switch's on/off, a number as %g."""
+    if isinstance(value, bool):
+        return "on" if value else "off"
+    return f"{value:g}" if isinstance(value, float) else str(value)
+
+
+def preset_text(path: str) -> str | None:
+    """The default of a settings field in its flag's help: its value under each preset
+    (``planners.svr_mpc.presets``) per task, where they differ (``default_text``)."""
+    plain = {f.name: f.default for f in fields(SVRMPCSettings)}
+    return default_text({name: {task: protocol_fields(name, task).get(path, plain[path])
+                                for task in PUSH_TASKS} for name in PRESETS}, _show)
+
+
+def summary_config(data: dict) -> dict:
+    """The settings of a run's summary.json (a --config file): the protocol it records
+    (``protocol``: the settings fields, --fd as fd_centered and its step) and its task; a
+    fig4 summary's per-row "settings", the fields common to its rows. The rows' and the run
+    flags' fields (``NOT_CONFIG``) are left to this run."""
+    rows = data.get("settings")
+    if isinstance(rows, dict) and rows and all(isinstance(v, dict) for v in rows.values()):
+        rows = list(rows.values())
+        out = {k: v for k, v in rows[0].items() if all(r.get(k) == v for r in rows[1:])}
+    else:
+        names = {f.name for f in fields(SVRMPCSettings)}
+        out = {k: v for k, v in data.items() if k in names}
+        if data.get("fd") in FINITE_DIFFERENCES:
+            named = FINITE_DIFFERENCES[data["fd"]]
+            out.update(fd_centered=named.centered, fd_eps=named.eps)
+    out.pop("seed", None)
+    return {k: v for k, v in out.items() if k not in NOT_CONFIG}
+
+
+#: the settings flags of every SVR experiment, with --config
+SETTINGS = SettingsFlags(SVRMPCSettings, SETTINGS_FIELDS, defaults=preset_text,
+                         summary=summary_config)
+
+
+def config_of(args) -> dict:
+    """The --config file's settings ({field: value}; empty without one), read once
+    (``read_config``: ValueError naming the file and the key) and kept on ``args``."""
+    if getattr(args, "config", None) is None:
+        return {}
+    if getattr(args, "config_values", None) is None:
+        values = read_config(args.config, SVRMPCSettings, summary_config)
+        bad = sorted(k for k in values if k in NOT_CONFIG)
+        if bad:
+            raise ValueError(f"{args.config}: setting {bad[0]!r} is this run's own "
+                             f"({NOT_CONFIG[bad[0]]}), not a settings file's")
+        args.config_values = values
+    return args.config_values
+
+
+def flag_overrides(args) -> dict:
+    """The settings the flags give ({field: value}): the derived flags' (``SETTINGS``), and
+    --clock-ms's model clock."""
+    over = SETTINGS.overrides(args)
+    if over.get("clock_ms") is not None:
+        over.setdefault("clock", "model")
+    return over
+
+
+def base_settings(args) -> SVRMPCSettings:
+    """The run's settings before its rows: the preset on the task, then the --config file's
+    settings (``config_of``), then the flags' (``flag_overrides``); TypeError / ValueError as
+    the settings refuse them."""
+    config = dict(config_of(args))
+    config.pop("task", None)                  # --task's, or the config's (flags.parse_args)
+    layouts = args.layouts or (rooted(config["layouts"]) if args.preset == "authors"
+                               and config.get("layouts") else None)
+    preset = SVRMPCSettings.preset(args.preset, args.task, str(layouts) if layouts else None)
+    if layouts is not None:
+        config.pop("layouts", None)
+    return apply(apply(preset, config), flag_overrides(args))
+
+
+def derivatives_of(args, base: Derivatives) -> Derivatives:
+    """``base`` (the preset's and the config's) with what --fd, --keypoints, --fd-skip and
+    --box-qp give: --keypoints adaptive, else --fd-skip K > 1 the skip (1: every timestep)."""
+    d = base
+    if getattr(args, "fd", None) is not None:
+        d = replace(d, fd=args.fd, fd_eps=None)
+    if getattr(args, "keypoints", None) is not None or getattr(args, "fd_skip", None):
+        skip = args.fd_skip or 1
+        kp = args.keypoints or ("skip" if skip > 1 else "every")
+        d = replace(d, keypoints=kp, fd_skip=skip if kp == "skip" else 1)
+    if getattr(args, "box_qp", None):
+        d = replace(d, box_qp=True)
+    return d
+
+
+def settings_of(args, row: Row, feedback: bool, base: SVRMPCSettings | None = None
+                ) -> SVRMPCSettings:
+    """The settings of one row (``parse_row``) under the flags: the preset's, the --config
+    file's and the flags' (``base_settings``; ``base``: them, computed once), then the row's
+    own method, theta, rho, derivative variants and fixes."""
+    base = base_settings(args) if base is None else base
+    d = replace(derivatives_of(args, base.derivatives), **row.variants)
+    return replace(base, task=args.task, method=row.method, theta=row.theta,
                    rho=float(row.rho),
-                   slowdown=args.slowdown or task_defaults(args.task)[0], timeout=args.timeout,
-                   threads=args.threads or 0, feedback=feedback,
-                   nominal_threads=float(args.nominal_threads), **over)
+                   slowdown=base.slowdown or task_defaults(args.task)[0],
+                   threads=args.threads or 0, feedback=feedback, **d.fields(), **row.fixes)
 
 
 def baseline_label(args) -> str:
@@ -79,11 +176,11 @@ def make_trials(args, rules=None, rhos=None, thetas=None, **override) -> list[Tr
     ``thetas``: the grid's in place of the flags'), each with its key (``trial_key``, the
     committed trials'); ``override``: settings fields replaced in every trial (e.g.
     clock="real")."""
-    out = []
+    out, base = [], base_settings(args)
     for seed in range(args.seed, args.seed + args.trials):
         for row in grid(args, rules, rhos, thetas):
             for feedback in FEEDBACK[args.feedback]:
-                s = replace(settings_of(args, row, feedback), **override)
+                s = replace(settings_of(args, row, feedback, base), **override)
                 p = trial_params(s, seed, row.optimiser)
                 out.append(Trial(trial_key(p), p))
     return out
@@ -96,13 +193,17 @@ def _theta(theta: int | None, method: str) -> int:
 
 def protocol(args, params: dict) -> dict:
     """The protocol a summary records: preset, cost, warm start, clock, nominal threads,
-    control noise, finite differences and slowdown of a trial's params under the flags."""
+    control noise, finite differences, slowdown (and a timeout, a --config file where given)
+    of a trial's params under the flags; ``summary_config`` reads it back."""
     return {"preset": args.preset, "cost": params["cost"], "warm_start": params["warm_start"],
             "clock": params["clock"], "nominal_threads": params["nominal_threads"],
-            "control_noise": params["control_noise"], "fd": args.fd,
+            "control_noise": params["control_noise"],
+            "fd": "central" if params["fd_centered"] else "forward",
             "keypoints": params["keypoints"], "fd_skip": params["fd_skip"],
             "box_qp": params["box_qp"], "slowdown": params["slowdown"],
             "problem": params["problem"], "layouts": params["layouts"],
             "islands": params["islands"], "push_tail": params["push_tail"],
             "executor": params.get("executor", "alg1"),
-            **({"clock_ms": params["clock_ms"]} if params.get("clock_ms") is not None else {})}
+            **({"clock_ms": params["clock_ms"]} if params.get("clock_ms") is not None else {}),
+            **({"timeout": params["timeout"]} if params.get("timeout") is not None else {}),
+            **({"config": str(args.config)} if getattr(args, "config", None) else {})}

@@ -21,13 +21,28 @@ from dopt.lab.report.trials import TrialInfo, first_params
 SVR_PRESET_FIELDS = ("cost", "warm_start", "control_noise", "clock", "nominal_threads",
                      "synchronous", "problem", "layouts", "islands", "fd_centered", "fd_eps",
                      "keypoints", "fd_skip", "box_qp", "executor")
-#: experiments/mpc.py's flags -> the SVRMPCSettings fields they set
-SVR_FLAGS = {"--cost": ("cost",), "--control-noise": ("control_noise",), "--clock": ("clock",),
-             "--clock-ms": ("clock", "clock_ms"), "--executor": ("executor",),
-             "--warm-start": ("warm_start",), "--nominal-threads": ("nominal_threads",),
-             "--fd": ("fd_centered", "fd_eps"), "--fd-skip": ("keypoints", "fd_skip"),
-             "--keypoints": ("keypoints", "fd_skip"), "--box-qp": ("box_qp",),
-             "--islands": ("islands",), "--layouts": ("layouts",)}
+#: experiments/mpc.py's hand-written flags -> the SVRMPCSettings fields they set (the derived
+#: ones, each setting its own field, are added from ``mapping.SETTINGS``: ``svr_flags``)
+SVR_FLAGS = {"--clock-ms": ("clock", "clock_ms"), "--fd": ("fd_centered", "fd_eps"),
+             "--fd-skip": ("keypoints", "fd_skip"), "--keypoints": ("keypoints", "fd_skip"),
+             "--box-qp": ("box_qp",), "--layouts": ("layouts",),
+             "--config": SVR_PRESET_FIELDS}       # a settings file may set any of them
+
+
+@functools.cache
+def svr_flags() -> dict[str, tuple[str, ...]]:
+    """Every flag of experiments/mpc.py -> the SVRMPCSettings fields it sets: ``SVR_FLAGS``
+    and the flags derived from the settings (a switch's --no- spelling too)."""
+    from planners.svr_mpc.experiments.mapping import SETTINGS
+
+    derived = {}
+    for f in SETTINGS.flags:
+        derived[f.flag] = (f.path,)
+        if f.kind is bool:
+            derived[f"--no-{f.flag[2:]}"] = (f.path,)
+    return {**derived, **SVR_FLAGS}
+
+
 #: the experiment kinds that run on Table 1's protocol
 SVR_KINDS = ("table1", "svr_explain", "clock_check", "fig4")
 #: the files that compute an MPC trial on Table 1's protocol (git pathspecs): the runtime
@@ -78,7 +93,7 @@ def _svr_findings(r: Result, params: dict | None) -> list[str]:
         params = next(iter(settings.values()))          # {row: settings}: rho_sweep's
     if not isinstance(today, dict) or "error" in today or not isinstance(params, dict):
         return []
-    flagged = {f for flag in flags for f in SVR_FLAGS.get(flag, ())}
+    flagged = {f for flag in flags for f in svr_flags().get(flag, ())}
     if r.kind == "clock_check":             # it runs each trial under both clocks itself
         flagged.add("clock")
     fields = [f for f in SVR_PRESET_FIELDS if f not in flagged]

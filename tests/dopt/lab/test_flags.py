@@ -15,7 +15,15 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from dopt.lab.cli import ArgumentParser
-from dopt.lab.flags import SettingsFlags, apply, derive, field_docs, field_paths, read_config
+from dopt.lab.flags import (
+    SettingsFlags,
+    apply,
+    default_text,
+    derive,
+    field_docs,
+    field_paths,
+    read_config,
+)
 from planners.cem import CEMConfig
 from planners.pick_place import PickPlaceSettings
 from planners.pick_place.drag_settings import DragSettings
@@ -191,3 +199,32 @@ def test_recorded_commands_with_old_spellings_still_parse(name, argv, tmp_path, 
 def test_recorded_commands_exist():
     assert _recorded_fig7_commands(), "no recorded cloth_fold.py command under docs/results"
     assert any("--seeds" in argv for _, argv in _recorded_fig7_commands())
+
+
+def test_default_text_names_each_presets_value_and_the_cases_that_differ():
+    same = {"ours": {"a": 1, "b": 1}, "paper": {"a": 1, "b": 1}}
+    assert default_text(same) == "1"
+    differ = {"ours": {"a": 32, "b": 32, "c": 16}, "paper": {"a": 8, "b": 8, "c": 8}}
+    assert default_text(differ) == "--preset ours: 32; 16 c; --preset paper: 8"
+    assert default_text({"ours": {"a": None}, "paper": {"a": 2}}) is None
+    assert default_text({"p": {"a": True}}, lambda v: "on" if v else "off") == "on"
+
+
+def test_a_switch_takes_on_off_and_its_no_spelling():
+    @dataclasses.dataclass(frozen=True)
+    class S:
+        """Attributes:
+            tail: keep the tail.
+        """
+
+        tail: bool = True
+
+    flags = SettingsFlags(S, ["tail"])
+    ap = ArgumentParser(prog="t.py")
+    flags.add_to(ap, config=False)
+    for argv, value in ((["--tail"], True), (["--tail", "off"], False), (["--tail", "ON"], True),
+                        (["--no-tail"], False), ([], None)):
+        assert ap.parse_args(argv).tail is value, argv
+    assert "--no-tail" not in ap.format_usage() and "--no-tail: off" in ap.format_help()
+    with pytest.raises(SystemExit):
+        ap.parse_args(["--tail", "maybe"])
