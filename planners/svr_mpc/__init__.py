@@ -55,6 +55,7 @@ from planners.svr_mpc.episode import (
     dofs_of_mask,
     run_svr_mpc,
     run_trial,
+    solve,
     wire_controller,
 )
 from planners.svr_mpc.optimisers import (
@@ -108,6 +109,6 @@ __all__ = ["CLOCK_MODEL_MS", "CONTROLS_FIELDS", "DEFAULT_OPTIMISER", "FINITE_DIF
            "derivatives_effect", "derivatives_tag", "dofs_mask", "dofs_of_mask", "feedback_effect",
            "fig4_fields", "optimiser_factory", "optimiser_names", "paired", "paired_ratio",
            "parse_row", "parse_variants", "register_optimiser", "row_label", "row_name",
-           "run_svr_mpc", "run_trial", "spell_derivatives", "split_params", "summarize",
+           "run_svr_mpc", "run_trial", "solve", "spell_derivatives", "split_params", "summarize",
            "svr_optimiser", "table1_fields", "task_defaults", "trial_key", "trial_params", "versus",
            "wire_controller"]

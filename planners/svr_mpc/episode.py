@@ -34,7 +34,13 @@ from planners.svr_mpc.optimisers import (
     OptimiserFactory,
     optimiser_factory,
 )
-from planners.svr_mpc.settings import CLOCK_MODEL_MS, SVRMPCSettings, split_params, trial_key
+from planners.svr_mpc.settings import (
+    CLOCK_MODEL_MS,
+    SVRMPCSettings,
+    parse_row,
+    split_params,
+    trial_key,
+)
 
 
 @dataclass(frozen=True)
@@ -243,6 +249,24 @@ def run_svr_mpc(settings: SVRMPCSettings = SVRMPCSettings(), seed: int = 0,
     if history is not None:
         history.extend(ctl.optimiser.history)
     return episode_result(ctl, res, start, config, keep_controls)
+
+
+def solve(settings: SVRMPCSettings, method: str | None = None, seed: int = 0,
+          **episode) -> SVRMPCResult:
+    """One trial in one call, as ``planners.pick_place.solve(settings, method, seed)``:
+    ``method`` names a row (``parse_row``: a Table 1 row such as ``sum-t10-r1``, with its
+    derivative variants and fixes, or a registered optimiser) applied over ``settings`` (None:
+    the settings' own method, theta and rho, by the paper's iLQR-SVR); then one MPC episode on
+    the task instance of ``seed`` (``run_svr_mpc``, which ``episode`` passes its other
+    arguments to)."""
+    if method is None:
+        return run_svr_mpc(settings, seed, **episode)
+    if not isinstance(method, str):
+        raise TypeError(f"method must be a row name (str) or None, got {method!r}")
+    if not isinstance(settings, SVRMPCSettings):
+        raise TypeError(f"settings must be SVRMPCSettings, got {type(settings).__name__}")
+    row = parse_row(method)
+    return run_svr_mpc(row.apply(settings), seed, optimiser=row.optimiser, **episode)
 
 
 def mpc_config(settings: SVRMPCSettings, task) -> MPCConfig:

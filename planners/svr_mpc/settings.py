@@ -6,7 +6,7 @@ rows by name (``parse_row`` -> ``Row``), a task's own slowdown and timeout
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import Literal
 
@@ -103,6 +103,13 @@ class Row:
     variants: dict = field(default_factory=dict)
     optimiser: str = DEFAULT_OPTIMISER
     fixes: dict = field(default_factory=dict)
+
+    def apply(self, settings: SVRMPCSettings) -> SVRMPCSettings:
+        """``settings`` with this row's method, theta, rho, derivative variants (over the
+        settings' own derivatives) and fixes."""
+        d = replace(settings.derivatives, **self.variants)
+        return replace(settings, method=self.method, theta=self.theta, rho=float(self.rho),
+                       **d.fields(), **self.fixes)
 
 
 def parse_fixes(mods, what: str) -> dict:
@@ -311,10 +318,13 @@ class SVRMPCSettings:
                       "layouts": layouts, **overrides})
 
     @classmethod
-    def preset(cls, name: str, task: str, layouts: str | Path | None = None) -> SVRMPCSettings:
-        """The protocol ``name`` (``PRESETS``) on ``task``: ``ours`` (the defaults), ``paper``
-        (``paper``, its default row) or ``authors`` (``authors``, with ``layouts``; only the
-        authors' problem reads them: ValueError with another preset)."""
+    def preset(cls, task: str, *, protocol: str = "ours",
+               layouts: str | Path | None = None) -> SVRMPCSettings:
+        """The settings the experiments run by default on ``task`` under ``protocol``
+        (``PRESETS``), as ``PickPlaceSettings.preset(task, goal, protocol=)``: ``ours`` (the
+        defaults), ``paper`` (``paper``, its default row) or ``authors`` (``authors``, with
+        ``layouts``; only the authors' problem reads them: ValueError with another)."""
+        name = protocol
         if layouts is not None and name != "authors":
             raise ValueError(f"layouts are the authors' clutter scenes: only preset 'authors' "
                              f"reads them, not {name!r}")

@@ -114,7 +114,8 @@ def base_settings(args) -> SVRMPCSettings:
     config.pop("task", None)                  # --task's, or the config's (flags.parse_args)
     layouts = args.layouts or (rooted(config["layouts"]) if args.preset == "authors"
                                and config.get("layouts") else None)
-    preset = SVRMPCSettings.preset(args.preset, args.task, str(layouts) if layouts else None)
+    preset = SVRMPCSettings.preset(args.task, protocol=args.preset,
+                                    layouts=str(layouts) if layouts else None)
     if layouts is not None:
         config.pop("layouts", None)
     return apply(apply(preset, config), flag_overrides(args))
@@ -141,11 +142,10 @@ def settings_of(args, row: Row, feedback: bool, base: SVRMPCSettings | None = No
     file's and the flags' (``base_settings``; ``base``: them, computed once), then the row's
     own method, theta, rho, derivative variants and fixes."""
     base = base_settings(args) if base is None else base
-    d = replace(derivatives_of(args, base.derivatives), **row.variants)
-    return replace(base, task=args.task, method=row.method, theta=row.theta,
-                   rho=float(row.rho),
+    base = replace(base, **derivatives_of(args, base.derivatives).fields())
+    return replace(row.apply(base), task=args.task,
                    slowdown=base.slowdown or task_defaults(args.task)[0],
-                   threads=args.threads or 0, feedback=feedback, **d.fields(), **row.fixes)
+                   threads=args.threads or 0, feedback=feedback)
 
 
 def baseline_label(args) -> str:

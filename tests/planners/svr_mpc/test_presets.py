@@ -66,15 +66,15 @@ def test_every_protocol_and_row_resolves_as_before(task, row, layouts):
 @pytest.mark.parametrize("task", sorted(PUSH_TASKS))
 def test_presets_by_name(task, layouts):
     assert PRESETS == ("ours", "paper", "authors") == tuple(PROTOCOLS)
-    _same(SVRMPCSettings.preset("ours", task), SVRMPCSettings(task=task))
-    _same(SVRMPCSettings.preset("paper", task), _old_paper(task))
+    _same(SVRMPCSettings.preset(task), SVRMPCSettings(task=task))
+    _same(SVRMPCSettings.preset(task, protocol="paper"), _old_paper(task))
     where = layouts if task == "clutter" else None
-    new = SVRMPCSettings.preset("authors", task, layouts=where)
+    new = SVRMPCSettings.preset(task, protocol="authors", layouts=where)
     _same(new, _old_authors(task, layouts=new.layouts))
     with pytest.raises(ValueError, match="unknown preset 'nope'"):
-        SVRMPCSettings.preset("nope", task)
+        SVRMPCSettings.preset(task, protocol="nope")
     with pytest.raises(ValueError, match="only preset 'authors' reads them"):
-        SVRMPCSettings.preset("paper", task, layouts="push_mcl_layouts")
+        SVRMPCSettings.preset(task, protocol="paper", layouts="push_mcl_layouts")
 
 
 def test_every_number_names_its_source_and_a_settings_field():
