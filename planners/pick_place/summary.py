@@ -8,7 +8,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from dopt.lab.stats import difference_ci, mean_ci
+from dopt.lab.stats import difference_ci, finite, finite_mean_ci
 
 
 def summarize(results: Sequence[dict], methods: Sequence[str],
@@ -34,8 +34,8 @@ def summarize(results: Sequence[dict], methods: Sequence[str],
         entry: dict = {}
         stable = [r for r in runs if not r["unstable"]]
         for name in metric_names:
-            mean, ci = mean_ci([r[name] for r in stable]) if stable else (None, None)
-            entry[f"{name}_mean"], entry[f"{name}_ci95"] = _finite(mean), _finite(ci)
+            entry[f"{name}_mean"], entry[f"{name}_ci95"] = finite_mean_ci([r[name]
+                                                                           for r in stable])
             entry[f"{name}s"] = [r[name] for r in runs]
             stable_values[m, name] = [r[name] for r in stable]
         entry["n_candidates"] = int(runs[0]["n_candidates"][-1])
@@ -57,8 +57,8 @@ def summarize(results: Sequence[dict], methods: Sequence[str],
         for name in metric_names if m != "simple" and "simple" in out else ():
             xs, ys = stable_values["simple", name], stable_values[m, name]
             diff, half = difference_ci(xs, ys) if xs and ys else (None, None)
-            entry[f"{name}_minus_simple_mean"] = _finite(diff)
-            entry[f"{name}_minus_simple_ci95"] = _finite(half)
+            entry[f"{name}_minus_simple_mean"] = finite(diff)
+            entry[f"{name}_minus_simple_ci95"] = finite(half)
     return out
 
 
@@ -74,7 +74,3 @@ def last_improvement(result: dict) -> int | None:
     last = [c for c, k in zip(result["cost_history"], stages, strict=True) if k == stages[-1]]
     falls = [i for i in range(1, len(last)) if last[i] < last[i - 1]]
     return (falls[-1] if falls else 0) + 1
-
-
-def _finite(x: float | None) -> float | None:
-    return None if x is None or not np.isfinite(x) else float(x)
