@@ -1,4 +1,5 @@
-"""Summaries of finished pick-and-place trials (``PickPlaceResult.to_dict()``): per method the
+"""Summaries of finished pick-and-place trials (the sweep's records, each result
+``PickPlaceResult.to_dict()``, as every summarize of the house takes them): per method the
 mean, 95 % interval and per-seed values of each metric, the difference to CEM(Simple), and
 where each trial's CEM last improved (``summarize``, ``last_improvement``)."""
 
@@ -11,7 +12,7 @@ import numpy as np
 from dopt.lab.stats import difference_ci, finite, finite_mean_ci
 
 
-def summarize(results: Sequence[dict], methods: Sequence[str],
+def summarize(records: Sequence[dict], methods: Sequence[str],
               metric_names: Sequence[str]) -> dict:
     """Per method (in ``methods`` order, those with results): the mean, 95 % CI half-width
     (None with one seed) and per-seed values of each metric, the candidates (last stage and
@@ -24,8 +25,10 @@ def summarize(results: Sequence[dict], methods: Sequence[str],
     minus Simple's and the Welch 95 % half-width, ``dopt.lab.stats.difference_ci``): whether the
     two differ where their own intervals overlap.
 
-    results: ``PickPlaceResult.to_dict()`` of finished trials.
+    records: {"params", "result"} of finished trials as ``dopt.lab.sweep`` stores them, each
+    result ``PickPlaceResult.to_dict()`` (its own "method" and "seed" group and order them).
     """
+    results = [r["result"] for r in records]
     out, stable_values = {}, {}
     for m in methods:
         runs = sorted((r for r in results if r["method"] == m), key=lambda r: r["seed"])
