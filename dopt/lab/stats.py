@@ -1,6 +1,8 @@
 """Summary statistics of trial results (mean and Student-t interval, Welch interval of a
-difference) and the state-vector-reduction authors' Table 1 statistic (an outlier fence, then
-a normal 90 % interval)."""
+difference; ``finite``, ``finite_mean_ci`` and ``median_or_none``: the same with None where a
+summary has no number, as the pick-and-place summaries write it) and the
+state-vector-reduction authors' Table 1 statistic (an outlier fence, then a normal 90 %
+interval)."""
 
 from __future__ import annotations
 
@@ -51,6 +53,25 @@ def difference_ci(a, b, level: float = 0.95) -> tuple[float, float]:
 AUTHORS_QUANTILE, AUTHORS_FENCE = 0.6, 1.5
 #: the authors' normal quantile for their 90 % interval (``authors_mean_ci``)
 AUTHORS_Z = 1.645
+
+
+def finite(x) -> float | None:
+    """``x`` as a float; None for None, NaN or an infinity (JSON has no such number)."""
+    return None if x is None or not np.isfinite(x) else float(x)
+
+
+def finite_mean_ci(values, level: float = 0.95) -> tuple[float | None, float | None]:
+    """``mean_ci`` of ``values`` (n,) with each number ``finite`` (one value: no half-width);
+    (None, None) for no values."""
+    if len(values) == 0:
+        return None, None
+    mean, half = mean_ci(values, level)
+    return finite(mean), finite(half)
+
+
+def median_or_none(values) -> float | None:
+    """The median of ``values`` (n,); None for no values."""
+    return float(np.median(values)) if len(values) else None
 
 
 def authors_kept(values) -> np.ndarray:

@@ -1,4 +1,5 @@
-"""Summaries of finished pick-and-place trials (``PickPlaceResult.to_dict()``): per method the
+"""Summaries of finished pick-and-place trials (the sweep's records, each result
+``PickPlaceResult.to_dict()``, as every summarize of the house takes them): per method the
 mean, 95 % interval and per-seed values of each metric, the difference to CEM(Simple), and
 where each trial's CEM last improved (``summarize``, ``last_improvement``)."""
 
@@ -8,10 +9,10 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from dopt.lab.stats import difference_ci, mean_ci
+from dopt.lab.stats import difference_ci, finite, finite_mean_ci
 
 
-def summarize(results: Sequence[dict], methods: Sequence[str],
+def summarize(records: Sequence[dict], methods: Sequence[str],
               metric_names: Sequence[str]) -> dict:
     """Per method (in ``methods`` order, those with results): the mean, 95 % CI half-width
     (None with one seed) and per-seed values of each metric, the candidates (last stage and
@@ -24,8 +25,10 @@ def summarize(results: Sequence[dict], methods: Sequence[str],
     minus Simple's and the Welch 95 % half-width, ``dopt.lab.stats.difference_ci``): whether the
     two differ where their own intervals overlap.
 
-    results: ``PickPlaceResult.to_dict()`` of finished trials.
+    records: {"params", "result"} of finished trials as ``dopt.lab.sweep`` stores them, each
+    result ``PickPlaceResult.to_dict()`` (its own "method" and "seed" group and order them).
     """
+    results = [r["result"] for r in records]
     out, stable_values = {}, {}
     for m in methods:
         runs = sorted((r for r in results if r["method"] == m), key=lambda r: r["seed"])
@@ -34,8 +37,8 @@ def summarize(results: Sequence[dict], methods: Sequence[str],
         entry: dict = {}
         stable = [r for r in runs if not r["unstable"]]
         for name in metric_names:
-            mean, ci = mean_ci([r[name] for r in stable]) if stable else (None, None)
-            entry[f"{name}_mean"], entry[f"{name}_ci95"] = _finite(mean), _finite(ci)
+            entry[f"{name}_mean"], entry[f"{name}_ci95"] = finite_mean_ci([r[name]
+                                                                           for r in stable])
             entry[f"{name}s"] = [r[name] for r in runs]
             stable_values[m, name] = [r[name] for r in stable]
         entry["n_candidates"] = int(runs[0]["n_candidates"][-1])
@@ -57,8 +60,8 @@ def summarize(results: Sequence[dict], methods: Sequence[str],
         for name in metric_names if m != "simple" and "simple" in out else ():
             xs, ys = stable_values["simple", name], stable_values[m, name]
             diff, half = difference_ci(xs, ys) if xs and ys else (None, None)
-            entry[f"{name}_minus_simple_mean"] = _finite(diff)
-            entry[f"{name}_minus_simple_ci95"] = _finite(half)
+            entry[f"{name}_minus_simple_mean"] = finite(diff)
+            entry[f"{name}_minus_simple_ci95"] = finite(half)
     return out
 
 
@@ -74,7 +77,3 @@ def last_improvement(result: dict) -> int | None:
     last = [c for c, k in zip(result["cost_history"], stages, strict=True) if k == stages[-1]]
     falls = [i for i in range(1, len(last)) if last[i] < last[i - 1]]
     return (falls[-1] if falls else 0) + 1
-
-
-def _finite(x: float | None) -> float | None:
-    return None if x is None or not np.isfinite(x) else float(x)

@@ -11,7 +11,7 @@ import numpy as np
 from scipy import stats
 
 from dopt.lab.multiple import holm_named
-from dopt.lab.stats import mean_ci
+from dopt.lab.stats import mean_ci, median_or_none
 from planners.ilqr import Derivatives
 from planners.svr_mpc.authors_data import authors_statistic
 from planners.svr_mpc.choice import choice_fields
@@ -63,7 +63,7 @@ def summarize(records: list[dict], baseline: str = "baseline", level: float = 0.
         out[row] = {
             "mpc_cost_normalised_mean": mean,
             "mpc_cost_normalised_ci90": ci,
-            "mpc_cost_normalised_median": float(np.median(norm_all)) if norm_all else None,
+            "mpc_cost_normalised_median": median_or_none(norm_all),
             "mpc_cost_median_ratio": (float(np.median(costs) / np.median(list(base_all.values())))
                                       if base_all else None),
             "mpc_cost_median": float(np.median(costs)),
@@ -73,7 +73,7 @@ def summarize(records: list[dict], baseline: str = "baseline", level: float = 0.
             "goal_distance_end_median": float(np.median([v["goal_distance_end"] for v in res])),
             "goal_distance_end_mean": float(np.mean([v["goal_distance_end"] for v in res])),
             "lag_steps_mean": float(np.mean([v["lag_steps_mean"] for v in res])),
-            "travel_median": _median([v["goal_distance_start"] - v["goal_distance_end"]
+            "travel_median": median_or_none([v["goal_distance_start"] - v["goal_distance_end"]
                                       for v in res if "goal_distance_start" in v]),
             "held_steps_mean": float(np.mean([v.get("held_steps", 0) for v in res])),
             "outliers": int(sum(outlier(v) for v in res)),
@@ -82,11 +82,6 @@ def summarize(records: list[dict], baseline: str = "baseline", level: float = 0.
             "n_unstable_rollouts": int(sum(v.get("n_unstable_rollouts", 0) for v in res)),
         }
     return out
-
-
-def _median(values: list) -> float | None:
-    """The median of ``values``; None for none."""
-    return float(np.median(values)) if values else None
 
 
 def paired_ratio(numerator: dict, denominator: dict, level: float = 0.90) -> dict:

@@ -1,7 +1,7 @@
 """dopt.blowup.captures_of and dopt.lab.console.print_captures: the blow-up captures of a run's
 trials, listed for its summary and named on the console; dopt.blowup.retire_captures moves a
-rerun trial's old ones aside; a pick-and-place run (rope.py) lists the captures of its
-flagged plans."""
+rerun trial's old ones aside (a pick-and-place run listing the captures of its flagged plans:
+tests/planners/pick_place/experiments/test_blowup_captures.py)."""
 
 import json
 
@@ -49,30 +49,3 @@ def test_the_run_names_its_trials_captures_and_a_rerun_retires_them(tmp_path, ca
     capture(tmp_path, "clutter-seed0")                   # run again and failed again
     assert retire_captures(tmp_path, ["clutter-seed0"]) == [
         tmp_path / "blowups" / "outdated" / "clutter-seed0-3"]         # none overwritten
-
-
-def test_a_pick_place_run_names_the_captures_of_its_flagged_plans(tmp_path, monkeypatch,
-                                                                  capsys):
-    """rope.py (pick_place_cli): a trial whose executed plan the verdict flags (its scene
-    judged by a speed bound no moved rope keeps) writes OUT/blowups/<trial key>-<stage>, lists
-    it in its trial file and in summary.json's "blowups", and names it on the console."""
-    import rope
-
-    import planners.pick_place.run as run
-    from planners.pick_place import capture_label, make_problem
-    from tests.planners.pick_place.test_pick_place_blowup import slow
-
-    monkeypatch.setattr(run, "make_problem", lambda s, seed: slow(make_problem(s, seed)))
-    out = tmp_path / "rope"
-    assert rope.main(["--quick", "--methods", "scripted", "--out", str(out),
-                      "--no-render"]) == 0
-    summary = json.loads((out / "summary.json").read_text())
-    (trial,) = [json.loads(f.read_text()) for f in (out / "trials").glob("*.json")]
-    label = capture_label(trial["key"], "rope_straighten")
-    assert trial["result"]["unstable"] and trial["result"]["blowups"] == [f"blowups/{label}"]
-    (found,) = summary["blowups"]
-    meta = json.loads((out / "blowups" / label / "blowup.json").read_text())
-    assert found == {"trial": label, "path": f"blowups/{label}", "step": meta["step"],
-                     "reason": meta["reason"], "body": meta["body"]}
-    assert f"blow-up capture {out / 'blowups' / label}: trial {label}, step {meta['step']}" \
-        in capsys.readouterr().out

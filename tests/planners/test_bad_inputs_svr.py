@@ -1,5 +1,6 @@
 """Every bad input of the planners' state-vector-reduction side gets a clear error naming the
-argument: iLQR, DoF selection and the SVR-MPC pipeline's settings."""
+argument: iLQR and DoF selection (the SVR-MPC pipeline's: tests/planners/svr_mpc/test_bad_inputs.py;
+the pick-and-place sizes: tests/planners/pick_place/test_bad_inputs.py)."""
 
 import mujoco
 import numpy as np
@@ -9,10 +10,6 @@ import torch
 from dopt import RolloutService, Scene
 from dopt.costs import QuadraticCost
 from planners.ilqr import ILQR, ILQRConfig, backward_pass
-from planners.pick_place import (
-    PickPlaceSettings,
-    make_problem,
-)
 from planners.svr import (
     DofSelector,
     SelectionConfig,
@@ -20,7 +17,6 @@ from planners.svr import (
     importance_sum,
     importance_svd,
 )
-from planners.svr_mpc import SVRMPCSettings, run_svr_mpc
 
 # ----------------------------------------------------------------------------- iLQR
 SLIDES = """<mujoco><option timestep="0.02" gravity="0 0 0"/><worldbody>
@@ -235,131 +231,3 @@ def test_svr_optimiser_arguments(lq):
         SVROptimiser(None, selector)
     with pytest.raises(TypeError, match="selector must be a DofSelector"):
         SVROptimiser(lq[0], None)
-
-
-# --------------------------------------------------------------------- SVR-MPC pipeline
-@pytest.mark.parametrize("kwargs, error, match", [
-    (dict(rho=-1.0), ValueError, "SVRMPCSettings.rho.*>= 0"),
-    (dict(rho=np.nan), ValueError, "SVRMPCSettings.rho.*finite"),
-    (dict(rho="1"), TypeError, "SVRMPCSettings.rho.*number"),
-    (dict(theta=-1), ValueError, "SVRMPCSettings.theta.*>= 0"),
-    (dict(theta=1.5), TypeError, "SVRMPCSettings.theta.*int"),
-    (dict(theta=True), TypeError, "SVRMPCSettings.theta.*int"),
-    (dict(control_noise=-0.1), ValueError, "SVRMPCSettings.control_noise.*>= 0"),
-    (dict(control_noise=np.nan), ValueError, "SVRMPCSettings.control_noise.*finite"),
-    (dict(control_noise="a"), TypeError, "SVRMPCSettings.control_noise.*number"),
-    (dict(slowdown=0.0), ValueError, "SVRMPCSettings.slowdown.*> 0"),
-    (dict(slowdown=np.nan), ValueError, "SVRMPCSettings.slowdown.*finite"),
-    (dict(timeout=0), ValueError, "SVRMPCSettings.timeout.*>= 1"),
-    (dict(timeout=1.5), TypeError, "SVRMPCSettings.timeout.*int"),
-    (dict(feedback=1), TypeError, "SVRMPCSettings.feedback.*bool"),
-    (dict(synchronous="yes"), TypeError, "SVRMPCSettings.synchronous.*bool"),
-    (dict(threads=-1), ValueError, "SVRMPCSettings.threads.*>= 0"),
-    (dict(threads=1.5), TypeError, "SVRMPCSettings.threads.*int"),
-    (dict(task="Clutter"), ValueError, "unknown task 'Clutter'"),
-    (dict(method=None), ValueError, "unknown method None"),
-])
-def test_svr_mpc_settings_fields(kwargs, error, match):
-    with pytest.raises(error, match=match):
-        SVRMPCSettings(**kwargs)
-
-
-@pytest.mark.parametrize("settings, seed, error, match", [
-    ({"task": "clutter"}, 0, TypeError, "settings must be SVRMPCSettings"),
-    (SVRMPCSettings(), -1, ValueError, "seed.*>= 0"),
-    (SVRMPCSettings(), 0.5, TypeError, "seed.*int"),
-])
-def test_run_svr_mpc_arguments(settings, seed, error, match):
-    with pytest.raises(error, match=match):
-        run_svr_mpc(settings, seed)
-
-
-@pytest.mark.parametrize("optimiser, error, match", [
-    ("nope", ValueError, "unknown optimiser 'nope'; choose from .*'svr'"),
-    (3, TypeError, "optimiser must be a name of OPTIMISERS or a factory.*got int"),
-    (None, TypeError, "optimiser must be a name of OPTIMISERS or a factory.*got NoneType"),
-    (lambda context: object(), TypeError, "'custom': its factory returned a 'object', which "
-                                          r"has no optimise\(state, plan\)"),
-])
-def test_run_svr_mpc_optimiser(optimiser, error, match):
-    settings = SVRMPCSettings(method="baseline", synchronous=True, timeout=1, threads=1)
-    with pytest.raises(error, match=match):
-        run_svr_mpc(settings, 0, optimiser=optimiser)
-
-
-@pytest.mark.parametrize("name, factory, error, match", [
-    ("Shooting", print, ValueError, "'Shooting' must be lower case letters"),
-    ("random-shooting", print, ValueError, "must be lower case letters, digits and _"),
-    ("svr", print, ValueError, "'svr' is taken"),
-    ("baseline", print, ValueError, "'baseline' is taken"),
-    (3, print, TypeError, "optimiser name must be a str, got int"),
-    ("shooting", "not callable", TypeError, "optimiser factory must be callable.*got str"),
-])
-def test_register_optimiser_arguments(name, factory, error, match):
-    from planners.svr_mpc import OPTIMISERS, register_optimiser
-
-    with pytest.raises(error, match=match):
-        register_optimiser(name, factory)
-    assert "shooting" not in OPTIMISERS
-
-
-def test_an_optimiser_is_registered_once_unless_replaced():
-    from planners.svr_mpc import OPTIMISERS, register_optimiser, svr_optimiser
-
-    register_optimiser("twice", svr_optimiser)
-    try:
-        with pytest.raises(ValueError, match="'twice' is registered already"):
-            register_optimiser("twice", svr_optimiser)
-        register_optimiser("twice", print, replace=True)
-        assert OPTIMISERS["twice"] is print
-    finally:
-        del OPTIMISERS["twice"]
-
-
-@pytest.mark.parametrize("optimiser, error, match", [
-    ("nope", ValueError, "unknown optimiser 'nope'"),
-    (print, TypeError, "optimiser must be a name of OPTIMISERS .*params are JSON"),
-])
-def test_trial_params_name_a_registered_optimiser(optimiser, error, match):
-    from planners.svr_mpc import trial_params
-
-    with pytest.raises(error, match=match):
-        trial_params(SVRMPCSettings(), 0, optimiser)
-    with pytest.raises(TypeError, match="settings must be SVRMPCSettings"):
-        trial_params({"task": "clutter"}, 0)
-
-
-@pytest.mark.parametrize("kwargs, error, match", [
-    (dict(fd="centred"), ValueError, r"Derivatives.fd must be one of \['central', 'forward'\]"),
-    (dict(keypoints="skip5"), ValueError, "Derivatives.keypoints must be one of"),
-    (dict(keypoints="skip", fd_skip=0), ValueError, "Derivatives.fd_skip must be >= 1"),
-    (dict(keypoints="skip", fd_skip=2.0), TypeError, "Derivatives.fd_skip must be an int"),
-    (dict(fd_skip=5), ValueError, "fd_skip must be 1 with keypoints 'every'"),
-    (dict(keypoints="adaptive", fd_skip=3), ValueError, "must be 1 with keypoints 'adaptive'"),
-    (dict(box_qp=1), TypeError, "Derivatives.box_qp must be a bool"),
-])
-def test_derivatives_fields(kwargs, error, match):
-    from planners.svr_mpc import Derivatives
-
-    with pytest.raises(error, match=match):
-        Derivatives(**kwargs)
-
-
-def test_make_problem_checks_the_sizes_its_settings_imply_before_building_anything():
-    """A cloth of 100000 x 100000 particles once ended in a MemoryError of numpy; the
-    settings' sizes are checked first, naming the setting (``planners.pick_place.budget``)."""
-    from dataclasses import replace
-
-    from planners.pick_place.budget import BudgetError, budget_problem
-
-    cloth = PickPlaceSettings.preset("cloth", "diagonal")
-    with pytest.raises(BudgetError, match=r"on 10000000000 particles\) needs about .* more "
-                                          r"than this machine's memory") as exc:
-        make_problem(replace(cloth, n=100_000))
-    assert exc.value.field == "n"
-    rope = PickPlaceSettings.preset("rope", "fold")
-    assert budget_problem(rope) is None
-    assert budget_problem(replace(rope, bound=1e9)).field == "bound"
-    assert budget_problem(replace(rope, picker_speed=1e-9)).field == "picker_speed"
-    assert budget_problem(replace(rope, cem=replace(rope.cem, population=10**9))).field == \
-        "cem.population"

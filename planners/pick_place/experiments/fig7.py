@@ -294,15 +294,16 @@ def _experiment(task: str, script: str, args, settings: PickPlaceSettings, argv)
               for seed in seeds for m in args.methods]
     iterations = settings.cem.iterations * len(problem.stages)
     print(estimate_line(problem, settings, trials, iterations, out, args))
-    results, res = run_trials(trials, iterations, out, args.fresh, args.workers,
+    records, res = run_trials(trials, iterations, out, args.fresh, args.workers,
                               reuse=reuse_mode(args))
+    results = [r["result"] for r in records]
     failed = res.failed
     summary = {"experiment": "fig7", "task": task, "goal": args.goal, "protocol": args.preset,
                "settings": settings.to_dict(),
                # the flags that changed the protocol: such a run is judged apart from it
                "departures": settings.departures(args.preset, args.quick),
                "physics": settings.resolved_physics(),
-               "methods": summarize(results, args.methods, problem.metric_names),
+               "methods": summarize(records, args.methods, problem.metric_names),
                "failed": failed, "trial_commits": res.commits,
                "blowups": print_captures(out, captures_of(
                    out, [capture_label(t.key, s.name) for t in trials for s in problem.stages])),

@@ -47,7 +47,7 @@ from dopt.lab.cli import (
 from dopt.lab.console import print_captures, print_outputs, run_with_console
 from dopt.lab.flags import add_alias
 from dopt.lab.record import add_reuse_argument, check_outputs, reuse_mode, write_summary
-from dopt.lab.stats import mean_ci
+from dopt.lab.stats import finite_mean_ci
 from dopt.lab.sweep import Schema, Trial, is_finished
 from planners.pick_place import PickPlaceSettings, make_planner, make_problem, run_problem
 
@@ -172,8 +172,8 @@ def summarize(records: list[dict]) -> dict:
     for goal, rs in by.items():
         entry = {"n": len(rs), "seeds": [r["seed"] for r in rs]}
         for key in ("picker_final_cost", "panda_final_cost", "picker_vs_panda"):
-            entry[f"{key}_mean"], entry[f"{key}_ci95"] = _mean_ci([r[key] for r in rs])
-        entry["difference_mean"], entry["difference_ci95"] = _mean_ci(
+            entry[f"{key}_mean"], entry[f"{key}_ci95"] = finite_mean_ci([r[key] for r in rs])
+        entry["difference_mean"], entry["difference_ci95"] = finite_mean_ci(
             [r["panda_final_cost"] - r["picker_final_cost"] for r in rs])
         entry["grasp_distance_max"] = max(r["grasp_distance_max"] for r in rs)
         entry["missed_actions"] = int(sum(len(r["missed_actions"]) for r in rs))
@@ -183,11 +183,6 @@ def summarize(records: list[dict]) -> dict:
         entry["panda_unstable_seeds"] = [r["seed"] for r in rs if r.get("panda_unstable")]
         out[goal] = entry
     return out
-
-
-def _mean_ci(values) -> tuple[float | None, float | None]:
-    """Mean and 95 % CI half-width; None where not finite (one seed has no interval)."""
-    return tuple(float(v) if np.isfinite(v) else None for v in mean_ci(values, 0.95))
 
 
 #: colours of the strip's goal dots and of the cloth's legend swatch (its flex_rgba)

@@ -32,9 +32,10 @@ def run_trials(trials: list[Trial], iterations_per_trial: int, out: Path,
                reuse: str = "same-code") -> tuple[list, SweepResult]:
     """Every trial not finished yet under ``out`` (all of them when ``fresh``), inline or on a
     pool of ``workers`` processes, with the sweep's console (a bar of the CEM iterations of
-    every trial, the running ones of the pool included). Returns the results of the given
-    trials and the sweep's result (``failed``: {key: error}, ``commits``: the code versions of
-    the results); a trial's blow-up captures go to ``out``/blowups. ``reuse``: the sweep's
+    every trial, the running ones of the pool included). Returns the records ({"params",
+    "result"}, what ``summarize`` takes) of the given trials and the sweep's result
+    (``failed``: {key: error}, ``commits``: the code versions of the results); a trial's
+    blow-up captures go to ``out``/blowups. ``reuse``: the sweep's
     (``dopt.lab.sweep.run_sweep``; "any" with --reuse-any)."""
     cem = {t.key for t in trials if t.params["method"] != "scripted"}
     res = run_with_console(
@@ -45,7 +46,7 @@ def run_trials(trials: list[Trial], iterations_per_trial: int, out: Path,
         held=lambda t: iterations_held([t], iterations_per_trial, out) if t.key in cem else 0,
         describe=describe_result)
     keys = {t.key for t in trials}
-    return [r["result"] for k, r in res.records.items() if k in keys], res
+    return [r for k, r in res.records.items() if k in keys], res
 
 
 def describe_result(record: dict) -> str:

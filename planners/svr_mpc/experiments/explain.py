@@ -38,6 +38,7 @@ from dopt import atomic
 from dopt.lab.cli import EPILOG, ArgumentParser, guarded, positive_int
 from dopt.lab.console import print_outputs, sweep_session
 from dopt.lab.record import write_summary
+from dopt.lab.stats import median_or_none
 from dopt.lab.sweep import Schema
 from planners.svr_mpc import row_label, run_svr_mpc, split_params, trial_key
 from planners.svr_mpc.experiments import flags, mapping, runner
@@ -111,11 +112,6 @@ def goal_importances(h: dict, goal) -> list[float] | None:
     return [float(of[d]) for d in goal if d in of]
 
 
-def _median(values) -> float | None:
-    """The median of ``values``, None when there are none."""
-    return float(np.median(values)) if len(values) else None
-
-
 def goal_importance_summary(results: list[dict]) -> dict | None:
     """Per row, from each optimisation that held all the goal object's planar DoFs (as many as
     its episode's most: SVR's first optimisation holds every DoF): the least of their
@@ -135,8 +131,8 @@ def goal_importance_summary(results: list[dict]) -> dict | None:
         n_later += len(v) - 1
         later += [x for x in held[1:] if x is not None]
 
-    return {"first_median": _median(first), "first_min": min(first, default=None),
-            "first_max": max(first, default=None), "later_median": _median(later),
+    return {"first_median": median_or_none(first), "first_min": min(first, default=None),
+            "first_max": max(first, default=None), "later_median": median_or_none(later),
             "later_held_share": len(later) / n_later if n_later else None}
 
 
@@ -200,13 +196,14 @@ def mechanism(results: list[dict]) -> dict:
     contact = [c > 0 for res in results for c in res["contact_steps"]]
     mus = [m for res in results for m in res["mu"]]
 
-    return {"rel_improvement_median_away": _median(away), "n_optimisations_away": len(away),
+    return {"rel_improvement_median_away": median_or_none(away), "n_optimisations_away": len(away),
             "accepted_share": float(np.mean([a > 0 for a in alphas])) if alphas else None,
             "contact_share": float(np.mean(contact)) if contact else None,
-            "mu_median": _median(mus),
-            "travel_median": _median([res["travel"] for res in results]),
-            "goal_distance_end_median": _median([res["goal_distance_end"] for res in results]),
-            "lag_steps_median": _median([res["lag_steps_mean"] for res in results]),
+            "mu_median": median_or_none(mus),
+            "travel_median": median_or_none([res["travel"] for res in results]),
+            "goal_distance_end_median": median_or_none([res["goal_distance_end"]
+                                                        for res in results]),
+            "lag_steps_median": median_or_none([res["lag_steps_mean"] for res in results]),
             "n_dofs_mean": float(np.mean([np.mean(res["n_dofs"]) for res in results
                                           if len(res["n_dofs"])])),
             "n_unstable_rollouts": int(sum(res.get("n_unstable_rollouts", 0) for res in results)),
@@ -235,8 +232,8 @@ def goal_held_split(results: list[dict]) -> dict:
                 cut[touch > 0].append(min(imp) < RHO_CUTS[0])
     n_away = len(held) + len(dropped)
     return {"goal_held_share_away": len(held) / n_away if n_away else None,
-            "rel_improvement_median_away_held": _median(held),
-            "rel_improvement_median_away_dropped": _median(dropped),
+            "rel_improvement_median_away_held": median_or_none(held),
+            "rel_improvement_median_away_dropped": median_or_none(dropped),
             "goal_cut_share_contact": float(np.mean(cut[True])) if cut[True] else None,
             "goal_cut_share_no_contact": float(np.mean(cut[False])) if cut[False] else None,
             "n_goal_importances": {"contact": len(cut[True]), "no_contact": len(cut[False])}}

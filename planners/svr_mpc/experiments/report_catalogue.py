@@ -137,11 +137,3 @@ def svr_explain_rebuild(d: dict, records: list[dict], info: TrialInfo) -> dict:
     bins = int(m.group(1)) if m else svr_explain.parser().get_default("bins")
     return {"rows": svr_explain.summarize_rows(records, bins),
             "trial_commits": commits_of(records)}
-
-
-def _panda(d: dict, records: list[dict], info: TrialInfo) -> dict:
-    import panda_execute
-
-    return {"goals": panda_execute.summarize(records), "trial_commits": commits_of(records)}
-
-

@@ -1,11 +1,19 @@
 """The sweep console's time estimate, its revision on each finished line and the trial's
-result on that line (dopt.lab.console)."""
+result on that line (dopt.lab.console); with workers, the bar counts the running trials' steps
+and warnings print above it, not on it."""
+
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
 
 import numpy as np
 import pytest
 
 from dopt.lab.console import duration, estimate_line, left_line, print_outputs, run_with_console
 from dopt.lab.sweep import Trial
+
+ROOT = Path(__file__).resolve().parents[3]
 
 
 @pytest.mark.parametrize("seconds, text", [(0.4, "0 s"), (89, "89 s"), (90, "2 min"),
@@ -68,3 +76,37 @@ def test_print_outputs_names_the_pictures_that_exist_and_the_viewer(tmp_path, ca
     assert out[0] == f"pictures: {tmp_path / 'a.png'}"
     assert out[1].startswith(f"replay its trials in the browser: dopt-view {tmp_path} ")
     assert 'pip install -e ".[viz]"' in out[1]
+
+
+# ------------------------------------------------------------------------------ console
+def test_the_console_counts_and_keeps_warnings_off_the_bar(tmp_path):
+    """With --workers N the bar counts the running trials' steps and a worker's warning
+    prints on a line of its own above the bar."""
+    script = textwrap.dedent(f"""
+        import logging, sys
+        sys.path[:0] = [{str(ROOT)!r}]
+        from dopt.lab.console import run_with_console
+        from dopt.lab.sweep import Trial
+        from tests.dopt.lab.sweep_trials import walk, warn
+        logging.basicConfig(format="%(levelname)s %(name)s: %(message)s")
+        trials = [Trial(f"w{{i}}", {{"n": 8, "x0": 0.2 + i / 10, "sleep": 0.05}})
+                  for i in range(2)]
+        run_with_console(walk, trials, {str(tmp_path)!r}, steps=lambda t: 8,
+                         held=lambda t: 0, unit="step", desc="walk", workers=2)
+        run_with_console(warn, [Trial("a", {{"x": 1}})], {str(tmp_path / "w")!r},
+                         steps=lambda t: 1, held=lambda t: 0, unit="t", desc="warn",
+                         workers=2)
+    """)
+    proc = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
+                          timeout=300)
+    assert proc.returncode == 0, proc.stderr
+    err = proc.stderr
+    assert "sweep: 2 trials: 0 reused, 0 resumed from a checkpoint, 2 run from the start" in err
+    assert "sweep: 2 trials: 0 reused, 2 run to the end (0 of them resumed from a checkpoint)," \
+           " 0 failed" in err
+    assert "16/16" in err                                  # every step of both trials
+    # each warning is a line of its own (after the bar's carriage returns, nothing before it)
+    shown = [line.split("\r")[-1] for line in err.splitlines()]
+    assert "WARNING tests.sweep_trials: warned by trial 1" in shown
+    assert any(line.startswith("WARNING py.warnings:") and "python warning of trial 1" in line
+               for line in shown)

@@ -1,13 +1,18 @@
-"""Intervals of dopt.lab.stats against their textbook formulas and their coverage."""
+"""Intervals of dopt.lab.stats against their textbook formulas and their coverage; the
+summaries' None-where-undefined forms (``finite``, ``finite_mean_ci``, ``median_or_none``)
+against the standard library's statistics."""
 
 import math
+import statistics
 import warnings
 
 import numpy as np
 import pytest
+from hypothesis import given
+from hypothesis import strategies as st
 from scipy import stats
 
-from dopt.lab.stats import difference_ci, mean_ci
+from dopt.lab.stats import difference_ci, finite, finite_mean_ci, mean_ci, median_or_none
 
 
 def test_mean_ci_is_the_student_t_interval():
@@ -56,3 +61,38 @@ def test_difference_ci_to_a_repeated_value_is_the_other_sides_interval_without_w
         diff, half = difference_ci(a, b)
     assert diff == pytest.approx(np.mean(b) - 0.0575)
     assert half == pytest.approx(mean_ci(b)[1])
+
+
+FLOATS = st.floats(min_value=-1e6, max_value=1e6, allow_nan=False)
+
+
+@given(st.lists(FLOATS, min_size=2, max_size=30))
+def test_finite_mean_ci_is_the_standard_librarys_mean_and_t_half_width(values):
+    mean, half = finite_mean_ci(values)
+    assert mean == pytest.approx(statistics.fmean(values), abs=1e-6)
+    s = statistics.stdev(values)
+    want = stats.t.ppf(0.975, len(values) - 1) * s / math.sqrt(len(values))
+    assert half == pytest.approx(want, rel=1e-6, abs=1e-6)
+
+
+@given(FLOATS)
+def test_one_value_has_its_mean_and_no_half_width(value):
+    assert finite_mean_ci([value]) == (pytest.approx(value), None)
+
+
+def test_no_value_or_a_non_finite_one_gives_none():
+    assert finite_mean_ci([]) == (None, None)
+    assert finite_mean_ci([1.0, math.inf]) == (None, None)
+    assert finite_mean_ci([1.0, math.nan, 2.0]) == (None, None)
+    assert [finite(x) for x in (None, math.nan, -math.inf, 2)] == [None, None, None, 2.0]
+    assert type(finite(np.float32(0.5))) is float
+
+
+@given(st.lists(FLOATS, max_size=30))
+def test_median_or_none_is_the_standard_librarys_median(values):
+    got = median_or_none(values)
+    if not values:
+        assert got is None
+    else:
+        assert got == pytest.approx(statistics.median(values), abs=1e-9)
+        assert median_or_none(np.asarray(values)) == got

@@ -59,13 +59,20 @@ def test_last_improvement_agrees_with_a_direct_count_on_random_histories():
         assert last_improvement(_trial(history, [0] * n)) == (falls[-1] if falls else 1)
 
 
+def records(results: list[dict]) -> list[dict]:
+    """Results as the sweep stores them: {"params", "result"} (the params its trial ran)."""
+    return [{"params": {"method": r["method"], "seed": r["seed"]}, "result": r}
+            for r in results]
+
+
 def test_summary_lists_each_seeds_last_improvement_and_none_for_the_scripted_policy():
     def result(method, seed, history, scripted=False):
         return {**_trial(history, [0] * len(history), scripted), "method": method,
                 "seed": seed, "final_cost": history[-1], "n_candidates": [4],
                 "n_rollouts": 10, "n_unstable_rollouts": 0, "unstable": False}
-    out = summarize([result("simple", 1, [3.0, 2.0, 2.0]), result("simple", 0, [3.0, 3.0]),
-                     result("scripted", 0, [2.5], scripted=True)],
+    out = summarize(records([result("simple", 1, [3.0, 2.0, 2.0]),
+                             result("simple", 0, [3.0, 3.0]),
+                             result("scripted", 0, [2.5], scripted=True)]),
                     ["simple", "scripted"], ["final_cost"])
     assert out["simple"]["seeds"] == [0, 1]
     assert out["simple"]["last_improvements"] == [1, 2]
@@ -82,7 +89,7 @@ def test_summary_holds_each_methods_difference_to_simple_with_welchs_interval():
           + [result("original", i, c) for i, c in enumerate(original)]
           + [result("original", 9, 5.0, unstable=True)]       # not in means or differences
           + [result("scripted", 0, 0.015)])
-    out = summarize(rs, ["simple", "original", "scripted"], ["final_cost"])
+    out = summarize(records(rs), ["simple", "original", "scripted"], ["final_cost"])
     o = out["original"]
     # Welch by hand: variances of the means and the Welch-Satterthwaite degrees of freedom
     va, vb = np.var(simple, ddof=1) / 3, np.var(original, ddof=1) / 4
@@ -93,5 +100,5 @@ def test_summary_holds_each_methods_difference_to_simple_with_welchs_interval():
     assert out["scripted"]["final_cost_minus_simple_ci95"] is None      # one value: no spread
     assert "final_cost_minus_simple_mean" not in out["simple"]
     # without Simple there is nothing to differ from
-    assert "final_cost_minus_simple_mean" not in summarize(rs, ["original"],
+    assert "final_cost_minus_simple_mean" not in summarize(records(rs), ["original"],
                                                            ["final_cost"])["original"]

@@ -1,6 +1,7 @@
 """experiments/key_particles.py, simulated goals: each fold made on the MuJoCo cloth by the line
 grasp, settled, reduced with the flex's own triangles and the settled flat start as rest sheet
-(the counts at 16 per side are tested on the library in tests/dopt/test_fold_goals.py)."""
+(the counts at 16 per side are tested on the library in
+tests/dopt/tasks/pick/test_fold_goals.py)."""
 import numpy as np
 
 from deformables import ClothConfig

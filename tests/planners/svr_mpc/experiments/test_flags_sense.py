@@ -9,7 +9,7 @@ ran). Each is a usage error (one line naming the flag, exit 2) that creates noth
 import pytest
 
 from planners.svr_mpc.experiments import fig4, flags, mapping, runner, table1
-from tests.dopt.tasks.test_authors_layout_sense import CYLINDER_XY, _layout
+from tests.dopt.tasks.push.test_authors_layout_sense import CYLINDER_XY, _layout
 
 
 @pytest.fixture(autouse=True)

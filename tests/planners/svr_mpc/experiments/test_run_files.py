@@ -3,15 +3,13 @@ the summary reads is recomputed (each experiment's schema); what a run needs is 
 its first trial; every JSON file a --quick run writes parses with a strict parser (no bare
 NaN: null with its reason)."""
 import json
-import os
-import subprocess
-import sys
 from pathlib import Path
 
 import pytest
 
 from dopt.lab.provenance import COMMIT_ENV
 from planners.svr_mpc.experiments import fig4, mapping, runner, table1
+from tests.dopt.lab.run_files import run_script, strict, strict_files
 
 ROOT = Path(__file__).resolve().parents[4]
 
@@ -21,13 +19,6 @@ def fixed_code(monkeypatch):
     """The code of this process (and its children) fixed: others may commit or edit the
     checkout while a test runs, and a resumed trial must see the code that wrote it."""
     monkeypatch.setenv(COMMIT_ENV, "c0ffee")
-
-
-def strict(text: str):
-    """json.loads that rejects NaN, Infinity and -Infinity (as JSON itself does)."""
-    def refuse(name):
-        raise ValueError(f"bare {name}")
-    return json.loads(text, parse_constant=refuse)
 
 
 # ---------------------------------------------------------------- records of another format
@@ -73,30 +64,18 @@ def test_a_bad_paper_reference_is_refused_before_the_sweep(tmp_path, capsys, tex
 
 
 # ------------------------------------------------------------------------ strict JSON files
-def run_script(name: str, *args) -> None:
-    proc = subprocess.run([sys.executable, str(ROOT / "experiments" / name), *map(str, args)],
-                          capture_output=True, text=True, timeout=900,
-                          env={**os.environ, "MUJOCO_GL": "egl"})
-    assert proc.returncode == 0, proc.stderr[-3000:]
-
-
 @pytest.mark.slow
 def test_every_file_of_a_quick_run_parses_strictly(tmp_path):
     """mpc.py and rho_sweep.py wrote bare NaN (13 in a --quick run); every JSON file of the
     three SVR scripts' --quick runs parses strictly (cloth_fold.py's: in
-    tests/experiments/test_run_files.py), and an undefined value is null with its reason
-    under "<field>_undefined"."""
+    tests/planners/pick_place/experiments/test_run_files.py), and an undefined value is null
+    with its reason under "<field>_undefined"."""
     runs = {"mpc": ("mpc.py", "--quick", "--rules", "baseline,svr-sum", "--no-render"),
             "rho": ("rho_sweep.py", "--quick", "--rhos", "1", "--thetas", "0"),
             "explain": ("svr_explain.py", "--quick", "--rows", "sum-t10-r1", "--bins", "2")}
     for name, (script, *flags) in runs.items():
         run_script(script, *flags, "--out", tmp_path / name)
-    files = [p for p in tmp_path.rglob("*.json*") if p.is_file()]
-    assert len(files) >= 8                       # 3 summaries, 5 trial records
-    for path in files:
-        lines = path.read_text().splitlines() if path.suffix == ".jsonl" else [path.read_text()]
-        for line in filter(None, lines):
-            strict(line)                                    # raises on a bare NaN
+    assert strict_files(tmp_path) >= 8      # 3 summaries, 5 trial records; a bare NaN raises
     methods = strict((tmp_path / "mpc" / "summary.json").read_text())["methods"]
     row = methods["svr-sum-t10-r1"] if "svr-sum-t10-r1" in methods else next(iter(methods.values()))
     assert row["mpc_cost_normalised_ci90"] is None                      # one trial: no CI

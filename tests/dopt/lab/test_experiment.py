@@ -20,7 +20,7 @@ from dopt.lab.experiment import (
 from dopt.lab.report.base import load_results
 from tests.dopt.lab.report.report_site import headlines, provenance, run, write
 
-ROOT = Path(__file__).resolve().parents[4]
+ROOT = Path(__file__).resolve().parents[3]
 
 
 class Reach(Experiment):

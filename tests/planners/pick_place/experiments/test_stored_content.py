@@ -10,11 +10,11 @@ import logging
 import math
 
 import pytest
-import rope
 import torch
 
 from dopt.lab.provenance import COMMIT_ENV
 from dopt.lab.sweep import Checkpoint
+from planners.pick_place.experiments import fig7
 from planners.pick_place.experiments import sweep as pick_sweep
 
 QUICK_ROPE = ["--quick", "--no-render"]
@@ -37,13 +37,13 @@ def test_a_record_of_another_goal_under_a_trials_name_is_recomputed(tmp_path, ca
     result does not have."""
     fold, straight = tmp_path / "fold", tmp_path / "straighten"
     base = [*QUICK_ROPE, "--methods", "scripted"]
-    assert rope.main([*base, "--goal", "fold", "--out", str(fold)]) == 0
-    assert rope.main([*base, "--goal", "straighten", "--out", str(straight)]) == 0
+    assert fig7.rope([*base, "--goal", "fold", "--out", str(fold)]) == 0
+    assert fig7.rope([*base, "--goal", "straighten", "--out", str(straight)]) == 0
     path, mine = _only_record(straight)
     _, theirs = _only_record(fold)
     path.write_text(json.dumps({**theirs, "key": mine["key"]}))
     with caplog.at_level(logging.WARNING, logger="dopt.lab.sweep"):
-        assert rope.main([*base, "--goal", "straighten", "--out", str(straight)]) == 0
+        assert fig7.rope([*base, "--goal", "straighten", "--out", str(straight)]) == 0
     assert "its params are another trial's" in caplog.text
     assert "'settings.goal': stored \"fold\", this trial's \"straighten\"" in caplog.text
     assert (straight / "trials" / "corrupt" / path.name).exists()
@@ -74,12 +74,12 @@ def test_a_shortened_cost_history_is_moved_aside_and_recomputed(tmp_path, caplog
     """A cost history one entry short of its stages gave zip()'s ValueError in the curves."""
     out = tmp_path / "rope"
     argv = [*QUICK_ROPE, "--methods", "scripted", "--out", str(out)]
-    assert rope.main(argv) == 0
+    assert fig7.rope(argv) == 0
     path, rec = _only_record(out)
     rec["result"]["cost_history"].pop()
     path.write_text(json.dumps(rec))
     with caplog.at_level(logging.WARNING, logger="dopt.lab.sweep"):
-        assert rope.main(argv) == 0
+        assert fig7.rope(argv) == 0
     assert "cost history" in caplog.text and (out / "trials" / "corrupt" / path.name).exists()
     again = json.loads(path.read_text())["result"]
     assert len(again["cost_history"]) == len(again["stage_of_iteration"])
@@ -113,12 +113,12 @@ def test_a_checkpoint_with_a_negative_cem_probability_is_moved_aside(tmp_path, c
     trial) and stayed where it was."""
     out = tmp_path / "rope"
     argv = [*QUICK_ROPE, "--methods", "random", "--out", str(out)]
-    assert rope.main(argv) == 0
+    assert fig7.rope(argv) == 0
     path, rec = _only_record(out)
     path.unlink()
     Checkpoint(out, path.stem).save(_progress([1.25, -0.25]))
     with caplog.at_level(logging.WARNING, logger="dopt.lab.sweep"):
-        assert rope.main(argv) == 0
+        assert fig7.rope(argv) == 0
     assert "is not resumed" in caplog.text and "probabilities" in caplog.text
     moved = out / "trials" / "checkpoints" / "corrupt"
     assert (moved / path.name).exists() and (moved / f"{path.stem}.reason.txt").exists()

@@ -1,26 +1,22 @@
-"""What the experiment scripts read and write under --out (the SVR experiments': in
-tests/planners/svr_mpc/experiments/test_run_files.py): trial records and checkpoints of
-another format are named, moved aside and recomputed (each experiment's schema); a second run
-on the same --out refuses, naming the first; every JSON file a --quick run writes parses with
-a strict parser (no bare NaN: null with its reason); what a run needs is checked before its
-first trial; the console says what the sweep reuses, resumes and runs, and prints warnings
-above its bar, not on it."""
+"""What the pick experiments (fig7: rope.py, cloth_fold.py) read and write under --out (the SVR
+experiments': in tests/planners/svr_mpc/experiments/test_run_files.py; the console's lines: in
+tests/dopt/lab/test_console.py): trial records and checkpoints of another format are named,
+moved aside and recomputed (each experiment's schema); a second run on the same --out
+refuses, naming the first; every JSON file a --quick run writes parses with a strict parser
+(no bare NaN: null with its reason); what a run needs is checked before its first trial."""
 
 import json
 import logging
-import os
 import subprocess
 import sys
-import textwrap
-from pathlib import Path
 
 import pytest
-import rope
 
 from dopt.lab.provenance import COMMIT_ENV
 from dopt.lab.sweep import Checkpoint
+from planners.pick_place.experiments import fig7
+from tests.dopt.lab.run_files import run_script, strict_files
 
-ROOT = Path(__file__).resolve().parents[2]
 QUICK_ROPE = ["--quick", "--no-render"]
 
 
@@ -29,13 +25,6 @@ def fixed_code(monkeypatch):
     """The code of this process (and its children) fixed: others may commit or edit the
     checkout while a test runs, and a resumed trial must see the code that wrote it."""
     monkeypatch.setenv(COMMIT_ENV, "c0ffee")
-
-
-def strict(text: str):
-    """json.loads that rejects NaN, Infinity and -Infinity (as JSON itself does)."""
-    def refuse(name):
-        raise ValueError(f"bare {name}")
-    return json.loads(text, parse_constant=refuse)
 
 
 # ---------------------------------------------------------------- records of another format
@@ -50,13 +39,13 @@ def test_a_pick_record_of_another_format_is_named_moved_aside_and_recomputed(
     every rerun, naming no file."""
     out = tmp_path / "rope"
     argv = [*QUICK_ROPE, "--methods", "scripted", "--out", str(out)]
-    assert rope.main(argv) == 0
+    assert fig7.rope(argv) == 0
     (path,) = (out / "trials").glob("*.json")
     rec = json.loads(path.read_text())
     spoil(rec)
     path.write_text(json.dumps(rec))
     with caplog.at_level(logging.WARNING, logger="dopt.lab.sweep"):
-        assert rope.main(argv) == 0
+        assert fig7.rope(argv) == 0
     assert f"trial file {path} is not used (" in caplog.text and reason in caplog.text
     assert json.loads((out / "trials" / "corrupt" / path.name).read_text()) == rec
     assert json.loads(path.read_text())["result"]["method"] == "scripted"     # recomputed
@@ -67,13 +56,13 @@ def test_a_checkpoint_of_another_format_is_moved_aside_and_its_trial_starts_afre
     """A checkpoint that is valid JSON without "trial" once failed its trial on every rerun."""
     out = tmp_path / "rope"
     argv = [*QUICK_ROPE, "--methods", "random", "--out", str(out)]
-    assert rope.main(argv) == 0
+    assert fig7.rope(argv) == 0
     (path,) = (out / "trials").glob("*.json")
     first = json.loads(path.read_text())["result"]
     path.unlink()
     Checkpoint(out, path.stem).save({"stages": [], "stage": None})        # no "trial"
     with caplog.at_level(logging.WARNING, logger="dopt.lab.sweep"):
-        assert rope.main(argv) == 0
+        assert fig7.rope(argv) == 0
     assert "is not resumed (its progress lacks 'trial', 'planner'" in caplog.text
     assert (out / "trials" / "checkpoints" / "corrupt" / path.name).exists()
     again = json.loads(path.read_text())["result"]
@@ -88,7 +77,7 @@ def test_a_second_run_on_the_same_out_refuses_naming_the_first(tmp_path, capsys)
     proc = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE, text=True)
     try:
         assert proc.stdout.readline().strip() == "held"
-        assert rope.main([*QUICK_ROPE, "--methods", "scripted", "--out", str(out)]) == 1
+        assert fig7.rope([*QUICK_ROPE, "--methods", "scripted", "--out", str(out)]) == 1
         err = capsys.readouterr().err.strip().splitlines()
         assert err[-1].startswith(f"rope.py: error: SweepLockedError: {out.absolute()} is in "
                                   f"use by process {proc.pid} on ")
@@ -108,63 +97,17 @@ def test_a_missing_plots_package_is_refused_before_the_first_trial(tmp_path, cap
                         lambda name, *a: None if name == "matplotlib" else real(name, *a))
     out = tmp_path / "out"
     with pytest.raises(SystemExit) as exc:
-        rope.main([*QUICK_ROPE, "--methods", "scripted", "--out", str(out)])
+        fig7.rope([*QUICK_ROPE, "--methods", "scripted", "--out", str(out)])
     assert exc.value.code == 2 and not out.exists()
     assert "the run needs matplotlib (the plots extra: pip install 'dopt[plots]')" in \
         capsys.readouterr().err
 
 
 # ------------------------------------------------------------------------ strict JSON files
-def run_script(name: str, *args) -> None:
-    proc = subprocess.run([sys.executable, str(ROOT / "experiments" / name), *map(str, args)],
-                          capture_output=True, text=True, timeout=900,
-                          env={**os.environ, "MUJOCO_GL": "egl"})
-    assert proc.returncode == 0, proc.stderr[-3000:]
-
-
 @pytest.mark.slow
 def test_every_file_of_a_quick_run_parses_strictly(tmp_path):
     """Every JSON file of a --quick run parses strictly (the SVR scripts' in
     tests/planners/svr_mpc/experiments/test_run_files.py)."""
     run_script("cloth_fold.py", "--quick", "--methods", "simple,scripted", "--no-render",
                "--out", tmp_path / "cloth")
-    files = [p for p in tmp_path.rglob("*.json*") if p.is_file()]
-    assert len(files) >= 3                       # the summary, 2 trial records
-    for path in files:
-        lines = path.read_text().splitlines() if path.suffix == ".jsonl" else [path.read_text()]
-        for line in filter(None, lines):
-            strict(line)                                    # raises on a bare NaN
-
-
-# ------------------------------------------------------------------------------ console
-def test_the_console_counts_and_keeps_warnings_off_the_bar(tmp_path):
-    """With --workers N the bar counts the running trials' steps and a worker's warning
-    prints on a line of its own above the bar."""
-    script = textwrap.dedent(f"""
-        import logging, sys
-        sys.path[:0] = [{str(ROOT / "experiments")!r}, {str(ROOT)!r}]
-        from dopt.lab.console import run_with_console
-        from dopt.lab.sweep import Trial
-        from tests.dopt.lab.sweep_trials import walk, warn
-        logging.basicConfig(format="%(levelname)s %(name)s: %(message)s")
-        trials = [Trial(f"w{{i}}", {{"n": 8, "x0": 0.2 + i / 10, "sleep": 0.05}})
-                  for i in range(2)]
-        run_with_console(walk, trials, {str(tmp_path)!r}, steps=lambda t: 8,
-                         held=lambda t: 0, unit="step", desc="walk", workers=2)
-        run_with_console(warn, [Trial("a", {{"x": 1}})], {str(tmp_path / "w")!r},
-                         steps=lambda t: 1, held=lambda t: 0, unit="t", desc="warn",
-                         workers=2)
-    """)
-    proc = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
-                          timeout=300)
-    assert proc.returncode == 0, proc.stderr
-    err = proc.stderr
-    assert "sweep: 2 trials: 0 reused, 0 resumed from a checkpoint, 2 run from the start" in err
-    assert "sweep: 2 trials: 0 reused, 2 run to the end (0 of them resumed from a checkpoint)," \
-           " 0 failed" in err
-    assert "16/16" in err                                  # every step of both trials
-    # each warning is a line of its own (after the bar's carriage returns, nothing before it)
-    shown = [line.split("\r")[-1] for line in err.splitlines()]
-    assert "WARNING tests.sweep_trials: warned by trial 1" in shown
-    assert any(line.startswith("WARNING py.warnings:") and "python warning of trial 1" in line
-               for line in shown)
+    assert strict_files(tmp_path) >= 3          # the summary, 2 trial records; a bare NaN raises
