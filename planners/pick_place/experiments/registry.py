@@ -37,6 +37,10 @@ def _rows(*items: str) -> list:
     return [r for r in report_map.ROWS if r.item.startswith(items)]
 
 
+#: the command line of each task's Fig. 7 panels (experiments/<name>.py; another task: its name)
+FIG7_SCRIPTS = {"cloth": "cloth_fold", "rope": "rope"}
+
+
 class Section(Experiment):
     """A kind that only has its RESULTS.md section (a benchmark's, most of them)."""
 
@@ -101,8 +105,8 @@ class Fig7(Experiment):
 
     def catalogue(self):
         return [Entry(KP, f"Fig. 7 {panel}",
-                      f"python experiments/{'cloth_fold' if task == 'cloth' else 'rope'}.py "
-                      f"--goal {goal}", self.kind, {"task": task, "goal": goal})
+                      f"python experiments/{FIG7_SCRIPTS.get(task, task)}.py --goal {goal}",
+                      self.kind, {"task": task, "goal": goal})
                 for (task, goal), panel in FIG7_PANELS.items()]
 
     def departure(self, result):
