@@ -71,7 +71,7 @@ def bench_cloth_steps(sizes: list[int], presets: list[str],
     rows = []
     for preset, variant in runs:
         for n in sizes:
-            config = ClothSceneConfig.preset(preset, n=n, **VARIANTS.get(variant, {}))
+            config = ClothSceneConfig.physics(preset, n=n, **VARIANTS.get(variant, {}))
             with mujoco_messages() as messages:
                 t0 = time.perf_counter()
                 scene = make_cloth(config)

@@ -89,7 +89,7 @@ def bench_cloth_warp(sizes: list[int], nworlds: list[int], preset: str = "defaul
         machine.update(preload_s=time.perf_counter() - t0, preload_workers=int(preload_workers))
     rows: list[dict] = []
     for n in sizes:
-        config = ClothSceneConfig.preset(preset, n=int(n))
+        config = ClothSceneConfig.physics(preset, n=int(n))
         with mujoco_messages() as messages:
             t0 = time.perf_counter()
             scene = make_cloth(config)

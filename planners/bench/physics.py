@@ -136,7 +136,7 @@ SETTINGS = {"cloth": CLOTH_SETTINGS, "rope": ROPE_SETTINGS}
 def _config(task: str, name: str, overrides: dict | None, n: int):
     cls = pick_task(task).config
     if overrides is None:
-        return cls.preset(name.split(":", 1)[1], n=n)
+        return cls.physics(name.split(":", 1)[1], n=n)
     return replace(cls(n=n), **overrides)
 
 

@@ -143,7 +143,7 @@ def _scene(task: str, preset: str, **fields):
     """(config, scene) of the pick task ``task``'s physics ``preset`` with ``fields`` on top,
     the scene built as the planners build it (every particle pickable)."""
     spec = pick_task(task)
-    config = spec.config.preset(preset, **fields)
+    config = spec.config.physics(preset, **fields)
     return config, spec.build(config, PickerConfig())
 
 
@@ -199,7 +199,7 @@ def rope_cantilever(preset: str, **fields) -> dict:
     its own spacing, clamped at particle 0 and 1, gravity off, a tip force bending it by
     ``CANTILEVER_DEFLECTION`` lengths: tip deflection and shape against Euler-Bernoulli."""
     _, _, cantilever = _cosseratbench()
-    full = pick_task("rope").config.preset(preset, **fields)
+    full = pick_task("rope").config.physics(preset, **fields)
     N = CANTILEVER_PARTICLES
     spacing = full.length / (full.n - 1)
     c, scene = _scene("rope", preset, **{**fields, "n": N, "length": spacing * (N - 1),
@@ -272,7 +272,7 @@ def pick_cost(task: str, preset: str, actions: int = 64, seed: int = 0, **fields
 
     bound = PickPlaceSettings.preset(task, GOALS[task][0]).bound
     spec = pick_task(task)
-    scene = spec.build(spec.config.preset(preset, **fields), PickerConfig(bound=(bound,) * 3))
+    scene = spec.build(spec.config.physics(preset, **fields), PickerConfig(bound=(bound,) * 3))
     rng = np.random.default_rng(seed)
     P = max(1, actions // 2)
     U = scene.picker.encode(rng.integers(0, scene.n_particles, (P, 2)),

@@ -212,7 +212,7 @@ class PickPlaceSettings:
         spec = PICK_TASKS[self.task]
         fields = {name: getattr(self, name) for name in spec.scene_fields
                   if getattr(self, name) is not None}
-        return spec.config.preset(physics, **{**fields, **(overrides or {})})
+        return spec.config.physics(physics, **{**fields, **(overrides or {})})
 
     def planning_scene_config(self, overrides: dict | None = None):
         """``scene_config`` of ``planning_physics``; None where CEM plans on the scene itself

@@ -214,7 +214,7 @@ def test_scripted_cloth_folds_are_not_flagged(goal, n, physics):
 def test_rope_actions_are_not_flagged(physics):
     """False positives: bounded random pick-and-place actions on the 40-particle rope under
     a physics preset (accurate: the stiff edges and Newton of the catenary reference)."""
-    scene = make_rope(RopeSceneConfig.preset(physics))
+    scene = make_rope(RopeSceneConfig.physics(physics))
     rng = np.random.default_rng(3)
     P = 16
     U = scene.picker.encode(rng.integers(0, 40, (P, 2)), rng.uniform(-0.1, 0.1, (P, 2, 3)))
@@ -226,7 +226,7 @@ def test_rope_actions_are_not_flagged(physics):
 def grasped_cloth(strain_at_grasps: bool, max_strain: float = 1e-3):
     """A 6 x 6 cloth whose particle 14 an active picker equality holds, and the scene with
     the given strain bounds."""
-    base = make_cloth(ClothSceneConfig.preset("fast", n=6))     # the soft sheet: strains
+    base = make_cloth(ClothSceneConfig.physics("fast", n=6))     # the soft sheet: strains
     bounds = replace(base.scene.stability, max_strain=max_strain,
                      strain_at_grasps=strain_at_grasps)
     scene = Scene(base.model, stability=bounds)
@@ -270,7 +270,7 @@ def test_grasp_verdict_is_the_same_on_every_route(strain_at_grasps, c_kernels):
     """With an active grasp pulling particle 14 to the picker, the open-loop Batch rollout
     and the feedback loops (Batch, C) flag the same step for the same reason."""
     scene, x0, _ = grasped_cloth(strain_at_grasps, max_strain=0.05)
-    picker = make_cloth(ClothSceneConfig.preset("fast", n=6)).picker
+    picker = make_cloth(ClothSceneConfig.physics("fast", n=6)).picker
     rows = picker.encode(np.array([[14]]), np.array([[[0.1, 0.0, 0.1]]]))[0]
     u = np.ascontiguousarray(rows[None, :, :scene.nu])     # the picker's controls, no grasp
     T = u.shape[1]                                         # switching: the grasp stays on

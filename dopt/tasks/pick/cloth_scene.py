@@ -24,7 +24,7 @@ from dopt.tasks.pick.scene import (
     DeformableScene,
     check_pickable,
     floor_scene_xml,
-    preset_fields,
+    physics_fields,
     selfcollide_mode,
 )
 from dopt.validation import check_config
@@ -109,9 +109,9 @@ class ClothSceneConfig:
             raise ValueError(f"ClothSceneConfig.poisson must be < 0.5, got {self.poisson!r}")
 
     @classmethod
-    def preset(cls, name: str = "default", **fields) -> ClothSceneConfig:
+    def physics(cls, name: str = "default", **fields) -> ClothSceneConfig:
         """A named physics preset (``PHYSICS_PRESETS``) with ``fields`` on top."""
-        return replace(cls(**fields), **preset_fields(PHYSICS_PRESETS, name, fields))
+        return replace(cls(**fields), **physics_fields(PHYSICS_PRESETS, name, fields))
 
     @property
     def spacing(self) -> float:

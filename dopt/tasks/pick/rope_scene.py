@@ -25,7 +25,7 @@ from dopt.tasks.pick.scene import (
     DeformableScene,
     check_pickable,
     floor_scene_xml,
-    preset_fields,
+    physics_fields,
     selfcollide_mode,
 )
 from dopt.validation import check_config
@@ -97,9 +97,9 @@ class RopeSceneConfig:
                              f"{self.length:g} m rope holds at most {most}")
 
     @classmethod
-    def preset(cls, name: str = "default", **fields) -> RopeSceneConfig:
+    def physics(cls, name: str = "default", **fields) -> RopeSceneConfig:
         """A named physics preset (``PHYSICS_PRESETS``) with ``fields`` on top."""
-        return replace(cls(**fields), **preset_fields(PHYSICS_PRESETS, name, fields))
+        return replace(cls(**fields), **physics_fields(PHYSICS_PRESETS, name, fields))
 
 
 def rope_xml(config: RopeSceneConfig = RopeSceneConfig(),

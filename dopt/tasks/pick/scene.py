@@ -81,7 +81,7 @@ def selfcollide_mode(value, name: str) -> str:
     return value
 
 
-def preset_fields(presets: dict, name: str, fields: dict) -> dict:
+def physics_fields(presets: dict, name: str, fields: dict) -> dict:
     """The fields of preset ``name`` that ``fields`` does not set; ValueError naming an unknown
     preset."""
     if not isinstance(name, str) or name not in presets:

@@ -323,7 +323,7 @@ def simulated_scenes(presets) -> dict:
     resolution's n aside): what each physics preset meant for this run."""
     from dopt.tasks.pick.cloth_scene import ClothSceneConfig
 
-    return settings_dict({p: ClothSceneConfig.preset(p, selfcollide=True) for p in presets})
+    return settings_dict({p: ClothSceneConfig.physics(p, selfcollide=True) for p in presets})
 
 
 def noise_table(rows: list[dict]) -> dict:

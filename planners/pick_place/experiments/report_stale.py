@@ -49,8 +49,8 @@ def today() -> dict:
     from dopt.tasks.pick.rope_scene import PHYSICS_PRESETS as ROPE
     from dopt.tasks.pick.rope_scene import RopeSceneConfig
 
-    out: dict = {"physics": {"cloth": {n: asdict(ClothSceneConfig.preset(n)) for n in CLOTH},
-                             "rope": {n: asdict(RopeSceneConfig.preset(n)) for n in ROPE}},
+    out: dict = {"physics": {"cloth": {n: asdict(ClothSceneConfig.physics(n)) for n in CLOTH},
+                             "rope": {n: asdict(RopeSceneConfig.physics(n)) for n in ROPE}},
                  "protocols": {}, "resolved": {}}
     for p in pp.PROTOCOLS:
         for task, goals in pp.GOALS.items():

@@ -56,7 +56,9 @@ SVR_COMPUTE_PATHS = ("dopt", "planners/ilqr.py", "planners/svr.py", "planners/ke
                      *(f":(exclude)dopt/{f}" for f in (
                          "lab", "sweep*.py", "trialpack.py", "jsonio.py", "atomic.py",
                          "provenance.py", "stats.py", "multiple.py", "cli.py", "scripts.py",
-                         "bench", "render.py", "view", "blowup.py")))
+                         "bench", "render.py", "view", "blowup.py",
+                         # the pick wing: no MPC trial loads it (tests/test_layers.py)
+                         "tasks/pick")))
 
 
 @functools.cache

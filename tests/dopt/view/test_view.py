@@ -225,7 +225,7 @@ def violent_rope():
     from dopt.tasks.pick.rope_scene import RopeSceneConfig, make_rope
     from dopt.tasks.pick.scene import PickPlaceTask
 
-    scene = make_rope(RopeSceneConfig.preset("fast", n=12),
+    scene = make_rope(RopeSceneConfig.physics("fast", n=12),
                       PickerConfig(bound=(0.5, 0.5, 0.5), speed=50.0))
     service = RolloutService(scene.scene, RolloutConfig(threads=1))
     task = PickPlaceTask(scene, scene.positions(scene.initial_state), rollout=service)

@@ -104,7 +104,7 @@ def test_pick_cost_counts_the_actions_steps():
     from planners.pick_place import GOALS, PickPlaceSettings
 
     row = pick_cost("rope", "accurate", actions=4)
-    dt = RopeSceneConfig.preset("accurate").timestep
+    dt = RopeSceneConfig.physics("accurate").timestep
     bound = PickPlaceSettings.preset("rope", GOALS["rope"][0]).bound
     snap, hold, move, settle = PickerConfig(bound=(bound,) * 3).steps(dt)
     assert row["actions"] == 4 and row["steps"] == 4 * (snap + hold + move + settle)

@@ -85,7 +85,7 @@ def test_settings_without_drag_keep_their_form_and_with_it_round_trip():
 @pytest.fixture(scope="module")
 def cloth():
     side = 0.2
-    return make_cloth(ClothSceneConfig.preset("default", n=6, side=side),
+    return make_cloth(ClothSceneConfig.physics("default", n=6, side=side),
                       PickerConfig(bound=(0.08,) * 3, workspace=ActionConstraint.table(side)))
 
 

@@ -19,8 +19,8 @@ from planners.pick_place import (
 
 def cloths(n=6):
     picker = PickerConfig(bound=(0.1,) * 3)
-    return (make_cloth(ClothSceneConfig.preset("default", n=n), picker),
-            make_cloth(ClothSceneConfig.preset("fast", n=n), picker))
+    return (make_cloth(ClothSceneConfig.physics("default", n=n), picker),
+            make_cloth(ClothSceneConfig.physics("fast", n=n), picker))
 
 
 def test_evaluate_runs_on_the_planning_scene_and_execute_on_the_scene():

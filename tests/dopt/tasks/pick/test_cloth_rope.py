@@ -148,7 +148,7 @@ def test_snap_brings_the_picker_to_the_particle_at_every_dt(make, config):
 
 def test_grasped_particle_follows_displacement():
     """An in-plane drag of a corner lands it at p0 + d (within the soft sheet's pull-back)."""
-    cloth = make_cloth(ClothSceneConfig.preset("fast", n=N_SIDE))
+    cloth = make_cloth(ClothSceneConfig.physics("fast", n=N_SIDE))
     task = _task(cloth)
     corner = cloth.n_particles - 1
     d = np.array([-0.1, -0.05, 0.0])
@@ -207,7 +207,7 @@ def test_scripted_diagonal_fold_reaches_goal():
     """Scripted fold (far corner above its goal, release) on the soft 10x10 sheet (fast preset):
     the mean particle distance to the ideal fold drops from 70 mm to below 25 mm."""
     n = 10
-    scene = make_cloth(ClothSceneConfig.preset("fast", n=n), PickerConfig(bound=(0.3, 0.3, 0.3)))
+    scene = make_cloth(ClothSceneConfig.physics("fast", n=n), PickerConfig(bound=(0.3, 0.3, 0.3)))
     goal = cloth_diagonal(n=n).positions + np.array([0.0, 0.0, scene.radius])
     task = _task(scene, goal)
     assert task.cost(scene.initial_state) > 0.06
@@ -245,8 +245,8 @@ def test_a_sheet_without_bending_keeps_its_stretch_stiffness():
     assert np.abs(both.flex_bending).sum() > 0
     assert np.abs(stretch.flex_bending).sum() == 0
     np.testing.assert_array_equal(stretch.flex_stiffness, both.flex_stiffness)
-    assert ClothSceneConfig.preset("fast").bending is False
-    assert ClothSceneConfig.preset("default").bending is True
+    assert ClothSceneConfig.physics("fast").bending is False
+    assert ClothSceneConfig.physics("default").bending is True
 
 
 @pytest.mark.parametrize("scene", [lambda mode: make_cloth(ClothSceneConfig(n=4, selfcollide=mode)),

@@ -99,7 +99,7 @@ CORNER = N * N - 1          # at (+side/2, +side/2)
 def _task(workspace=None, max_stretch=None):
     if workspace is not None and max_stretch is not None:
         workspace = ActionConstraint(workspace.low, workspace.high, max_stretch)
-    scene = make_cloth(ClothSceneConfig.preset("fast", n=N),     # a sheet that stretches
+    scene = make_cloth(ClothSceneConfig.physics("fast", n=N),     # a sheet that stretches
                        PickerConfig(bound=(0.3,) * 3, workspace=workspace))
     return PickPlaceTask(scene, scene.positions(scene.initial_state),
                          rollout=RolloutService(scene.scene, RolloutConfig(threads=1)))

@@ -43,7 +43,7 @@ def test_today_is_every_preset_the_library_resolves():
     t = today()
     assert set(t["physics"]["cloth"]) == set(PHYSICS_PRESETS)
     for name in PHYSICS_PRESETS:
-        assert set(t["physics"]["cloth"][name]) == set(asdict(ClothSceneConfig.preset(name)))
+        assert set(t["physics"]["cloth"][name]) == set(asdict(ClothSceneConfig.physics(name)))
     assert set(t["protocols"]) == set(pp.PROTOCOLS) == set(t["resolved"])
     for task, goals in pp.GOALS.items():
         for goal in goals:
