@@ -15,7 +15,7 @@ last digit, so they stay these functions):
   Table 1 statistic, 1.645 std / sqrt(n)).
 
 ``kendall_tau_b(x, y)``: Kendall's tau-b rank correlation (how two columns order the same
-rows). ``holm_family`` applies ``dopt.lab.multiple.holm`` (pure Python) to a family of
+rows). ``holm_family`` applies ``dopt.lab.multiple.holm_named`` (pure Python) to a family of
 p-values. The tests check every function against scipy.
 """
 
@@ -24,7 +24,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 
-from dopt.lab.multiple import holm
+from dopt.lab.multiple import holm_named
 
 #: the family-wise error rate the report's families are judged at
 FAMILY_ALPHA = 0.05
@@ -157,9 +157,8 @@ def _normal_ppf(q: float) -> float:
 def holm_family(pvalues: dict, alpha: float = FAMILY_ALPHA) -> dict:
     """{name: (p, Holm-adjusted p, rejected at family-wise ``alpha``)} of a family {name: p};
     names whose p is None are left out of the family (and of the result)."""
-    names = [k for k, p in pvalues.items() if p is not None]
-    adjusted = holm([min(1.0, max(0.0, pvalues[k])) for k in names])
-    return {k: (pvalues[k], adj, adj <= alpha) for k, adj in zip(names, adjusted, strict=True)}
+    adjusted = holm_named(pvalues)
+    return {k: (pvalues[k], adj, adj <= alpha) for k, adj in adjusted.items()}
 
 
 def pval(p: float | None) -> str:

@@ -59,9 +59,10 @@ from dopt.lab.flags import add_alias
 from dopt.lab.provenance import code_version
 from dopt.lab.record import check_outputs, settings_dict, write_summary
 from dopt.tasks.pick.cloth_scene import PHYSICS_PRESETS
+from planners.pick_place import GOAL_NAMES
 
 ROPE_TASKS = ["rope_straighten", "rope_fold", "rope_fold_unequal"]
-CLOTH_TASKS = ["cloth_diagonal", "cloth_side", "cloth_reflective", "cloth_underneath"]
+CLOTH_TASKS = [g.shape for g in GOAL_NAMES if g.task == "cloth" and g.panel is not None]
 TASKS = ROPE_TASKS + CLOTH_TASKS
 #: the counts the paper reports (Sec. IV-C.1): key particles for rope, triangles for cloth
 PAPER = {"rope_straighten": {"keys": 2}, "rope_fold": {"keys": 4},

@@ -7,17 +7,13 @@ from __future__ import annotations
 
 from dopt.lab.multiple import holm_slopes
 from dopt.lab.report.base import Result
-from planners.pick_place import LABELS
+from planners.pick_place import GOAL_NAMES, LABELS
 
 #: the paper, as the pages, the catalogue and the map name it
 KP = "key particles"
-#: Fig. 7 panel of each (task, goal) of the key-particle paper
-FIG7_PANELS = {("rope", "straighten"): "(a) rope straightening",
-               ("rope", "fold"): "(b) rope folding",
-               ("cloth", "diagonal"): "(c) cloth diagonal fold",
-               ("cloth", "side"): "(d) cloth side fold",
-               ("cloth", "reflective"): "(e) cloth reflective fold",
-               ("cloth", "underneath"): "(f) cloth underneath fold"}
+#: Fig. 7 panel of each (task, goal) of the key-particle paper ("(c) cloth diagonal fold"),
+#: read from the one goal-name table
+FIG7_PANELS = {(g.task, g.goal): g.label for g in GOAL_NAMES if g.panel is not None}
 
 
 def _label(method: str) -> str:
