@@ -39,7 +39,9 @@ class MapRow:
     """A figure or table of a paper: the command that reproduces it (the short form; the
     recorded commands are in RESULTS.md), the RESULTS.md section with its details, the
     headline sentence from the result files, which files the row reads, and the title of its
-    claim on its paper's page (``dopt.lab.report.claims``; None: the row links to its section)."""
+    claim on its paper's page (``dopt.lab.report.claims``; None: the row links to its section).
+    ``uses``: the files the headline takes its numbers from, where it picks some of those it
+    reads (their notes, "stale" among them, are the row's; None: all it reads)."""
 
     paper: str
     item: str
@@ -48,6 +50,7 @@ class MapRow:
     headline: Callable[[list[Result]], str | None]
     reads: Callable[[Result], bool]
     claim: str | None = None
+    uses: Callable[[list[Result]], list[Result]] | None = None
 
 
 def rows() -> list[MapRow]:
@@ -80,6 +83,8 @@ def map_block(results: list[Result], readme: Path, results_md: Path) -> str:
     for row in rows():
         headline = row.headline(results)
         files = [r for r in results if row.reads(r)]
+        if files and row.uses is not None:
+            files = row.uses(results)
         # a row no file feeds yet has no section to link to; a row with a claim links to the
         # claim on its paper's page, the others to their section of RESULTS.md
         if row.claim is not None:
