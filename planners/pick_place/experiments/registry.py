@@ -10,6 +10,7 @@ from dopt.lab.experiment import Experiment, register_experiment, register_page
 from dopt.lab.report.engine import Entry
 from dopt.lab.report.resummarize import commits_of
 from planners.pick_place.experiments import report_claims, report_kp, report_map
+from planners.pick_place.experiments.report_budget import cloth_budget_section
 from planners.pick_place.experiments.report_fig7 import (
     HOLM_NOTE,
     _departs,
@@ -220,7 +221,9 @@ def _register() -> None:
               Section("random_reach", 19, report_kp.random_reach_section,
                       "python experiments/random_reach.py"),
               Section("physics_reference", 21, physics_reference_section,
-                      "python -m planners.bench physics-reference")):
+                      "python -m planners.bench physics-reference"),
+              Section("cloth_budget", 22, cloth_budget_section,
+                      "python -m planners.bench cloth-budget")):
         register_experiment(x)
     register_page(PAGE)
 
