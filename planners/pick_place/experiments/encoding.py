@@ -160,12 +160,9 @@ def parse(argv=None) -> argparse.Namespace:
     return args
 
 
+@guarded("fig7_encoding.py")
 def main(argv=None) -> int:
-    """The run of the module docstring; the exit code."""
-    return guarded("fig7_encoding.py")(_main)(argv)
-
-
-def _main(argv=None) -> int:
+    """The run of the module docstring, holding OUT's lock and logging; the exit code."""
     args = parse(argv)
     with sweep_session(args.out, args.verbose):
         return _experiment(args, argv)

@@ -203,12 +203,9 @@ def copy_finished(trials, source: Path, out: Path) -> int:
     return copied
 
 
+@guarded("fig7_scaling.py")
 def main(argv=None) -> int:
-    """The run of the module docstring; the exit code."""
-    return guarded("fig7_scaling.py")(_main)(argv)
-
-
-def _main(argv=None) -> int:
+    """The run of the module docstring, holding OUT's lock and logging; the exit code."""
     args = parse(argv)
     with sweep_session(args.out, args.verbose):
         return _experiment(args, argv)
