@@ -176,7 +176,7 @@ class PandaExecute(Section):
 
     def __init__(self):
         super().__init__("panda_execute", 14, report_kp.panda_section,
-                         "python experiments/panda_execute.py --seeds 3 --out "
+                         "python experiments/panda_execute.py --trials 3 --out "
                          "docs/results/runs/panda --record docs/results/panda-execute.json")
 
     def headline(self, result):

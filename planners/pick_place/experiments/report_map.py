@@ -178,7 +178,7 @@ ROWS = (
            lambda r: r.kind == "fig7_scaling" and not r.quick,
            "The gain grows with the particle count"),
     MapRow(KP, "Sec. IV-D: a Panda executes the plans",
-           "python experiments/panda_execute.py --seeds 3",
+           "python experiments/panda_execute.py --trials 3",
            "Key particles, Sec. IV-D: a Panda executes the plans", panda_line,
            lambda r: r.kind == "panda_execute" and not r.quick,
            "A robot arm executes the plans"),

@@ -140,7 +140,7 @@ def sweeps_in_progress_section(results_dir: Path, results: list[Result]) -> list
              "final cost (mean particle distance, mm) as its trial file holds it, and what a "
              "trial cost. Means, intervals and the paper's claims wait for the recorded "
              "summary; the command in the results table above (with these methods in "
-             "`--methods` and enough `--seeds`) resumes the sweep where it stopped."]
+             "`--methods` and enough `--trials`) resumes the sweep where it stopped."]
     summaries = {r.path.stem for r in results}
     checkpoints = {name: _checkpoints(Path(results_dir) / "runs" / name) for name in sweeps}
 
