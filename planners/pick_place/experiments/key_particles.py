@@ -62,7 +62,7 @@ from dopt.tasks.pick.cloth_scene import PHYSICS_PRESETS
 from planners.pick_place import GOAL_NAMES
 
 ROPE_TASKS = ["rope_straighten", "rope_fold", "rope_fold_unequal"]
-CLOTH_TASKS = [g.shape for g in GOAL_NAMES if g.task == "cloth" and g.panel is not None]
+CLOTH_TASKS = [g.shape for g in GOAL_NAMES if g.shape.startswith("cloth_") and g.panel]
 TASKS = ROPE_TASKS + CLOTH_TASKS
 #: the counts the paper reports (Sec. IV-C.1): key particles for rope, triangles for cloth
 PAPER = {"rope_straighten": {"keys": 2}, "rope_fold": {"keys": 4},
