@@ -28,6 +28,7 @@ from collections import Counter
 from collections.abc import Callable
 from pathlib import Path
 
+from dopt.lab.cli import guarded
 from dopt.lab.sweep import OutLock, SweepPlan, SweepResult, Trial, run_sweep
 
 
@@ -46,6 +47,18 @@ def sweep_session(out: Path, verbose: bool):
     out.mkdir(parents=True, exist_ok=True)
     with out_lock(out):
         yield
+
+
+def sweep_main(script: str, parse: Callable, experiment: Callable) -> Callable:
+    """A sweep script's ``main(argv=None) -> int``: ``parse(argv)`` its flags, then
+    ``experiment(args, argv)`` inside its ``sweep_session`` (logging, OUT made and locked), all
+    under ``guarded(script)`` (a failure is one line and an exit status)."""
+    @guarded(script)
+    def main(argv=None) -> int:
+        args = parse(argv)
+        with sweep_session(args.out, args.verbose):
+            return experiment(args, argv)
+    return main
 
 
 @contextlib.contextmanager

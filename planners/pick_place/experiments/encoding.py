@@ -30,7 +30,6 @@ from dopt.lab.cli import (
     EPILOG,
     ArgumentParser,
     choices_type,
-    guarded,
     nonneg_int,
     number_list,
     output_dir,
@@ -38,7 +37,7 @@ from dopt.lab.cli import (
     positive_float,
     positive_int,
 )
-from dopt.lab.console import print_outputs, run_with_console, sweep_session
+from dopt.lab.console import print_outputs, run_with_console, sweep_main
 from dopt.lab.flags import SettingsFlags, add_alias, apply, common_settings
 from dopt.lab.record import (
     add_reuse_argument,
@@ -160,14 +159,6 @@ def parse(argv=None) -> argparse.Namespace:
     return args
 
 
-@guarded("fig7_encoding.py")
-def main(argv=None) -> int:
-    """The run of the module docstring, holding OUT's lock and logging; the exit code."""
-    args = parse(argv)
-    with sweep_session(args.out, args.verbose):
-        return _experiment(args, argv)
-
-
 def _experiment(args, argv) -> int:
     """The sweep, the summary, the plot and the printed verdict."""
     start, out = time.perf_counter(), args.out
@@ -201,6 +192,10 @@ def _experiment(args, argv) -> int:
         print(f"FAILED {key}: {err}", file=sys.stderr)
     print_outputs(out, ["encoding.png"])
     return 1 if res.failed else 0
+
+
+#: the run of the module docstring, holding OUT's lock and logging; the exit code
+main = sweep_main("fig7_encoding.py", parse, _experiment)
 
 
 if __name__ == "__main__":

@@ -43,14 +43,13 @@ from dopt.lab.cli import (
     EPILOG,
     ArgumentParser,
     choices_type,
-    guarded,
     nonneg_int,
     number_list,
     output_dir,
     output_file,
     positive_int,
 )
-from dopt.lab.console import print_outputs, run_with_console, sweep_session
+from dopt.lab.console import print_outputs, run_with_console, sweep_main
 from dopt.lab.flags import SettingsFlags, add_alias
 from dopt.lab.record import (
     add_reuse_argument,
@@ -203,14 +202,6 @@ def copy_finished(trials, source: Path, out: Path) -> int:
     return copied
 
 
-@guarded("fig7_scaling.py")
-def main(argv=None) -> int:
-    """The run of the module docstring, holding OUT's lock and logging; the exit code."""
-    args = parse(argv)
-    with sweep_session(args.out, args.verbose):
-        return _experiment(args, argv)
-
-
 def _experiment(args, argv) -> int:
     """The sweep, the summary, the plot and the printed verdict."""
     start = time.perf_counter()
@@ -306,6 +297,10 @@ def plot(path: Path, stats: dict, goal: str) -> bool:
         fig.savefig(tmp, dpi=120)
     plt.close(fig)
     return True
+
+
+#: the run of the module docstring, holding OUT's lock and logging; the exit code
+main = sweep_main("fig7_scaling.py", parse, _experiment)
 
 
 if __name__ == "__main__":
