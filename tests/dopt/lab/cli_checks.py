@@ -39,6 +39,16 @@ def usage_error(capsys, main, argv: list, hint: bool = True) -> str:
     return err
 
 
+def bad_argument_is_a_usage_error_and_creates_nothing(tmp_path, capsys, main, script: str,
+                                                      argv: list, message: str) -> None:
+    """``main`` (the experiment ``script``'s) refuses ``argv`` with a usage error holding
+    ``message`` and its script's name, and --out is not created."""
+    out = tmp_path / "out"
+    err = usage_error(capsys, main, [*argv, "--out", out])
+    assert message in err and f"{script}.py: error:" in err
+    assert not out.exists()
+
+
 # --------------------------------------------------------------------------- --out, --record
 def out_and_record_must_be_writable_places(tmp_path: Path, capsys, main) -> None:
     afile = tmp_path / "afile"

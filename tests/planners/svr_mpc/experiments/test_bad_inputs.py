@@ -12,7 +12,7 @@ import pytest
 
 from planners.svr_mpc.experiments import clock_check, explain, fig4, mapping, runner, table1
 from tests.dopt.lab import cli_checks
-from tests.dopt.lab.cli_checks import check_provenance, impossible, usage_error
+from tests.dopt.lab.cli_checks import check_provenance, impossible
 
 ROOT = Path(__file__).resolve().parents[4]
 #: where the SVR experiments' flags are added (their scripts in experiments/ are thin)
@@ -77,10 +77,8 @@ BAD = [
                          ids=[f"{s}{' '.join(a)}" for s, a, _ in BAD])
 def test_a_bad_argument_is_a_usage_error_and_creates_nothing(tmp_path, capsys, no_run, script,
                                                              argv, message):
-    out = tmp_path / "out"
-    err = usage_error(capsys, SCRIPTS[script], [*argv, "--out", out])
-    assert message in err and f"{script}.py: error:" in err
-    assert not out.exists()
+    cli_checks.bad_argument_is_a_usage_error_and_creates_nothing(
+        tmp_path, capsys, SCRIPTS[script], script, argv, message)
 
 
 @pytest.mark.parametrize("script", WRITERS)
