@@ -37,7 +37,8 @@ def grid(**fields) -> dict:
 
 
 #: the settings the sweep compares: name -> scene-config overrides (on top of the config's
-#: defaults); "preset:<name>" entries are the named presets themselves
+#: defaults, or of the physics preset named by their "physics" key); "preset:<name>" entries
+#: are the named presets themselves
 CLOTH_SETTINGS = {
     "preset:fast": None, "preset:default": None, "preset:accurate": None,
     "E5e4 dt.02 CG30": grid(young=5e4, timestep=0.02, solver="CG", iterations=30),
@@ -110,6 +111,10 @@ CLOTH_SETTINGS = {
     "default selfcollide passive": dict(selfcollide=True, passive=True),
     "default Newton": dict(solver="Newton"),
     "default Newton dt.01": dict(solver="Newton", timestep=0.01),
+    # the solver per preset (issue 90): each preset as it is, but with Newton ("physics":
+    # the preset the overrides go on top of)
+    "fast Newton": dict(physics="fast", solver="Newton"),
+    "accurate Newton": dict(physics="accurate", solver="Newton"),
 }
 ROPE_SETTINGS = {
     "preset:fast": None, "preset:default": None, "preset:accurate": None,
@@ -137,7 +142,9 @@ def _config(task: str, name: str, overrides: dict | None, n: int):
     cls = pick_task(task).config
     if overrides is None:
         return cls.physics(name.split(":", 1)[1], n=n)
-    return replace(cls(n=n), **overrides)
+    fields = dict(overrides)
+    base = cls.physics(fields.pop("physics"), n=n) if "physics" in fields else cls(n=n)
+    return replace(base, **fields)
 
 
 def differing_fields(config) -> dict:

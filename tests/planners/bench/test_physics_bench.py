@@ -38,3 +38,14 @@ def test_picker_speeds_give_a_row_each_with_the_moves_steps():
     assert (slow["picker_speed"], fast["picker_speed"]) == (0.5, 1.0)
     move = {v: math.ceil(0.3 * math.sqrt(3) / v / 0.005) for v in (0.5, 1.0)}
     assert slow["steps_per_action"] - fast["steps_per_action"] == move[0.5] - move[1.0]
+
+
+def test_a_solver_row_on_a_preset_keeps_the_presets_fields():
+    """"accurate Newton": the accurate preset's fields with the solver changed, so the row
+    differs from "preset:accurate" in the solver alone (and steps alike)."""
+    out = bench_physics("cloth", [4], ["preset:accurate", "accurate Newton"], actions=4,
+                        threads=1, seed=0, scripted=False)
+    cg, newton = out["rows"]
+    assert newton["fields"] == {**cg["fields"], "solver": "Newton"}
+    assert cg["fields"] == PHYSICS_PRESETS["accurate"]
+    assert newton["steps_per_action"] == cg["steps_per_action"]
