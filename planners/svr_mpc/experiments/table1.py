@@ -106,9 +106,10 @@ def _main(args, argv) -> int:
                               "rho": t.params["rho"]}
                         for t in trials for row in [row_label(t.params)]},
                **fields, "failed": failed, "trial_commits": res.commits,
-               "trial_keys": sorted(t.key for t in trials),
-               "blowups": print_captures(args.out,
-                                         captures_of(args.out, [t.key for t in trials]))}
+               # the names its trials are stored under (an older name: as stored)
+               "trial_keys": sorted(res.stored_key(t.key) for t in trials),
+               "blowups": print_captures(args.out, captures_of(
+                   args.out, [res.stored_key(t.key) for t in trials]))}
     if getattr(args, "authors_data", None) is not None:
         summary["authors_rows"] = authors_travel(args.authors_data / TASK_DIRS[args.task],
                                                  args.layouts)
