@@ -39,8 +39,8 @@ from planners.svr_mpc.settings import (
     SVRMPCSettings,
     parse_row,
     split_params,
+    trial_key,
 )
-from planners.svr_mpc.trial_names import trial_key
 
 
 @dataclass(frozen=True)

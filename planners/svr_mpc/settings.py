@@ -2,7 +2,7 @@
 derivative options (``planners.ilqr.Derivatives``: ``spell_derivatives``), the paper's Table 1
 rows by name (``parse_row`` -> ``Row``), a task's own slowdown and timeout
 (``task_defaults``), and the params, key and row label a trial is stored and reported under
-(``trial_params``, ``row_label``; its key: ``planners.svr_mpc.trial_names``)."""
+(``trial_params``, ``trial_key``, ``row_label``)."""
 
 from __future__ import annotations
 
@@ -143,7 +143,7 @@ def spell_derivatives(d: Derivatives, form: Literal["key", "label", "row"]) -> t
     timestep, a plain backward pass), in the one order fd, keypoints, box QP: the spelling of
     the derivative options everywhere they are written out.
 
-    form: ``key`` (``legacy_trial_key``'s parts: ``fdc1e-06`` or ``fdf<eps>``, ``skip<K>`` or
+    form: ``key`` (``trial_key``'s parts: ``fdc1e-06`` or ``fdf<eps>``, ``skip<K>`` or
     ``kpadaptive``, ``boxqp``), ``label`` (``row_label``'s ``+`` suffixes: ``central`` or
     ``fd<eps>``, ``skip<K>`` for K > 1 or ``adaptive``, ``boxqp``) or ``row`` (the variants a
     row names, ``parse_variants``' words: ``central``, ``skip<K>`` or ``adaptive``,
@@ -390,6 +390,42 @@ def split_params(params: dict) -> tuple[SVRMPCSettings, int, str]:
     p = dict(params)
     seed, optimiser = p.pop("seed"), p.pop("optimiser", DEFAULT_OPTIMISER)
     return SVRMPCSettings(**p), seed, optimiser
+
+
+def trial_key(p: dict) -> str:
+    """File-name key of a trial's params: everything that changes its outcome (timeout None,
+    the task's own, is Y0; settings at their defaults add nothing)."""
+    parts = [p["task"], p["method"], f"rho{p['rho']:g}", f"theta{p['theta']}",
+             f"slow{p['slowdown']:g}", f"Y{p['timeout'] or 0}", f"seed{p['seed']}"]
+    if p.get("feedback"):
+        parts.append("fb")
+    if p.get("control_noise"):
+        parts.append(f"noise{p['control_noise']:g}")
+    if p.get("cost", "ee") != "ee":
+        parts.append(f"cost{p['cost']}")
+    if p.get("warm_start"):
+        parts.append("ws")
+    if p.get("clock", "real") == "authors":
+        parts.append("clockauthors")
+    elif p.get("clock", "real") != "real":
+        parts.append(f"clock{p['clock']}{p.get('nominal_threads', 2.0):g}")
+    if p.get("executor", "alg1") != "alg1":
+        parts.append(f"exec{p['executor']}")
+    if p.get("clock_ms") is not None:
+        parts.append(f"ms{p['clock_ms']:g}")
+    if p.get("synchronous"):
+        parts.append("sync")
+    parts += spell_derivatives(Derivatives.from_fields(p), "key")
+    if p.get("problem", "ours") != "ours":
+        parts.append(p["problem"])
+    if not p.get("islands", True):
+        parts.append("noislands")
+    if not p.get("push_tail", True):
+        parts.append("notail")
+    parts += [f"fix{name}" for name, f in FIXES.items() if p.get(f)]
+    if p.get("optimiser", DEFAULT_OPTIMISER) != DEFAULT_OPTIMISER:
+        parts.append(f"opt{p['optimiser']}")
+    return "-".join(parts)
 
 
 def row_label(p: dict) -> str:

@@ -210,7 +210,7 @@ def test_a_trial_captures_a_flagged_episode_under_the_sweeps_folder(tmp_path, mo
     import json
 
     import planners.svr_mpc.episode as episode
-    from planners.svr_mpc import CapturingTrial, trial_key
+    from planners.svr_mpc import CapturingTrial
 
     params = {**dataclasses.asdict(SVRMPCSettings(task="clutter", method="baseline",
                                                   synchronous=True, timeout=3, threads=1,
@@ -223,7 +223,7 @@ def test_a_trial_captures_a_flagged_episode_under_the_sweeps_folder(tmp_path, mo
     monkeypatch.setattr(episode, "Scene", lambda model, stability: scene(
         model, stability=dataclasses.replace(stability, max_speed=1e-9)))
     res = CapturingTrial(str(tmp_path))(params)
-    key = trial_key(params)
+    key = legacy_trial_key(params)                # run_trial's capture label, still
     assert res["unstable"] and res["blowups"] == [f"blowups/{key}"]
     meta = json.loads((tmp_path / "blowups" / key / "blowup.json").read_text())
     assert res["unstable_reason"] == f"step {meta['step']}: {meta['reason']}"
