@@ -20,5 +20,7 @@ runs sweeps reads this room. Modules:
     console.py              a sweep's console: progress bar, estimates, finished lines
     scripts.py              the console scripts (dopt-fold, dopt-mpc, ...) over experiments/
     dicts.py                small helpers on nested JSON-like dicts
+    identity.py             the one trial identity of both papers: a trial's name, the hash
+                            of the settings that differ from a fixed reference
 
 Standard library only, but numpy in stats.py (Ray, for a sweep across machines, is optional)."""

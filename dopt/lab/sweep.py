@@ -134,6 +134,7 @@ from dopt.lab.sweep_store import (  # noqa: F401  (the public names of dopt.lab.
     check_record,
     check_trial_files,
     current_code,
+    find_alias,
     move_aside,
     stored_record,
     trial_path,
@@ -185,6 +186,12 @@ class SweepResult:
     reused_across: dict = field(default_factory=dict)
     resumed: list = field(default_factory=list)
     interrupted: dict = field(default_factory=dict)
+
+    def stored_key(self, key: str) -> str:
+        """The name trial ``key``'s record is stored under (its file, its blow-up captures):
+        ``key`` itself, or the older name it was found under (``Schema.aliases``)."""
+        rec = self.records.get(key)
+        return key if rec is None else rec["key"]
 
     def line(self) -> str:
         """One line: trials reused, resumed, run, failed (and interrupted)."""
@@ -294,11 +301,12 @@ def is_finished(out_dir: Path | str, key: str, *, root: Path | str | None = None
                 params: dict | None = None) -> bool:
     """Whether ``run_sweep`` (not fresh, same ``reuse``, ``root`` and ``schema``) would skip
     trial ``key`` (of ``params``, when given: the stored params must be its, by
-    ``Schema.params_problem``): its file under OUT/trials, or else its packed record, is a
-    valid record that may stand for this code (the code state this process last saw,
-    ``current_code``). Reads only (PackError: the pack cannot be read)."""
+    ``Schema.params_problem``; with params, a record under one of its ``Schema.aliases``
+    counts too): its file under OUT/trials, or else its packed record, is a valid record
+    that may stand for this code (the code state this process last saw, ``current_code``).
+    Reads only (PackError: the pack cannot be read)."""
     _check_reuse(reuse)
-    rec, _ = stored_record(out_dir, key, schema)
+    rec, _ = stored_record(out_dir, key, schema, params)
     if rec is None or schema.wanted_problem(rec["result"]):
         return False
     if params is not None and schema.params_problem(rec["params"], params):
@@ -320,8 +328,10 @@ def _check_reuse(reuse) -> None:
 def _sort_stored(trials, out_dir, state, *, fresh, reuse, root, schema
                  ) -> tuple[dict, dict, dict, dict]:
     """({key: reused record}, {key: why recomputed}, {file name: why corrupt}, {key: why it
-    was reused across a code change}) of the stored trial files; the files of the trials to
-    recompute are moved to OUT/trials/outdated/."""
+    was reused across a code change}) of the stored trial files; a trial without a record of
+    its own key takes the one stored under an alias (``Schema.aliases``, as stored); the
+    loose files of the trials to recompute are moved to OUT/trials/outdated/ (a record under
+    an alias stays where it is: the new record does not overwrite it)."""
     done, corrupt = check_trial_files(out_dir, schema)
     recomputed, across = {}, {}
     for t in trials:
@@ -329,6 +339,9 @@ def _sort_stored(trials, out_dir, state, *, fresh, reuse, root, schema
             _check_params(out_dir, t, done, corrupt, schema)
         if f"{t.key}.json" in corrupt and t.key not in done:
             recomputed[t.key] = f"corrupt trial file: {corrupt[f'{t.key}.json']}"
+        if t.key not in done and (alias := find_alias(done, t.params, schema)) is not None:
+            done[t.key] = done[alias]
+            log.info("trial %s is stored under its older name %s", t.key, alias)
         rec = done.get(t.key)
         if rec is None:
             continue
@@ -343,8 +356,10 @@ def _sort_stored(trials, out_dir, state, *, fresh, reuse, root, schema
             continue
         recomputed[t.key] = reason
         del done[t.key]
-        path = trial_path(out_dir, t.key)
-        old = (f"old file moved to {move_aside(path, OUTDATED_DIR)}" if path.is_file() else
+        path = trial_path(out_dir, rec["key"])
+        old = (f"its record under its older name {rec['key']} stays as it is"
+               if rec["key"] != t.key else
+               f"old file moved to {move_aside(path, OUTDATED_DIR)}" if path.is_file() else
                "its packed record stays in its pack, overridden by the new file")
         log.log(logging.INFO if fresh else logging.WARNING, "trial %s is recomputed: %s (%s)",
                 t.key, reason, old)
@@ -443,8 +458,7 @@ def _run_locked(fn, trials, out_dir, state, *, workers, ray_address, progress, t
     _DELIBERATE.update(across)
     todo = [t for t in trials if t.key not in done]
     skipped = [t.key for t in trials if t.key in done]
-    checkpoints = {t.key: Checkpoint(out_dir, t.key, root, state, schema, t.params)
-                   for t in todo}
+    checkpoints = {t.key: checkpoint_of(out_dir, t, schema, root, state) for t in todo}
     if fresh:
         for c in checkpoints.values():
             if c.path.exists():
@@ -469,6 +483,22 @@ def _run_locked(fn, trials, out_dir, state, *, workers, ray_address, progress, t
     if stop.signum is not None:
         raise SweepInterrupted(stop.signum, result, out_dir)
     return result
+
+
+def checkpoint_of(out_dir: Path | str, trial: Trial, schema: Schema = ANY,
+                  root: Path | str | None = None, state: CodeState | None = None
+                  ) -> Checkpoint:
+    """The ``Checkpoint`` of ``trial``: of its own key, or, while that has no file, of the
+    first alias (``Schema.aliases``) that has one (a trial saved before its name changed
+    resumes, and its checkpoint is deleted once its record is written under its key)."""
+    own = Checkpoint(out_dir, trial.key, root, state, schema, trial.params)
+    if own.path.is_file():
+        return own
+    for alias in schema.aliases_of(trial.params):
+        old = Checkpoint(out_dir, alias, root, state, schema, trial.params)
+        if old.path.is_file():
+            return old
+    return own
 
 
 def _execute(fn, todo, out_dir, code, checkpoints, records, progress, tick, schema, *,

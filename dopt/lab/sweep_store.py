@@ -105,6 +105,12 @@ class Schema:
             (``params_problem``). Fields that do not change a result (threads) are left out
             of it, so that a rerun with other threads reuses the trial. Every experiment of
             the project names one.
+        aliases: the older names a trial of these params may be stored under (a picklable
+            function params -> tuple of keys, tried in order; None: none): the names trials
+            had before the one identity (``dopt.lab.identity``). A trial whose own key holds
+            no usable record is taken from the first alias whose record's params are its
+            (``params_problem``), reused as stored: its "key" still names its file, and no
+            file is renamed or rewritten (``stored_record``, ``find_alias``).
     """
 
     result: tuple[str, ...] = ()
@@ -114,6 +120,7 @@ class Schema:
     wanted: tuple[str, ...] = ()
     finite: tuple[str, ...] = ()
     identity: Callable[[dict], object] | None = None
+    aliases: Callable[[dict], tuple[str, ...]] | None = None
 
     def __post_init__(self):
         for name in ("result", "progress", "wanted", "finite"):
@@ -121,7 +128,7 @@ class Schema:
             if isinstance(keys, str) or not all(isinstance(k, str) for k in keys):
                 raise TypeError(f"Schema.{name} must be a tuple of key names, got {keys!r}")
             object.__setattr__(self, name, tuple(keys))
-        for name in ("check_result", "check_progress", "identity"):
+        for name in ("check_result", "check_progress", "identity", "aliases"):
             if getattr(self, name) is not None and not callable(getattr(self, name)):
                 raise TypeError(f"Schema.{name} must be callable or None")
 
@@ -151,6 +158,16 @@ class Schema:
     def _identity(self, params) -> str:
         """The identity of ``params`` as canonical JSON text (tuples as lists, keys sorted)."""
         return json.dumps(self.identity(params), sort_keys=True, allow_nan=True, default=repr)
+
+    def aliases_of(self, params: dict) -> tuple[str, ...]:
+        """The older keys a trial of ``params`` may be stored under (``aliases``; () without
+        one); TypeError unless the function gives a tuple or list of str."""
+        if self.aliases is None:
+            return ()
+        keys = self.aliases(params)
+        if not isinstance(keys, (tuple, list)) or not all(isinstance(k, str) for k in keys):
+            raise TypeError(f"Schema.aliases must give a tuple of keys, got {keys!r}")
+        return tuple(keys)
 
     def wanted_problem(self, result: dict) -> str | None:
         """Why the sound trial ``result`` cannot stand for this run (it lacks a ``wanted``
@@ -279,15 +296,42 @@ def check_packed(trial: StoredTrial, schema: Schema = ANY) -> tuple[dict | None,
                  else f"packed in {trial.pack.name} line {trial.line}: {problem}")
 
 
-def stored_record(out_dir: Path | str, key: str, schema: Schema = ANY
-                  ) -> tuple[dict | None, str | None]:
+def stored_record(out_dir: Path | str, key: str, schema: Schema = ANY,
+                  params: dict | None = None) -> tuple[dict | None, str | None]:
     """(record, None) of trial ``key`` under OUT/trials as ``check_trial_files`` would take it
     (its loose file, else, when that is missing or not a record, its packed record), else
-    (None, what is wrong, or None when there is none). Reads only.
+    (None, what is wrong, or None when there is none). With ``params`` (the trial's), a trial
+    without a usable record of its own key is looked up under its ``schema.aliases`` too
+    (the record of the first alias whose params are these, by ``Schema.params_problem``,
+    returned as stored: its "key" is the alias). Reads only.
 
     Raises:
         dopt.lab.trialpack.PackError: the folder's pack cannot be read.
     """
+    rec, problem = _stored_record(out_dir, key, schema)
+    if rec is not None or params is None:
+        return rec, problem
+    for alias in schema.aliases_of(params):
+        old, _ = _stored_record(out_dir, alias, schema)
+        if old is not None and schema.params_problem(old["params"], params) is None:
+            return old, None
+    return None, problem
+
+
+def find_alias(records: dict, params: dict, schema: Schema) -> str | None:
+    """The first of ``schema.aliases_of(params)`` that ``records`` ({key: record}, as
+    ``check_trial_files`` reads them) holds with these params (``Schema.params_problem``), or
+    None: where the trial of ``params`` is stored when its own key holds nothing."""
+    for alias in schema.aliases_of(params):
+        rec = records.get(alias)
+        if rec is not None and schema.params_problem(rec["params"], params) is None:
+            return alias
+    return None
+
+
+def _stored_record(out_dir: Path | str, key: str, schema: Schema
+                   ) -> tuple[dict | None, str | None]:
+    """``stored_record`` of ``key`` alone (no alias)."""
     path = trial_path(out_dir, key)
     packed = read_pack(path.parent).get(key)        # first: a bad pack is named either way
     rec, problem = (check_record(path, schema) if path.is_file() else (None, None))
@@ -512,5 +556,5 @@ class Report:
 __all__ = ["ANY", "CHECKPOINT_DIR", "CORRUPT_DIR", "LOCK_NAME", "OUTDATED_DIR", "PROGRESS_DIR",
            "RECORD_FIELDS", "Checkpoint", "OutLock", "Report", "Schema",
            "SweepLockedError", "Trial", "check_packed", "check_record", "check_trial_files",
-           "check_value", "current_code", "move_aside", "read_json", "reason_path",
+           "check_value", "current_code", "find_alias", "move_aside", "read_json", "reason_path",
            "stored_record", "trial_path"]

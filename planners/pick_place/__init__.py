@@ -29,7 +29,8 @@ Modules, one job each (every name is re-exported here):
     presets.py   the presets of both protocols with the source of every number: PRESETS
                  (ours), PAPER_PRESETS (the paper's), QUICK_CHANGES, PROTOCOL_SEEDS
     settings.py  PickPlaceSettings: presets, scene and picker configs, a trial's identity
-                 and name (trial_key)
+    trial_names.py  a trial's name (trial_key, dopt.lab.identity's rule), the names of the
+                 trials written before it (legacy_trial_key) and the sweeps' identity check
     problem.py   Problem and make_problem (a goal's start, or its prepared start)
     budget.py    the sizes a setting implies, checked before anything is allocated
                  (check_budget, budget_problem, BudgetError)
@@ -90,7 +91,6 @@ from planners.pick_place.settings import (
     UNSET_SCENE_FIELDS,
     UNSET_SETTINGS,
     PickPlaceSettings,
-    trial_key,
 )
 from planners.pick_place.summary import last_improvement, summarize
 from planners.pick_place.tasks import (
@@ -114,6 +114,7 @@ from planners.pick_place.tasks import (
     register_task,
     rope_stage,
 )
+from planners.pick_place.trial_names import legacy_trial_key, trial_key
 
 __all__ = [
     "CEM_CANDIDATES", "CRUMPLE_TURN", "FOLD_STARTS", "GOAL_NAMES", "GOALS", "LABELS", "METHODS",
@@ -125,5 +126,5 @@ __all__ = [
     "cloth_sequence", "goal_name", "last_improvement", "make_planner", "make_problem",
     "metric_names", "paper_preset", "pick_task", "quick_preset", "register_goal",
     "register_planner", "register_task", "rope_stage", "run_problem", "run_trial",
-    "seconds_per_action", "solve", "summarize", "trial_key",
+    "legacy_trial_key", "seconds_per_action", "solve", "summarize", "trial_key",
 ]

@@ -23,7 +23,8 @@ from dataclasses import replace
 from dopt.lab.sweep import Trial
 from planners.pick_place.drag_settings import SOFTGYM_SPACING, DragSettings
 from planners.pick_place.scaling import scaling_summary
-from planners.pick_place.settings import PickPlaceSettings, trial_key
+from planners.pick_place.settings import PickPlaceSettings
+from planners.pick_place.trial_names import trial_key
 
 #: the physics mesh's particles per side (the Fig. 7 paper-protocol cloth, 20 x 20)
 MESH = 20

@@ -26,7 +26,8 @@ from dopt.rollout import RolloutConfig, RolloutService
 from dopt.tasks import PickPlaceTask
 from planners.pick_place.planners import PickPlanner, StagePlan, make_planner
 from planners.pick_place.problem import Problem, make_problem
-from planners.pick_place.settings import PickPlaceSettings, trial_key
+from planners.pick_place.settings import PickPlaceSettings
+from planners.pick_place.trial_names import trial_key
 
 log = logging.getLogger(__name__)
 
@@ -277,18 +278,6 @@ def _result(problem: Problem, progress: TrialProgress, state: np.ndarray, method
                            sum(p.n_unstable_rollouts for p in done), bool(reasons),
                            "; ".join(reasons), sum(p.n_infeasible_rollouts for p in done),
                            progress.segments, [b for p in done for b in p.blowups])
-
-
-def trial_identity(params: dict) -> str:
-    """What names a sweep's trial of ``params`` ({"settings", "method", "seed"}, as
-    ``run_trial`` takes them): its ``trial_key``, which hashes the settings that change its
-    result (not the threads). The experiments' ``dopt.lab.sweep.Schema.identity``: a stored
-    record whose params give another is another trial's.
-
-    Raises:
-        KeyError, TypeError, ValueError: ``params`` are not a trial's."""
-    return trial_key(params["method"], int(params["seed"]),
-                     PickPlaceSettings.from_dict(params["settings"]))
 
 
 def checkpoint_problem(progress: dict) -> str | None:

@@ -37,7 +37,8 @@ from scipy import stats
 from dopt.lab.multiple import NO_TREND, TREND_LEVEL, holm_named, slope_verdict
 from dopt.lab.stats import mean_ci
 from dopt.lab.sweep import Trial
-from planners.pick_place.settings import PickPlaceSettings, trial_key
+from planners.pick_place.settings import PickPlaceSettings
+from planners.pick_place.trial_names import trial_key
 
 #: the methods compared to CEM(Simple) by the trend test
 COMPARED = ("original", "random")

@@ -1,7 +1,7 @@
 """``PickPlaceSettings``: everything that defines a pick-and-place trial except the method and
 the seed, its presets (``planners.pick_place.presets``), its scene and picker configs, and
 its identity (what names a trial: the settings and what their presets resolve to today;
-``trial_key``).
+``planners.pick_place.trial_names``).
 
 The task names a ``PickTaskSpec`` (``planners.pick_place.tasks.PICK_TASKS``): its scene
 config, the fields that config takes and the object's extent come from there, so no method
@@ -11,7 +11,6 @@ here branches on the task's name.
 from __future__ import annotations
 
 import dataclasses
-import hashlib
 import json
 from dataclasses import asdict, dataclass, field
 
@@ -296,16 +295,6 @@ def check_seed(seed) -> None:
     check_int(seed, "seed", minimum=0)
     if seed >= 2 ** 63:
         raise ValueError(f"seed must be < 2**63, got {seed}")
-
-
-def trial_key(method: str, seed: int, settings: PickPlaceSettings) -> str:
-    """A trial's name: <method>-seed<seed>-<hash of the settings that change results>
-    (``PickPlaceSettings.identity``: not the threads; what the presets and picker resolve
-    to). The experiments' sweep keys its trial files by it, and ``run_trial`` its blow-up
-    captures."""
-    digest = hashlib.sha1(json.dumps(settings.identity(), sort_keys=True).encode()
-                          ).hexdigest()[:8]
-    return f"{method}-seed{seed}-{digest}"
 
 
 def check_settings(settings) -> None:

@@ -25,7 +25,9 @@ Shapes: T horizon, nu controls, ns state row, c = |C| active DoFs.
 
     settings.py  SVRMPCSettings, Derivatives (planners.ilqr's typed derivative options;
                  spell_derivatives, their one spelling), TABLE1_ROWS, rows
-                 by name (parse_row -> Row), task_defaults, trial params, keys and row labels
+                 by name (parse_row -> Row), task_defaults, trial params and row labels
+    trial_names.py  a trial's name (trial_key, dopt.lab.identity's rule), the names of the
+                 trials written before it (legacy_trial_key) and the sweeps' identity check
     presets.py   the protocols (ours, paper, authors) and TABLE1_ROWS, each number with its
                  source (the paper's section, the authors' file)
     optimisers.py  OPTIMISERS by name, register_optimiser, OptimiserContext, svr_optimiser
@@ -86,7 +88,6 @@ from planners.svr_mpc.settings import (
     spell_derivatives,
     split_params,
     task_defaults,
-    trial_key,
     trial_params,
 )
 from planners.svr_mpc.summary import (
@@ -100,6 +101,7 @@ from planners.svr_mpc.summary import (
     table1_fields,
     versus,
 )
+from planners.svr_mpc.trial_names import legacy_trial_key, trial_key
 
 __all__ = ["CLOCK_MODEL_MS", "CONTROLS_FIELDS", "DEFAULT_OPTIMISER", "FINITE_DIFFERENCES",
            "GOAL_DISTANCE_STRIDE", "OPTIMISERS", "OUTLIER_DISTANCE", "PAPER_COSTS", "PRESETS",
@@ -107,7 +109,8 @@ __all__ = ["CLOCK_MODEL_MS", "CONTROLS_FIELDS", "DEFAULT_OPTIMISER", "FINITE_DIF
            "OptimiserContext", "Row",
            "SVRController", "SVRMPCResult", "SVRMPCSettings", "build_controller",
            "derivatives_effect", "derivatives_tag", "dofs_mask", "dofs_of_mask", "feedback_effect",
-           "fig4_fields", "optimiser_factory", "optimiser_names", "paired", "paired_ratio",
+           "fig4_fields", "legacy_trial_key", "optimiser_factory", "optimiser_names", "paired",
+           "paired_ratio",
            "parse_row", "parse_variants", "register_optimiser", "row_label", "row_name",
            "run_svr_mpc", "run_trial", "solve", "spell_derivatives", "split_params", "summarize",
            "svr_optimiser", "table1_fields", "task_defaults", "trial_key", "trial_params", "versus",

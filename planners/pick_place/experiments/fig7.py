@@ -306,7 +306,8 @@ def _experiment(task: str, script: str, args, settings: PickPlaceSettings, argv)
                "methods": summarize(records, args.methods, problem.metric_names),
                "failed": failed, "trial_commits": res.commits,
                "blowups": print_captures(out, captures_of(
-                   out, [capture_label(t.key, s.name) for t in trials for s in problem.stages])),
+                   out, [capture_label(res.stored_key(t.key), s.name) for t in trials
+                         for s in problem.stages])),
                # this run's wall time (a resumed run reuses finished trials), and the trials'
                # own wall times summed, wherever and whenever they ran
                "wall_s": time.perf_counter() - start,

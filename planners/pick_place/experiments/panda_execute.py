@@ -49,7 +49,13 @@ from dopt.lab.flags import add_alias
 from dopt.lab.record import add_reuse_argument, check_outputs, reuse_mode, write_summary
 from dopt.lab.stats import finite_mean_ci
 from dopt.lab.sweep import Schema, Trial, is_finished
-from planners.pick_place import PickPlaceSettings, make_planner, make_problem, run_problem
+from planners.pick_place import (
+    PickPlaceSettings,
+    make_planner,
+    make_problem,
+    run_problem,
+    trial_key,
+)
 
 GOALS = ("diagonal", "side")
 
@@ -121,21 +127,37 @@ def trial_identity(params: dict) -> dict:
             "settings": PickPlaceSettings.from_dict(params["settings"]).identity()}
 
 
-#: what a stored trial must be to be reused: the trial it is stored for (``trial_identity``)
-SCHEMA = Schema(identity=trial_identity)
+def panda_key(params: dict) -> str:
+    """A trial's key (its file under OUT/trials, its capture under OUT/blowups): the pick
+    rule, ``planners.pick_place.trial_key``, labelled by the goal."""
+    return trial_key(params["goal"], int(params["seed"]),
+                     PickPlaceSettings.from_dict(params["settings"]))
 
 
-def trial_key(goal: str, seed: int, n: int, quick: bool) -> str:
-    """A trial's key (its file under OUT/trials, its capture under OUT/blowups)."""
+def legacy_trial_key(goal: str, seed: int, n: int, quick: bool) -> str:
+    """The key of a trial written before the one identity (``<goal>-seed<seed>-n<n>``, and
+    ``-quick`` for a smoke run's): only to find those trials (``trial_aliases``)."""
     return f"{goal}-seed{seed}-n{n}{'-quick' if quick else ''}"
 
 
-def panda_trial(params: dict, report=None, blowup_out: str | None = None,
-                quick: bool = False) -> dict:
+def trial_aliases(params: dict) -> tuple[str, ...]:
+    """The older keys a trial of ``params`` may be stored under (``legacy_trial_key``, with
+    and without ``-quick``: the params do not say; the identity check tells them apart)."""
+    n = int(params["settings"]["n"])
+    return tuple(legacy_trial_key(params["goal"], int(params["seed"]), n, quick)
+                 for quick in (False, True))
+
+
+#: what a stored trial must be to be reused: the trial it is stored for (``trial_identity``),
+#: under its key or its older one (``trial_aliases``)
+SCHEMA = Schema(identity=trial_identity, aliases=trial_aliases)
+
+
+def panda_trial(params: dict, report=None, blowup_out: str | None = None) -> dict:
     """Plan with CEM(Simple) on the picker, replay with the arm; the two final costs and how
     far apart the two final cloths are (m). ``report`` (the sweep's) is called after each CEM
     iteration. ``blowup_out``: the run folder that receives a blow-up capture of the arm's
-    replay as blowups/<trial key> (``quick``: the key's; an earlier run's moves to
+    replay as blowups/<trial key> (``panda_key``; an earlier run's moves to
     blowups/outdated/)."""
     from dopt.tasks.pick.scene import mean_distance
 
@@ -144,7 +166,7 @@ def panda_trial(params: dict, report=None, blowup_out: str | None = None,
     problem = make_problem(s, seed)
     res = run_problem(problem, make_planner("simple", s, seed), method="simple", seed=seed,
                       on_iteration=None if report is None else (lambda i, best: report()))
-    label = trial_key(params["goal"], seed, s.n, quick)
+    label = panda_key(params)
     if blowup_out is not None:
         retire_captures(blowup_out, [label])
     _, done = replay(problem, res.actions, blowup_out=blowup_out, blowup_label=label)
@@ -258,14 +280,13 @@ def main(argv=None) -> int:
     for goal in args.goals:
         s = settings_of(goal, args)
         for seed in seeds:
-            trials.append(Trial(trial_key(goal, seed, s.n, args.quick),
-                                {"goal": goal, "seed": int(seed), "settings": s.to_dict()}))
-    keys = [t.key for t in trials]
+            params = {"goal": goal, "seed": int(seed), "settings": s.to_dict()}
+            trials.append(Trial(panda_key(params), params))
     iterations = {g: settings_of(g, args).cem.iterations
                   * len(make_problem(settings_of(g, args), args.seed).stages)
                   for g in args.goals}
     res = run_with_console(
-        functools.partial(panda_trial, blowup_out=str(args.out), quick=args.quick), trials,
+        functools.partial(panda_trial, blowup_out=str(args.out)), trials,
         args.out, unit="it", desc="CEM iterations (the arm's replays uncounted)",
         steps=lambda t: iterations[t.params["goal"]],
         held=lambda t: iterations[t.params["goal"]] if is_finished(
@@ -285,7 +306,8 @@ def main(argv=None) -> int:
                    "physics": {g: settings_of(g, args).resolved_physics()
                                for g in args.goals},
                    "failed": res.failed, "trial_commits": res.commits,
-                   "blowups": print_captures(args.out, captures_of(args.out, keys))},
+                   "blowups": print_captures(args.out, captures_of(
+                       args.out, [res.stored_key(t.key) for t in trials]))},
                   args.out, args.record, "experiments/panda_execute.py", argv)
     for goal, e in goals.items():
         print(f"{goal}: picker {e['picker_final_cost_mean'] * 1e3:.1f} mm, panda "

@@ -187,18 +187,22 @@ def config_base(ap: argparse.ArgumentParser, args) -> None:
 
 
 def copy_finished(trials, source: Path, out: Path) -> int:
-    """Copy the stored trials of ``source``/trials (loose or packed) whose key is a trial of
-    ``trials`` into ``out``/trials as loose files, where ``out`` has none yet. Returns how many
-    were copied (the sweep still judges whether each may stand for this code)."""
+    """Copy the stored trials of ``source``/trials (loose or packed) of ``trials`` into
+    ``out``/trials as loose files, where ``out`` has none yet: each under the name it is
+    stored under, its key or else its older name (``SCHEMA.aliases``), never renamed. Returns
+    how many were copied (the sweep still judges whether each may stand for this code)."""
     dest = out / "trials"
     dest.mkdir(parents=True, exist_ok=True)
     copied = 0
     for t in trials:
-        src, dst = source / "trials" / f"{t.key}.json", dest / f"{t.key}.json"
-        if dst.exists() or is_stored_trial(dst) or not is_stored_trial(src):
+        names = (t.key, *SCHEMA.aliases_of(t.params))
+        if any(is_stored_trial(dest / f"{name}.json") for name in names):
             continue
-        atomic.write_text(dst, read_trial_text(src))
-        copied += 1
+        src = next((source / "trials" / f"{name}.json" for name in names
+                    if is_stored_trial(source / "trials" / f"{name}.json")), None)
+        if src is not None:
+            atomic.write_text(dest / src.name, read_trial_text(src))
+            copied += 1
     return copied
 
 

@@ -10,9 +10,10 @@ import functools
 from pathlib import Path
 
 from dopt.lab.console import run_with_console
-from dopt.lab.sweep import Checkpoint, Schema, SweepResult, Trial, is_finished
+from dopt.lab.sweep import Checkpoint, Schema, SweepResult, Trial, checkpoint_of, is_finished
 from planners.pick_place import run_trial
-from planners.pick_place.run import checkpoint_problem, trial_identity
+from planners.pick_place.run import checkpoint_problem
+from planners.pick_place.trial_names import trial_aliases, trial_identity
 from planners.trial_progress import (
     PROGRESS_FIELDS,
     RESULT_FIELDS,
@@ -22,9 +23,11 @@ from planners.trial_progress import (
 
 #: what a stored trial and its checkpoint must hold to be reused or resumed (``dopt.lab.sweep``):
 #: their fields, a cost history as long as its stages' list, a CEM progress that can resume,
-#: and params that name the trial they are stored for (the key they hash to)
+#: and params that name the trial they are stored for (``trial_identity``); a trial written
+#: before the one identity is found under its older name (``trial_aliases``)
 SCHEMA = Schema(result=RESULT_FIELDS, progress=PROGRESS_FIELDS, check_result=result_problem,
-                check_progress=checkpoint_problem, identity=trial_identity)
+                check_progress=checkpoint_problem, identity=trial_identity,
+                aliases=trial_aliases)
 
 
 def run_trials(trials: list[Trial], iterations_per_trial: int, out: Path,
@@ -70,8 +73,7 @@ def iterations_held(trials: list[Trial], iterations_per_trial: int, out: Path) -
     for t in trials:
         if is_finished(out, t.key, schema=SCHEMA, params=t.params):
             held += iterations_per_trial
-        elif (progress := Checkpoint(out, t.key, schema=SCHEMA, params=t.params).peek()
-              ) is not None:
+        elif (progress := checkpoint_of(out, t, SCHEMA).peek()) is not None:
             held += iterations_done(progress)
     return held
 

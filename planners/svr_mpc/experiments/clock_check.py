@@ -20,6 +20,7 @@ on a bad flag.
 from __future__ import annotations
 
 import argparse
+from dataclasses import replace
 
 import numpy as np
 
@@ -30,6 +31,7 @@ from dopt.lab.stats import mean_ci
 from dopt.lab.sweep import Trial
 from planners.svr_mpc import row_label
 from planners.svr_mpc.experiments import flags, mapping, runner
+from planners.svr_mpc.trial_names import legacy_trial_key
 
 DEFAULT_ROWS = ("baseline", "rand-t5", "sum-t10-r1")
 
@@ -45,10 +47,21 @@ def parser() -> argparse.ArgumentParser:
 
 
 def clock_trials(args, clock: str) -> list[Trial]:
-    """Every (seed, row) trial under ``clock`` (real: --real-threads threads; virtual: one)."""
+    """Every (seed, row) trial under ``clock`` (real: --real-threads threads; virtual: one),
+    its key the trial's name and its threads (they set a real clock's wall time)."""
     threads = args.real_threads if clock == "real" else 1
     return [Trial(t.key + f"-threads{threads}", t.params)
             for t in mapping.make_trials(args, clock=clock, threads=threads)]
+
+
+def clock_aliases(params: dict) -> tuple[str, ...]:
+    """The older key a clock check's trial of ``params`` may be stored under: its
+    ``legacy_trial_key`` and its threads (``SCHEMA``'s aliases)."""
+    return (f"{legacy_trial_key(params)}-threads{params['threads']}",)
+
+
+#: the MPC trials' schema (``runner.SCHEMA``), their older keys naming the threads too
+SCHEMA = replace(runner.SCHEMA, aliases=clock_aliases)
 
 
 def compare(records: dict[str, list[dict]], nominal_threads: float) -> dict:
@@ -97,7 +110,8 @@ def _main(args, argv) -> int:
     trials = {clock: clock_trials(args, clock) for clock in ("real", "virtual")}
     records, failed, commits = {}, {}, {}
     for clock, these in trials.items():
-        records[clock], res = runner.run(args, these, out=args.out / clock, workers=1)
+        records[clock], res = runner.run(args, these, out=args.out / clock, workers=1,
+                                         schema=SCHEMA)
         failed.update(res.failed)
         commits[clock] = res.commits
     write_summary({"experiment": "clock_check", "task": args.task,

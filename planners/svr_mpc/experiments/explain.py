@@ -40,8 +40,9 @@ from dopt.lab.console import print_outputs, sweep_session
 from dopt.lab.record import write_summary
 from dopt.lab.stats import median_or_none
 from dopt.lab.sweep import Schema
-from planners.svr_mpc import row_label, run_svr_mpc, split_params, trial_key
+from planners.svr_mpc import row_label, run_svr_mpc, split_params
 from planners.svr_mpc.experiments import flags, mapping, runner
+from planners.svr_mpc.trial_names import trial_aliases, trial_identity
 
 DEFAULT_ROWS = ("rand-t5", "sum-t10-r1", "sum-t10-r500", "svd-t10-r1")
 #: importance decades counted: 10^k <= v < 10^(k+1) for k in DECADES (and the ends beyond)
@@ -53,7 +54,7 @@ SCHEMA = Schema(result=("steps", "opt_step", "n_dofs", "goal_share", "goal_impor
                         "importance",
                         "rel_improvement", "goal_distance_at_opt", "alpha", "contact_steps",
                         "mu", "travel", "goal_distance_end", "lag_steps_mean", "horizon"),
-                identity=trial_key)
+                identity=trial_identity, aliases=trial_aliases)
 
 
 def parser() -> argparse.ArgumentParser:

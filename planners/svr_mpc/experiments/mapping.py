@@ -1,7 +1,8 @@
 """The experiments' flags (``flags``) as settings and trials: the settings flags derived from
 ``SVRMPCSettings`` (``SETTINGS``: preset < ``--config`` < flags), each Table 1 row's settings
 under them (``settings_of``), the rows of the flags (``grid``), the sweep's trials with their
-keys (``make_trials``: the keys of the committed trials, ``trial_key``) and the protocol a
+keys (``make_trials``: ``trial_key``; a committed trial of an older name is found through
+the sweep's schema, ``runner.SCHEMA``) and the protocol a
 summary records (``protocol``), which a summary given to ``--config`` gives back
 (``summary_config``)."""
 
@@ -173,8 +174,8 @@ def grid(args, rules=None, rhos=None, thetas=None) -> list[Row]:
 
 def make_trials(args, rules=None, rhos=None, thetas=None, **override) -> list[Trial]:
     """Every (seed, row, feedback) trial of the flags (``grid``; ``rules``, ``rhos``,
-    ``thetas``: the grid's in place of the flags'), each with its key (``trial_key``, the
-    committed trials'); ``override``: settings fields replaced in every trial (e.g.
+    ``thetas``: the grid's in place of the flags'), each with its key (``trial_key``);
+    ``override``: settings fields replaced in every trial (e.g.
     clock="real")."""
     out, base = [], base_settings(args)
     for seed in range(args.seed, args.seed + args.trials):

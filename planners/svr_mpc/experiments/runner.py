@@ -22,18 +22,19 @@ from planners.svr_mpc import (
     authors_clock,
     run_trial,
     task_defaults,
-    trial_key,
 )
+from planners.svr_mpc.trial_names import trial_aliases, trial_identity
 
 #: what a stored MPC trial must hold to be reused: the fields the summary and plots read,
 #: the numbers among them finite (a cost of +inf once failed every rerun in the summary), and
-#: params that name the trial they are stored for (``trial_key``: not the threads)
+#: params that name the trial they are stored for (``trial_identity``: not the threads); a
+#: trial written before the one identity is found under its older name (``trial_aliases``)
 SCHEMA = Schema(result=("mpc_cost", "success", "steps", "goal_distance_start",
                         "goal_distance_end", "opt_ms_mean", "dofs_mean", "n_dofs", "opt_step",
                         "lag_steps_mean", "unstable"),
                 finite=("mpc_cost", "steps", "goal_distance_start", "goal_distance_end",
                         "opt_ms_mean", "dofs_mean", "lag_steps_mean"),
-                identity=trial_key)
+                identity=trial_identity, aliases=trial_aliases)
 
 
 def run(args, trials, fn=None, out: Path | None = None, workers: int | None = None,

@@ -1,6 +1,6 @@
 """Derivative options as one typed value (``planners.ilqr.Derivatives``) spelled by one function
-(``spell_derivatives``): the keys and row labels it spells are today's, for every row the
-command lines accept and for every committed trial, so stored trials are found again."""
+(``spell_derivatives``): the legacy keys and row labels it spells are today's, for every row
+the command lines accept and for every committed trial, so stored trials are found again."""
 
 import gzip
 import itertools
@@ -16,6 +16,7 @@ from planners.ilqr import Derivatives, ILQRConfig
 from planners.svr_mpc import (
     TABLE1_ROWS,
     SVRMPCSettings,
+    legacy_trial_key,
     parse_row,
     parse_variants,
     row_label,
@@ -63,7 +64,7 @@ def _check_against_old(p):
     assert list(spell_derivatives(d, "key")) == _old_key_parts(p)
     assert "".join(f" +{w}" for w in spell_derivatives(d, "label")) == _old_tag(p)
     words = _old_key_parts(p)
-    key = trial_key(p)
+    key = legacy_trial_key(p)
     assert all(f"-{w}-" in f"{key}-" for w in words), (key, words)
     assert _old_tag(p) in row_label(p)
 
@@ -124,18 +125,25 @@ def _committed():
         yield json.loads(path.read_text())
 
 
-def test_committed_trial_keys_are_spelled_again():
-    """Every committed MPC trial's key is ``trial_key`` of its params, the derivative words
-    spelled by ``spell_derivatives``, and its label the old label."""
-    n = 0
+def test_committed_trial_keys_are_their_legacy_keys_and_their_new_names_unique():
+    """Every committed MPC trial's key is ``legacy_trial_key`` of its params (the name a sweep
+    finds it under, ``Schema.aliases``), the derivative words spelled by ``spell_derivatives``,
+    and its label the old label; and the names of the one identity (``trial_key``) tell every
+    two different committed trials apart and take no committed trial's key."""
+    n, names, keys = 0, {}, set()
     for record in _committed():
         p = record["params"]
         if "rho" not in p:
             continue                                   # a pick-and-place trial
-        assert trial_key(p) == record["key"]
+        assert legacy_trial_key(p) == record["key"]
         _check_against_old(p)
+        names.setdefault(trial_key(p), set()).add(record["key"])
+        keys.add(record["key"])
         n += 1
     assert n > 1000, n
+    assert all(len(old) == 1 for old in names.values()), \
+        [(k, v) for k, v in names.items() if len(v) > 1][:3]
+    assert not names.keys() & keys
 
 
 # --------------------------------------------------------------------- round trips

@@ -8,7 +8,8 @@ import pytest
 import torch
 
 from planners.svr import DofSelector, SelectionConfig
-from planners.svr_mpc.settings import SVRMPCSettings, parse_row, row_label, trial_key
+from planners.svr_mpc.settings import SVRMPCSettings, parse_row, row_label
+from planners.svr_mpc.trial_names import legacy_trial_key, trial_key
 
 
 def selector(method, keep_costed, theta=2):
@@ -42,11 +43,12 @@ def test_rows_name_their_fixes_and_the_keys_hold_them():
                                slowdown=1.0)
     p = {**s.__dict__, "seed": 0}
     assert row_label(p) == "sum-t10-r500 +costdofs +mureset"
-    assert trial_key(p).endswith("-fixcostdofs-fixmureset")
+    assert legacy_trial_key(p).endswith("-fixcostdofs-fixmureset")
     assert s.ilqr.mu_reset and s.selection.keep_costed
     plain = {**SVRMPCSettings.authors("soft_rigid", "sum-t10-r500", slowdown=1.0).__dict__,
              "seed": 0}
-    assert "fix" not in trial_key(plain) and row_label(plain) == "sum-t10-r500"
+    assert "fix" not in legacy_trial_key(plain) and row_label(plain) == "sum-t10-r500"
+    assert trial_key(plain) != trial_key(p)                    # the fixes name the trial
     with pytest.raises(ValueError, match="repeated"):
         parse_row("sum-t10-r1+mureset+mureset")
 

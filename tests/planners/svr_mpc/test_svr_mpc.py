@@ -11,10 +11,10 @@ from planners.svr_mpc import (
     dofs_mask,
     dofs_of_mask,
     feedback_effect,
+    legacy_trial_key,
     paired,
     row_name,
     run_svr_mpc,
-    trial_key,
     trial_params,
 )
 from planners.svr_mpc import summarize as aggregate
@@ -183,7 +183,7 @@ def test_a_fixed_model_clock_lags_every_row_alike():
                                  slowdown=1.0, threads=1)
         lags[row] = run_svr_mpc(s, seed=1).lag_steps
     assert len(set(lags["baseline"][1:] + lags["rand-t5"][1:])) == 1
-    assert "ms20" in trial_key(trial_params(s, 1))
+    assert "ms20" in legacy_trial_key(trial_params(s, 1))
     with pytest.raises(ValueError, match="clock_ms"):
         SVRMPCSettings.paper("clutter", "baseline", clock_ms=20.0)       # the virtual clock
     with pytest.raises(ValueError, match="clock_ms"):
@@ -210,7 +210,7 @@ def test_a_trial_captures_a_flagged_episode_under_the_sweeps_folder(tmp_path, mo
     import json
 
     import planners.svr_mpc.episode as episode
-    from planners.svr_mpc import CapturingTrial, trial_key
+    from planners.svr_mpc import CapturingTrial
 
     params = {**dataclasses.asdict(SVRMPCSettings(task="clutter", method="baseline",
                                                   synchronous=True, timeout=3, threads=1,
@@ -223,7 +223,7 @@ def test_a_trial_captures_a_flagged_episode_under_the_sweeps_folder(tmp_path, mo
     monkeypatch.setattr(episode, "Scene", lambda model, stability: scene(
         model, stability=dataclasses.replace(stability, max_speed=1e-9)))
     res = CapturingTrial(str(tmp_path))(params)
-    key = trial_key(params)
+    key = legacy_trial_key(params)                # run_trial's capture label, still
     assert res["unstable"] and res["blowups"] == [f"blowups/{key}"]
     meta = json.loads((tmp_path / "blowups" / key / "blowup.json").read_text())
     assert res["unstable_reason"] == f"step {meta['step']}: {meta['reason']}"
@@ -303,15 +303,18 @@ def test_a_registered_optimiser_runs_the_episode(registry):
     assert svr.mpc_cost != res.mpc_cost and svr.n_dofs[0] == 55
 
     params = trial_params(settings, 1, "constant")
-    assert params["optimiser"] == "constant" and trial_key(params).endswith("-optconstant")
+    assert params["optimiser"] == "constant"
+    assert legacy_trial_key(params).endswith("-optconstant")
     assert row_label(params) == "constant"
     assert row_label({**params, "method": "svr-sum", "theta": 10}) == "constant:sum-t10-r1"
     again = run_trial(params)
     assert again["mpc_cost"] == res.mpc_cost and again["final_state"] == res.final_state
     # the default optimiser adds nothing to the params: the paper's trials keep their keys
     plain = trial_params(settings, 1)
-    assert "optimiser" not in plain and trial_key(plain) == trial_key(params)[:-len(
-        "-optconstant")]
+    assert "optimiser" not in plain and legacy_trial_key(plain) == legacy_trial_key(params)[
+        :-len("-optconstant")]
+    assert trial_key(plain) != trial_key(params)
+    assert trial_key(plain).rsplit("-", 1)[0] == trial_key(params).rsplit("-", 1)[0]
 
 
 def test_a_factory_runs_without_a_name_and_summaries_give_it_a_row():

@@ -2,7 +2,8 @@
 they keep of earlier runs) that runs an SVR experiment still parses with today's flags: a
 renamed flag keeps its old spelling as a hidden alias (--methods for --rules, --method for
 --rule) with the same meaning and a deprecation line. The recorded Table 1 commands also make
-today the trial keys their summaries list (``trial_keys``), so the committed trials resolve."""
+today the trials their summaries list (``trial_keys``): each found under its name, or under its
+older one (``Schema.aliases``), so the committed trials resolve."""
 import json
 import logging
 import shlex
@@ -89,11 +90,14 @@ TABLE1 = sorted(name for name, script, argv in COMMANDS
 
 @pytest.mark.parametrize("name", TABLE1)
 def test_a_recorded_table1_command_makes_the_keys_of_its_committed_trials(name, monkeypatch):
-    """The keys today's flags make are the committed trials' (loose or packed) and those the
-    summary lists: a rerun of the command reuses them, resummarize finds them (where the
-    command's preset still means the protocol the summary records)."""
+    """The trials today's flags make are the committed trials (loose or packed, found under
+    their older names) and those the summary lists: a rerun of the command reuses them,
+    resummarize finds them (where the command's preset still means the protocol the summary
+    records)."""
     from dopt.lab.sweep import load_finished
+    from dopt.lab.sweep_store import find_alias
     from planners.svr_mpc.experiments.flags import quick_defaults
+    from planners.svr_mpc.experiments.runner import SCHEMA
 
     data = json.loads((RESULTS / name).read_text())
     argv = shlex.split(data["provenance"]["command"])[2:]
@@ -108,7 +112,10 @@ def test_a_recorded_table1_command_makes_the_keys_of_its_committed_trials(name, 
     recorded = {"executor": "alg1", **data}     # a summary before the executor had Alg. 1's
     if any(recorded.get(k, v) != v for k, v in then.items()):
         pytest.skip(f"{name}: its preset meant another protocol then (report_stale's case)")
-    keys = {t.key for t in trials}
     committed = load_finished(ROOT / argv[argv.index("--out") + 1])
-    assert keys and not keys - set(committed), sorted(keys - set(committed))[:3]
-    assert keys == set(data.get("trial_keys", keys))
+    # each trial under its own name, else under its older one (the committed trials' names)
+    stored = {t.key: t.key if t.key in committed else find_alias(committed, t.params, SCHEMA)
+              for t in trials}
+    missing = sorted(k for k, v in stored.items() if v is None)
+    assert stored and not missing, missing[:3]
+    assert set(stored.values()) == set(data.get("trial_keys", stored.values()))

@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 
 from planners.svr_mpc.experiments import mapping, table1
+from planners.svr_mpc.trial_names import legacy_trial_key
 
 ROOT = Path(__file__).resolve().parents[4]
 SCRIPT = ROOT / "experiments" / "mpc.py"
@@ -174,7 +175,7 @@ def test_trials_of_the_default_flags_are_valid_settings(tmp_path, flags):
     for t in trials:
         p = {k: v for k, v in t.params.items() if k != "seed"}
         SVRMPCSettings(**p)
-        assert ("-Y7-" if flags else "-Y0-") in t.key
+        assert ("-Y7-" if flags else "-Y0-") in legacy_trial_key(t.params)
 
 
 def test_paper_preset_runs_the_nine_rows_by_name(tmp_path):
@@ -191,7 +192,7 @@ def test_paper_preset_runs_the_nine_rows_by_name(tmp_path):
         p = t.params
         assert (p["cost"], p["warm_start"], p["clock"], p["control_noise"]) == \
             ("paper", True, "virtual", 0.05)
-        assert "-costpaper-ws-clockvirtual2" in t.key
+        assert "-costpaper-ws-clockvirtual2" in legacy_trial_key(t.params)
     args = table1.parse_args(["--preset", "paper", "--rows", "rand-t5,svd-t5-r1", "--cost", "ee",
                            "--trials", "1",
                            "--clock", "model", "--fd", "central", "--out", str(tmp_path / "q")])
@@ -199,7 +200,7 @@ def test_paper_preset_runs_the_nine_rows_by_name(tmp_path):
     assert [row_label(t.params) for t in trials] == ["rand-t5 +central", "svd-t5-r1 +central"]
     assert trials[0].params["cost"] == "ee" and trials[0].params["clock"] == "model"
     assert trials[0].params["fd_centered"] and trials[0].params["fd_eps"] == 1e-6
-    assert trials[0].key.endswith("fdc1e-06")
+    assert legacy_trial_key(trials[0].params).endswith("fdc1e-06")
 
 
 def test_derivative_options_reach_the_trials(tmp_path):
@@ -208,11 +209,12 @@ def test_derivative_options_reach_the_trials(tmp_path):
                            "--fd-skip", "5", "--box-qp", "--out", str(tmp_path / "a")])
     (t,) = mapping.make_trials(args)
     assert (t.params["keypoints"], t.params["fd_skip"], t.params["box_qp"]) == ("skip", 5, True)
-    assert t.key.endswith("-skip5-boxqp")
+    assert legacy_trial_key(t.params).endswith("-skip5-boxqp")
     args = table1.parse_args(["--rows", "sum-t10-r1", "--trials", "1", "--keypoints", "adaptive",
                            "--out", str(tmp_path / "b")])
     (t,) = mapping.make_trials(args)
-    assert t.params["keypoints"] == "adaptive" and t.key.endswith("-kpadaptive")
+    assert t.params["keypoints"] == "adaptive"
+    assert legacy_trial_key(t.params).endswith("-kpadaptive")
 
 
 def test_rows_carry_their_own_derivative_variants(tmp_path):
@@ -246,7 +248,7 @@ def test_rows_carry_their_own_derivative_variants(tmp_path):
          "--out", str(tmp_path / "c")]))[0]
     assert row_label(central.params) == "sum-t10-r1 +central +skip5"
     assert (central.params["fd_centered"], central.params["fd_eps"]) == (True, 1e-6)
-    assert central.key.endswith("-fdc1e-06-skip5")
+    assert legacy_trial_key(central.params).endswith("-fdc1e-06-skip5")
     assert [row_label(t.params) for t in mapping.make_trials(glob)] == \
         ["baseline +skip2", "sum-t10-r1 +adaptive"]          # the row's variant wins
 
@@ -281,6 +283,8 @@ def test_committed_variant_rows_find_their_trials_by_key(name, tmp_path):
     from pathlib import Path
 
     from dopt.lab.sweep import load_finished
+    from dopt.lab.sweep_store import find_alias
+    from planners.svr_mpc.experiments import runner
 
     root = Path(__file__).resolve().parents[4]
     argv = shlex.split(json.loads((root / "docs" / "results" / f"{name}.json").read_text())
@@ -291,10 +295,12 @@ def test_committed_variant_rows_find_their_trials_by_key(name, tmp_path):
     assert any("+" in row for row in argv[argv.index("--rows") + 1].split(","))
     trials = mapping.make_trials(table1.parse_args(argv))
     committed = load_finished(root / runs)                         # loose or packed
-    missing = [t.key for t in trials if t.key not in committed]
+    # under their older names (the sweep's Schema.aliases)
+    found = {t.key: find_alias(committed, t.params, runner.SCHEMA) for t in trials}
+    missing = [k for k, v in found.items() if v is None]
     assert trials and not missing, missing[:3]
     for t in trials:
-        stored = committed[t.key]["params"]
+        stored = committed[found[t.key]]["params"]
         assert {k: t.params[k] for k in stored} == stored
 
 
@@ -330,7 +336,10 @@ def test_a_registered_optimiser_is_a_row_of_the_command_line(tmp_path, monkeypat
     assert [row_label(t.params) for t in (base, mine, skip)] == \
         ["baseline", "mine", "mine +skip5"]
     assert "optimiser" not in base.params and mine.params["optimiser"] == "mine"
-    assert mine.key == base.key + "-optmine" and skip.key == base.key + "-skip5-optmine"
+    old = legacy_trial_key
+    assert old(mine.params) == old(base.params) + "-optmine"
+    assert old(skip.params) == old(base.params) + "-skip5-optmine"
+    assert len({base.key, mine.key, skip.key}) == 3
     assert mapping.baseline_label(args) == "baseline"
     monkeypatch.setenv("DOPT_OPTIMISERS", "no_such_optimisers_module")
     with pytest.raises(SystemExit) as e:
@@ -348,12 +357,13 @@ def test_the_authors_preset_runs_their_executor_and_clock_and_the_summary_names_
     (t,) = mapping.make_trials(args)
     proto = mapping.protocol(args, t.params)
     assert (proto["executor"], proto["clock"]) == ("authors", "authors")
-    assert t.key.endswith("-ws-clockauthors-execauthors-authors")
+    assert legacy_trial_key(t.params).endswith("-ws-clockauthors-execauthors-authors")
     args = table1.parse_args(["--task", "soft", "--preset", "authors", "--rows", "baseline",
                            "--executor", "alg1", "--clock", "virtual", "--trials", "1",
                            "--out", str(tmp_path / "b")])
     (old,) = mapping.make_trials(args)
     assert (mapping.protocol(args, old.params)["executor"], old.params["clock"]) == \
         ("alg1", "virtual")
-    assert old.key.endswith("-ws-clockvirtual2-authors")
+    assert legacy_trial_key(old.params).endswith("-ws-clockvirtual2-authors")
+    assert old.key != t.key
     assert {k for k in t.params if t.params[k] != old.params[k]} == {"executor", "clock"}
