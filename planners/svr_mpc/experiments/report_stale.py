@@ -54,6 +54,7 @@ SVR_KINDS = ("table1", "svr_explain", "clock_check", "fig4")
 SVR_COMPUTE_PATHS = ("dopt", "planners/ilqr.py", "planners/svr.py", "planners/keypoints.py",
                      "planners/_checks.py", "planners/svr_mpc/episode.py",
                      "planners/svr_mpc/optimisers.py", "planners/svr_mpc/settings.py",
+                     "planners/svr_mpc/settings_groups.py",
                      "planners/svr_mpc/authors_clock.py", "planners/svr_mpc/presets.py",
                      *(f":(exclude)dopt/{f}" for f in (
                          "lab", "sweep*.py", "trialpack.py", "jsonio.py", "atomic.py",

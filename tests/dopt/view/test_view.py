@@ -9,7 +9,6 @@ import json
 import os
 import subprocess
 import sys
-from dataclasses import asdict
 from fnmatch import fnmatch
 from pathlib import Path
 
@@ -43,7 +42,7 @@ def write_mpc_trial(path: Path) -> dict:
     a trial file as experiments/mpc.py does, with the proposed optional fields start_state and
     controls. Returns {"path", "start", "states", "controls"}."""
     import planners.svr_mpc.episode as episode
-    from planners.svr_mpc import SVRMPCSettings
+    from planners.svr_mpc import SVRMPCSettings, trial_params
 
     seen = {}
     run = episode.MPC.run
@@ -61,7 +60,7 @@ def write_mpc_trial(path: Path) -> dict:
     result["start_state"] = [float(v) for v in seen["start"]]
     result["controls"] = res.controls.tolist()
     path.write_text(json.dumps({"key": "clutter-baseline-view-test",
-                                "params": {**asdict(settings), "seed": 0}, "result": result}))
+                                "params": trial_params(settings, 0), "result": result}))
     return {"path": path, "start": seen["start"], "states": res.states,
             "controls": res.controls}
 
