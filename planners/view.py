@@ -215,7 +215,7 @@ def load_mpc(path, max_frames: int = 300) -> Episode:
         steps = np.arange(len(states))
     else:
         log.warning("%s: %s", path, NO_CONTROLS)
-        start = (warm_start.setup(task).final_state if settings.warm_start
+        start = (warm_start.setup(task).final_state if settings.start.warm_start
                  else task.initial_state)
         states, error, steps = np.stack([start, final]), None, np.array([0, int(res["steps"])])
     rows = frame_rows(len(states), max_frames)
@@ -239,7 +239,8 @@ def load_mpc(path, max_frames: int = 300) -> Episode:
     markers = mpc_goal_markers(model, states[rows], task)
     replay = (NO_CONTROLS if error is None else
               f"replay of {len(states) - 1} steps ends {error:.1e} from the recorded final state")
-    summary = (f"**{settings.method}** seed {seed} · {settings.task} ({settings.problem}) · "
+    summary = (f"**{settings.selection.method}** seed {seed} · {settings.task} "
+               f"({settings.scene.problem}) · "
                f"MPC cost {res.get('mpc_cost', float('nan')):.4g} · success "
                f"{res.get('success')}  \n{replay}  \nshade: share of each object's DoFs in C "
                f"(grey none, red all)")

@@ -18,8 +18,10 @@ spelling of recorded commands: ``--push-tail off``).
 
 ``--config FILE`` (TOML or JSON; a run's ``summary.json`` gives its ``"settings"``: with one
 settings table per row or size, the values common to them all; ``summary=`` reads another
-layout) maps settings field names (nested as tables / objects, or dotted keys) to values; an
-unknown key or a value of the wrong type is a one-line usage error naming it. A run resolves
+layout) maps settings field names (nested as tables / objects, or dotted keys) to values
+(``record=`` lets a file name a nested field by another name too: the flat name a trial's
+params record it under); an unknown key or a value of the wrong type is a one-line usage
+error naming it. A run resolves
 its settings as preset < config < flags (``SettingsFlags.resolve``). Standard library and
 ``dopt.lab.cli`` only.
 """
@@ -278,11 +280,15 @@ def is_summary(data) -> bool:
 
 
 def read_config(path: Path, cls: type,
-                summary: Callable[[dict], dict] | None = None) -> dict:
+                summary: Callable[[dict], dict] | None = None,
+                record: Callable[[str, object], tuple[str, object]] | None = None) -> dict:
     """{dotted path: value} of the settings file ``path`` (TOML by its ``.toml`` suffix, else
     JSON; a run's summary.json gives its settings: ``summary(data)``, default
-    ``summary_settings``), each key a field of ``cls`` and each value of its type. Raises
-    ValueError (one line naming the file and the key) otherwise."""
+    ``summary_settings``), each key a field of ``cls`` and each value of its type. ``record``:
+    (a key, its value) -> (the dotted path, the value) where a file may name a field otherwise
+    (a flat name: ``clock`` for ``timing.clock``); a key it does not know comes back as it
+    is. Raises ValueError (one line naming the file and the key as the file wrote it, or a
+    field given twice) otherwise."""
     import tomllib
 
     path = Path(path)
@@ -302,18 +308,21 @@ def read_config(path: Path, cls: type,
                              f"({type(e).__name__}: {e})") from None
     flags = {f.path: f for f in derive(cls)}
     nested = {p.split(".", 1)[0] for p in flags if "." in p}
-    values = {}
+    values: dict = {}
     for key, value in _flatten(data).items():
         if key in nested and value is None:          # an unset optional group (drag: null)
             continue
-        if key not in flags:
+        field, value = record(key, value) if record is not None else (key, value)
+        if field not in flags:
             raise ValueError(f"{path}: unknown setting {key!r} of {cls.__name__} (its "
                              f"settings: {', '.join(flags)})")
+        if field in values:
+            raise ValueError(f"{path}: setting {key!r} is {field!r}, given twice")
         try:
-            flags[key].check_value(value, f"setting {key!r}")
+            flags[field].check_value(value, f"setting {key!r}")
         except (TypeError, ValueError) as e:
             raise ValueError(f"{path}: {e}") from None
-        values[key] = value
+        values[field] = value
     return values
 
 
@@ -408,12 +417,15 @@ class SettingsFlags:
         defaults: path -> the text of its default ("32; 16 reflective, underneath"), or None
             for none in the help.
         summary: how a run's summary.json gives the settings (``read_config``).
+        record: the other names a settings file may give a field by (``read_config``).
     """
 
     def __init__(self, cls: type, paths: Iterable[str], names: dict[str, str] | None = None,
                  defaults: Callable[[str], str | None] | None = None,
-                 summary: Callable[[dict], dict] | None = None):
+                 summary: Callable[[dict], dict] | None = None,
+                 record: Callable[[str, object], tuple[str, object]] | None = None):
         self.cls, self.names, self.summary = cls, dict(names or {}), summary
+        self.record = record
         self.flags = [dataclasses.replace(f, flag=self.names.get(f.path, f.flag))
                       for f in derive(cls, paths)]
         self.own = {f.path: f.flag for f in derive(cls, paths)}
@@ -453,7 +465,7 @@ class SettingsFlags:
         if getattr(args, "config", None) is None:
             return {}
         try:
-            return read_config(args.config, self.cls, self.summary)
+            return read_config(args.config, self.cls, self.summary, self.record)
         except ValueError as e:
             ap.error(f"argument --config: {e}")
 

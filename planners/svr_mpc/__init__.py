@@ -6,7 +6,7 @@ service, iLQR and a DoF selector; ``run_svr_mpc`` runs one MPC episode (Alg. 1) 
 returns an ``SVRMPCResult``::
 
     from planners.svr_mpc import SVRMPCSettings, run_svr_mpc
-    result = run_svr_mpc(SVRMPCSettings(task="clutter", method="svr-sum"), seed=0)
+    result = run_svr_mpc(SVRMPCSettings(task="clutter"), seed=0)   # iLQR-SVR, svr-sum
     result.mpc_cost, result.success, result.dofs_mean
 
 The optimiser is a seam: ``run_svr_mpc(settings, seed, optimiser=...)`` takes a name of
@@ -23,9 +23,12 @@ plan (``dopt.tasks.push.warm_start``), their 5 % control noise, and the virtual 
 
 Shapes: T horizon, nu controls, ns state row, c = |C| active DoFs.
 
-    settings.py  SVRMPCSettings, Derivatives (planners.ilqr's typed derivative options;
+    settings.py  SVRMPCSettings (nested: from_params / params, the flat form a trial's
+                 params keep), Derivatives (planners.ilqr's typed derivative options;
                  spell_derivatives, their one spelling), TABLE1_ROWS, rows
                  by name (parse_row -> Row), task_defaults, trial params and row labels
+    settings_groups.py  the settings' groups: DofSelection, PushScene, PushStart, Timing,
+                 Execution
     trial_names.py  a trial's name (trial_key, dopt.lab.identity's rule), the names of the
                  trials written before it (legacy_trial_key) and the sweeps' identity check
     presets.py   the protocols (ours, paper, authors) and TABLE1_ROWS, each number with its
@@ -75,7 +78,6 @@ from planners.svr_mpc.settings import (
     FINITE_DIFFERENCES,
     PAPER_COSTS,
     PRESETS,
-    SVR_CLOCKS,
     TABLE1_ROWS,
     Derivatives,
     Row,
@@ -89,6 +91,14 @@ from planners.svr_mpc.settings import (
     split_params,
     task_defaults,
     trial_params,
+)
+from planners.svr_mpc.settings_groups import (
+    SVR_CLOCKS,
+    DofSelection,
+    Execution,
+    PushScene,
+    PushStart,
+    Timing,
 )
 from planners.svr_mpc.summary import (
     OUTLIER_DISTANCE,
@@ -105,13 +115,13 @@ from planners.svr_mpc.trial_names import legacy_trial_key, trial_key
 
 __all__ = ["CLOCK_MODEL_MS", "CONTROLS_FIELDS", "DEFAULT_OPTIMISER", "FINITE_DIFFERENCES",
            "GOAL_DISTANCE_STRIDE", "OPTIMISERS", "OUTLIER_DISTANCE", "PAPER_COSTS", "PRESETS",
-           "SVR_CLOCKS", "TABLE1_ROWS", "CapturingTrial", "Derivatives", "KeptControls",
-           "OptimiserContext", "Row",
+           "SVR_CLOCKS", "TABLE1_ROWS", "CapturingTrial", "Derivatives", "DofSelection",
+           "Execution", "KeptControls", "OptimiserContext", "PushScene", "PushStart", "Row",
            "SVRController", "SVRMPCResult", "SVRMPCSettings", "build_controller",
            "derivatives_effect", "derivatives_tag", "dofs_mask", "dofs_of_mask", "feedback_effect",
            "fig4_fields", "legacy_trial_key", "optimiser_factory", "optimiser_names", "paired",
            "paired_ratio",
            "parse_row", "parse_variants", "register_optimiser", "row_label", "row_name",
            "run_svr_mpc", "run_trial", "solve", "spell_derivatives", "split_params", "summarize",
-           "svr_optimiser", "table1_fields", "task_defaults", "trial_key", "trial_params", "versus",
-           "wire_controller"]
+           "svr_optimiser", "table1_fields", "task_defaults", "Timing", "trial_key", "trial_params",
+           "versus", "wire_controller"]

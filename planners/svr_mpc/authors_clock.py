@@ -2,8 +2,8 @@
 
 A comparison of MPC planners whose lag is measured on the host drifts with the host (a loaded
 machine makes every row slower and reorders rows whose costs differ by a few per cent). The
-``authors`` clock (``SVRMPCSettings.clock``) gives every optimisation the duration the authors'
-machine took for one of its size, from their per-episode files (``PaperData/MPC_push_*``,
+``authors`` clock (``SVRMPCSettings.timing.clock``) gives every optimisation the duration the
+authors' machine took for one of its size, from their per-episode files (``PaperData/MPC_push_*``,
 ``../shared/external/ilqr_svr/paper_data``), so a trial gives the same cost on any machine and
 its lag is the authors' lag.
 

@@ -25,15 +25,17 @@ def goal_dofs(params: dict) -> np.ndarray:
     """(k,) int: the qvel indices of the goal objects' planar DoFs in the task instance of a
     trial's ``params`` (``trial_params``), built once per instance."""
     settings, seed, _ = split_params(params)
-    return np.array(_goal_dofs(settings.task, settings.problem, settings.layouts, int(seed)))
+    return np.array(_goal_dofs(settings.task, settings.scene, int(seed)))
 
 
 @lru_cache(maxsize=512)
-def _goal_dofs(task: str, problem: str, layouts: str | None, seed: int) -> tuple[int, ...]:
+def _goal_dofs(task: str, scene, seed: int) -> tuple[int, ...]:
+    """The goal objects' planar DoFs of the task instance of ``seed`` on ``scene`` (a
+    ``PushScene``: the same instance for every method)."""
     from dopt.tasks.push.task_model import planar_dofs
     from planners.svr_mpc.settings import SVRMPCSettings
 
-    built = SVRMPCSettings(task=task, problem=problem, layouts=layouts).build_task(seed)
+    built = SVRMPCSettings(task=task, scene=scene).build_task(seed)
     return tuple(int(d) for d in planar_dofs(built.model, built.goal_bodies))
 
 

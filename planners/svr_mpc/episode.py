@@ -39,8 +39,8 @@ from planners.svr_mpc.settings import (
     SVRMPCSettings,
     parse_row,
     split_params,
-    trial_key,
 )
+from planners.svr_mpc.trial_names import trial_key
 
 
 @dataclass(frozen=True)
@@ -197,16 +197,17 @@ def run_svr_mpc(settings: SVRMPCSettings = SVRMPCSettings(), seed: int = 0,
                 blowup_label: str | None = None,
                 optimiser: str | OptimiserFactory = DEFAULT_OPTIMISER,
                 keep_controls: bool = False) -> SVRMPCResult:
-    """One MPC episode of ``settings.method`` on the task instance of ``seed``, optimised by
-    ``optimiser`` (``planners.svr_mpc.optimisers``: a name of ``OPTIMISERS`` or a factory
-    ``context -> optimiser``; default the paper's iLQR-SVR).
+    """One MPC episode of ``settings.selection.method`` on the task instance of ``seed``,
+    optimised by ``optimiser`` (``planners.svr_mpc.optimisers``: a name of ``OPTIMISERS`` or
+    a factory ``context -> optimiser``; default the paper's iLQR-SVR).
 
     The seed builds the task instance (the same for every method, so costs pair up against baseline:
     problem ``ours`` draws its layout from ``default_rng(seed)``; the authors' clutter loads
     their scene number ``seed``), the DoF selector's draws ([seed, 1]) and the control noise
     ([seed, 2]). The episode starts at the task's initial state with zero controls, or
-    (``warm_start``) at the state the authors' set-up motion ends in with their push plan; it
-    runs on the settings' clock (real: real time times the slowdown) unless ``synchronous``.
+    (``start.warm_start``) at the state the authors' set-up motion ends in with their push
+    plan; it runs on the settings' clock (``timing``; real: real time times the slowdown)
+    unless ``timing.synchronous``.
     ``history``: a list that receives the optimiser's ``history`` (``SVROptimiser``'s: each
     optimisation's set, importances, line-search step, regularisation and costs), with
     "contact_steps": the states of the new nominal in which the robot touches the pushed
@@ -240,7 +241,7 @@ def run_svr_mpc(settings: SVRMPCSettings = SVRMPCSettings(), seed: int = 0,
               success=lambda x: ctl.goal_distance(x) < radius, on_step=on_step,
               blowup_out=blowup_out,
               blowup_label=blowup_label or f"{settings.task}-"
-              f"{settings.method if name == DEFAULT_OPTIMISER else name}-seed{seed}")
+              f"{settings.selection.method if name == DEFAULT_OPTIMISER else name}-seed{seed}")
     start, plan = start_and_plan(settings, task, ctl.scene.nu)
     try:
         res = mpc.run(start, plan)
@@ -273,18 +274,19 @@ def mpc_config(settings: SVRMPCSettings, task) -> MPCConfig:
     """The MPC loop's config of an episode: the settings' timeout and slowdown (else the
     task's), clock, noise, feedback and, on the model clock, the settings' fixed duration or
     else the task's cost model."""
-    if settings.clock == "authors":
-        clock, ms = "model", authors_clock.model_ms(settings.task, settings.method)
+    timing, execution = settings.timing, settings.execution
+    if timing.clock == "authors":
+        clock, ms = "model", authors_clock.model_ms(settings.task, settings.selection.method)
     else:
-        clock, ms = settings.clock, (None if settings.clock != "model"
-                                     else CLOCK_MODEL_MS[settings.task]
-                                     if settings.clock_ms is None else (settings.clock_ms, 0.0))
-    return MPCConfig(timeout=int(settings.timeout or task.timeout),
-                     slowdown=float(settings.slowdown or task.slowdown),
-                     synchronous=settings.synchronous, feedback=settings.feedback,
-                     control_noise=float(settings.control_noise), clock=clock,
-                     threads=float(settings.nominal_threads), model_ms=ms,
-                     executor=settings.executor)
+        clock, ms = timing.clock, (None if timing.clock != "model"
+                                   else CLOCK_MODEL_MS[settings.task]
+                                   if timing.clock_ms is None else (timing.clock_ms, 0.0))
+    return MPCConfig(timeout=int(execution.timeout or task.timeout),
+                     slowdown=float(timing.slowdown or task.slowdown),
+                     synchronous=timing.synchronous, feedback=execution.feedback,
+                     control_noise=float(execution.control_noise), clock=clock,
+                     threads=float(timing.nominal_threads), model_ms=ms,
+                     executor=execution.executor)
 
 
 def keep_history(ctl, task, name: str) -> None:
@@ -306,12 +308,12 @@ def keep_history(ctl, task, name: str) -> None:
 
 
 def start_and_plan(settings: SVRMPCSettings, task, nu: int) -> tuple[np.ndarray, Plan]:
-    """The episode's start state (ns,) and first plan (T, nu): with ``warm_start`` the state
-    the authors' set-up motion ends in and their push plan, else the task's initial state
-    and zero controls."""
-    if settings.warm_start:
+    """The episode's start state (ns,) and first plan (T, nu): with ``start.warm_start`` the
+    state the authors' set-up motion ends in and their push plan, else the task's initial
+    state and zero controls."""
+    if settings.start.warm_start:
         start = warm_start.setup(task).final_state
-        push = warm_start.WarmStartConfig(moving_tail=settings.push_tail)
+        push = warm_start.WarmStartConfig(moving_tail=settings.start.push_tail)
         return start, Plan(warm_start.push(task, start, task.horizon, push).controls)
     return task.initial_state, Plan(np.zeros((task.horizon, nu)))
 
@@ -346,10 +348,10 @@ def episode_result(ctl, res, start: np.ndarray, config: MPCConfig,
 def run_trial(params: dict, report: Callable[[], None] | None = None,
               blowup_out: str | os.PathLike | None = None,
               keep_controls: bool = False) -> dict:
-    """``run_svr_mpc`` for ``dopt.lab.sweep``: params holds the ``SVRMPCSettings`` fields,
-    "seed" and, where it is not ``svr``, "optimiser" (``trial_params``) ->
-    ``SVRMPCResult.to_dict()``; ``report`` (the sweep's) is called after every
-    agent step. ``blowup_out``: the sweep's folder, which receives the blow-up captures of
+    """``run_svr_mpc`` for ``dopt.lab.sweep``: params holds the settings flat
+    (``SVRMPCSettings.params``), "seed" and, where it is not ``svr``, "optimiser"
+    (``trial_params``) -> ``SVRMPCResult.to_dict()``; ``report`` (the sweep's) is called after
+    every agent step. ``blowup_out``: the sweep's folder, which receives the blow-up captures of
     the episode as ``blowups/<trial key>`` (``trial_key``), listed in the result relative to
     it; those of an earlier run of the trial move to ``blowups/outdated/`` first.
     ``keep_controls``: the result also holds "start_state" (ns,) and "controls" (S, nu) of

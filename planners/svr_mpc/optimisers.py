@@ -6,7 +6,7 @@ An optimiser is any object with ``optimise(state, plan) -> dopt.mpc.Plan``
 scene, its cost, a rollout service over it (closed after the episode), the trial's
 ``SVRMPCSettings`` and the episode's own generator. ``OPTIMISERS`` maps names to factories;
 ``svr``, the paper's (``planners.svr.SVROptimiser``: iLQR on the DoF set of
-``settings.method``, the Table 1 rows baseline, rand, naive and SVR alike), is the default;
+``settings.selection``, the Table 1 rows baseline, rand, naive and SVR alike), is the default;
 ``unoptimised`` executes the task's first plan as it is (shifted and padded by the MPC loop),
 the control that says what an optimiser adds to it.
 
@@ -71,10 +71,10 @@ class OptimiserContext:
 
 def svr_optimiser(context: OptimiserContext) -> SVROptimiser:
     """The paper's optimiser: one iLQR iteration (``settings.ilqr``: finite differences, key
-    timesteps, box QP) on the DoF set a selector of ``settings.selection`` keeps."""
+    timesteps, box QP) on the DoF set a selector of ``settings.selection.config`` keeps."""
     c = context
     selector = DofSelector(c.scene.nv, c.task.robot_dofs, c.cost.costed_dofs,
-                           c.settings.selection, c.rng)
+                           c.settings.selection.config, c.rng)
     return SVROptimiser(ILQR(c.service, c.cost, c.settings.ilqr), selector)
 
 

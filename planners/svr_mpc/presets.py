@@ -6,8 +6,11 @@ the tasks, Table 1 the rows), the authors' code and data (``iLQR_SVR``, its ``Pa
 file and function as ``../shared/notes/svr-authors-setup.md`` section 1 records them) or ours
 (chosen or measured; docs/DESIGN-NOTES.md). ``SVRMPCSettings.paper``, ``.authors`` and
 ``.preset`` (``planners.svr_mpc.settings``) read them: a protocol is the settings' defaults
-("ours") with its ``Setting`` rows on top, "authors" on top of "paper". A task's T, dt, Y and
-slowdown are the paper's Sec. 5.1 numbers and live in its ``dopt.tasks.PUSH_TASKS`` spec.
+("ours") with its ``Setting`` rows on top, "authors" on top of "paper". A row names its
+setting flat, as a trial's params do (``cost``, ``clock``; ``settings.RECORD_PATHS`` says
+which group holds it: ``timing.clock``), so a protocol reads as the trials record it. A
+task's T, dt, Y and slowdown are the paper's Sec. 5.1 numbers and live in its
+``dopt.tasks.PUSH_TASKS`` spec.
 """
 
 from __future__ import annotations
@@ -36,9 +39,9 @@ DEFAULT_ROW = "sum-t10-r1"
 
 @dataclass(frozen=True)
 class Setting:
-    """One ``SVRMPCSettings`` field of a protocol: ``value`` (the same on every task) or
-    ``per_task`` (task -> value; a task it does not name takes ``value``), and ``source``,
-    where the number comes from."""
+    """One setting of a protocol: ``value`` (the same on every task) or ``per_task`` (task ->
+    value; a task it does not name takes ``value``), and ``source``, where the number comes
+    from."""
 
     value: object
     source: str
@@ -100,8 +103,9 @@ PROTOCOLS: dict[str, tuple[dict[str, Setting], ...]] = {
 
 
 def protocol_fields(name: str, task: str) -> dict:
-    """The ``SVRMPCSettings`` fields protocol ``name`` sets on ``task`` (its rows in order,
-    a later one over an earlier); ValueError naming the protocols."""
+    """The settings protocol ``name`` sets on ``task``, by flat name (its rows in order, a
+    later one over an earlier; ``SVRMPCSettings.with_params`` takes them); ValueError naming
+    the protocols."""
     if name not in PROTOCOLS:
         raise ValueError(f"unknown preset {name!r}; choose from {tuple(PROTOCOLS)}")
     out: dict = {}

@@ -1,27 +1,28 @@
-"""The settings of one iLQR-SVR MPC trial (``SVRMPCSettings``), the one spelling of its
-derivative options (``planners.ilqr.Derivatives``: ``spell_derivatives``), the paper's Table 1
-rows by name (``parse_row`` -> ``Row``), a task's own slowdown and timeout
-(``task_defaults``), and the params, key and row label a trial is stored and reported under
-(``trial_params``, ``trial_key``, ``row_label``)."""
+"""The settings of one iLQR-SVR MPC trial (``SVRMPCSettings``: its groups are
+``settings_groups``'), their flat form in a trial's params (``RECORD_NAMES``,
+``SVRMPCSettings.params`` / ``from_params``), the one spelling of its derivative options
+(``planners.ilqr.Derivatives``: ``spell_derivatives``), the paper's Table 1 rows by name
+(``parse_row`` -> ``Row``), a task's own slowdown and timeout (``task_defaults``), and the
+params and row label a trial is stored and reported under (``trial_params``,
+``row_label``; its name: ``planners.svr_mpc.trial_names``)."""
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass, field, replace
+from collections.abc import Mapping
+from dataclasses import asdict, dataclass, field, fields, is_dataclass, replace
 from pathlib import Path
 from typing import Literal
 
 import mujoco
 
 from dopt.lab.provenance import root_relative, rooted
-from dopt.mpc import CLOCKS, EXECUTORS, MAX_CONTROL_NOISE
 from dopt.rollout import FDConfig
-from dopt.tasks import PUSH_PROBLEMS, build_push_task, get_task
+from dopt.tasks import build_push_task, get_task
 from dopt.tasks.push.costs import COST_PRESETS
 from dopt.tasks.push.task_model import TaskModel
 from dopt.validation import check_config
 from planners.ilqr import FINITE_DIFFERENCES, Derivatives, ILQRConfig
 from planners.keypoints import KeypointConfig
-from planners.svr import METHODS, SelectionConfig, paper_theta
 from planners.svr_mpc.optimisers import DEFAULT_OPTIMISER, optimiser_names
 from planners.svr_mpc.presets import (
     DEFAULT_ROW,
@@ -31,10 +32,13 @@ from planners.svr_mpc.presets import (
     protocol_fields,
     row_fields,
 )
-
-#: the problems a trial can run on: ``ours`` (dopt's own scenes, ``dopt.tasks.PUSH_TASKS``) or
-#: ``authors`` (the authors' scenes, objects and contacts, ``dopt.tasks.push.authors``)
-PROBLEMS = PUSH_PROBLEMS
+from planners.svr_mpc.settings_groups import (
+    DofSelection,
+    Execution,
+    PushScene,
+    PushStart,
+    Timing,
+)
 
 #: the protocols by name (``SVRMPCSettings.preset``; ``planners.svr_mpc.presets``)
 PRESETS = tuple(PROTOCOLS)
@@ -42,10 +46,6 @@ PRESETS = tuple(PROTOCOLS)
 #: the paper's cost per task where it is not Eq. 2 alone (``COST_PRESETS["paper"]``): their
 #: push_soft task file adds a terminal reach residual (``presets.PAPER["cost"]``)
 PAPER_COSTS = dict(PAPER["cost"].per_task)
-
-#: the clocks a trial can run on: ``dopt.mpc.CLOCKS`` and ``authors``, the model clock fitted
-#: to the authors' own optimisation times (``planners.svr_mpc.authors_clock``)
-SVR_CLOCKS = CLOCKS + ("authors",)
 
 #: the model clock per task, ms per optimisation = a + b |C| on the nominal 2 threads: fitted
 #: by ``python -m planners.bench clock`` (docs/results/clock-model.json)
@@ -62,8 +62,9 @@ def row_name(method: str, theta: int, rho: float) -> str:
     return f"{method[4:]}-t{theta}-r{rho:g}"
 
 
-#: the fixes beyond the paper a row can name (``sum-t10-r500+costdofs``): the
-#: ``SVRMPCSettings`` field each sets (``SelectionConfig.keep_costed``, ``ILQRConfig.mu_reset``)
+#: the fixes beyond the paper a row can name (``sum-t10-r500+costdofs``): the setting each
+#: sets, by its flat name (``SVRMPCSettings.params``: ``DofSelection.keep_costed``,
+#: ``SVRMPCSettings.mu_reset``)
 FIXES = {"costdofs": "keep_costed", "mureset": "mu_reset"}
 
 
@@ -105,15 +106,17 @@ class Row:
     fixes: dict = field(default_factory=dict)
 
     def apply(self, settings: SVRMPCSettings) -> SVRMPCSettings:
-        """``settings`` with this row's method, theta, rho, derivative variants (over the
-        settings' own derivatives) and fixes."""
-        d = replace(settings.derivatives, **self.variants)
-        return replace(settings, method=self.method, theta=self.theta, rho=float(self.rho),
-                       **d.fields(), **self.fixes)
+        """``settings`` with this row's method, theta and rho (its ``selection``), derivative
+        variants (over the settings' own ``derivatives``) and fixes."""
+        selection = replace(settings.selection, method=self.method, theta=self.theta,
+                            rho=float(self.rho))
+        return replace(settings, selection=selection,
+                       derivatives=replace(settings.derivatives, **self.variants)
+                       ).with_params(**self.fixes)
 
 
 def parse_fixes(mods, what: str) -> dict:
-    """The ``SVRMPCSettings`` fields a row's fixes (``FIXES``) set to True."""
+    """The settings (flat names) a row's fixes (``FIXES``) set to True."""
     names = [m for m in mods if m in FIXES]
     if len(set(names)) < len(names):
         raise ValueError(f"{what}: a fix is repeated")
@@ -185,120 +188,118 @@ def fixes_tag(p: dict) -> str:
 
 @dataclass(frozen=True)
 class SVRMPCSettings:
-    """One MPC trial's settings (the seed comes separately).
+    """One MPC trial's settings (the seed comes separately), in groups of one idea each
+    (``planners.svr_mpc.settings_groups``: each group's Attributes say what its fields mean).
+
+    A trial's params keep them flat (``params``, ``from_params``; ``trial_params``): every
+    group's fields by their own names, the derivatives as ``Derivatives.fields()``.
 
     Attributes:
         task: a name of ``dopt.tasks.PUSH_TASKS`` (clutter, soft, soft_rigid).
-        method: a DoF-selection method (``planners.svr.METHODS``).
-        rho: SVR importance threshold.
-        theta: random DoFs per iteration; None: the paper's for the method (rand 5, svr 10).
-        slowdown: agent wall time per step over dt; None: the task's (the paper's).
-        timeout: Y, agent steps; None: the task's (the paper's).
-        feedback: execute u + K (x - x_nominal) (the authors did not).
-        control_noise: Gaussian noise on executed controls, fraction of each control's range.
-        synchronous: the agent waits for the optimiser (deterministic; tests, debugging).
-        threads: simulation threads (0: one per core).
+        selection: which DoFs each optimisation keeps (``DofSelection``: method, rho, theta,
+            keep_costed).
+        derivatives: how iLQR differentiates the dynamics (``planners.ilqr.Derivatives``: the
+            finite differences, default forward 1e-3, the authors' centred 1e-6; the
+            timesteps they cover; the box-QP backward pass for the control limits).
+        mu_reset: a fix beyond the paper (row ``+mureset``, ``FIXES``): mu reset at every MPC
+            call (``ILQRConfig.mu_reset``).
         cost: a name of ``dopt.tasks.push.costs.COST_PRESETS``: ``ee`` (with the end-effector
             term, ours), ``paper`` (Eq. 2 alone) or ``paper-reach`` (Eq. 2 with the authors'
             soft-task reach residual).
-        warm_start: start from the authors' set-up state and initial push plan
-            (``dopt.tasks.push.warm_start``) instead of the task's start and zero controls.
-        clock: ``real``, ``virtual`` or ``model`` (``dopt.mpc``; the model clock's
-            coefficients are the task's ``CLOCK_MODEL_MS``, fitted on this project's
-            machine), or ``authors``: the model clock fitted to the authors' own times
-            (``planners.svr_mpc.authors_clock``).
-        nominal_threads: the thread count a virtual duration divides the CPU time by (2,
-            this project's machine).
-        fd_centered, fd_eps: the finite differences (default forward 1e-3; the authors:
-            centred 1e-6).
-        keypoints, fd_skip: the timesteps the finite differences cover (``every``, ``skip``
-            every fd_skip-th, ``adaptive``; ``planners.keypoints``), A and B linear between.
-        box_qp: control limits in the backward pass. The five are ``derivatives``
-            (``planners.ilqr.Derivatives``) spelled flat, as a trial's params keep them; set
-            them together: ``replace(settings, **Derivatives(...).fields())``.
-        problem: ``ours`` or ``authors`` (``PROBLEMS``): whose scenes the task builds.
-        layouts: the folder of the authors' clutter scenes (``push_mcl_layouts``, one CSV per
-            scene; seed i loads scene i); needed by problem ``authors`` on clutter only. A
-            relative path is taken from the checkout's root (``dopt.lab.provenance.rooted``), as
-            ``authors`` and ``preset`` record the folder they are given (relative to the
-            current folder), so that a result names no folder of its machine.
-        islands: MuJoCo's constraint islands (its default); False solves all constraints as
-            one system (``mjDSBL_ISLAND``), as the authors' MuJoCo did, so that untouched
-            objects' derivatives are tiny rather than exactly 0.
-        push_tail: the first push plan ends moving forward (``WarmStartConfig.moving_tail``);
-            False: it ends braking at its end point, and MPC's padding pulls the pusher back.
-        clock_ms: on the model clock, every optimisation lasts this long (ms) instead of the
-            task's fitted a + b |C| (``CLOCK_MODEL_MS``): every row then lags alike, so what
-            is left between rows is their choice of DoFs, not their speed.
-        executor: ``alg1`` (the paper's Alg. 1: pad with the last control, land shifted by
-            the lag) or ``authors`` (their data generator's: hold after 80 controls, land at
-            the nearest nominal state; ``dopt.mpc``).
-        keep_costed, mu_reset: fixes beyond the paper (rows ``+costdofs``, ``+mureset``,
-            ``FIXES``): the cost's DoFs always in C (``SelectionConfig.keep_costed``); mu reset
-            at every MPC call (``ILQRConfig.mu_reset``).
+        scene: the scene a seed builds (``PushScene``: problem, layouts, islands).
+        start: where an episode starts (``PushStart``: warm_start, push_tail).
+        timing: the clock (``Timing``: clock, nominal_threads, clock_ms, slowdown,
+            synchronous).
+        execution: how the agent executes the plans (``Execution``: executor, feedback,
+            control_noise, timeout).
+        threads: simulation threads (0: one per core).
     """
 
     task: str = "clutter"
-    method: str = "svr-sum"
-    rho: float = field(default=1.0, metadata={"at_least": 0.0})
-    theta: int | None = field(default=None, metadata={"at_least": 0})
-    slowdown: float | None = field(default=None, metadata={"above": 0})
-    timeout: int | None = field(default=None, metadata={"at_least": 1})
-    feedback: bool = False
-    control_noise: float = field(default=0.0, metadata={"at_least": 0.0,
-                                                          "at_most": MAX_CONTROL_NOISE})
-    synchronous: bool = False
-    threads: int = field(default=0, metadata={"at_least": 0})
-    cost: str = field(default="ee", metadata={"choices": tuple(COST_PRESETS)})
-    warm_start: bool = False
-    clock: str = field(default="real", metadata={"choices": SVR_CLOCKS})
-    nominal_threads: float = field(default=2.0, metadata={"above": 0})
-    fd_centered: bool = False
-    fd_eps: float = field(default=1e-3, metadata={"above": 0})
-    keypoints: str = "every"
-    fd_skip: int = field(default=1, metadata={"at_least": 1})
-    box_qp: bool = False
-    problem: str = field(default="ours", metadata={"choices": PROBLEMS})
-    layouts: str | None = None
-    islands: bool = True
-    push_tail: bool = True
-    clock_ms: float | None = field(default=None, metadata={"above": 0})
-    executor: str = field(default="alg1", metadata={"choices": EXECUTORS})
-    keep_costed: bool = False
+    selection: DofSelection = DofSelection()
+    derivatives: Derivatives = Derivatives()
     mu_reset: bool = False
+    cost: str = field(default="ee", metadata={"choices": tuple(COST_PRESETS)})
+    scene: PushScene = PushScene()
+    start: PushStart = PushStart()
+    timing: Timing = Timing()
+    execution: Execution = Execution()
+    threads: int = field(default=0, metadata={"at_least": 0})
 
     def __post_init__(self):
         get_task(self.task)                       # ValueError naming the known tasks
-        if self.method not in METHODS:
-            raise ValueError(f"unknown method {self.method!r}; choose from {METHODS}")
+        for name, kind in GROUPS.items():
+            if not isinstance(getattr(self, name), kind):
+                raise TypeError(f"SVRMPCSettings.{name} must be a {kind.__name__}, got "
+                                f"{getattr(self, name)!r}")
         # every field's type; the bounds and choices of the fields' metadata (the flags
         # derived from the fields read the same: dopt.lab.flags)
         check_config(self)
-        if self.problem == "authors" and self.task == "clutter" and not self.layouts:
+        scene = self.scene
+        if scene.problem == "authors" and self.task == "clutter" and not scene.layouts:
             raise ValueError("problem 'authors' on clutter needs layouts: the folder of the "
                              "authors' scenes (push_mcl_layouts/{0..99}.csv)")
-        if self.layouts is not None and not rooted(self.layouts).is_dir():
-            raise ValueError(f"layouts: no folder {rooted(self.layouts)} (the authors' "
-                             f"push_mcl_layouts, one CSV per scene)")
-        if self.layouts is not None and (self.problem, self.task) != ("authors", "clutter"):
+        if scene.layouts is not None and (scene.problem, self.task) != ("authors", "clutter"):
             raise ValueError(f"layouts: only the authors' clutter reads them (problem "
-                             f"'authors', task 'clutter'), not problem {self.problem!r} on "
+                             f"'authors', task 'clutter'), not problem {scene.problem!r} on "
                              f"{self.task}")
-        _ = self.ilqr                  # ValueError naming a bad keypoint method or fd_skip
-        if self.synchronous and self.clock != "real":
-            raise ValueError("synchronous runs have no clock: use clock='real' with it")
-        if self.clock_ms is not None and self.clock != "model":
-            raise ValueError(f"clock_ms sets the model clock's duration: use clock='model' "
-                             f"with it, not {self.clock!r}")
+
+    def params(self) -> dict:
+        """These settings flat, as a trial's params keep them (``RECORD_NAMES``, in that
+        order): every group's fields by their names, the derivatives as
+        ``Derivatives.fields()``; ``from_params`` reads them back."""
+        flat: dict = {}
+        for f in fields(self):
+            value = getattr(self, f.name)
+            if isinstance(value, Derivatives):
+                flat.update(value.fields())
+            elif f.name in GROUPS:
+                flat.update(asdict(value))
+            else:
+                flat[f.name] = value
+        return {name: flat[name] for name in RECORD_NAMES}
+
+    @classmethod
+    def from_params(cls, params: Mapping) -> SVRMPCSettings:
+        """The settings of flat fields (``params``' names, ``RECORD_NAMES``; a missing one at
+        its default, as in older trials' params): ``from_params(s.params()) == s``.
+
+        Raises:
+            TypeError: a name that is no setting (a trial's seed and optimiser are
+                ``split_params``').
+        """
+        unknown = [k for k in params if k not in RECORD_PATHS]
+        if unknown:
+            raise TypeError(f"SVRMPCSettings has no setting {unknown[0]!r}; its settings: "
+                            f"{', '.join(RECORD_NAMES)}")
+        top: dict = {}
+        for f in fields(cls):
+            kind = GROUPS.get(f.name)
+            if kind is Derivatives:
+                top[f.name] = Derivatives.from_fields(params)
+            elif kind is not None:
+                top[f.name] = kind(**{g.name: params[g.name] for g in fields(kind)
+                                      if g.name in params})
+            elif f.name in params:
+                top[f.name] = params[f.name]
+        return cls(**top)
+
+    def with_params(self, **changes) -> SVRMPCSettings:
+        """These settings with ``changes``: a group whole (``timing=Timing(...)``) or a
+        setting by its flat name (``params``: ``clock="model"``, ``fd_skip=5``, ``method=``),
+        the groups first; TypeError naming one that is neither."""
+        groups = {k: changes.pop(k) for k in list(changes) if k in GROUPS}
+        base = replace(self, **groups) if groups else self
+        return type(self).from_params({**base.params(), **changes}) if changes else base
 
     @classmethod
     def paper(cls, task: str, row: str = DEFAULT_ROW, **overrides) -> SVRMPCSettings:
         """The paper's protocol for ``row`` (a name of ``TABLE1_ROWS``) on ``task``
         (``planners.svr_mpc.presets.PAPER``, each number with its source): the authors' cost
         for the task (Eq. 2, on soft with their reach residual), their initial plan, 5 %
-        control noise, the virtual clock."""
-        return cls(**{"task": task, **row_fields(row), **protocol_fields("paper", task),
-                      **overrides})
+        control noise, the virtual clock. ``overrides``: as ``with_params`` takes them."""
+        return cls(task=task).with_params(**{**row_fields(row),
+                                             **protocol_fields("paper", task), **overrides})
 
     @classmethod
     def authors(cls, task: str, row: str = DEFAULT_ROW, layouts: str | Path | None = None,
@@ -312,10 +313,11 @@ class SVRMPCSettings:
         (``authors``). Where the paper's text (Alg. 1) and their code differ, this follows
         the code, which generated their data; ``executor="alg1"`` is the text's reading.
         ``layouts`` (relative to the current folder) is recorded relative to the checkout's
-        root (``dopt.lab.provenance.root_relative``)."""
+        root (``dopt.lab.provenance.root_relative``). ``overrides``: as ``with_params``."""
         layouts = None if layouts is None else root_relative(layouts)
-        return cls(**{"task": task, **row_fields(row), **protocol_fields("authors", task),
-                      "layouts": layouts, **overrides})
+        return cls(task=task).with_params(**{**row_fields(row),
+                                             **protocol_fields("authors", task),
+                                             "layouts": layouts, **overrides})
 
     @classmethod
     def preset(cls, task: str, *, protocol: str = "ours",
@@ -337,30 +339,61 @@ class SVRMPCSettings:
         return cls(task=task)
 
     def build_task(self, seed: int) -> TaskModel:
-        """The task instance of ``seed`` under these settings (``problem``, ``layouts``,
-        ``islands``): the same for every method, so costs pair up seed by seed."""
-        task = build_push_task(self.task, self.problem, int(seed),
-                               rooted(self.layouts) if self.layouts else None)
-        if not self.islands:
+        """The task instance of ``seed`` under these settings (``scene``: problem, layouts,
+        islands): the same for every method, so costs pair up seed by seed."""
+        scene = self.scene
+        task = build_push_task(self.task, scene.problem, int(seed),
+                               rooted(scene.layouts) if scene.layouts else None)
+        if not scene.islands:
             task.model.opt.disableflags |= mujoco.mjtDisableBit.mjDSBL_ISLAND
         return task
-
-    @property
-    def derivatives(self) -> Derivatives:
-        """The five derivative fields as one typed value (``Derivatives.from_fields``)."""
-        return Derivatives.from_fields({k: getattr(self, k) for k in Derivatives().fields()})
 
     @property
     def ilqr(self) -> ILQRConfig:
         """iLQR's config: its derivatives (``derivatives``) and mu's reset."""
         return ILQRConfig(derivatives=self.derivatives, mu_reset=bool(self.mu_reset))
 
-    @property
-    def selection(self) -> SelectionConfig:
-        """The DoF selector's config (theta None -> the paper's for the method)."""
-        theta = paper_theta(self.method) if self.theta is None else self.theta
-        return SelectionConfig(self.method, rho=float(self.rho), theta=int(theta),
-                               keep_costed=bool(self.keep_costed))
+
+#: the groups of ``SVRMPCSettings`` by field name (the fields whose default is a dataclass)
+GROUPS: dict[str, type] = {f.name: type(f.default) for f in fields(SVRMPCSettings)
+                           if is_dataclass(f.default)}
+#: the flat names of the settings, in the order a trial's params record them
+#: (``SVRMPCSettings.params``; every committed trial's params keep this order)
+RECORD_NAMES = ("task", "method", "rho", "theta", "slowdown", "timeout", "feedback",
+                "control_noise", "synchronous", "threads", "cost", "warm_start", "clock",
+                "nominal_threads", "fd_centered", "fd_eps", "keypoints", "fd_skip", "box_qp",
+                "problem", "layouts", "islands", "push_tail", "clock_ms", "executor",
+                "keep_costed", "mu_reset")
+
+
+def _record_paths() -> dict[str, str]:
+    """{flat name: the settings path (dotted) it sets}: a group's field under the group, the
+    derivatives' flat fields under ``derivatives`` (fd_centered: its ``fd``)."""
+    out = {}
+    for f in fields(SVRMPCSettings):
+        kind = GROUPS.get(f.name)
+        if kind is Derivatives:
+            out.update({name: f"{f.name}.{'fd' if name == 'fd_centered' else name}"
+                        for name in Derivatives().fields()})
+        elif kind is not None:
+            out.update({g.name: f"{f.name}.{g.name}" for g in fields(kind)})
+        else:
+            out[f.name] = f.name
+    return out
+
+
+#: {flat name (``RECORD_NAMES``): the settings path it sets}
+RECORD_PATHS = _record_paths()
+
+
+def record_path(name: str, value) -> tuple[str, object]:
+    """A setting named flat (a trial's params, a settings file: ``RECORD_PATHS``) as its
+    dotted path and value (``fd_centered`` True/False: ``derivatives.fd`` central/forward);
+    any other name (a path already, or no setting) as it is."""
+    path = RECORD_PATHS.get(name, name)
+    if name == "fd_centered" and isinstance(value, bool):
+        value = "central" if value else "forward"
+    return path, value
 
 
 def task_defaults(task: str) -> tuple[float, int]:
@@ -372,8 +405,9 @@ def task_defaults(task: str) -> tuple[float, int]:
 
 def trial_params(settings: SVRMPCSettings, seed: int,
                  optimiser: str = DEFAULT_OPTIMISER) -> dict:
-    """A trial's params (``dopt.lab.sweep``'s, what ``run_trial`` runs): every ``SVRMPCSettings``
-    field, "seed", and "optimiser" where it is not ``svr`` (a name of ``OPTIMISERS``)."""
+    """A trial's params (``dopt.lab.sweep``'s, what ``run_trial`` runs): the settings flat
+    (``SVRMPCSettings.params``), "seed", and "optimiser" where it is not ``svr`` (a name of
+    ``OPTIMISERS``)."""
     if not isinstance(settings, SVRMPCSettings):
         raise TypeError(f"settings must be SVRMPCSettings, got {type(settings).__name__}")
     if not isinstance(optimiser, str):
@@ -382,50 +416,15 @@ def trial_params(settings: SVRMPCSettings, seed: int,
     if optimiser not in optimiser_names():
         raise ValueError(f"unknown optimiser {optimiser!r}; choose from {optimiser_names()}")
     extra = {} if optimiser == DEFAULT_OPTIMISER else {"optimiser": optimiser}
-    return {**asdict(settings), "seed": seed, **extra}
+    return {**settings.params(), "seed": seed, **extra}
 
 
 def split_params(params: dict) -> tuple[SVRMPCSettings, int, str]:
-    """A trial's params (``trial_params``) -> (its settings, its seed, its optimiser's name)."""
+    """A trial's params (``trial_params``) -> (its settings, ``SVRMPCSettings.from_params``;
+    its seed; its optimiser's name)."""
     p = dict(params)
     seed, optimiser = p.pop("seed"), p.pop("optimiser", DEFAULT_OPTIMISER)
-    return SVRMPCSettings(**p), seed, optimiser
-
-
-def trial_key(p: dict) -> str:
-    """File-name key of a trial's params: everything that changes its outcome (timeout None,
-    the task's own, is Y0; settings at their defaults add nothing)."""
-    parts = [p["task"], p["method"], f"rho{p['rho']:g}", f"theta{p['theta']}",
-             f"slow{p['slowdown']:g}", f"Y{p['timeout'] or 0}", f"seed{p['seed']}"]
-    if p.get("feedback"):
-        parts.append("fb")
-    if p.get("control_noise"):
-        parts.append(f"noise{p['control_noise']:g}")
-    if p.get("cost", "ee") != "ee":
-        parts.append(f"cost{p['cost']}")
-    if p.get("warm_start"):
-        parts.append("ws")
-    if p.get("clock", "real") == "authors":
-        parts.append("clockauthors")
-    elif p.get("clock", "real") != "real":
-        parts.append(f"clock{p['clock']}{p.get('nominal_threads', 2.0):g}")
-    if p.get("executor", "alg1") != "alg1":
-        parts.append(f"exec{p['executor']}")
-    if p.get("clock_ms") is not None:
-        parts.append(f"ms{p['clock_ms']:g}")
-    if p.get("synchronous"):
-        parts.append("sync")
-    parts += spell_derivatives(Derivatives.from_fields(p), "key")
-    if p.get("problem", "ours") != "ours":
-        parts.append(p["problem"])
-    if not p.get("islands", True):
-        parts.append("noislands")
-    if not p.get("push_tail", True):
-        parts.append("notail")
-    parts += [f"fix{name}" for name, f in FIXES.items() if p.get(f)]
-    if p.get("optimiser", DEFAULT_OPTIMISER) != DEFAULT_OPTIMISER:
-        parts.append(f"opt{p['optimiser']}")
-    return "-".join(parts)
+    return SVRMPCSettings.from_params(p), seed, optimiser
 
 
 def row_label(p: dict) -> str:

@@ -11,20 +11,26 @@ papers name trials by).
 - ``legacy_trial_key``: the names of the trials written before the one identity, a chain of
   readable parts (``clutter-svr-sum-rho1-theta10-slow1-Y0-seed0-fb-...``); the committed
   trials under docs/results/runs keep them, and a sweep finds them there through
-  ``trial_aliases`` (``dopt.lab.sweep_store.Schema.aliases``); ``run_trial`` still labels an
-  episode's blow-up captures by it (``legacy_trial_key`` says why).
+  ``trial_aliases`` (``dopt.lab.sweep_store.Schema.aliases``).
 - ``trial_identity``: what a stored record's params must give to stand for a trial
-  (``Schema.identity``): the legacy key, as before the one identity (it spells every setting
-  that changes a result, the threads and the layouts' folder name aside), so the check is as
-  strong as it was.
+  (``Schema.identity``): the legacy key (it spells every setting of ``LEGACY_NAMES`` that
+  changes a result, the threads and the layouts' folder name aside) and the settings added
+  since that differ from their defaults (``unspelled``).
 """
 
 from __future__ import annotations
 
-from dopt.lab.identity import trial_name
+from dopt.lab.identity import changed_settings, trial_name
+from planners.ilqr import Derivatives
 from planners.svr import paper_theta
-from planners.svr_mpc.settings import SVRMPCSettings, row_name, trial_params
-from planners.svr_mpc.settings import trial_key as settings_key
+from planners.svr_mpc.optimisers import DEFAULT_OPTIMISER
+from planners.svr_mpc.settings import (
+    FIXES,
+    SVRMPCSettings,
+    row_name,
+    spell_derivatives,
+    trial_params,
+)
 from planners.trial_progress import RUN_ONLY_SETTINGS
 
 #: the params a trial's name leaves out: its seed (written apart) and the run-only settings
@@ -56,26 +62,72 @@ def trial_key(p: dict) -> str:
 
 def legacy_trial_key(p: dict) -> str:
     """The name of a trial written before the one identity, from its params: everything that
-    changes its outcome as readable parts (timeout None, the task's own, is Y0; settings at
-    their defaults add nothing). Only to find those trials, for ``trial_identity``, and as the
-    label of an episode's blow-up captures (``run_trial``). Its one spelling is still
-    ``planners.svr_mpc.settings.trial_key``: that file, like ``episode.py``, is one whose
-    change marks every committed MPC result stale
-    (``planners.svr_mpc.experiments.report_stale.SVR_COMPUTE_PATHS``), so the function moves
-    here, and the captures to ``trial_key``, with the next change there."""
-    return settings_key(p)
+    changed its outcome then as readable parts (timeout None, the task's own, is Y0; settings
+    at their defaults add nothing). Only to find those trials (``trial_aliases``) and to check
+    them (``trial_identity``); a setting added since (not in ``LEGACY_NAMES``) is not spelled
+    here, and a trial that sets one has no legacy name."""
+    parts = [p["task"], p["method"], f"rho{p['rho']:g}", f"theta{p['theta']}",
+             f"slow{p['slowdown']:g}", f"Y{p['timeout'] or 0}", f"seed{p['seed']}"]
+    if p.get("feedback"):
+        parts.append("fb")
+    if p.get("control_noise"):
+        parts.append(f"noise{p['control_noise']:g}")
+    if p.get("cost", "ee") != "ee":
+        parts.append(f"cost{p['cost']}")
+    if p.get("warm_start"):
+        parts.append("ws")
+    if p.get("clock", "real") == "authors":
+        parts.append("clockauthors")
+    elif p.get("clock", "real") != "real":
+        parts.append(f"clock{p['clock']}{p.get('nominal_threads', 2.0):g}")
+    if p.get("executor", "alg1") != "alg1":
+        parts.append(f"exec{p['executor']}")
+    if p.get("clock_ms") is not None:
+        parts.append(f"ms{p['clock_ms']:g}")
+    if p.get("synchronous"):
+        parts.append("sync")
+    parts += spell_derivatives(Derivatives.from_fields(p), "key")
+    if p.get("problem", "ours") != "ours":
+        parts.append(p["problem"])
+    if not p.get("islands", True):
+        parts.append("noislands")
+    if not p.get("push_tail", True):
+        parts.append("notail")
+    parts += [f"fix{name}" for name, f in FIXES.items() if p.get(f)]
+    if p.get("optimiser", DEFAULT_OPTIMISER) != DEFAULT_OPTIMISER:
+        parts.append(f"opt{p['optimiser']}")
+    return "-".join(parts)
 
 
-def trial_identity(p: dict) -> str:
+#: the params a ``legacy_trial_key`` knows (the flat settings when the one identity came, and
+#: the optimiser): a trial whose params set another has no legacy name
+LEGACY_NAMES = frozenset((
+    "task", "method", "rho", "theta", "slowdown", "timeout", "feedback", "control_noise",
+    "synchronous", "threads", "cost", "warm_start", "clock", "nominal_threads", "fd_centered",
+    "fd_eps", "keypoints", "fd_skip", "box_qp", "problem", "layouts", "islands", "push_tail",
+    "clock_ms", "executor", "keep_costed", "mu_reset", "seed", "optimiser"))
+
+
+def unspelled(p: dict) -> dict:
+    """The settings of params ``p`` that ``legacy_trial_key`` cannot spell: those outside
+    ``LEGACY_NAMES`` that differ from ``reference(task)`` (``changed_settings``)."""
+    values = {k: v for k, v in p.items() if k not in LEGACY_NAMES}
+    return changed_settings(values, reference(p["task"]))
+
+
+def trial_identity(p: dict) -> list:
     """What names a trial of params ``p`` for the sweeps' check (``Schema.identity``): its
-    ``legacy_trial_key``, which spells what changes its outcome (not the threads)."""
-    return legacy_trial_key(p)
+    ``legacy_trial_key``, which spells what changes its outcome (not the threads, not the
+    layouts' folder), and the settings it cannot spell (``unspelled``), so that a setting
+    added later is compared too."""
+    return [legacy_trial_key(p), unspelled(p)]
 
 
 def trial_aliases(p: dict) -> tuple[str, ...]:
-    """The older name a trial of params ``p`` may be stored under (``legacy_trial_key``):
-    the experiments' ``Schema.aliases``."""
-    return (legacy_trial_key(p),)
+    """The older name a trial of params ``p`` may be stored under (``legacy_trial_key``),
+    none when ``p`` sets a setting that name cannot spell (``unspelled``): the experiments'
+    ``Schema.aliases``."""
+    return () if unspelled(p) else (legacy_trial_key(p),)
 
 
 __all__ = ["UNNAMED", "legacy_trial_key", "reference", "trial_aliases", "trial_identity",

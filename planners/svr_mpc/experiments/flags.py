@@ -234,7 +234,7 @@ def settings_checked(ap: argparse.ArgumentParser, args):
     except (ValueError, TypeError) as e:
         given = mapping.flag_overrides(args)
         flag = next((f.flag for f in mapping.SETTINGS.flags if f.path in given
-                     and f.path in str(e)), None)
+                     and f.path.rsplit(".", 1)[-1] in str(e)), None)
         if flag is None and mapping.config_of(args):
             flag = "--config"
         ap.error(f"argument {flag}: {e}" if flag else str(e))
@@ -247,7 +247,7 @@ def quick_defaults(args) -> None:
     --clock not beside --clock-ms, which sets the model clock; none the --config file sets); an
     explicit --trials stands. Without --task (nor a --config file's), ``DEFAULT_TASK``."""
     args.task = args.task or DEFAULT_TASK
-    config = mapping.config_of(args)
+    config = {path.rsplit(".", 1)[-1]: v for path, v in mapping.config_of(args).items()}
     if args.trials is None:                  # an explicit --trials stands with --quick
         args.trials = QUICK["trials"] if args.quick else DEFAULT_TRIALS
     if not args.quick:

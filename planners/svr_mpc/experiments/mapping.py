@@ -8,7 +8,7 @@ summary records (``protocol``), which a summary given to ``--config`` gives back
 
 from __future__ import annotations
 
-from dataclasses import asdict, fields, replace
+from dataclasses import replace
 
 from dopt.lab.flags import SettingsFlags, apply, default_text, read_config
 from dopt.lab.provenance import rooted
@@ -29,17 +29,19 @@ from planners.svr_mpc import (
     trial_params,
 )
 from planners.svr_mpc.presets import protocol_fields
+from planners.svr_mpc.settings import RECORD_NAMES, record_path
 
 #: --feedback -> the feedback settings each trial runs under
 FEEDBACK = {"off": (False,), "on": (True,), "both": (False, True)}
-#: the SVRMPCSettings fields with a flag of their own name, derived from the field
-#: (``dopt.lab.flags``); the rest are set by the rows (method, theta, rho, the derivative
+#: the SVRMPCSettings fields (dotted paths) with a flag of their own name, derived from the
+#: field (``dopt.lab.flags``); the rest are set by the rows (method, theta, rho, the derivative
 #: variants, the fixes), by flags of the run (--task, --feedback, --threads, --layouts, and
 #: --fd/--fd-skip/--keypoints/--box-qp, which build one ``Derivatives``) or by the preset
-SETTINGS_FIELDS = ("cost", "warm_start", "control_noise", "clock", "clock_ms", "executor",
-                   "nominal_threads", "slowdown", "timeout", "islands", "push_tail")
-#: the fields a --config file may not set: the rows' and those of flags that always decide
-#: (each with the flag that sets it)
+SETTINGS_FIELDS = ("cost", "start.warm_start", "execution.control_noise", "timing.clock",
+                   "timing.clock_ms", "execution.executor", "timing.nominal_threads",
+                   "timing.slowdown", "execution.timeout", "scene.islands", "start.push_tail")
+#: the settings (flat names) a --config file may not set: the rows' and those of flags that
+#: always decide (each with the flag that sets it)
 NOT_CONFIG = {"method": "--rows/--rules", "rho": "--rows/--rho", "theta": "--rows/--theta",
               "feedback": "--feedback", "threads": "--threads"}
 
@@ -52,25 +54,25 @@ def _show(value) -> str:
 
 
 def preset_text(path: str) -> str | None:
-    """The default of a settings field in its flag's help: its value under each preset
-    (``planners.svr_mpc.presets``) per task, where they differ (``default_text``)."""
-    plain = {f.name: f.default for f in fields(SVRMPCSettings)}
-    return default_text({name: {task: protocol_fields(name, task).get(path, plain[path])
-                                for task in PUSH_TASKS} for name in PRESETS}, _show)
+    """The default of a settings field (its dotted ``path``) in its flag's help: its value
+    under each preset (``planners.svr_mpc.presets``, by flat name) per task, where they differ
+    (``default_text``)."""
+    name, plain = path.rsplit(".", 1)[-1], SVRMPCSettings().params()
+    return default_text({preset: {task: protocol_fields(preset, task).get(name, plain[name])
+                                  for task in PUSH_TASKS} for preset in PRESETS}, _show)
 
 
 def summary_config(data: dict) -> dict:
-    """The settings of a run's summary.json (a --config file): the protocol it records
-    (``protocol``: the settings fields, --fd as fd_centered and its step) and its task; a
-    fig4 summary's per-row "settings", the fields common to its rows. The rows' and the run
-    flags' fields (``NOT_CONFIG``) are left to this run."""
+    """The settings of a run's summary.json (a --config file), by flat name (a trial's
+    params'): the protocol it records (``protocol``: the settings, --fd as fd_centered and its
+    step) and its task; a fig4 summary's per-row "settings", the fields common to its rows. The
+    rows' and the run flags' fields (``NOT_CONFIG``) are left to this run."""
     rows = data.get("settings")
     if isinstance(rows, dict) and rows and all(isinstance(v, dict) for v in rows.values()):
         rows = list(rows.values())
         out = {k: v for k, v in rows[0].items() if all(r.get(k) == v for r in rows[1:])}
     else:
-        names = {f.name for f in fields(SVRMPCSettings)}
-        out = {k: v for k, v in data.items() if k in names}
+        out = {k: v for k, v in data.items() if k in RECORD_NAMES}
         if data.get("fd") in FINITE_DIFFERENCES:
             named = FINITE_DIFFERENCES[data["fd"]]
             out.update(fd_centered=named.centered, fd_eps=named.eps)
@@ -78,19 +80,20 @@ def summary_config(data: dict) -> dict:
     return {k: v for k, v in out.items() if k not in NOT_CONFIG}
 
 
-#: the settings flags of every SVR experiment, with --config
+#: the settings flags of every SVR experiment, with --config (a file names a setting by its
+#: dotted path or by its flat name: ``record_path``)
 SETTINGS = SettingsFlags(SVRMPCSettings, SETTINGS_FIELDS, defaults=preset_text,
-                         summary=summary_config)
+                         summary=summary_config, record=record_path)
 
 
 def config_of(args) -> dict:
-    """The --config file's settings ({field: value}; empty without one), read once
+    """The --config file's settings ({dotted path: value}; empty without one), read once
     (``read_config``: ValueError naming the file and the key) and kept on ``args``."""
     if getattr(args, "config", None) is None:
         return {}
     if getattr(args, "config_values", None) is None:
-        values = read_config(args.config, SVRMPCSettings, summary_config)
-        bad = sorted(k for k in values if k in NOT_CONFIG)
+        values = read_config(args.config, SVRMPCSettings, summary_config, record_path)
+        bad = sorted(name for k in values if (name := k.rsplit(".", 1)[-1]) in NOT_CONFIG)
         if bad:
             raise ValueError(f"{args.config}: setting {bad[0]!r} is this run's own "
                              f"({NOT_CONFIG[bad[0]]}), not a settings file's")
@@ -99,11 +102,11 @@ def config_of(args) -> dict:
 
 
 def flag_overrides(args) -> dict:
-    """The settings the flags give ({field: value}): the derived flags' (``SETTINGS``), and
-    --clock-ms's model clock."""
+    """The settings the flags give ({dotted path: value}): the derived flags' (``SETTINGS``),
+    and --clock-ms's model clock."""
     over = SETTINGS.overrides(args)
-    if over.get("clock_ms") is not None:
-        over.setdefault("clock", "model")
+    if over.get("timing.clock_ms") is not None:
+        over.setdefault("timing.clock", "model")
     return over
 
 
@@ -113,12 +116,12 @@ def base_settings(args) -> SVRMPCSettings:
     the settings refuse them."""
     config = dict(config_of(args))
     config.pop("task", None)                  # --task's, or the config's (flags.parse_args)
-    layouts = args.layouts or (rooted(config["layouts"]) if args.preset == "authors"
-                               and config.get("layouts") else None)
+    layouts = args.layouts or (rooted(config["scene.layouts"]) if args.preset == "authors"
+                               and config.get("scene.layouts") else None)
     preset = SVRMPCSettings.preset(args.task, protocol=args.preset,
                                     layouts=str(layouts) if layouts else None)
     if layouts is not None:
-        config.pop("layouts", None)
+        config.pop("scene.layouts", None)
     return apply(apply(preset, config), flag_overrides(args))
 
 
@@ -143,16 +146,17 @@ def settings_of(args, row: Row, feedback: bool, base: SVRMPCSettings | None = No
     file's and the flags' (``base_settings``; ``base``: them, computed once), then the row's
     own method, theta, rho, derivative variants and fixes."""
     base = base_settings(args) if base is None else base
-    base = replace(base, **derivatives_of(args, base.derivatives).fields())
-    return replace(row.apply(base), task=args.task,
-                   slowdown=base.slowdown or task_defaults(args.task)[0],
-                   threads=args.threads or 0, feedback=feedback)
+    s = row.apply(replace(base, derivatives=derivatives_of(args, base.derivatives)))
+    slowdown = base.timing.slowdown or task_defaults(args.task)[0]
+    return replace(s, task=args.task, threads=args.threads or 0,
+                   timing=replace(s.timing, slowdown=slowdown),
+                   execution=replace(s.execution, feedback=feedback))
 
 
 def baseline_label(args) -> str:
     """The row label (``row_label``) of the baseline trials of the flags: the row every other
     is normalised by."""
-    return row_label(asdict(settings_of(args, Row("baseline", 0, 1.0), args.feedback == "on")))
+    return row_label(settings_of(args, Row("baseline", 0, 1.0), args.feedback == "on").params())
 
 
 def grid(args, rules=None, rhos=None, thetas=None) -> list[Row]:
@@ -175,13 +179,13 @@ def grid(args, rules=None, rhos=None, thetas=None) -> list[Row]:
 def make_trials(args, rules=None, rhos=None, thetas=None, **override) -> list[Trial]:
     """Every (seed, row, feedback) trial of the flags (``grid``; ``rules``, ``rhos``,
     ``thetas``: the grid's in place of the flags'), each with its key (``trial_key``);
-    ``override``: settings fields replaced in every trial (e.g.
-    clock="real")."""
+    ``override``: settings replaced in every trial, as ``SVRMPCSettings.with_params`` takes
+    them (e.g. clock="real")."""
     out, base = [], base_settings(args)
     for seed in range(args.seed, args.seed + args.trials):
         for row in grid(args, rules, rhos, thetas):
             for feedback in FEEDBACK[args.feedback]:
-                s = replace(settings_of(args, row, feedback, base), **override)
+                s = settings_of(args, row, feedback, base).with_params(**override)
                 p = trial_params(s, seed, row.optimiser)
                 out.append(Trial(trial_key(p), p))
     return out

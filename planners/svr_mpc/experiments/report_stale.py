@@ -1,5 +1,5 @@
 """Stale results on Table 1's protocol (table1, svr_explain, clock_check, fig4): a trial's
-settings (every ``SVRMPCSettings`` field is in each trial's params) against the preset the
+settings (every ``SVRMPCSettings`` setting is in each trial's params, flat) against the preset the
 summary names (``preset``, else the command's ``--preset``, else "ours") as it resolves today
 (``svr_presets``), on the fields the preset sets (``SVR_PRESET_FIELDS``) less those the
 command's flags set; and the files that compute its trials (``SVR_COMPUTE_PATHS``) changed since
@@ -17,11 +17,12 @@ from dopt.lab.report.base import Result
 from dopt.lab.report.stale import _diff, code_findings, command_preset
 from dopt.lab.report.trials import TrialInfo, first_params
 
-#: the SVRMPCSettings fields a Table 1 protocol sets (the rest are the row's and the run's)
+#: the settings a Table 1 protocol sets, by flat name (a trial's params'; the rest are the
+#: row's and the run's)
 SVR_PRESET_FIELDS = ("cost", "warm_start", "control_noise", "clock", "nominal_threads",
                      "synchronous", "problem", "layouts", "islands", "fd_centered", "fd_eps",
                      "keypoints", "fd_skip", "box_qp", "executor")
-#: experiments/mpc.py's hand-written flags -> the SVRMPCSettings fields they set (the derived
+#: experiments/mpc.py's hand-written flags -> the settings they set, by flat name (the derived
 #: ones, each setting its own field, are added from ``mapping.SETTINGS``: ``svr_flags``)
 SVR_FLAGS = {"--clock-ms": ("clock", "clock_ms"), "--fd": ("fd_centered", "fd_eps"),
              "--fd-skip": ("keypoints", "fd_skip"), "--keypoints": ("keypoints", "fd_skip"),
@@ -31,15 +32,16 @@ SVR_FLAGS = {"--clock-ms": ("clock", "clock_ms"), "--fd": ("fd_centered", "fd_ep
 
 @functools.cache
 def svr_flags() -> dict[str, tuple[str, ...]]:
-    """Every flag of experiments/mpc.py -> the SVRMPCSettings fields it sets: ``SVR_FLAGS``
+    """Every flag of experiments/mpc.py -> the settings it sets (flat names): ``SVR_FLAGS``
     and the flags derived from the settings (a switch's --no- spelling too)."""
     from planners.svr_mpc.experiments.mapping import SETTINGS
 
     derived = {}
     for f in SETTINGS.flags:
-        derived[f.flag] = (f.path,)
+        name = f.path.rsplit(".", 1)[-1]              # a group's field: its flat name
+        derived[f.flag] = (name,)
         if f.kind is bool:
-            derived[f"--no-{f.flag[2:]}"] = (f.path,)
+            derived[f"--no-{f.flag[2:]}"] = (name,)
     return {**derived, **SVR_FLAGS}
 
 
@@ -52,6 +54,7 @@ SVR_KINDS = ("table1", "svr_explain", "clock_check", "fig4")
 SVR_COMPUTE_PATHS = ("dopt", "planners/ilqr.py", "planners/svr.py", "planners/keypoints.py",
                      "planners/_checks.py", "planners/svr_mpc/episode.py",
                      "planners/svr_mpc/optimisers.py", "planners/svr_mpc/settings.py",
+                     "planners/svr_mpc/settings_groups.py",
                      "planners/svr_mpc/authors_clock.py", "planners/svr_mpc/presets.py",
                      *(f":(exclude)dopt/{f}" for f in (
                          "lab", "sweep*.py", "trialpack.py", "jsonio.py", "atomic.py",
@@ -63,10 +66,10 @@ SVR_COMPUTE_PATHS = ("dopt", "planners/ilqr.py", "planners/svr.py", "planners/ke
 
 @functools.cache
 def svr_presets() -> dict:
-    """{"ours", "paper", "authors": {task: every SVRMPCSettings field}} of today's code, as
-    JSON values (a preset a task cannot resolve, the authors' clutter without their scenes:
-    {"error": why})."""
-    from dataclasses import asdict, replace
+    """{"ours", "paper", "authors": {task: every setting, flat (``SVRMPCSettings.params``)}}
+    of today's code, as JSON values (a preset a task cannot resolve, the authors' clutter
+    without their scenes: {"error": why})."""
+    from dataclasses import replace
 
     from dopt.tasks import PUSH_TASKS
     from planners.svr_mpc import SVRMPCSettings
@@ -76,7 +79,7 @@ def svr_presets() -> dict:
         for name, make in (("ours", lambda t: replace(SVRMPCSettings(), task=t)),
                            ("paper", SVRMPCSettings.paper), ("authors", SVRMPCSettings.authors)):
             try:
-                out[name][task] = asdict(make(task))
+                out[name][task] = make(task).params()
             except (ValueError, TypeError) as e:
                 out[name][task] = {"error": f"{type(e).__name__}: {e}"}
     return json.loads(json.dumps(out))

@@ -51,7 +51,7 @@ from dopt.lab.cli import EPILOG, ArgumentParser, choices_type, guarded, nonneg_f
 from dopt.lab.console import print_captures, print_outputs, sweep_session
 from dopt.lab.record import write_summary
 from planners.svr import METHODS
-from planners.svr_mpc import legacy_trial_key, row_label, table1_fields
+from planners.svr_mpc import row_label, table1_fields
 from planners.svr_mpc.authors_data import TASK_DIRS, authors_travel
 from planners.svr_mpc.experiments import flags, mapping, runner
 from planners.svr_mpc.experiments.outputs import write_plots, write_table
@@ -108,9 +108,9 @@ def _main(args, argv) -> int:
                **fields, "failed": failed, "trial_commits": res.commits,
                # the names its trials are stored under (an older name: as stored)
                "trial_keys": sorted(res.stored_key(t.key) for t in trials),
-               # run_trial labels an episode's captures by its legacy key
+               # run_trial labels an episode's captures by the name it ran under
                "blowups": print_captures(args.out, captures_of(
-                   args.out, [legacy_trial_key(t.params) for t in trials]))}
+                   args.out, [res.stored_key(t.key) for t in trials]))}
     if getattr(args, "authors_data", None) is not None:
         summary["authors_rows"] = authors_travel(args.authors_data / TASK_DIRS[args.task],
                                                  args.layouts)

@@ -167,6 +167,58 @@ def test_read_config_refuses_what_is_not_a_table(tmp_path):
         read_config(tmp_path / "none.json", PickPlaceSettings)
 
 
+@dataclasses.dataclass(frozen=True)
+class _Clock:
+    """A group.
+
+    Attributes:
+        clock: the clock's name.
+        ms: a fixed duration.
+    """
+
+    clock: str = "real"
+    ms: float | None = None
+
+
+@dataclasses.dataclass(frozen=True)
+class _Nested:
+    """Settings with a group whose fields a record names flat.
+
+    Attributes:
+        timing: the clock.
+        threads: simulation threads.
+    """
+
+    timing: _Clock = _Clock()
+    threads: int = 0
+
+
+def test_a_settings_file_may_name_a_nested_field_by_its_flat_name(tmp_path):
+    """``record=``: a file names a group's field by its path or its flat name (a trial's
+    params' spelling); the same field twice, or a bad value, is refused naming the key as
+    the file wrote it; without the hook a flat name is unknown."""
+    flat = {"clock": "timing.clock", "ms": "timing.ms"}
+
+    def record(key, value):
+        return flat.get(key, key), value
+
+    path = tmp_path / "s.toml"
+    path.write_text('clock = "model"\nthreads = 2\n[timing]\nms = 5.0\n')
+    values = read_config(path, _Nested, record=record)
+    assert values == {"timing.clock": "model", "threads": 2, "timing.ms": 5.0}
+    assert apply(_Nested(), values) == _Nested(_Clock("model", 5.0), 2)
+    for text, message in (('clock = "model"\n[timing]\nclock = "real"\n',
+                           "setting 'timing.clock' is 'timing.clock', given twice"),
+                          ('ms = "long"\n', "setting 'ms' must be float"),
+                          ('clocks = "model"\n', "unknown setting 'clocks' of _Nested")):
+        path.write_text(text)
+        with pytest.raises(ValueError, match=message):
+            read_config(path, _Nested, record=record)
+    path.write_text('clock = "model"\n')
+    with pytest.raises(ValueError, match="unknown setting 'clock' of _Nested"):
+        read_config(path, _Nested)
+
+
 def _recorded_fig7_commands() -> list[tuple[str, list[str]]]:
     out = []
     for path in sorted((ROOT / "docs" / "results").glob("fig7-cloth-*.json")):

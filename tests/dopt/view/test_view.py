@@ -9,7 +9,6 @@ import json
 import os
 import subprocess
 import sys
-from dataclasses import asdict
 from fnmatch import fnmatch
 from pathlib import Path
 
@@ -43,7 +42,7 @@ def write_mpc_trial(path: Path) -> dict:
     a trial file as experiments/mpc.py does, with the proposed optional fields start_state and
     controls. Returns {"path", "start", "states", "controls"}."""
     import planners.svr_mpc.episode as episode
-    from planners.svr_mpc import SVRMPCSettings
+    from planners.svr_mpc import SVRMPCSettings, trial_params
 
     seen = {}
     run = episode.MPC.run
@@ -53,7 +52,7 @@ def write_mpc_trial(path: Path) -> dict:
         seen.update(start=np.array(initial_state), res=res)
         return res
 
-    settings = SVRMPCSettings(**MPC_SETTINGS)
+    settings = SVRMPCSettings.from_params(MPC_SETTINGS)
     with pytest.MonkeyPatch.context() as mp:
         mp.setattr(episode.MPC, "run", keep)
         result = episode.run_svr_mpc(settings, seed=0).to_dict()
@@ -61,7 +60,7 @@ def write_mpc_trial(path: Path) -> dict:
     result["start_state"] = [float(v) for v in seen["start"]]
     result["controls"] = res.controls.tolist()
     path.write_text(json.dumps({"key": "clutter-baseline-view-test",
-                                "params": {**asdict(settings), "seed": 0}, "result": result}))
+                                "params": trial_params(settings, 0), "result": result}))
     return {"path": path, "start": seen["start"], "states": res.states,
             "controls": res.controls}
 
@@ -76,7 +75,7 @@ def test_mpc_episode_replays_bit_for_bit(mpc_trial):
     from planners.svr_mpc import SVRMPCSettings
     from planners.view import load_mpc
 
-    task = SVRMPCSettings(**MPC_SETTINGS).build_task(0)
+    task = SVRMPCSettings.from_params(MPC_SETTINGS).build_task(0)
     model = task.model
     states = replay_controls(model, mpc_trial["start"], mpc_trial["controls"])
     assert states.shape == mpc_trial["states"].shape
@@ -115,7 +114,7 @@ def write_run_trial(path: Path, **kwargs) -> tuple[dict, dict]:
     from dopt.lab import jsonio
     from planners.svr_mpc import SVRMPCSettings, run_trial, trial_key, trial_params
 
-    params = trial_params(SVRMPCSettings(**KEEP_SETTINGS), 0)
+    params = trial_params(SVRMPCSettings.from_params(KEEP_SETTINGS), 0)
     result = run_trial(params, **kwargs)
     path.write_text(jsonio.dumps({"key": trial_key(params), "params": params,
                                   "result": result}))
@@ -160,7 +159,7 @@ def test_mpc_trial_with_keep_controls_replays_to_its_final_state(c_kernels, tmp_
     assert ep.n_frames == result["steps"] + 1
     assert "replay of 10 steps ends" in ep.summary
 
-    task = SVRMPCSettings(**KEEP_SETTINGS).build_task(0)
+    task = SVRMPCSettings.from_params(KEEP_SETTINGS).build_task(0)
     with RolloutService(Scene(task.model, stability=task.stability),
                         RolloutConfig(threads=1, c_kernels=c_kernels)) as svc:
         batch = svc.trajectory(result["start_state"], controls).states
@@ -450,7 +449,7 @@ def test_mpc_goal_object_and_target_are_marked(mpc_trial):
     ep = load_mpc(mpc_trial["path"], max_frames=10)
     obj, target = ep.markers
     assert (obj.tag, target.tag) == ("goal object", "target")
-    task = SVRMPCSettings(**MPC_SETTINGS).build_task(0)
+    task = SVRMPCSettings.from_params(MPC_SETTINGS).build_task(0)
     body = ep.model.body(task.goal_object).id
     d = mujoco.MjData(ep.model)
     for f in (0, ep.n_frames - 1):

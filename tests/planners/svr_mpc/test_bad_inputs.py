@@ -9,28 +9,44 @@ from planners.svr_mpc import SVRMPCSettings, run_svr_mpc
 
 
 @pytest.mark.parametrize("kwargs, error, match", [
-    (dict(rho=-1.0), ValueError, "SVRMPCSettings.rho.*>= 0"),
-    (dict(rho=np.nan), ValueError, "SVRMPCSettings.rho.*finite"),
-    (dict(rho="1"), TypeError, "SVRMPCSettings.rho.*number"),
-    (dict(theta=-1), ValueError, "SVRMPCSettings.theta.*>= 0"),
-    (dict(theta=1.5), TypeError, "SVRMPCSettings.theta.*int"),
-    (dict(theta=True), TypeError, "SVRMPCSettings.theta.*int"),
-    (dict(control_noise=-0.1), ValueError, "SVRMPCSettings.control_noise.*>= 0"),
-    (dict(control_noise=np.nan), ValueError, "SVRMPCSettings.control_noise.*finite"),
-    (dict(control_noise="a"), TypeError, "SVRMPCSettings.control_noise.*number"),
-    (dict(slowdown=0.0), ValueError, "SVRMPCSettings.slowdown.*> 0"),
-    (dict(slowdown=np.nan), ValueError, "SVRMPCSettings.slowdown.*finite"),
-    (dict(timeout=0), ValueError, "SVRMPCSettings.timeout.*>= 1"),
-    (dict(timeout=1.5), TypeError, "SVRMPCSettings.timeout.*int"),
-    (dict(feedback=1), TypeError, "SVRMPCSettings.feedback.*bool"),
-    (dict(synchronous="yes"), TypeError, "SVRMPCSettings.synchronous.*bool"),
+    (dict(rho=-1.0), ValueError, "DofSelection.rho.*>= 0"),
+    (dict(rho=np.nan), ValueError, "DofSelection.rho.*finite"),
+    (dict(rho="1"), TypeError, "DofSelection.rho.*number"),
+    (dict(theta=-1), ValueError, "DofSelection.theta.*>= 0"),
+    (dict(theta=1.5), TypeError, "DofSelection.theta.*int"),
+    (dict(theta=True), TypeError, "DofSelection.theta.*int"),
+    (dict(control_noise=-0.1), ValueError, "Execution.control_noise.*>= 0"),
+    (dict(control_noise=np.nan), ValueError, "Execution.control_noise.*finite"),
+    (dict(control_noise="a"), TypeError, "Execution.control_noise.*number"),
+    (dict(slowdown=0.0), ValueError, "Timing.slowdown.*> 0"),
+    (dict(slowdown=np.nan), ValueError, "Timing.slowdown.*finite"),
+    (dict(timeout=0), ValueError, "Execution.timeout.*>= 1"),
+    (dict(timeout=1.5), TypeError, "Execution.timeout.*int"),
+    (dict(feedback=1), TypeError, "Execution.feedback.*bool"),
+    (dict(synchronous="yes"), TypeError, "Timing.synchronous.*bool"),
     (dict(threads=-1), ValueError, "SVRMPCSettings.threads.*>= 0"),
     (dict(threads=1.5), TypeError, "SVRMPCSettings.threads.*int"),
     (dict(task="Clutter"), ValueError, "unknown task 'Clutter'"),
     (dict(method=None), ValueError, "unknown method None"),
+    (dict(islands="no"), TypeError, "PushScene.islands.*bool"),
+    (dict(push_tail=0), TypeError, "PushStart.push_tail.*bool"),
+    (dict(clocks="model"), TypeError, "SVRMPCSettings has no setting 'clocks'"),
 ])
 def test_svr_mpc_settings_fields(kwargs, error, match):
+    """Each bad setting, by its flat name (a trial's params), is refused by its group."""
     with pytest.raises(error, match=match):
+        SVRMPCSettings.from_params(kwargs)
+    with pytest.raises(error, match=match):
+        SVRMPCSettings().with_params(**kwargs)
+
+
+@pytest.mark.parametrize("kwargs, match", [
+    (dict(timing={"clock": "model"}), "SVRMPCSettings.timing must be a Timing"),
+    (dict(selection="svr-sum"), "SVRMPCSettings.selection must be a DofSelection"),
+    (dict(derivatives=None), "SVRMPCSettings.derivatives must be a Derivatives"),
+])
+def test_svr_mpc_settings_groups_have_their_types(kwargs, match):
+    with pytest.raises(TypeError, match=match):
         SVRMPCSettings(**kwargs)
 
 
@@ -52,7 +68,8 @@ def test_run_svr_mpc_arguments(settings, seed, error, match):
                                           r"has no optimise\(state, plan\)"),
 ])
 def test_run_svr_mpc_optimiser(optimiser, error, match):
-    settings = SVRMPCSettings(method="baseline", synchronous=True, timeout=1, threads=1)
+    settings = SVRMPCSettings.from_params(dict(method="baseline", synchronous=True, timeout=1,
+                                               threads=1))
     with pytest.raises(error, match=match):
         run_svr_mpc(settings, 0, optimiser=optimiser)
 

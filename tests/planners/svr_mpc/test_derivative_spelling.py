@@ -104,9 +104,9 @@ def test_every_accepted_row_spells_todays_params_key_and_label():
             old.update({k: v for k, v in over.items() if k in ("keypoints", "fd_skip",
                                                                 "box_qp")})
             assert new == old, (spec, fd, fd_skip, keypoints, box_qp)
-            settings_ = replace(SVRMPCSettings.paper("clutter"), method=row.method,
-                                theta=row.theta, rho=float(row.rho), slowdown=1.0, **new,
-                                **row.fixes)
+            settings_ = SVRMPCSettings.paper("clutter").with_params(
+                method=row.method, theta=row.theta, rho=float(row.rho), slowdown=1.0, **new,
+                **row.fixes)
             p = trial_params(settings_, 3)
             assert {k: p[k] for k in old} == old
             assert settings_.derivatives == replace(flags, **row.variants)
@@ -160,8 +160,9 @@ def test_one_value_survives_fields_settings_and_ilqr(d):
     """Derivatives -> flat fields -> settings -> ILQRConfig and back is the same value, and
     what ILQR runs is the named step unless fd_eps overrides it."""
     assert Derivatives.from_fields(d.fields()) == d
-    s = replace(SVRMPCSettings(slowdown=3.0), **d.fields())
+    s = SVRMPCSettings().with_params(slowdown=3.0, **d.fields())
     assert s.derivatives == d and s.ilqr.derivatives == d
+    assert s == replace(SVRMPCSettings(), derivatives=d).with_params(slowdown=3.0)
     assert isinstance(s.ilqr, ILQRConfig)
     named = 1e-6 if d.fd == "central" else 1e-3
     assert d.fd_config.eps == (named if d.fd_eps is None else d.fd_eps)
@@ -180,4 +181,4 @@ def test_fd_eps_at_the_named_step_is_the_named_difference():
     with pytest.raises(ValueError, match="FDConfig.eps must be >="):
         Derivatives(fd_eps=1e-15)
     with pytest.raises(ValueError, match="fd_skip must be 1 with keypoints 'every'"):
-        replace(SVRMPCSettings(), fd_skip=5)
+        SVRMPCSettings().with_params(fd_skip=5)

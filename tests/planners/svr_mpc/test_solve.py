@@ -1,15 +1,25 @@
 """planners.svr_mpc.solve(settings, method, seed): the same call as planners.pick_place.solve,
 and the same trial as the command line's row mapping (``experiments/mpc.py --rows``) gives."""
 
-from dataclasses import asdict, replace
+from dataclasses import replace
 
 import pytest
 
-from planners.svr_mpc import SVRMPCSettings, parse_row, run_svr_mpc, solve, trial_params
+from planners.svr_mpc import (
+    DofSelection,
+    Execution,
+    SVRMPCSettings,
+    Timing,
+    parse_row,
+    run_svr_mpc,
+    solve,
+    trial_params,
+)
 from planners.svr_mpc.experiments import mapping
 from planners.svr_mpc.experiments.table1 import parse_args
 
-BASE = SVRMPCSettings(task="clutter", synchronous=True, timeout=3, threads=1)
+BASE = SVRMPCSettings(task="clutter", timing=Timing(synchronous=True),
+                      execution=Execution(timeout=3), threads=1)
 
 
 #: rows spelled out by hand: Table 1 of the paper, the variants and fixes as documented
@@ -26,25 +36,29 @@ ROWS = {"baseline": {"method": "baseline", "theta": 0, "rho": 1.0},
 
 @pytest.mark.parametrize("row", ROWS)
 def test_a_row_sets_its_fields_and_the_command_line_agrees(row):
-    """Row.apply sets exactly the row's fields over the settings, and --rows makes the same
-    settings of the row (every field but those the command line sets from its other flags)."""
-    applied = asdict(parse_row(row).apply(BASE))
-    changed = {k: v for k, v in applied.items() if asdict(BASE)[k] != v}
-    expected = {k: v for k, v in ROWS[row].items() if asdict(BASE)[k] != v}
+    """Row.apply sets exactly the row's fields over the settings (compared flat, as a trial's
+    params keep them), and --rows makes the same settings of the row (every field but those
+    the command line sets from its other flags)."""
+    applied, plain = parse_row(row).apply(BASE).params(), BASE.params()
+    changed = {k: v for k, v in applied.items() if plain[k] != v}
+    expected = {k: v for k, v in ROWS[row].items() if plain[k] != v}
     assert changed == expected
     args = parse_args(["--task", "clutter", "--rows", row, "--trials", "1"])
     by_flags = mapping.settings_of(args, parse_row(row), feedback=False)
-    base = replace(mapping.base_settings(args), feedback=False)
-    by_row = replace(parse_row(row).apply(base), slowdown=by_flags.slowdown,
+    base = mapping.base_settings(args)
+    base = replace(base, execution=replace(base.execution, feedback=False))
+    by_row = parse_row(row).apply(base)
+    by_row = replace(by_row, timing=replace(by_row.timing, slowdown=by_flags.timing.slowdown),
                      threads=by_flags.threads)
-    assert asdict(by_row) == asdict(by_flags)
+    assert by_row == by_flags
 
 
 def test_solve_runs_the_row_over_the_settings():
     """solve(settings, "sum-t10-r1", seed) is run_svr_mpc on the row's settings: the same
     cost, steps and |C| per optimisation (a synchronous episode is deterministic)."""
     a = solve(BASE, "sum-t10-r1", seed=2)
-    b = run_svr_mpc(replace(BASE, method="svr-sum", theta=10, rho=1.0), seed=2)
+    b = run_svr_mpc(replace(BASE, selection=DofSelection("svr-sum", theta=10, rho=1.0)),
+                    seed=2)
     assert (a.mpc_cost, a.steps, a.n_dofs) == (b.mpc_cost, b.steps, b.n_dofs)
     assert a.n_dofs[0] == 55 and min(a.n_dofs) < 55
     assert trial_params(parse_row("sum-t10-r1").apply(BASE), 2)["method"] == "svr-sum"

@@ -73,9 +73,9 @@ def test_goal_dofs_of_an_authors_clutter_scene_are_its_goal_bodys_free_joint_x_a
     if not LAYOUTS.is_dir():
         pytest.skip("the authors' layouts are not here (../shared/external)")
     layouts = LAYOUTS
-    from planners.svr_mpc.settings import SVRMPCSettings
+    from planners.svr_mpc import PushScene, SVRMPCSettings
 
-    s = SVRMPCSettings(task="clutter", problem="authors", layouts=str(layouts))
+    s = SVRMPCSettings(task="clutter", scene=PushScene("authors", str(layouts)))
     task = s.build_task(0)
     (body,) = task.goal_bodies
     joint = task.model.body_jntadr[body]

@@ -41,11 +41,12 @@ def test_rows_name_their_fixes_and_the_keys_hold_them():
     assert row.fixes == {"keep_costed": True, "mu_reset": True} and row.variants == {}
     s = SVRMPCSettings.authors("soft_rigid", "sum-t10-r500", keep_costed=True, mu_reset=True,
                                slowdown=1.0)
-    p = {**s.__dict__, "seed": 0}
+    p = {**s.params(), "seed": 0}
     assert row_label(p) == "sum-t10-r500 +costdofs +mureset"
     assert legacy_trial_key(p).endswith("-fixcostdofs-fixmureset")
-    assert s.ilqr.mu_reset and s.selection.keep_costed
-    plain = {**SVRMPCSettings.authors("soft_rigid", "sum-t10-r500", slowdown=1.0).__dict__,
+    assert s.ilqr.mu_reset and s.selection.keep_costed and s.selection.config.keep_costed
+    assert row.apply(SVRMPCSettings.authors("soft_rigid", slowdown=1.0)) == s
+    plain = {**SVRMPCSettings.authors("soft_rigid", "sum-t10-r500", slowdown=1.0).params(),
              "seed": 0}
     assert "fix" not in legacy_trial_key(plain) and row_label(plain) == "sum-t10-r500"
     assert trial_key(plain) != trial_key(p)                    # the fixes name the trial

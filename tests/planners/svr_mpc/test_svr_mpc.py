@@ -6,7 +6,10 @@ import pytest
 
 from planners.svr_mpc import (
     TABLE1_ROWS,
+    DofSelection,
+    Execution,
     SVRMPCSettings,
+    Timing,
     derivatives_effect,
     dofs_mask,
     dofs_of_mask,
@@ -15,11 +18,19 @@ from planners.svr_mpc import (
     paired,
     row_name,
     run_svr_mpc,
+    trial_key,
     trial_params,
 )
 from planners.svr_mpc import summarize as aggregate
 
 SUM = "sum-t10-r1"     # the row of svr-sum at theta 10, rho 1
+
+
+def short(method="baseline", timeout=3, synchronous=True, **timing) -> SVRMPCSettings:
+    """A short episode of ``method`` on clutter on one thread."""
+    return SVRMPCSettings(task="clutter", selection=DofSelection(method),
+                          timing=Timing(synchronous=synchronous, **timing),
+                          execution=Execution(timeout=timeout), threads=1)
 
 
 def rec(method, seed, cost, dist=0.01):
@@ -118,8 +129,7 @@ def test_derivatives_effect_pairs_each_variant_with_its_plain_row():
 def test_one_synchronous_episode_from_python_is_deterministic():
     """run_svr_mpc wires task, cost, iLQR and selector in one call; the synchronous mode
     gives the same MPC cost twice, and the reduced method holds fewer DoFs than nv."""
-    settings = SVRMPCSettings(task="clutter", method="svr-sum", synchronous=True, timeout=4,
-                              threads=1)
+    settings = short("svr-sum", timeout=4)
     a, b = run_svr_mpc(settings, seed=3), run_svr_mpc(settings, seed=3)
     assert a.mpc_cost == b.mpc_cost and a.steps == 4
     assert a.goal_distance_start > 0 and a.n_dofs[0] == 55
@@ -130,7 +140,7 @@ def test_settings_reject_unknown_names():
     with pytest.raises(ValueError, match="unknown task"):
         SVRMPCSettings(task="nope")
     with pytest.raises(ValueError, match="unknown method"):
-        SVRMPCSettings(method="svr")
+        SVRMPCSettings(selection=DofSelection("svr"))
 
 
 def test_paired_is_the_geometric_mean_of_per_seed_ratios():
@@ -149,9 +159,9 @@ def test_the_nine_table1_rows_parse_and_name_themselves():
     for name, (method, theta, rho) in TABLE1_ROWS.items():
         assert row_name(method, theta, rho) == name
         s = SVRMPCSettings.paper("clutter", name)
-        assert (s.method, s.theta, s.rho) == (method, theta, rho)
-        assert s.cost == "paper" and s.warm_start and s.clock == "virtual"
-        assert s.control_noise == 0.05
+        assert s.selection == DofSelection(method, rho, theta)
+        assert s.cost == "paper" and s.start.warm_start and s.timing.clock == "virtual"
+        assert s.execution.control_noise == 0.05
     with pytest.raises(ValueError, match="unknown Table 1 row"):
         SVRMPCSettings.paper("clutter", "sum-t7-r3")
 
@@ -212,10 +222,7 @@ def test_a_trial_captures_a_flagged_episode_under_the_sweeps_folder(tmp_path, mo
     import planners.svr_mpc.episode as episode
     from planners.svr_mpc import CapturingTrial
 
-    params = {**dataclasses.asdict(SVRMPCSettings(task="clutter", method="baseline",
-                                                  synchronous=True, timeout=3, threads=1,
-                                                  slowdown=1.0)),
-              "seed": 0}
+    params = trial_params(short(slowdown=1.0), 0)
     calm = CapturingTrial(str(tmp_path))(params)
     assert not calm["unstable"] and calm["blowups"] == []
     assert not (tmp_path / "blowups").exists()
@@ -223,7 +230,7 @@ def test_a_trial_captures_a_flagged_episode_under_the_sweeps_folder(tmp_path, mo
     monkeypatch.setattr(episode, "Scene", lambda model, stability: scene(
         model, stability=dataclasses.replace(stability, max_speed=1e-9)))
     res = CapturingTrial(str(tmp_path))(params)
-    key = legacy_trial_key(params)                # run_trial's capture label, still
+    key = trial_key(params)                       # run_trial's capture label
     assert res["unstable"] and res["blowups"] == [f"blowups/{key}"]
     meta = json.loads((tmp_path / "blowups" / key / "blowup.json").read_text())
     assert res["unstable_reason"] == f"step {meta['step']}: {meta['reason']}"
@@ -285,8 +292,7 @@ def test_a_registered_optimiser_runs_the_episode(registry):
         return built[-1]
 
     register_optimiser("constant", constant)
-    settings = SVRMPCSettings(task="clutter", method="baseline", synchronous=True, timeout=6,
-                              threads=1, slowdown=1.0)
+    settings = short(timeout=6, slowdown=1.0)
     res = run_svr_mpc(settings, seed=1, optimiser="constant")
     (opt,) = built
     assert opt.calls == len(res.opt_ms) >= 1 and res.steps == 6
@@ -320,8 +326,7 @@ def test_a_registered_optimiser_runs_the_episode(registry):
 def test_a_factory_runs_without_a_name_and_summaries_give_it_a_row():
     """A factory passed as such needs no registry; a registered optimiser's trials summarise
     as a row of their own, normalised by the baseline trials on the same seeds."""
-    settings = SVRMPCSettings(task="clutter", method="baseline", synchronous=True, timeout=3,
-                              threads=1)
+    settings = short()
     res = run_svr_mpc(settings, seed=0,
                       optimiser=lambda c: Constant(np.zeros(c.scene.nu), [0, 1]))
     assert res.n_dofs == [2] * len(res.opt_ms)
@@ -340,8 +345,7 @@ def test_unoptimised_executes_the_first_plan_padded_with_its_last_control():
     whatever the lag, and it optimises no DoF."""
     from planners.svr_mpc.episode import start_and_plan
 
-    settings = SVRMPCSettings(task="clutter", method="baseline", synchronous=False, timeout=100,
-                              threads=1, control_noise=0.0)
+    settings = short(timeout=100, synchronous=False)
     res = run_svr_mpc(settings, seed=2, optimiser="unoptimised", keep_controls=True)
     task = settings.build_task(2)
     start, plan = start_and_plan(settings, task, task.model.nu)
@@ -354,8 +358,7 @@ def test_unoptimised_executes_the_first_plan_padded_with_its_last_control():
 
 
 def test_history_needs_an_optimiser_that_keeps_one():
-    settings = SVRMPCSettings(task="clutter", method="baseline", synchronous=True, timeout=2,
-                              threads=1)
+    settings = short(timeout=2)
     with pytest.raises(TypeError, match="history needs an optimiser that keeps one"):
         run_svr_mpc(settings, 0, history=[],
                     optimiser=lambda c: Constant(np.zeros(c.scene.nu), [0]))
@@ -388,18 +391,21 @@ def test_modules_named_by_the_environment_register_their_optimisers(registry, tm
 
 # ------------------------------------------------------------ typed derivative options
 def test_derivatives_are_typed_fields_of_the_settings():
-    """Derivatives sets the five SVRMPCSettings fields of iLQR's derivatives; its defaults
-    are the settings' own; a row's variants parse once into its fields."""
-    from dataclasses import asdict, replace
+    """Derivatives is the settings' ``derivatives`` and their five flat fields in a trial's
+    params; its defaults are the settings' own; a row's variants parse once into its
+    fields."""
+    from dataclasses import replace
 
     from planners.svr_mpc import Derivatives, parse_variants
 
-    plain = asdict(SVRMPCSettings())
+    plain = SVRMPCSettings().params()
     assert {k: plain[k] for k in Derivatives().fields()} == Derivatives().fields()
     d = Derivatives(fd="central", keypoints="skip", fd_skip=5, box_qp=True)
     assert d.fields() == {"fd_centered": True, "fd_eps": 1e-6, "keypoints": "skip",
                           "fd_skip": 5, "box_qp": True}
-    s = replace(SVRMPCSettings(), **d.fields())
+    s = replace(SVRMPCSettings(), derivatives=d)
+    assert SVRMPCSettings().with_params(**d.fields()) == s
+    assert {k: trial_params(s, 0)[k] for k in d.fields()} == d.fields()
     how = s.ilqr.derivatives
     assert (how.fd_config.centered, how.fd_config.eps, how.keypoint_config.skip, how.box_qp) == \
         (True, 1e-6, 5, True)

@@ -12,7 +12,8 @@ def test_goal_tilt_is_the_angle_of_a_rotation_about_a_horizontal_axis(degrees):
     from dopt.scene import Scene
     from planners.svr_mpc import SVRMPCSettings, trial_params
 
-    params = trial_params(SVRMPCSettings(task="clutter", method="baseline", timeout=5), 0)
+    params = trial_params(SVRMPCSettings.from_params(
+        {"task": "clutter", "method": "baseline", "timeout": 5}), 0)
     settings, seed, _ = outputs.split_params(params)
     task = settings.build_task(seed)
     m = task.model

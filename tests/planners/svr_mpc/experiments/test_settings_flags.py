@@ -2,9 +2,9 @@
 every derived flag sets its field in the trials' params (a property over values generated
 here from the fields' meaning: a fraction of the control range, a positive duration, the
 registered names), on/off switches as recorded commands spell them, --config between the
-preset and the flags (a TOML file, and a run's summary.json giving back its trials), a bad
-settings file as one usage line, and each flag's help naming its default under each preset
-where the presets differ."""
+preset and the flags (a TOML file naming settings flat or nested, and a run's summary.json
+giving back its trials), a bad settings file as one usage line, and each flag's help naming
+its default under each preset where the presets differ."""
 from __future__ import annotations
 
 import argparse
@@ -20,10 +20,11 @@ from dopt.tasks.push.costs import COST_PRESETS
 from planners.svr_mpc import SVR_CLOCKS
 from planners.svr_mpc.experiments import fig4, mapping, table1
 from planners.svr_mpc.presets import AUTHORS, PAPER
+from planners.svr_mpc.settings import RECORD_PATHS
 
 positive = st.floats(1e-3, 1e4, allow_nan=False)
 switch = st.booleans()
-#: a valid value of each derived field, from what the field means
+#: a valid value of each derived field (by its flat name), from what the field means
 VALUES = {
     "cost": st.sampled_from(sorted(COST_PRESETS)),
     "warm_start": switch,
@@ -37,12 +38,15 @@ VALUES = {
     "islands": switch,
     "push_tail": switch,
 }
-FLAGS = {f.path: f for f in mapping.SETTINGS.flags}
+#: the derived flags by the flat name of their field (a group's field: its own name)
+FLAGS = {f.path.rsplit(".", 1)[-1]: f for f in mapping.SETTINGS.flags}
 
 
 def test_every_derived_flag_has_a_generator_and_its_fields_name():
-    assert set(VALUES) == set(FLAGS) == set(mapping.SETTINGS_FIELDS)
-    assert all(f.flag == "--" + f.path.replace("_", "-") for f in FLAGS.values())
+    assert set(VALUES) == set(FLAGS)
+    assert [f.path for f in mapping.SETTINGS.flags] == list(mapping.SETTINGS_FIELDS)
+    for name, f in FLAGS.items():                  # the flat name, the field's path and flag
+        assert f.flag == "--" + name.replace("_", "-") and RECORD_PATHS[name] == f.path
 
 
 def _words(flag, value, spelling: int) -> list[str]:
@@ -97,6 +101,11 @@ def test_config_sits_between_the_preset_and_the_flags(tmp_path):
                          "--control-noise", "0.1", "--fd-skip", "2", "--push-tail", "on")
     r = flagged[0].params
     assert (r["control_noise"], r["timeout"], r["fd_skip"], r["push_tail"]) == (0.1, 50, 2, True)
+    nested = tmp_path / "n.toml"                   # the same settings by their nested paths
+    nested.write_text('start.push_tail = false\n[execution]\ncontrol_noise = 0.02\n'
+                      'timeout = 50\n[derivatives]\nkeypoints = "skip"\nfd_skip = 5\n')
+    _, same = _trials(tmp_path, "--preset", "paper", "--config", str(nested))
+    assert [t.params for t in same] == [t.params for t in mine]
     js = tmp_path / "s.json"
     js.write_text(json.dumps({"task": "soft", "clock": "model"}))
     args, trials = _trials(tmp_path, "--config", str(js))
@@ -131,6 +140,9 @@ def test_a_summary_as_config_gives_its_trials_again(tmp_path):
     ('threads = 3\n', "setting 'threads' is this run's own (--threads)"),
     ('task = "sand"\n', "unknown task 'sand'"),
     ('clock_ms = 50\nclock = "real"\n', "clock_ms sets the model clock's duration"),
+    ('clock = "model"\n[timing]\nclock = "virtual"\n', "'timing.clock', given twice"),
+    ('[timing]\nclocks = "model"\n', "unknown setting 'timing.clocks' of SVRMPCSettings"),
+    ('fd_centered = "yes"\n', "setting 'fd_centered' must be one of"),
     ('timeout = \n', "s.toml: "),
 ])
 def test_a_bad_config_is_one_usage_line_naming_it(tmp_path, capsys, text, message):

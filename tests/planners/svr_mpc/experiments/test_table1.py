@@ -174,7 +174,7 @@ def test_trials_of_the_default_flags_are_valid_settings(tmp_path, flags):
     assert len(trials) == 2 * 5 * (2 if "both" in flags else 1)
     for t in trials:
         p = {k: v for k, v in t.params.items() if k != "seed"}
-        SVRMPCSettings(**p)
+        assert SVRMPCSettings.from_params(p).params() == p
         assert ("-Y7-" if flags else "-Y0-") in legacy_trial_key(t.params)
 
 
