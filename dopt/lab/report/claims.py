@@ -38,7 +38,9 @@ class Finding:
 @dataclass(frozen=True)
 class Claim:
     """What ``paper`` says at ``where`` (``says``, in words), how ``judge`` reads it from the
-    result files, and the RESULTS.md section (``details``) that holds the tables behind it."""
+    result files, and the RESULTS.md section (``details``) that holds the tables behind it;
+    ``hidden_until_recorded``: its page leaves it out while no file bears on it (in place of
+    "not recorded yet")."""
 
     paper: str
     title: str
@@ -46,6 +48,7 @@ class Claim:
     says: str
     details: str
     judge: Callable[[list[Result]], Finding | None]
+    hidden_until_recorded: bool = False
 
 
 def share(k: int, n: int) -> str:

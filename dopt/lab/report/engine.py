@@ -50,13 +50,16 @@ from dopt.lab.report.trials import summary_trials, trials_line, uncommitted_note
 @dataclass(frozen=True)
 class Entry:
     """One row of the headline table: a paper's figure or table, the command that
-    reproduces it, and which result files hold its numbers (``match(result)``)."""
+    reproduces it, and which result files hold its numbers (``match(result)``);
+    ``hidden_until_recorded``: no "not recorded yet" row while no file matches it (an
+    experiment whose files may never be recorded announces nothing)."""
 
     paper: str
     item: str
     command: str
     kind: str
     where: dict = field(default_factory=dict)
+    hidden_until_recorded: bool = False
 
     def match(self, r: Result) -> bool:
         """Its kind, and each ``where`` field equal to the value (a callable: true of it)."""
@@ -137,7 +140,7 @@ def headlines_section(results: list[Result], page: Path) -> list[str]:
     for e in entries:
         # a run that departs from its protocol is in its section, beside the protocol's
         matched = [r for r in results if e.match(r) and not _departs(r)]
-        if not matched:
+        if not matched and not e.hidden_until_recorded:
             rows.append([e.paper, e.item, f"`{e.command}`", "not recorded yet"])
         for r in matched:
             headline = _rendered(r, experiment_of(r).headline, r)

@@ -41,7 +41,9 @@ class MapRow:
     headline sentence from the result files, which files the row reads, and the title of its
     claim on its paper's page (``dopt.lab.report.claims``; None: the row links to its section).
     ``uses``: the files the headline takes its numbers from, where it picks some of those it
-    reads (their notes, "stale" among them, are the row's; None: all it reads)."""
+    reads (their notes, "stale" among them, are the row's; None: all it reads).
+    ``hidden_until_recorded``: the row is left out while it reads no file (in place of "not
+    recorded yet")."""
 
     paper: str
     item: str
@@ -51,6 +53,7 @@ class MapRow:
     reads: Callable[[Result], bool]
     claim: str | None = None
     uses: Callable[[list[Result]], list[Result]] | None = None
+    hidden_until_recorded: bool = False
 
 
 def rows() -> list[MapRow]:
@@ -83,6 +86,8 @@ def map_block(results: list[Result], readme: Path, results_md: Path) -> str:
     for row in rows():
         headline = row.headline(results)
         files = [r for r in results if row.reads(r)]
+        if not files and row.hidden_until_recorded:
+            continue
         if files and row.uses is not None:
             files = row.uses(results)
         # a row no file feeds yet has no section to link to; a row with a claim links to the

@@ -52,8 +52,10 @@ def _rel(target: Path, page: Path) -> str:
 
 # ------------------------------------------------------------------------------- claims
 def judged(results: list[Result], paper: str) -> list[tuple[Claim, Finding | None]]:
-    """The paper's claims, each with its finding on ``results`` (None: no file yet)."""
-    return [(c, c.judge(results)) for c in all_claims() if c.paper == paper]
+    """The paper's claims, each with its finding on ``results`` (None: no file yet; a claim
+    ``hidden_until_recorded`` is then left out)."""
+    found = [(c, c.judge(results)) for c in all_claims() if c.paper == paper]
+    return [(c, f) for c, f in found if f is not None or not c.hidden_until_recorded]
 
 
 def claims_table(found: list[tuple[Claim, Finding | None]]) -> list[str]:
