@@ -8,7 +8,12 @@ from collections.abc import Callable
 from dopt.lab.report.base import Result, mm, num, pm
 from dopt.lab.report.map import MapRow
 from planners.pick_place.experiments.report_fig7 import CLOTH_DIFFICULTY, _departs, fig7_claims
-from planners.pick_place.experiments.report_paper import KP, _label, scaling_families
+from planners.pick_place.experiments.report_paper import (
+    KP,
+    _label,
+    encoding_families,
+    scaling_families,
+)
 
 
 def _paper(results: list[Result], kind: str, **where) -> list[Result]:
@@ -100,21 +105,33 @@ def cloth_line(results: list[Result]) -> str | None:
 
 
 def scaling_line(results: list[Result]) -> str | None:
-    """Sec. V's claim per recorded scaling fold: whether the gap CEM(Original) - CEM(Simple)
-    grows with the particle count (the trend test's verdict, "no trend" where it finds none,
-    its slope per unit of log N with the 95 % interval), over which particle counts N and
-    seeds (said once where every fold has the same). With several folds the verdicts are
-    Holm's over all their trend tests together (``holm_slopes``); the line says so."""
-    files, family = scaling_families(results)
+    """Sec. V's claim per recorded scaling fold (``trend_line``: the particle counts N)."""
+    return trend_line(*scaling_families(results), "n_particles")
+
+
+def encoding_line(results: list[Result]) -> str | None:
+    """Sec. V's claim per recorded drag-encoding fold (``trend_line``: the candidate counts N
+    of the authors' encoding on one physics mesh)."""
+    return trend_line(*encoding_families(results), "n_points")
+
+
+def trend_line(files: dict, family: dict, counts: str) -> str | None:
+    """Per file of ``files`` ({key: a scaling summary}): whether the gap CEM(Original) -
+    CEM(Simple) grows with N (the trend test's verdict, "no trend" where it finds none, its
+    slope per unit of log N with the 95 % interval), over which N (the summary's ``counts``
+    field) and seeds (said once where every fold has the same). With several folds the
+    verdicts are Holm's over all their trend tests together (``family``: ``trend_families``);
+    the line says so. None without files."""
     sizes, seeds, verdicts = [], [], []
     for goal, r in sorted(files.items(), key=lambda kv: str(kv[0])):
         d = r.data
         t = {**d["trend"]["original_minus_simple"],
              **family.get((goal, "original_minus_simple"), {})}
-        counts = sorted({e["methods"].get(m, {}).get("n", 0) for e in d["per_size"].values()
-                         for m in ("simple", "original")})
-        seeds.append(str(counts[0]) if len(counts) == 1 else f"{counts[0]}-{counts[-1]}")
-        sizes.append(f"N {d['n_particles'][0]}-{d['n_particles'][-1]}")
+        counts_of = sorted({e["methods"].get(m, {}).get("n", 0) for e in d["per_size"].values()
+                            for m in ("simple", "original")})
+        seeds.append(str(counts_of[0]) if len(counts_of) == 1
+                     else f"{counts_of[0]}-{counts_of[-1]}")
+        sizes.append(f"N {d[counts][0]}-{d[counts][-1]}")
         slope = (f" ({pm(mm(t['slope']), mm(t.get('slope_ci95')))} mm)"
                  if t.get("slope") is not None else "")
         verdict = t["verdict"] if t["verdict"] in ("grows", "shrinks") else "no trend"
@@ -177,6 +194,13 @@ ROWS = (
            "Key particles: the gain against the particle count", scaling_line,
            lambda r: r.kind == "fig7_scaling" and not r.quick,
            "The gain grows with the particle count"),
+    MapRow(KP, "Sec. V under the authors' drag encoding: the gain against N candidate points "
+               "on one physics mesh",
+           "python experiments/fig7_encoding.py --goal diagonal",
+           "Key particles: the gain against the candidate count under the drag encoding",
+           encoding_line, lambda r: r.kind == "fig7_encoding" and not r.quick,
+           "The gain grows with the candidate count under the authors' encoding",
+           hidden_until_recorded=True),
     MapRow(KP, "Sec. IV-D: a Panda executes the plans",
            "python experiments/panda_execute.py --trials 3",
            "Key particles, Sec. IV-D: a Panda executes the plans", panda_line,

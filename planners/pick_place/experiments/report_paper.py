@@ -54,15 +54,38 @@ def scaling_key(r) -> str:
     return r.data.get("goal") + (" at fixed spacing" if r.data.get("mode") == "size" else "")
 
 
+def trend_families(files: dict, group=lambda r: "") -> dict:
+    """{(key, test): Holm over the trend tests of the files ``files`` ({key: file}, each a
+    summary with "trend": ``planners.pick_place.scaling.scaling_summary``'s) of one ``group``
+    together, ``holm_slopes``, with "folds": how many files}; a group with one file has no
+    family."""
+    family = {}
+    for g in {group(r) for r in files.values()}:
+        tests = {k: r.data["trend"] for k, r in files.items() if group(r) == g}
+        if len(tests) > 1:
+            family.update({k: {**v, "folds": len(tests)} for k, v in holm_slopes(tests).items()})
+    return family
+
+
 def scaling_families(results: list) -> tuple[dict, dict]:
     """({scaling_key: file} of the scaling files, {(key, test): Holm over the trend tests of
-    the files of one mode together, ``holm_slopes``, with "folds": how many files}); a mode
-    with one file has no family."""
+    the files of one mode together, ``trend_families``})."""
     files = {scaling_key(r): r for r in results if r.kind == "fig7_scaling"}
-    family = {}
-    for mode in {r.data.get("mode", "resolution") for r in files.values()}:
-        group = {k: r.data["trend"] for k, r in files.items()
-                 if r.data.get("mode", "resolution") == mode}
-        if len(group) > 1:
-            family.update({k: {**v, "folds": len(group)} for k, v in holm_slopes(group).items()})
-    return files, family
+    return files, trend_families(files, lambda r: r.data.get("mode", "resolution"))
+
+
+# ------------------------------------------------------- the drag encoding's sweeps
+def encoding_key(r) -> str:
+    """A drag-encoding file's name among the others: its fold, and "final cost" for a run
+    that scores a plan after the whole of it (``fig7_encoding.py --cost final``; the
+    authors' best-over-trajectory cost otherwise)."""
+    drags = [s.get("drag") or {} for s in (r.data.get("settings") or {}).values()]
+    final = any(d.get("best_over_trajectory") is False for d in drags)
+    return str(r.data.get("goal")) + (", final cost" if final else "")
+
+
+def encoding_families(results: list) -> tuple[dict, dict]:
+    """({encoding_key: file} of the drag-encoding files but quick runs, {(key, test): Holm
+    over all their trend tests together, ``trend_families``})."""
+    files = {encoding_key(r): r for r in results if r.kind == "fig7_encoding" and not r.quick}
+    return files, trend_families(files)
