@@ -1,7 +1,7 @@
 """The key-particle paper's experiments, registered with the report (``dopt.lab.experiment``):
 one ``Experiment`` per kind of result file (Fig. 4's key particles, Fig. 7, the scaling study,
-the Panda, the cloth benchmarks), and the paper's page. Loaded by the entry-point group
-``dopt.experiments`` (pyproject.toml).
+the drag encoding's sweep, the Panda, the cloth benchmarks), and the paper's page. Loaded by
+the entry-point group ``dopt.experiments`` (pyproject.toml).
 """
 
 from __future__ import annotations
@@ -11,6 +11,14 @@ from dopt.lab.report.engine import Entry
 from dopt.lab.report.resummarize import commits_of
 from planners.pick_place.experiments import report_claims, report_kp, report_map
 from planners.pick_place.experiments.report_budget import cloth_budget_section
+from planners.pick_place.experiments.report_encoding import (
+    TRIAL_FIELDS,
+    encoding_headline,
+    encoding_rebuild,
+    encoding_section,
+    encoding_stale,
+    encoding_trial_files,
+)
 from planners.pick_place.experiments.report_fig7 import (
     HOLM_NOTE,
     _departs,
@@ -169,6 +177,42 @@ class Scaling(Section):
         return scaling_trials(folder, result)
 
 
+class Encoding(Section):
+    """Sec. V under the authors' drag encoding: the gain against N candidate points on one
+    physics mesh (``experiments/fig7_encoding.py``). Its catalogue entries, README row and
+    claim stay hidden until a file is recorded."""
+
+    trial_fields = TRIAL_FIELDS
+    goals = ("diagonal", "side")
+
+    def __init__(self):
+        super().__init__("fig7_encoding", 20.5, encoding_section,
+                         "python experiments/fig7_encoding.py --goal diagonal")
+
+    def headline(self, result):
+        return encoding_headline(result)
+
+    def catalogue(self):
+        return [Entry(KP, f"Sec. V under the authors' drag encoding, {goal} fold",
+                      f"python experiments/fig7_encoding.py --goal {goal}", self.kind,
+                      {"goal": goal}, hidden_until_recorded=True) for goal in self.goals]
+
+    def map_rows(self):
+        return _rows("Sec. V under the authors' drag encoding")
+
+    def claims(self):
+        return _claims("The gain grows with the candidate count under the authors' encoding")
+
+    def trial_files(self, folder, result):
+        return encoding_trial_files(folder, result)
+
+    def stale(self, result, results_dir, trials):
+        return encoding_stale(result)
+
+    def rebuild(self, data, records, info):
+        return encoding_rebuild(data, records)
+
+
 class PandaExecute(Section):
     """Sec. IV-D: a Panda executes the plans (simulated)."""
 
@@ -202,7 +246,8 @@ class PandaExecute(Section):
 
 
 def _register() -> None:
-    for x in (KeyParticles(), KeyParticlesAuthors(), Fig7(), Scaling(), PandaExecute(),
+    for x in (KeyParticles(), KeyParticlesAuthors(), Fig7(), Scaling(), Encoding(),
+              PandaExecute(),
               Section("kp_compare", 2, report_kp.kp_compare_section,
                       "python -m deformables.bench compare", ("key-particles-compare",)),
               Section("kp_paper_scale", 3, report_kp.kp_paper_scale_section,
@@ -230,4 +275,5 @@ def _register() -> None:
 
 _register()
 
-__all__ = ["Fig7", "KeyParticles", "KeyParticlesAuthors", "PandaExecute", "Scaling", "Section"]
+__all__ = ["Encoding", "Fig7", "KeyParticles", "KeyParticlesAuthors", "PandaExecute", "Scaling",
+           "Section"]

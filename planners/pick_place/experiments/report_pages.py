@@ -59,5 +59,9 @@ PAGE = Page(KP, "KEY-PARTICLES.md", "Key particles: the paper's claims beside ou
              ("panda-diagonal.png", "A Panda executes the diagonal fold's plan")),
             {"fig7_scaling": lambda d: f"Sec. V, the {d.get('goal')} fold: final cost and "
                                        "the gaps to CEM(Simple) against the particle count, "
-                                       "95 % intervals"},
+                                       "95 % intervals",
+             "fig7_encoding": lambda d: f"Sec. V under the authors' drag encoding, the "
+                                        f"{d.get('goal')} fold: final cost and the gaps to "
+                                        "CEM(Simple) against the candidate count N, 95 % "
+                                        "intervals"},
             kp_tables)

@@ -22,6 +22,7 @@ CHECKED_IN = {**dict.fromkeys(("mpc", "rho_sweep", "svr_explain", "clock_check")
               "cloth_fold": "planners.pick_place.experiments.fig7",
               "key_particles": "planners.pick_place.experiments.key_particles",
               "fig7_scaling": "planners.pick_place.experiments.scaling",
+              "fig7_encoding": "planners.pick_place.experiments.encoding",
               "panda_execute": "planners.pick_place.experiments.panda_execute"}
 
 
