@@ -11,6 +11,7 @@ from pathlib import Path
 from dopt.lab.experiment import own_trials
 from dopt.lab.report.base import ReportError, Result, _finite, _median, mm, num, table
 from dopt.lab.trialpack import PackError, StoredTrial, stored_trials
+from planners.pick_place.encoding import BASE
 from planners.pick_place.experiments.report_paper import (
     _in_label_order,
     _label,
@@ -24,9 +25,16 @@ from planners.trial_progress import RUN_ONLY_SETTINGS, iterations_done
 def held_seeds(summary: dict, method: str, settings: dict) -> set:
     """The seeds of ``method`` that a recorded Fig. 7 ``summary`` holds for trials with these
     ``settings``: a sweep's (``methods.<m>.seeds``), or a scaling study's for the trial's size
-    (``per_size.<n>.methods.<m>.seeds``, ``fig7_scaling.py``); none where ``summary`` is empty."""
+    (``per_size.<n>.methods.<m>.seeds``, ``fig7_scaling.py``; the drag encoding's,
+    ``fig7_encoding.py``: its size the side of the trial's grid of candidate points, its method
+    the one it stands for, ``planners.pick_place.encoding.BASE``); none where ``summary`` is
+    empty."""
     if "per_size" in summary:
-        summary = summary["per_size"].get(str(settings.get("n")), {})
+        size = settings.get("n")
+        drag = settings.get("drag")
+        if "n_points" in summary and isinstance(drag, dict):
+            size, method = round(drag.get("n_points", 0) ** 0.5), BASE.get(method, method)
+        summary = summary["per_size"].get(str(size), {})
     return set(summary.get("methods", {}).get(method, {}).get("seeds") or ())
 
 
@@ -125,6 +133,19 @@ def _group_table(group: list[dict]) -> list[str]:
                   "planning rollouts flagged", "executed plans unstable"], rows)
 
 
+def _budget(s: dict) -> str:
+    """A trial's planning budget in words: CEM's per stage, or the drag encoding's (its
+    candidate points, decisions and CEM budget, ``DragSettings``)."""
+    drag = s.get("drag")
+    if isinstance(drag, dict):
+        return (f"drag encoding, {drag.get('n_points')} candidate points, T = "
+                f"{drag.get('horizon')} drags, CEM population {drag.get('population')}, "
+                f"{drag.get('iterations')} iterations")
+    cem = s.get("cem") or {}
+    return (f"CEM population {cem.get('population')}, elites {cem.get('elites')}, "
+            f"{cem.get('iterations')} iterations per stage, horizon {cem.get('horizon')}")
+
+
 def sweeps_in_progress_section(results_dir: Path, results: list[Result]) -> list[str]:
     """Per unrecorded Fig. 7 sweep (``unrecorded_sweeps``) and per settings in it (those
     that name a trial: ``RUN_ONLY_SETTINGS`` such as the thread count left out): each
@@ -166,15 +187,12 @@ def sweeps_in_progress_section(results_dir: Path, results: list[Result]) -> list
             by_settings.setdefault(json.dumps(named, sort_keys=True), []).append(rec)
         for group in by_settings.values():
             s = group[0]["settings"]
-            cem = s.get("cem") or {}
             size = (f"{s.get('n')} x {s.get('n')}" if s.get("task") == "cloth"
                     else str(s.get("n")))
             lines += _sweep_heading(name, s) + [
                 "", f"{size} particles, self-collision "
                     f"{'on' if s.get('selfcollide') else 'off'}, physics {s.get('physics')}; "
-                    f"CEM population {cem.get('population')}, elites {cem.get('elites')}, "
-                    f"{cem.get('iterations')} iterations per stage, horizon "
-                    f"{cem.get('horizon')}.", ""]
+                    f"{_budget(s)}.", ""]
             lines += _group_table(group)
             wall = sum(x for r in group if _finite(x := r["result"].get("wall_s")))
             n = len(group)
