@@ -5,6 +5,7 @@ from __future__ import annotations
 
 from dopt.lab.report.base import Result, _and, _finite, mm
 from dopt.lab.report.claims import Claim, Finding, newest, share
+from planners.pick_place.experiments.report_encoding import TITLE as ENCODING_TITLE
 from planners.pick_place.experiments.report_fig7 import _departs, fig7_claims
 from planners.pick_place.experiments.report_paper import (
     KP,
@@ -196,7 +197,7 @@ CLAIMS = (
     Claim(KP, "The gain grows with the candidate count under the authors' encoding", "Sec. V",
           "The improvement of the reduced action space over the original grows with the number "
           "of particles.",
-          "Key particles: the gain against the candidate count under the drag encoding",
+          ENCODING_TITLE,
           _encoding, hidden_until_recorded=True),
     Claim(KP, "A robot arm executes the plans", "Sec. IV-D, Fig. 6",
           "A real robot executes the plans for the cloth folds (a demonstration).",

@@ -7,6 +7,7 @@ from collections.abc import Callable
 
 from dopt.lab.report.base import Result, mm, num, pm
 from dopt.lab.report.map import MapRow
+from planners.pick_place.experiments.report_encoding import TITLE as ENCODING_TITLE
 from planners.pick_place.experiments.report_fig7 import CLOTH_DIFFICULTY, _departs, fig7_claims
 from planners.pick_place.experiments.report_paper import (
     KP,
@@ -197,7 +198,7 @@ ROWS = (
     MapRow(KP, "Sec. V under the authors' drag encoding: the gain against N candidate points "
                "on one physics mesh",
            "python experiments/fig7_encoding.py --goal diagonal",
-           "Key particles: the gain against the candidate count under the drag encoding",
+           ENCODING_TITLE,
            encoding_line, lambda r: r.kind == "fig7_encoding" and not r.quick,
            "The gain grows with the candidate count under the authors' encoding",
            hidden_until_recorded=True),
