@@ -118,11 +118,13 @@ def _lag(results: list[Result]) -> Finding | None:
 
 
 def fig4_files(results: list[Result], problem: str) -> list[Result]:
-    """The Fig. 4 files (not quick) of ``problem`` ("authors" or "ours"), fewest trials first:
-    a reader takes the last, the sweep with the most scenes per point."""
+    """The Fig. 4 files (not quick) of ``problem`` ("authors" or "ours"), a reader takes the
+    last: those on the authors' executor (their regime: ``dopt.mpc``'s ``authors``) after
+    those on the paper's Alg. 1, and within each the most trials last."""
     files = [r for r in results if r.kind == "fig4" and not r.quick
              and r.data.get("problem", "ours") == problem]
-    return sorted(files, key=lambda r: (sum(p.get("n_trials") or 0
+    return sorted(files, key=lambda r: (r.data.get("executor", "alg1") == "authors",
+                                        sum(p.get("n_trials") or 0
                                             for p in r.data.get("points") or []), r.name))
 
 
