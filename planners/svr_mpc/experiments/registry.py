@@ -130,7 +130,7 @@ class Fig4(OnProtocol):
     (``experiments/rho_sweep.py``)."""
 
     kind, rank, script = "fig4", 7, "python experiments/rho_sweep.py"
-    trial_fields = ("points", "versus", "trial_commits")
+    trial_fields = ("points", "versus", "cost_dofs_r", "trial_commits")
 
     def section(self, results, page):
         return fig4_section(results, page)

@@ -146,7 +146,7 @@ ROWS = (
            "State-vector reduction, Fig. 4: importance threshold rho and random DoFs theta",
            lambda results: fig4_line(results, "authors"),
            lambda r: (r.kind == "fig4" and not r.quick and r.data.get("problem") == "authors"),
-           "The best rho is moderate"),
+           "The best rho is moderate", lambda results: fig4_files(results, "authors")[-1:]),
     MapRow(SVR, "Fig. 4 on dopt's own clutter (a second benchmark)",
            "python experiments/rho_sweep.py --task clutter --preset paper",
            "State-vector reduction, Fig. 4: importance threshold rho and random DoFs theta",
