@@ -22,7 +22,12 @@ from dopt.lab.report.base import Result, _and, mm, num, pm, section, table
 from dopt.lab.report.stale import _diff, command_preset
 from dopt.lab.trialpack import StoredTrial, stored_trials
 from planners.pick_place.drag_settings import DragSettings
-from planners.pick_place.experiments.report_paper import _label, encoding_families, encoding_key
+from planners.pick_place.experiments.report_paper import (
+    _label,
+    encoding_families,
+    encoding_key,
+    family_note,
+)
 from planners.trial_progress import RUN_ONLY_SETTINGS
 
 #: the methods of the table, in the figures' order (the statistics' names)
@@ -107,9 +112,7 @@ def encoding_section(results: list[Result], page: Path) -> list[str]:
     _, family = encoding_families(results)
 
     def across(r: Result, key: str) -> str:   # the verdict of every fold's tests together
-        f = family.get((encoding_key(r), key)) if not r.quick else None
-        return (f"; Holm p over the {f['m']} tests of the {f['folds']} folds "
-                f"{num(f['p_holm'], 3)}: **{f['verdict']}**") if f else ""
+        return family_note(family.get((encoding_key(r), key)) if not r.quick else None)
 
     def body(r: Result) -> list[str]:
         d = r.data

@@ -9,7 +9,11 @@ from pathlib import Path
 
 from dopt.lab.report.base import Result, _finite, cell, clip, mm, num, pm, sci, section, table
 from planners.bench.cem import SHARES
-from planners.pick_place.experiments.report_paper import scaling_families, scaling_key
+from planners.pick_place.experiments.report_paper import (
+    family_note,
+    scaling_families,
+    scaling_key,
+)
 
 
 # ------------------------------------------------------------------------ physics presets
@@ -534,9 +538,7 @@ def scaling_section(results: list[Result], page: Path) -> list[str]:
     files, family = scaling_families(results)
 
     def across(goal: str, key: str) -> str:   # the verdict of every fold's tests together
-        f = family.get((goal, key))
-        return (f"; Holm p over the {f['m']} tests of the {f['folds']} folds "
-                f"{num(f['p_holm'], 3)}: **{f['verdict']}**") if f else ""
+        return family_note(family.get((goal, key)))
 
     def body(r: Result) -> list[str]:
         d = r.data

@@ -6,7 +6,7 @@ trend tests grouped into Holm families.
 from __future__ import annotations
 
 from dopt.lab.multiple import holm_slopes
-from dopt.lab.report.base import Result
+from dopt.lab.report.base import Result, num
 from planners.pick_place import GOAL_NAMES, LABELS
 
 #: the paper, as the pages, the catalogue and the map name it
@@ -52,6 +52,14 @@ def scaling_key(r) -> str:
     that grows the sheet (``fig7_scaling.py --mode size``; a file without a mode refined the
     fixed sheet)."""
     return r.data.get("goal") + (" at fixed spacing" if r.data.get("mode") == "size" else "")
+
+
+def family_note(f: dict | None) -> str:
+    """The verdict of every fold's trend tests together (a family of ``trend_families``), as a
+    section's table caption ends: '; Holm p over the M tests of the F folds P: **verdict**';
+    '' without one."""
+    return (f"; Holm p over the {f['m']} tests of the {f['folds']} folds "
+            f"{num(f['p_holm'], 3)}: **{f['verdict']}**") if f else ""
 
 
 def trend_families(files: dict, group=lambda r: "") -> dict:
