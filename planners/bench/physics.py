@@ -210,6 +210,17 @@ def random_actions(task: str, config, actions: int, threads: int, seed: int,
     }
 
 
+def scripted_problem(settings: PickPlaceSettings, name: str, overrides: dict | None):
+    """The problem of ``settings`` under the bench's setting ``name`` (its ``overrides`` on
+    top of the physics preset their "physics" key names, as ``_config`` builds them)."""
+    if overrides is None:
+        return make_problem(replace(settings, physics=name.split(":", 1)[1]))
+    fields = dict(overrides)
+    if "physics" in fields:
+        settings = replace(settings, physics=fields.pop("physics"))
+    return make_problem(settings, scene_overrides=fields)
+
+
 def scripted_goals(task: str, name: str, overrides: dict | None, n: int,
                    threads: int, picker_speed: float | None = None) -> dict:
     """The scripted policy on every goal of ``task`` (Fig. 7 settings, one trial): error (mm)
@@ -218,12 +229,8 @@ def scripted_goals(task: str, name: str, overrides: dict | None, n: int,
     for goal in GOALS[task]:
         s = replace(PickPlaceSettings.preset(task, goal), n=n, threads=threads,
                     picker_speed=picker_speed)
-        if overrides is None:
-            s = replace(s, physics=name.split(":", 1)[1])
-            problem = make_problem(s)
-        else:
-            problem = make_problem(s, scene_overrides=overrides)
-        res = run_problem(problem, ScriptedPlanner(), method="scripted")
+        res = run_problem(scripted_problem(s, name, overrides), ScriptedPlanner(),
+                          method="scripted")
         out[goal] = {"error_mm": 1e3 * res.metrics["final_cost"], "unstable": res.unstable,
                      "reason": res.unstable_reason, "wall_s": res.wall_s}
     return out

@@ -1,9 +1,13 @@
 """python -m planners.bench cloth|rope at a toy size: each row says which physics it measured
 (a preset row its resolved fields), and its counts are consistent with the actions run."""
+from dataclasses import replace
+
+import mujoco
 import pytest
 
 from dopt.tasks.pick.cloth_scene import PHYSICS_PRESETS
-from planners.bench.physics import bench_physics
+from planners.bench.physics import SETTINGS, _config, bench_physics, scripted_problem
+from planners.pick_place.settings import PickPlaceSettings
 
 
 def test_rows_name_their_physics_and_count_the_actions():
@@ -49,3 +53,16 @@ def test_a_solver_row_on_a_preset_keeps_the_presets_fields():
     assert newton["fields"] == {**cg["fields"], "solver": "Newton"}
     assert cg["fields"] == PHYSICS_PRESETS["accurate"]
     assert newton["steps_per_action"] == cg["steps_per_action"]
+
+
+@pytest.mark.parametrize("name", ["fast Newton", "accurate Newton", "preset:fast"])
+def test_the_scripted_folds_run_the_rows_physics(name):
+    """The scripted folds of a row simulate the physics its random actions do: the preset its
+    "physics" key names, with its overrides (the solver) on top."""
+    config = _config("cloth", name, SETTINGS["cloth"][name], 4)
+    settings = replace(PickPlaceSettings.preset("cloth", "diagonal"), n=4)
+    opt = scripted_problem(settings, name, SETTINGS["cloth"][name]).scene.model.opt
+    solver = mujoco.mjtSolver.mjSOL_NEWTON if config.solver == "Newton" \
+        else mujoco.mjtSolver.mjSOL_CG
+    assert opt.solver == solver
+    assert opt.timestep == pytest.approx(config.timestep)
