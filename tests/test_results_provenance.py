@@ -6,7 +6,7 @@ from uncommitted code ("-dirty") or names a commit that is not an ancestor of HE
 It fails on main today: summaries and trial files from runs made before issue 57's rule
 are "-dirty" (every named commit is an ancestor of HEAD). It is marked xfail(strict=True), so
 that it turns into a failure (XPASS) the day they are re-recorded from committed code, and the
-mark is removed. ``python tests/test_results_provenance.py`` prints them with their counts.
+mark is removed. ``python -m tests.test_results_provenance`` prints them with their counts.
 """
 
 from __future__ import annotations
@@ -142,7 +142,7 @@ def test_the_auditor_reads_commits_as_git_does():
     "issue 57: result summaries and committed trial files recorded from uncommitted code "
     "before issue 57's rule (the cloth underneath fold, the 12 x 12 cloth physics bench, "
     "the H200 Warp runs; "
-    "`python tests/test_results_provenance.py` lists them); every named commit is an "
+    "`python -m tests.test_results_provenance` lists them); every named commit is an "
     "ancestor of HEAD. Remove this mark when they are re-recorded."))
 def test_no_result_comes_from_uncommitted_or_foreign_code():
     if not in_git():
