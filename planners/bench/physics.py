@@ -138,12 +138,19 @@ ROPE_SETTINGS = {
 SETTINGS = {"cloth": CLOTH_SETTINGS, "rope": ROPE_SETTINGS}
 
 
+def _preset_and_fields(name: str, overrides: dict | None) -> tuple[str | None, dict]:
+    """A setting's physics preset (a "preset:<name>" row's, or its overrides' "physics" key;
+    None: the defaults) and the scene-config fields set on top of it."""
+    if overrides is None:
+        return name.split(":", 1)[1], {}
+    fields = dict(overrides)
+    return fields.pop("physics", None), fields
+
+
 def _config(task: str, name: str, overrides: dict | None, n: int):
     cls = pick_task(task).config
-    if overrides is None:
-        return cls.physics(name.split(":", 1)[1], n=n)
-    fields = dict(overrides)
-    base = cls.physics(fields.pop("physics"), n=n) if "physics" in fields else cls(n=n)
+    preset, fields = _preset_and_fields(name, overrides)
+    base = cls.physics(preset, n=n) if preset is not None else cls(n=n)
     return replace(base, **fields)
 
 
@@ -213,12 +220,10 @@ def random_actions(task: str, config, actions: int, threads: int, seed: int,
 def scripted_problem(settings: PickPlaceSettings, name: str, overrides: dict | None):
     """The problem of ``settings`` under the bench's setting ``name`` (its ``overrides`` on
     top of the physics preset their "physics" key names, as ``_config`` builds them)."""
-    if overrides is None:
-        return make_problem(replace(settings, physics=name.split(":", 1)[1]))
-    fields = dict(overrides)
-    if "physics" in fields:
-        settings = replace(settings, physics=fields.pop("physics"))
-    return make_problem(settings, scene_overrides=fields)
+    preset, fields = _preset_and_fields(name, overrides)
+    if preset is not None:
+        settings = replace(settings, physics=preset)
+    return make_problem(settings, scene_overrides=fields or None)
 
 
 def scripted_goals(task: str, name: str, overrides: dict | None, n: int,
