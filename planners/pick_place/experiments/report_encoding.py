@@ -14,8 +14,11 @@ tests, ``report_paper.encoding_families``). The claim and the README row:
 from __future__ import annotations
 
 import json
+import math
 from dataclasses import asdict
 from pathlib import Path
+
+import numpy as np
 
 from dopt.lab.experiment import own_trials
 from dopt.lab.report.base import Result, _and, mm, num, pm, section, table
@@ -34,6 +37,9 @@ from planners.trial_progress import RUN_ONLY_SETTINGS
 METHODS = ("simple", "original", "random")
 #: the section's title (the claim's and the map row's details link here)
 TITLE = "Key particles: the gain against the candidate count under the drag encoding"
+#: the mean distance between two independent uniform points on a unit square (square line
+#: picking: (2 + sqrt 2 + 5 ln(1 + sqrt 2)) / 15)
+UNIFORM_PAIR = (2 + math.sqrt(2) + 5 * math.log(1 + math.sqrt(2))) / 15
 #: the summary fields its trials give (``rebuild``)
 TRIAL_FIELDS = ("sizes", "n_points", "per_size", "trend", "verdict", "trial_commits")
 
@@ -107,6 +113,55 @@ def _trend_line(key: str, t: dict) -> str:
             f"log N (95 % interval), Holm p {num(t.get('p_holm'), 3)}: **{t['verdict']}**")
 
 
+def pick_spread(records: list[dict]) -> dict[int, tuple[float, int]]:
+    """Per candidate count N, {N: (the mean over CEM(Original)'s trials of the mean distance
+    (m) between its executed plan's consecutive picks, the trials with two picks or more)}.
+    A trial's picks are its first stage's candidate indices (``-1``, None, skipped), point ix *
+    m + iy of the m x m grid over a sheet of side ``settings.side`` (``drag.grid_points``).
+    Against ``UNIFORM_PAIR`` x side: a plan whose picks were independent uniform draws. Records
+    that are not drag trials with these fields are skipped."""
+    per: dict[int, list[float]] = {}
+    for rec in records:
+        try:
+            if rec["result"]["method"] != "original-drag":
+                continue
+            settings = rec["params"]["settings"]
+            n, side = int(settings["drag"]["n_points"]), float(settings["side"])
+            idx = np.asarray(rec["result"]["actions"][0]["particles"], dtype=int)
+        except (KeyError, TypeError, ValueError, IndexError):
+            continue
+        m, idx = round(math.sqrt(n)), idx[idx >= 0]
+        if len(idx) < 2 or m < 2:
+            continue
+        xy = np.stack([idx // m, idx % m], axis=1) * side / (m - 1)
+        per.setdefault(n, []).append(float(np.linalg.norm(np.diff(xy, axis=0), axis=1).mean()))
+    return {n: (float(np.mean(v)), len(v)) for n, v in sorted(per.items())}
+
+
+def _spread_line(r: Result, results_dir: Path) -> list[str]:
+    """The sentence on CEM(Original)'s pick spread of a file's committed trials ([] without)."""
+    from dopt.lab.report.trials import summary_trials
+
+    info = summary_trials(results_dir, r)
+    records = []
+    for f in (info.files if info is not None else []):
+        try:
+            records.append(json.loads(f.read_text()))
+        except (OSError, ValueError):
+            continue
+    spread = pick_spread(records)
+    sides = {float(s["side"]) for s in r.data["settings"].values()}
+    if not spread or len(sides) != 1:
+        return []
+    cells = " / ".join(f"{mm(d)} mm ({k})" for d, k in spread.values())
+    return [f"CEM(Original)'s executed plan, the mean distance between consecutive picks (mean "
+            f"over its trials, their number in brackets), N {' / '.join(map(str, spread))}: "
+            f"{cells}; two independent uniform points on the sheet lie "
+            f"{mm(UNIFORM_PAIR * sides.pop())} mm apart. Where they match, the plan carries no "
+            "point from one drag to the next, and a narrower bin cannot hold it back further.",
+            ""]
+
+
 def encoding_section(results: list[Result], page: Path) -> list[str]:
     """RESULTS.md's section of the drag-encoding files."""
     _, family = encoding_families(results)
@@ -131,7 +186,8 @@ def encoding_section(results: list[Result], page: Path) -> list[str]:
                 "Final cost (mm, the mean particle distance to the goal): mean ± 95 % CI "
                 "(seeds); the differences paired over the seeds both ran.", "",
                 *table(["candidates N", "grid", *(_label(m) for m in METHODS),
-                        "Original - Simple", "Random - Simple"], rows), "", *trends]
+                        "Original - Simple", "Random - Simple"], rows), "", *trends, "",
+                *_spread_line(r, page.parent / "results")]
 
     return section(TITLE,
                    "`python experiments/fig7_encoding.py`: CEM(Simple), CEM(Original) and "

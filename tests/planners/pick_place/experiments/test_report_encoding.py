@@ -240,3 +240,45 @@ def test_nothing_shows_while_no_encoding_file_is_recorded(site):
     assert "not recorded yet" in headlines(site)           # the other experiments' entries
     for text in (site["md"].read_text(), _page(site), block(site["readme"])):
         assert "drag encoding" not in text and "candidate count" not in text
+
+
+def _drag_record(picks, n_points, side=0.5, method="original-drag"):
+    """A drag trial record with the fields ``pick_spread`` reads."""
+    return {"params": {"settings": {"side": side, "drag": {"n_points": n_points}}},
+            "result": {"method": method, "actions": [{"particles": list(map(int, picks))}]}}
+
+
+def test_uniform_pair_constant_matches_monte_carlo():
+    """The square line picking constant against a Monte-Carlo estimate (its standard error
+    is about 0.25 / sqrt(n), 0.0004 here)."""
+    from planners.pick_place.experiments.report_encoding import UNIFORM_PAIR
+
+    rng = np.random.default_rng(0)
+    a, b = rng.random((400_000, 2)), rng.random((400_000, 2))
+    assert np.linalg.norm(a - b, axis=1).mean() == pytest.approx(UNIFORM_PAIR, abs=0.002)
+
+
+def test_pick_spread_measures_grid_distances():
+    """Opposite corners of the grid lie one side apart (a None pick between them skipped);
+    a point picked again is 0 apart; other methods' trials and unreadable records are left
+    out; trials of one N are averaged."""
+    from planners.pick_place.experiments.report_encoding import pick_spread
+
+    m = 7
+    recs = [_drag_record([0, -1, m - 1], m * m, side=0.4),       # (0, 0) -> (0, 6): 0.4 m
+            _drag_record([3, 3, 3], m * m, side=0.4),            # held: 0
+            _drag_record([0, m * m - 1], m * m, side=0.4, method="simple-drag"),
+            {"result": {"method": "original-drag"}},
+            _drag_record([5], 16)]                               # one pick: no distance
+    assert pick_spread(recs) == {m * m: (pytest.approx(0.2), 2)}
+
+
+def test_pick_spread_of_uniform_picks_is_the_uniform_pair_distance():
+    """Picks drawn independently and uniformly over a fine grid (a generator of this test's
+    own) lie UNIFORM_PAIR x side apart on average, to the grid's and the sample's error."""
+    from planners.pick_place.experiments.report_encoding import UNIFORM_PAIR, pick_spread
+
+    rng = np.random.default_rng(1)
+    n = 200 * 200
+    out = pick_spread([_drag_record(rng.integers(0, n, 50_000), n, side=0.6)])
+    assert out[n][0] == pytest.approx(UNIFORM_PAIR * 0.6, rel=0.01)
