@@ -116,10 +116,12 @@ def _trend_line(key: str, t: dict) -> str:
 def pick_spread(records: list[dict]) -> dict[int, tuple[float, int]]:
     """Per candidate count N, {N: (the mean over CEM(Original)'s trials of the mean distance
     (m) between its executed plan's consecutive picks, the trials with two picks or more)}.
-    A trial's picks are its first stage's candidate indices (``-1``, None, skipped), point ix *
-    m + iy of the m x m grid over a sheet of side ``settings.side`` (``drag.grid_points``).
-    Against ``UNIFORM_PAIR`` x side: a plan whose picks were independent uniform draws. Records
-    that are not drag trials with these fields are skipped."""
+    A trial's picks are its first stage's candidate indices (``-1``, None, skipped) into the
+    m x m grid ``drag.grid_points`` lays over a flat sheet of side ``settings.side``. Against
+    ``UNIFORM_PAIR`` x side: a plan whose picks were independent uniform draws. Records that
+    are not drag trials with these fields are skipped."""
+    from planners.pick_place.drag import grid_points
+
     per: dict[int, list[float]] = {}
     for rec in records:
         try:
@@ -133,23 +135,18 @@ def pick_spread(records: list[dict]) -> dict[int, tuple[float, int]]:
         m, idx = round(math.sqrt(n)), idx[idx >= 0]
         if len(idx) < 2 or m < 2:
             continue
-        xy = np.stack([idx // m, idx % m], axis=1) * side / (m - 1)
+        xy = grid_points(np.array([[0.0, 0.0, 0.0], [side, side, 0.0]]), m)[idx, :2]
         per.setdefault(n, []).append(float(np.linalg.norm(np.diff(xy, axis=0), axis=1).mean()))
     return {n: (float(np.mean(v)), len(v)) for n, v in sorted(per.items())}
 
 
 def _spread_line(r: Result, results_dir: Path) -> list[str]:
     """The sentence on CEM(Original)'s pick spread of a file's committed trials ([] without)."""
+    from dopt.lab.report.resummarize import records_of
     from dopt.lab.report.trials import summary_trials
 
     info = summary_trials(results_dir, r)
-    records = []
-    for f in (info.files if info is not None else []):
-        try:
-            records.append(json.loads(f.read_text()))
-        except (OSError, ValueError):
-            continue
-    spread = pick_spread(records)
+    spread = pick_spread(records_of(info) if info is not None else [])
     sides = {float(s["side"]) for s in r.data["settings"].values()}
     if not spread or len(sides) != 1:
         return []
