@@ -7,7 +7,10 @@ N, the drag encoding's decisions, substeps and step, CEM's budget and elites, th
 cost), the figure where docs/images holds one, per N and method the mean final cost with its
 95 % interval, the paired Original - Simple and Random - Simple, and the trend of each against
 log N with its Holm-adjusted p (over the two tests; with several folds also over all their
-tests, ``report_paper.encoding_families``). The claim and the README row:
+tests, ``report_paper.encoding_families``), and from the committed trials CEM(Original)'s
+pick spread (``pick_spread``) and how far each method's plans get (``plan_diagnostics``: the
+final cost against the flat sheet's, the drags that keep their point, executed against
+planned). The claim and the README row:
 ``report_claims`` and ``report_map``.
 """
 
@@ -140,13 +143,18 @@ def pick_spread(records: list[dict]) -> dict[int, tuple[float, int]]:
     return {n: (float(np.mean(v)), len(v)) for n, v in sorted(per.items())}
 
 
-def _spread_line(r: Result, results_dir: Path) -> list[str]:
-    """The sentence on CEM(Original)'s pick spread of a file's committed trials ([] without)."""
+def _records(r: Result, results_dir: Path) -> list[dict]:
+    """The committed trial records a file's summary holds ([] where none are found)."""
     from dopt.lab.report.resummarize import records_of
     from dopt.lab.report.trials import summary_trials
 
     info = summary_trials(results_dir, r)
-    spread = pick_spread(records_of(info) if info is not None else [])
+    return records_of(info) if info is not None else []
+
+
+def _spread_line(r: Result, records: list[dict]) -> list[str]:
+    """The sentence on CEM(Original)'s pick spread of a file's committed trials ([] without)."""
+    spread = pick_spread(records)
     sides = {float(s["side"]) for s in r.data["settings"].values()}
     if not spread or len(sides) != 1:
         return []
@@ -157,6 +165,83 @@ def _spread_line(r: Result, results_dir: Path) -> list[str]:
             f"{mm(UNIFORM_PAIR * sides.pop())} mm apart. Where they match, the plan carries no "
             "point from one drag to the next, and a narrower bin cannot hold it back further.",
             ""]
+
+
+def plan_diagnostics(records: list[dict]) -> dict[str, dict]:
+    """Per drag method, how its executed plans stand ({method: {"trials", "final" (mean final
+    cost, m), "pairs" (consecutive drag pairs of the executed plans, None picks included),
+    "carried" (the share of those pairs that pick the same point twice; nan without pairs),
+    "held_gap" (mean of executed - planned, m: the final cost after the release and settle
+    minus the plan's cost, the lowest of its CEM history), "largest" (the largest
+    executed - planned, m, with its seed and N)}}, methods in ``METHODS``' order. Records
+    that are not drag trials with these fields are skipped."""
+    per: dict[str, dict] = {}
+    for rec in records:
+        try:
+            res = rec["result"]
+            method = str(res["method"])
+            n = int(rec["params"]["settings"]["drag"]["n_points"])
+            idx = np.asarray(res["actions"][0]["particles"], dtype=int).reshape(-1)
+            final, planned = float(res["final_cost"]), float(min(res["cost_history"]))
+        except (KeyError, TypeError, ValueError, IndexError):
+            continue
+        if not method.endswith("-drag"):
+            continue
+        e = per.setdefault(method.removesuffix("-drag"), {"finals": [], "gaps": [],
+                                                          "pairs": 0, "carried": 0})
+        e["finals"].append(final)
+        e["gaps"].append((final - planned, int(res.get("seed", -1)), n))
+        e["pairs"] += max(len(idx) - 1, 0)
+        e["carried"] += int(np.sum((idx[1:] == idx[:-1]) & (idx[1:] >= 0)))
+    out = {}
+    for m in sorted(per, key=lambda k: METHODS.index(k) if k in METHODS else len(METHODS)):
+        e = per[m]
+        largest = max(e["gaps"])
+        out[m] = {"trials": len(e["finals"]), "final": float(np.mean(e["finals"])),
+                  "pairs": e["pairs"],
+                  "carried": e["carried"] / e["pairs"] if e["pairs"] else math.nan,
+                  "held_gap": float(np.mean([g for g, _, _ in e["gaps"]])),
+                  "largest": {"gap": largest[0], "seed": largest[1], "n_points": largest[2]}}
+    return out
+
+
+def _flat_cost(d: dict) -> float | None:
+    """The flat sheet's cost (m) to a drag-encoding file's goal (``scaling.flat_cost`` of its
+    first recorded settings; the physics mesh and sheet are one for every N); None where the
+    settings cannot be read."""
+    from planners.pick_place.scaling import flat_cost
+    from planners.pick_place.settings import PickPlaceSettings
+
+    try:
+        return flat_cost(PickPlaceSettings.from_dict(_by_count(d)[0][1]))
+    except (KeyError, TypeError, ValueError, IndexError):
+        return None
+
+
+def _diagnostics_lines(d: dict, records: list[dict]) -> list[str]:
+    """The table of ``plan_diagnostics`` over a file's committed trials ([] without)."""
+    diag, flat = plan_diagnostics(records), _flat_cost(d)
+    if not diag:
+        return []
+    rows = []
+    for m, e in diag.items():
+        big = e["largest"]
+        rows.append([_label(m), str(e["trials"]), mm(e["final"]),
+                     num(e["final"] / flat, 2) if flat else "-",
+                     "-" if math.isnan(e["carried"]) else
+                     f"{num(100 * e['carried'], 0)} % of {e['pairs']}",
+                     mm(e["held_gap"]),
+                     f"{mm(big['gap'])} (seed {big['seed']}"
+                     + (")" if m == "simple" else f", N {big['n_points']})")])
+    flat_words = (f"the flat sheet lies {mm(flat)} mm from the goal" if flat
+                  else "the flat sheet's cost could not be computed")
+    return [f"How far the plans get, over all N ({flat_words}; a final cost / flat of 1 is no "
+            "progress): the executed plans' drags that pick the point the drag before picked "
+            "(consecutive pairs, None picks counted as pairs not kept), and the final cost "
+            "after the release and settle minus the plan's cost, judged at its best decision "
+            "with the cloth still held.", "",
+            *table(["method", "trials", "final cost (mm)", "final / flat", "drags keeping "
+                    "the point", "executed - planned (mm)", "largest (mm)"], rows)]
 
 
 def encoding_section(results: list[Result], page: Path) -> list[str]:
@@ -175,6 +260,7 @@ def encoding_section(results: list[Result], page: Path) -> list[str]:
                          *(_cell(e["methods"].get(m)) for m in METHODS),
                          *(_gap(e.get(f"{m}_minus_simple")) for m in METHODS[1:])])
         trends = [_trend_line(key, t) + across(r, key) for key, t in d["trend"].items()]
+        records = _records(r, page.parent / "results")
         image = page.parent / "images" / f"{r.path.stem}.png"
         figure = ([f"![Final cost and the gaps to CEM(Simple) against the candidate count N "
                    f"under the drag encoding, {d.get('goal')} fold, 95 % intervals]"
@@ -184,7 +270,7 @@ def encoding_section(results: list[Result], page: Path) -> list[str]:
                 "(seeds); the differences paired over the seeds both ran.", "",
                 *table(["candidates N", "grid", *(_label(m) for m in METHODS),
                         "Original - Simple", "Random - Simple"], rows), "", *trends, "",
-                *_spread_line(r, page.parent / "results")]
+                *_spread_line(r, records), *_diagnostics_lines(d, records)]
 
     return section(TITLE,
                    "`python experiments/fig7_encoding.py`: CEM(Simple), CEM(Original) and "

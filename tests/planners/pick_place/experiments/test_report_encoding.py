@@ -282,3 +282,44 @@ def test_pick_spread_of_uniform_picks_is_the_uniform_pair_distance():
     n = 200 * 200
     out = pick_spread([_drag_record(rng.integers(0, n, 50_000), n, side=0.6)])
     assert out[n][0] == pytest.approx(UNIFORM_PAIR * 0.6, rel=0.01)
+
+
+def _plan_record(method, picks, final, history, seed=0, n_points=100):
+    """A drag trial record with the fields ``plan_diagnostics`` reads."""
+    rec = _drag_record(picks, n_points, method=method)
+    rec["result"].update(final_cost=final, cost_history=list(history), seed=seed)
+    return rec
+
+
+def test_plan_diagnostics_counts_kept_points_and_the_release_gap():
+    """Kept pairs: the same point twice in a row, a None pair (-1, -1) not kept; the gap: the
+    final cost minus the lowest of the history, its largest with its seed and N; methods in
+    the table's order, other records skipped."""
+    from planners.pick_place.experiments.report_encoding import plan_diagnostics
+
+    recs = [_plan_record("original-drag", [4, 4, 7, -1, -1], 0.10, [0.2, 0.09], seed=1,
+                         n_points=400),                         # pairs 4, kept 1, gap +0.01
+            _plan_record("original-drag", [2, 3], 0.05, [0.08, 0.06], seed=2),  # gap -0.01
+            _plan_record("simple-drag", [1, 1, 1], 0.07, [0.07]),   # pairs 2, kept 2, gap 0
+            _plan_record("simple", [1, 1], 0.01, [0.01]),            # not a drag trial
+            {"result": {"method": "random-drag"}}]                   # unreadable
+    out = plan_diagnostics(recs)
+    assert list(out) == ["simple", "original"]
+    o = out["original"]
+    assert (o["trials"], o["pairs"]) == (2, 5)
+    assert o["carried"] == pytest.approx(1 / 5)
+    assert o["final"] == pytest.approx(0.075)
+    assert o["held_gap"] == pytest.approx(0.0)
+    assert o["largest"] == {"gap": pytest.approx(0.01), "seed": 1, "n_points": 400}
+    assert out["simple"]["carried"] == 1.0 and out["simple"]["held_gap"] == 0.0
+
+
+def test_plan_diagnostics_of_independent_uniform_picks_keep_one_in_n():
+    """Picks drawn independently and uniformly over N points (this test's own generator)
+    pick the previous point again once in N, to the sample's error."""
+    from planners.pick_place.experiments.report_encoding import plan_diagnostics
+
+    rng = np.random.default_rng(2)
+    picks = rng.integers(0, 10, 100_000)
+    out = plan_diagnostics([_plan_record("random-drag", picks, 0.1, [0.1], n_points=10)])
+    assert out["random"]["carried"] == pytest.approx(0.1, abs=0.005)
