@@ -184,7 +184,8 @@ def _experiment(args, argv) -> int:
                **stats, "failed": res.failed, "trial_commits": res.commits,
                "wall_s": time.perf_counter() - start}
     write_summary(summary, out, args.record, "experiments/fig7_encoding.py", argv)
-    if plot(out / "encoding.png", stats, args.goal):
+    if plot(out / "encoding.png", stats, args.goal,
+            xlabel="candidate points N = n x n on one physics mesh (log scale)"):
         record_figure(out / "encoding.png", args.record)
     print(f"{args.goal}, drag encoding: {stats['verdict']}")
     print(f"wrote {out}/summary.json")

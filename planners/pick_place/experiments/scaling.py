@@ -256,9 +256,11 @@ def _experiment(args, argv) -> int:
     return 1 if res.failed else 0
 
 
-def plot(path: Path, stats: dict, goal: str) -> bool:
-    """Final cost per method and the gaps over CEM(Simple) against N = n * n (log axis), with
-    95 % bars. Returns whether it wrote ``path`` (not where matplotlib is not installed)."""
+def plot(path: Path, stats: dict, goal: str,
+         xlabel: str = "particles N = n x n (log scale)") -> bool:
+    """Final cost per method and the gaps over CEM(Simple) against N = n * n (log axis, named
+    ``xlabel``), with 95 % bars. Returns whether it wrote ``path`` (not where matplotlib is not
+    installed)."""
     try:
         import matplotlib
         matplotlib.use("Agg")
@@ -291,7 +293,7 @@ def plot(path: Path, stats: dict, goal: str) -> bool:
         ax.xaxis.set_major_locator(FixedLocator(sizes))
         ax.xaxis.set_major_formatter(ScalarFormatter())
         ax.xaxis.set_minor_locator(NullLocator())
-        ax.set_xlabel("particles N = n x n (log scale)")
+        ax.set_xlabel(xlabel)
         ax.set_ylabel(ylabel)
         ax.legend(title="method")
     # the verdict line is longer than the figure is wide: one line per compared method
