@@ -22,13 +22,28 @@ from planners.trial_progress import RUN_ONLY_SETTINGS, iterations_done
 
 
 # ----------------------------------------------------------------- sweeps in progress
+def ran_settings(summary: dict, settings: dict) -> bool:
+    """Whether a Fig. 7 sweep's ``summary`` can hold a trial with these ``settings``: its
+    "settings" (one sweep's) equal to them on every key but ``RUN_ONLY_SETTINGS``, a key only
+    one side holds counting as None (a setting added since the summary was recorded, such
+    as ``fold_start``, left at None by its trials); always where the summary records per-size
+    settings (a scaling study's: ``held_seeds`` matches those by size) or none."""
+    recorded = summary.get("settings")
+    if "per_size" in summary or not isinstance(recorded, dict) or not isinstance(settings, dict):
+        return True
+    keys = (set(recorded) | set(settings)) - set(RUN_ONLY_SETTINGS)
+    return all(recorded.get(k) == settings.get(k) for k in keys)
+
+
 def held_seeds(summary: dict, method: str, settings: dict) -> set:
     """The seeds of ``method`` that a recorded Fig. 7 ``summary`` holds for trials with these
     ``settings``: a sweep's (``methods.<m>.seeds``), or a scaling study's for the trial's size
     (``per_size.<n>.methods.<m>.seeds``, ``fig7_scaling.py``; the drag encoding's,
     ``fig7_encoding.py``: its size the side of the trial's grid of candidate points, its method
     the one it stands for, ``planners.pick_place.encoding.BASE``); none where ``summary`` is
-    empty."""
+    empty or ran other settings (``ran_settings``)."""
+    if not ran_settings(summary, settings):
+        return set()
     if "per_size" in summary:
         size = settings.get("n")
         drag = settings.get("drag")
@@ -191,8 +206,9 @@ def sweeps_in_progress_section(results_dir: Path, results: list[Result]) -> list
                     else str(s.get("n")))
             lines += _sweep_heading(name, s) + [
                 "", f"{size} particles, self-collision "
-                    f"{'on' if s.get('selfcollide') else 'off'}, physics {s.get('physics')}; "
-                    f"{_budget(s)}.", ""]
+                    f"{'on' if s.get('selfcollide') else 'off'}, physics {s.get('physics')}"
+                    + (f", {s['fold_start']} start" if s.get("fold_start") else "")
+                    + f"; {_budget(s)}.", ""]
             lines += _group_table(group)
             wall = sum(x for r in group if _finite(x := r["result"].get("wall_s")))
             n = len(group)
@@ -218,7 +234,17 @@ def fig7_trials(folder: Path, r: Result) -> list[StoredTrial]:
         return own_trials(folder, r)
     held = {m: set(e.get("seeds") or ()) for m, e in (r.data.get("methods") or {}).items()}
     return [p for p in stored_trials(folder / "trials") if (m := FIG7_KEY.match(p.stem))
-            and int(m["seed"]) in held.get(m["method"], ())]
+            and int(m["seed"]) in held.get(m["method"], ())
+            and ran_settings(r.data, _trial_settings(p))]
+
+
+def _trial_settings(path: Path | StoredTrial) -> dict | None:
+    """A pick-and-place trial's settings (its params' "settings"; None unreadable)."""
+    try:
+        settings = json.loads(path.read_text())["params"]["settings"]
+    except (OSError, ValueError, KeyError, TypeError):
+        return None
+    return settings if isinstance(settings, dict) else None
 
 
 def scaling_trials(folder: Path, r: Result) -> list[StoredTrial]:
@@ -235,8 +261,5 @@ def scaling_trials(folder: Path, r: Result) -> list[StoredTrial]:
 
 def _cloth_size(path: Path | StoredTrial) -> int | None:
     """The particles per side a pick-and-place trial ran on (its params' settings "n")."""
-    try:
-        n = json.loads(path.read_text())["params"]["settings"]["n"]
-    except (OSError, ValueError, KeyError, TypeError):
-        return None
+    n = (_trial_settings(path) or {}).get("n")
     return n if isinstance(n, int) else None

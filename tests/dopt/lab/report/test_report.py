@@ -154,7 +154,7 @@ def test_a_sweep_without_its_summary_is_shown_seed_by_seed_until_recorded(site):
     assert "3 trials, 5600 s of trials (1.6 h of one core)." in part
     assert "fig7-cloth-side" not in headlines(site)   # partial: never a headline
     # a summary recorded for some of them leaves the others listed
-    partial = fig7(goal="side")
+    partial = fig7(goal="side", settings=trial_record("simple", 0, 0.0, 0.0)["params"]["settings"])
     partial["methods"]["simple"]["seeds"] = [0, 1, 2]
     write(site["results"], "fig7-cloth-side.json", partial)
     assert run(site) == 0
@@ -167,6 +167,15 @@ def test_a_sweep_without_its_summary_is_shown_seed_by_seed_until_recorded(site):
     write(site["results"], "fig7-cloth-side.json", partial)
     assert run(site) == 0
     assert "sweeps in progress" not in site["md"].read_text()
+    # a trial of a held seed run with other settings (a prepared start, a setting the
+    # summary predates) is not the summary's: listed, with its start named
+    other = trial_record("simple", 1, 0.0171, 2500.0)
+    other["params"]["settings"]["fold_start"] = "prepared"
+    write(trials, "simple-seed1-def.json", other)
+    assert run(site) == 0
+    part = site["md"].read_text().split("## Fig. 7 sweeps in progress")[1]
+    assert "physics default, prepared start;" in part and "| CEM(Simple) | 1 | 17.1 |" in part
+    assert "1 trial, 2500 s of trials" in part
 
 
 def test_trials_differing_only_in_their_thread_count_share_one_table(site):
