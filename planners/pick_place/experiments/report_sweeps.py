@@ -12,6 +12,7 @@ from dopt.lab.experiment import own_trials
 from dopt.lab.report.base import ReportError, Result, _finite, _median, mm, num, table
 from dopt.lab.trialpack import PackError, StoredTrial, stored_trials
 from planners.pick_place.encoding import BASE
+from planners.pick_place.experiments.report_fig7 import fold_reference
 from planners.pick_place.experiments.report_paper import (
     _in_label_order,
     _label,
@@ -210,6 +211,8 @@ def sweeps_in_progress_section(results_dir: Path, results: list[Result]) -> list
                     + (f", {s['fold_start']} start" if s.get("fold_start") else "")
                     + f"; {_budget(s)}.", ""]
             lines += _group_table(group)
+            reference = fold_reference(s)
+            lines += ["", reference] if reference else []
             wall = sum(x for r in group if _finite(x := r["result"].get("wall_s")))
             n = len(group)
             lines += ["", f"{n} trial{'s' if n != 1 else ''}, {num(wall, 0)} s of trials "
