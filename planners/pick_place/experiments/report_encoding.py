@@ -206,14 +206,14 @@ def plan_diagnostics(records: list[dict]) -> dict[str, dict]:
 
 
 def _flat_cost(d: dict) -> float | None:
-    """The flat sheet's cost (m) to a drag-encoding file's goal (``scaling.flat_cost`` of its
-    first recorded settings; the physics mesh and sheet are one for every N); None where the
-    settings cannot be read."""
-    from planners.pick_place.scaling import flat_cost
-    from planners.pick_place.settings import PickPlaceSettings
+    """The flat sheet's cost (m) to a drag-encoding file's goal (``report_fig7.fold_costs`` of
+    its first recorded settings; the physics mesh and sheet are one for every N); None where
+    the settings cannot be read."""
+    from planners.pick_place.experiments.report_fig7 import fold_costs
 
     try:
-        return flat_cost(PickPlaceSettings.from_dict(_by_count(d)[0][1]))
+        s = _by_count(d)[0][1]
+        return fold_costs(str(s["goal"]), int(s["n"]), float(s["side"]))[0]
     except (KeyError, TypeError, ValueError, IndexError):
         return None
 

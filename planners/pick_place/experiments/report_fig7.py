@@ -106,7 +106,7 @@ def _fig7_physics(d: dict) -> str:
 
 
 @functools.lru_cache(maxsize=32)
-def _fold_costs(goal: str, n: int, side: float) -> tuple[float, float | None]:
+def fold_costs(goal: str, n: int, side: float) -> tuple[float, float | None]:
     """(the flat sheet's Eq. 2 cost to the final goal of cloth fold ``goal``, m; the previous
     fold's goal's, None for a one-fold goal), from the goals' own geometry."""
     from deformables.goals import goal_sequence
@@ -127,7 +127,7 @@ def fold_reference(settings: dict) -> str:
     try:
         if settings.get("task") != "cloth":
             return ""
-        flat, previous = _fold_costs(str(settings["goal"]), int(settings["n"]),
+        flat, previous = fold_costs(str(settings["goal"]), int(settings["n"]),
                                      float(settings["side"]))
     except (KeyError, TypeError, ValueError, AttributeError):
         return ""
