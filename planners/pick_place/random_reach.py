@@ -105,17 +105,38 @@ def trial_reach(settings, seed: int, final_cost: float, moving: float = MOVING) 
 
 def random_reach(records: Sequence[dict], moving: float = MOVING) -> list[TrialReach]:
     """``trial_reach`` of every CEM(Random) trial record (``{"params": {"settings", "seed",
-    "method"}, "result": {"final_cost"}}``, as a pick-and-place sweep stores them), by seed."""
+    "method"}, "result": {"final_cost"}}``, as a pick-and-place sweep stores them), by seed.
+
+    Raises:
+        ValueError: the CEM(Random) records ran more than one setting (a folder holding two
+            protocols, such as a multi-layer fold's chained and prepared starts): a seed would
+            stand for two trials; split them first (``settings_groups``)."""
     from planners.pick_place import PickPlaceSettings
 
+    random = [rec for rec in records if rec["params"].get("method") == "random"]
+    if len(settings_groups(random)) > 1:
+        raise ValueError("the CEM(Random) records ran more than one setting; "
+                         "split them with settings_groups first")
     out = []
-    for rec in records:
+    for rec in random:
         params, result = rec["params"], rec["result"]
-        if params.get("method") != "random":
-            continue
         settings = PickPlaceSettings.from_dict(params["settings"])
         out.append(trial_reach(settings, params["seed"], result["final_cost"], moving))
     return sorted(out, key=lambda t: t.seed)
+
+
+def settings_groups(records: Sequence[dict]) -> list[list[dict]]:
+    """The trial records split by what they ran (``PickPlaceSettings.identity`` of their
+    ``params.settings``; the method and seed aside), in order of first appearance."""
+    import json
+
+    from planners.pick_place import PickPlaceSettings
+
+    groups: dict[str, list[dict]] = {}
+    for rec in records:
+        identity = PickPlaceSettings.from_dict(rec["params"]["settings"]).identity()
+        groups.setdefault(json.dumps(identity, sort_keys=True), []).append(rec)
+    return list(groups.values())
 
 
 def at_least(chances: Sequence[float], k: int) -> float:

@@ -22,7 +22,12 @@ from pathlib import Path
 from dopt.lab.cli import EPILOG, ArgumentParser, existing_dir, guarded, output_dir, positive_float
 from dopt.lab.record import record_problem, write_summary
 from dopt.lab.sweep import load_finished
-from planners.pick_place.random_reach import MOVING, random_reach, reach_summary
+from planners.pick_place.random_reach import (
+    MOVING,
+    random_reach,
+    reach_summary,
+    settings_groups,
+)
 
 
 def parse_args(argv):
@@ -38,21 +43,28 @@ def parse_args(argv):
     return ap.parse_args(argv)
 
 
-def folder_report(folder: Path, moving: float) -> dict:
-    """The reach of one run folder's CEM(Random) trials, beside the other methods' means."""
-    records = list(load_finished(folder).values())
-    trials = random_reach(records, moving)
-    if not trials:
+def folder_report(folder: Path, moving: float) -> list[dict]:
+    """The reach of one run folder's CEM(Random) trials, beside the other methods' means: one
+    report per setting the folder's trials ran (a multi-layer fold's folder may hold its
+    chained and its prepared start; ``settings_groups``), each naming its fold start."""
+    groups = [g for g in settings_groups(load_finished(folder).values())
+              if any(r["params"].get("method") == "random" for r in g)]
+    if not groups:
         raise ValueError(f"{folder}: no CEM(Random) trial under trials/")
-    settings = next(r["params"]["settings"] for r in records
-                    if r["params"].get("method") == "random")
+    return [_group_report(folder, records, moving) for records in groups]
+
+
+def _group_report(folder: Path, records: list[dict], moving: float) -> dict:
+    trials = random_reach(records, moving)
+    settings = records[0]["params"]["settings"]
     means = {}
     for method in ("simple", "original", "random"):
         costs = [r["result"]["final_cost"] for r in records
                  if r["params"].get("method") == method]
         means[method] = sum(costs) / len(costs) if costs else None
     return {"folder": str(folder), "task": settings["task"], "goal": settings["goal"],
-            "n": settings["n"], "mean_final_cost": means, "summary": reach_summary(trials),
+            "n": settings["n"], "fold_start": settings.get("fold_start"),
+            "mean_final_cost": means, "summary": reach_summary(trials),
             "trials": [t.to_dict() for t in trials]}
 
 
@@ -63,10 +75,11 @@ def main(argv=None) -> int:
         print(f"random_reach.py: error: {problem}", file=sys.stderr)
         return 2
     args.out.mkdir(parents=True, exist_ok=True)
-    runs = [folder_report(Path(f), args.moving) for f in args.runs]
+    runs = [r for f in args.runs for r in folder_report(Path(f), args.moving)]
     for r in runs:
         s = r["summary"]
-        print(f"{r['task']} {r['goal']} {r['n']}: Spearman rho {s['spearman_rho']}, "
+        start = f" ({r['fold_start']} start)" if r["fold_start"] else ""
+        print(f"{r['task']} {r['goal']} {r['n']}{start}: Spearman rho {s['spearman_rho']}, "
               f"blind {s['blind']} of {s['trials']} (expected {s['blind_expected']:.2f})")
     write_summary({"experiment": "random_reach", "moving": args.moving, "runs": runs},
                   args.out, args.record, "experiments/random_reach.py", argv)

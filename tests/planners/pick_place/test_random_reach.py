@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from dopt.lab.trialpack import stored_trials
-from planners.pick_place.random_reach import p_blind, random_reach, reach_summary
+from planners.pick_place.random_reach import p_blind, random_reach, reach_summary, settings_groups
 
 RUNS = Path(__file__).resolve().parents[3] / "docs" / "results" / "runs"
 
@@ -29,22 +29,27 @@ def test_p_blind_matches_enumeration():
 @pytest.mark.parametrize("fold", ["diagonal", "reflective"])
 def test_redrawn_candidates_hold_every_recorded_pick(fold):
     """Every particle a recorded CEM(Random) trial picked is among the candidates re-drawn for
-    that stage from its seed (a pick of -1 is a no-op action)."""
+    that stage from its seed and settings (a pick of -1 is a no-op action); the reflective
+    folder holds both fold starts, each re-drawn under its own."""
     folder = RUNS / f"fig7-cloth-{fold}" / "trials"
     records = [json.loads(t.read_text()) for t in stored_trials(folder)     # loose or packed
                if fnmatch(t.name, "random-seed[01]-*.json")]
     if not records:
         pytest.skip(f"no committed CEM(Random) trials under {folder}")
-    reach = random_reach(records)
-    assert [t.seed for t in reach] == sorted(r["params"]["seed"] for r in records)
-    by_seed = {r["params"]["seed"]: r for r in records}
-    for t in reach:
-        stages = {s.stage: set(s.candidates) for s in t.stages}
-        for action in by_seed[t.seed]["result"]["actions"]:
-            picked = {p for p in action["particles"] if p >= 0}
-            assert picked <= stages[action["stage"]], (t.seed, action, stages)
-        for s in t.stages:
-            assert 0.0 <= s.reach <= 1.0 and s.need <= s.max_need
+    for group in settings_groups(records):
+        reach = random_reach(group)
+        assert [t.seed for t in reach] == sorted(r["params"]["seed"] for r in group)
+        by_seed = {r["params"]["seed"]: r for r in group}
+        for t in reach:
+            stages = {s.stage: set(s.candidates) for s in t.stages}
+            for action in by_seed[t.seed]["result"]["actions"]:
+                picked = {p for p in action["particles"] if p >= 0}
+                assert picked <= stages[action["stage"]], (t.seed, action, stages)
+            for s in t.stages:
+                assert 0.0 <= s.reach <= 1.0 and s.need <= s.max_need
+    if len(settings_groups(records)) > 1:
+        with pytest.raises(ValueError, match="more than one setting"):
+            random_reach(records)
 
 
 def test_at_least_matches_binomial_and_enumeration():
@@ -73,3 +78,30 @@ def test_reach_summary_counts():
     assert s["p_blind_at_least"] == pytest.approx(1 - 0.9 ** 3)
     assert s["spearman_rho"] == pytest.approx(-1.0)
     assert s["cost_blind"] == pytest.approx(0.06) and s["cost_seeing"] == pytest.approx(0.015)
+
+
+def test_a_folder_of_two_fold_starts_reports_each_on_its_own(tmp_path):
+    """``experiments/random_reach.py``'s folder report splits a folder holding a multi-layer
+    fold's chained and prepared-start trials into one report per start, never pairing one
+    start's seed with the other's candidates."""
+    from planners.pick_place.experiments.random_reach import folder_report
+
+    folder = RUNS / "fig7-cloth-reflective" / "trials"
+    records = [json.loads(t.read_text()) for t in stored_trials(folder)
+               if fnmatch(t.name, "random-seed0-*.json")]
+    starts = {r["params"]["settings"].get("fold_start") for r in records}
+    if starts != {None, "prepared"}:
+        pytest.skip(f"the committed reflective trials hold fold starts {starts}, not both")
+    (tmp_path / "trials").mkdir()
+    for r in records:
+        (tmp_path / "trials" / f"{r['key']}.json").write_text(json.dumps(r))
+    reports = folder_report(tmp_path, 0.01)
+    assert sorted(str(r["fold_start"]) for r in reports) == ["None", "prepared"]
+    for rep in reports:
+        (trial,) = rep["trials"]
+        own = next(r for r in records
+                   if r["params"]["settings"].get("fold_start") == rep["fold_start"])
+        assert trial["final_cost"] == own["result"]["final_cost"]
+        assert rep["mean_final_cost"]["random"] == own["result"]["final_cost"]
+        assert ({s["stage"] for s in trial["stages"]}
+                == {a["stage"] for a in own["result"]["actions"]})
