@@ -28,6 +28,7 @@ grows with the particle count. Means and differences are over the stable trials 
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Iterable, Sequence
 from dataclasses import replace
 
@@ -70,15 +71,28 @@ def scaling_settings(goal: str, n: int, threads: int = 0, move: str | None = Non
                    mass=base.scene_config().mass * scale ** 2)
 
 
-def flat_cost(settings: PickPlaceSettings) -> float:
-    """The Eq. 2 cost (m) of the flat sheet to the final goal of the cloth ``settings``: the
-    mean distance of the goal's rest shape to the goal (``deformables.goals``), the start's
-    cost that SoftGym's normalised performance divides by (the settled start lies within a
-    fraction of a millimetre of it)."""
+@functools.lru_cache(maxsize=32)
+def fold_costs(goal: str, n: int, side: float) -> tuple[float, float | None]:
+    """(the flat sheet's Eq. 2 cost to the final goal of cloth fold ``goal`` on an n x n sheet
+    of ``side`` m, m; the previous fold's goal's, None for a one-fold goal), from the goals'
+    own geometry (``deformables.goals``): the mean distance of the goal's rest shape, and of
+    the previous goal, to the final goal."""
     from deformables.goals import goal_sequence
 
-    goal = goal_sequence(f"cloth_{settings.goal}", n=settings.n, side=settings.side)[-1]
-    return float(np.linalg.norm(goal.positions - goal.rest_positions, axis=1).mean())
+    seq = goal_sequence(f"cloth_{goal}", n=n, side=side)
+    final = seq[-1].positions
+
+    def cost(x):
+        return float(np.linalg.norm(x - final, axis=1).mean())
+
+    return cost(seq[-1].rest_positions), (cost(seq[-2].positions) if len(seq) > 1 else None)
+
+
+def flat_cost(settings: PickPlaceSettings) -> float:
+    """The Eq. 2 cost (m) of the flat sheet to the final goal of the cloth ``settings``
+    (``fold_costs``), the start's cost that SoftGym's normalised performance divides by (the
+    settled start lies within a fraction of a millimetre of it)."""
+    return fold_costs(settings.goal, settings.n, settings.side)[0]
 
 
 def scaling_trials(goal: str, sizes: Sequence[int], seeds: Iterable[int],

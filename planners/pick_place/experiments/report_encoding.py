@@ -206,10 +206,10 @@ def plan_diagnostics(records: list[dict]) -> dict[str, dict]:
 
 
 def _flat_cost(d: dict) -> float | None:
-    """The flat sheet's cost (m) to a drag-encoding file's goal (``report_fig7.fold_costs`` of
-    its first recorded settings; the physics mesh and sheet are one for every N); None where
-    the settings cannot be read."""
-    from planners.pick_place.experiments.report_fig7 import fold_costs
+    """The flat sheet's cost (m) to a drag-encoding file's goal (``scaling.fold_costs`` of its
+    first recorded settings; the physics mesh and sheet are one for every N); None where the
+    settings cannot be read."""
+    from planners.pick_place.scaling import fold_costs
 
     try:
         s = _by_count(d)[0][1]

@@ -5,11 +5,8 @@ Simple-vs-other comparisons judged with Holm's correction (``dopt.lab.report.sta
 
 from __future__ import annotations
 
-import functools
 import statistics
 from pathlib import Path
-
-import numpy as np
 
 from dopt.lab.report.base import (
     Result,
@@ -38,6 +35,7 @@ from planners.pick_place.experiments.report_paper import (
     _panel,
     _panel_rank,
 )
+from planners.pick_place.scaling import fold_costs
 
 #: how the claims' sentences name the correction (RESULTS.md and the README)
 HOLM_NOTE = (f"Holm p: Welch's p-value of the difference adjusted by {CORRECTION} over its "
@@ -103,21 +101,6 @@ def _fig7_physics(d: dict) -> str:
     what.append(f"energy bound {energy:g} J/kg" if energy is not None
                 else "no energy bound in the verdict")
     return f"preset {name} ({', '.join(what)})"
-
-
-@functools.lru_cache(maxsize=32)
-def fold_costs(goal: str, n: int, side: float) -> tuple[float, float | None]:
-    """(the flat sheet's Eq. 2 cost to the final goal of cloth fold ``goal``, m; the previous
-    fold's goal's, None for a one-fold goal), from the goals' own geometry."""
-    from deformables.goals import goal_sequence
-
-    seq = goal_sequence(f"cloth_{goal}", n=n, side=side)
-    final = seq[-1].positions
-
-    def cost(x):
-        return float(np.linalg.norm(x - final, axis=1).mean())
-
-    return cost(seq[-1].rest_positions), (cost(seq[-2].positions) if len(seq) > 1 else None)
 
 
 def fold_reference(settings: dict) -> str:

@@ -4,7 +4,8 @@ flat sheet's and the previous fold's goal's cost to the final goal, from the goa
 import numpy as np
 import pytest
 
-from planners.pick_place.experiments.report_fig7 import fold_costs, fold_reference
+from planners.pick_place.experiments.report_fig7 import fold_reference
+from planners.pick_place.scaling import fold_costs
 
 
 @pytest.mark.parametrize("n, side", [(12, 0.3), (20, 0.3), (31, 0.5)])
