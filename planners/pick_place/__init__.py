@@ -46,9 +46,10 @@ Modules, one job each (every name is re-exported here):
     scaling.py   the gain against the particle count: scaling_trials (Fig. 7's trials at
                  several cloth sizes: a finer sheet, or a bigger one at fixed spacing),
                  scaling_summary (intervals, the trend test on log N, in m and normalised
-                 by the flat sheet's cost)
+                 by the flat sheet's cost, ``fold_costs``)
     random_reach.py  why CEM(Random) lands where it does: each trial's candidates re-drawn
-                 from its seed and what they can reach (``random_reach``, ``reach_summary``)
+                 from its seed and what they can reach (``random_reach``, ``reach_summary``;
+                 ``settings_groups`` splits a folder that ran two settings)
 
 Shapes: N particles, K key particles, H actions per plan, ns state row.
 """
