@@ -3,11 +3,14 @@ over, and the blind-draw chance matches an enumeration."""
 
 import itertools
 import json
+from dataclasses import replace
 from fnmatch import fnmatch
 from pathlib import Path
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from dopt.lab.trialpack import stored_trials
 from planners.pick_place.random_reach import p_blind, random_reach, reach_summary, settings_groups
@@ -111,3 +114,29 @@ def test_a_folder_of_two_fold_starts_reports_each_on_its_own(tmp_path):
         assert rep["mean_final_cost"]["random"] == own["result"]["final_cost"]
         assert ({s["stage"] for s in trial["stages"]}
                 == {a["stage"] for a in own["result"]["actions"]})
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.lists(st.tuples(st.sampled_from(["reflective", "underneath"]),
+                          st.sampled_from([None, "prepared"]), st.sampled_from([12, 20]),
+                          st.sampled_from(["simple", "random"]), st.integers(0, 9),
+                          st.integers(1, 4)), max_size=12))
+def test_settings_groups_partition_records_by_what_they_ran(draws):
+    """Records drawn at random over fold, start, size, method, seed and threads: the groups
+    hold every record once, in its order; one group's records ran one setting whatever their
+    method, seed and threads; two groups ran two."""
+    from planners.pick_place import PickPlaceSettings
+
+    records = []
+    for goal, start, n, method, seed, threads in draws:
+        s = replace(PickPlaceSettings.preset("cloth", goal, protocol="paper"), n=n,
+                    fold_start=start, threads=threads)
+        records.append({"params": {"settings": s.to_dict(), "method": method, "seed": seed}})
+    groups = settings_groups(records)
+    position = {id(r): i for i, r in enumerate(records)}
+    assert sorted(position[id(r)] for g in groups for r in g) == list(range(len(records)))
+    for g in groups:
+        assert [position[id(r)] for r in g] == sorted(position[id(r)] for r in g)
+        assert len({(r["params"]["settings"]["goal"], r["params"]["settings"].get("fold_start"),
+                     r["params"]["settings"]["n"]) for r in g}) == 1
+    assert len(groups) == len({(goal, start, n) for goal, start, n, *_ in draws})
