@@ -95,9 +95,15 @@ def _cloth_gap_grows(results: list[Result]) -> Finding | None:
     apart = ("no two folds' gaps apart" if g["separate"] == [] else
              f"gaps apart only for {_and([f'{a} vs {b}' for a, b in g['separate']])}"
              if g["separate"] else "")
+    start = dict(g["starts"])
+    mixed = len(set(start.values())) > 1
     return Finding(verdict, "the gap Original - Simple, diagonal to underneath: "
-                   + ", ".join(f"{goal} {mm(gap)} mm" for goal, gap in g["gaps"])
-                   + (f" ({apart})" if apart else ""), tuple(files))
+                   + ", ".join(f"{goal} {mm(gap)} mm"
+                               + (f" ({start[goal]} start)" if mixed and goal in start else "")
+                               for goal, gap in g["gaps"])
+                   + (f" ({apart})" if apart else "")
+                   + ("; the multi-layer folds start differently, so their gaps belong to two "
+                      "experiments" if mixed else ""), tuple(files))
 
 
 def _random_over_original(results: list[Result]) -> Finding | None:

@@ -36,6 +36,7 @@ from planners.pick_place.experiments.report_paper import (
     _panel_rank,
 )
 from planners.pick_place.scaling import fold_costs
+from planners.pick_place.tasks import pick_task
 
 #: how the claims' sentences name the correction (RESULTS.md and the README)
 HOLM_NOTE = (f"Holm p: Welch's p-value of the difference adjusted by {CORRECTION} over its "
@@ -359,6 +360,15 @@ def fig7_setup(r: Result) -> str:
     return f"preset {r.data.get('protocol', 'ours')}" + (f", {dep}" if dep else "")
 
 
+def _several_stages(goal: str) -> bool:
+    """Whether cloth fold ``goal`` has a fold before its last (its start, "prepared" or
+    "chained", is then part of the experiment)."""
+    try:
+        return pick_task("cloth").goal(goal).prepared is not None
+    except ValueError:
+        return False
+
+
 def fig7_claims(results: list[Result]) -> dict:
     """The paper's Fig. 7 claims checked on the recorded files (not quick), per setup
     (``fig7_setup``: protocol and departures; one panel may be run under several).
@@ -367,10 +377,11 @@ def fig7_claims(results: list[Result]) -> dict:
     (``comparison``) on the panel's paper metric (``PAPER_METRICS``; a file without it: the
     mean particle distance), the gap Original - Simple of the mean particle distance (m), the
     seeds and the size}; "cloth": per setup with cloth folds, the gaps in the paper's order of
-    difficulty, each fold's cloth size and whether the gap grows (None: not judged; a gap at
-    another cloth size, another N_O, is another experiment: judged only when all four folds
-    share one size)."""
-    panels, gaps = {}, {}
+    difficulty, each fold's cloth size, each multi-layer fold's start ("prepared" or "chained")
+    and whether the gap grows (None: not judged; a gap at another cloth size, another N_O, or
+    from another start is another experiment: judged only when all four folds share one size
+    and the multi-layer folds one start)."""
+    panels, gaps, starts = {}, {}, {}
     for r in sorted(results, key=lambda r: _panel_rank(r.data.get("task"), r.data.get("goal"))):
         if r.kind != "fig7" or r.quick:
             continue
@@ -393,14 +404,18 @@ def fig7_claims(results: list[Result]) -> dict:
             gaps.setdefault(setup, []).append(
                 (CLOTH_DIFFICULTY.index(r.data["goal"]), r.data["goal"], gap, n,
                  difference(s, o) if gap is not None else None, r.data.get("trials_wall_s")))
+            if _several_stages(r.data["goal"]):
+                starts.setdefault(setup, {})[r.data["goal"]] = (
+                    (r.data.get("settings") or {}).get("fold_start") or "chained")
     cloth = []
     for setup, folds in gaps.items():
         folds.sort()
         values = [g for _, _, g, _, _, _ in folds]
         sizes = {n for _, _, _, n, _, _ in folds}
         walls = [w for *_, w in folds]
+        start = starts.get(setup, {})
         grows = (None if len(values) < len(CLOTH_DIFFICULTY) or len(sizes) != 1
-                 or any(g is None for g in values)
+                 or len(set(start.values())) > 1 or any(g is None for g in values)
                  else all(b > a for a, b in zip(values, values[1:], strict=False)))
         halves = [h for *_, h, _ in folds]
         # pairs of folds whose gaps' 95 % intervals are separate; None where a gap or its
@@ -414,6 +429,7 @@ def fig7_claims(results: list[Result]) -> dict:
                       "gap_ci95": [(goal, h) for _, goal, _, _, h, _ in folds],
                       "separate": separate,
                       "sizes": [(goal, n) for _, goal, _, n, _, _ in folds], "grows": grows,
+                      "starts": sorted(start.items(), key=lambda gs: CLOTH_DIFFICULTY.index(gs[0])),
                       # the folds' trials in seconds of one core, where every file says
                       "trials_wall_s": (sum(walls) if all(_finite(w) for w in walls)
                                         else None)})
@@ -501,13 +517,19 @@ def fig7_claims_lines(results: list[Result], page: Path) -> list[str]:
             continue
         size, half = dict(g["sizes"]), dict(g["gap_ci95"])
         mixed = len(set(size.values())) > 1
+        start = dict(g["starts"])
+        mixed_start = len(set(start.values())) > 1
         gaps = ", ".join(f"{goal} {mm(gap)}"
                          + (f" ± {mm(half[goal])}" if half[goal] is not None else "")
                          + (f" at {size[goal]} x {size[goal]}" if mixed else "")
+                         + (f" ({start[goal]} start)" if mixed_start and goal in start else "")
                          for goal, gap in g["gaps"])
         missing = [goal for goal in CLOTH_DIFFICULTY if goal not in size]
         if mixed:
             verdict = "whether it grows cannot be judged until all folds are run at one size"
+        elif mixed_start:
+            verdict = (f"whether it grows cannot be judged until {_and(list(start))} "
+                       "are run from one start")
         elif missing:
             verdict = (f"whether it grows cannot be judged until {_and(missing)} "
                        f"{'is' if len(missing) == 1 else 'are'} run")

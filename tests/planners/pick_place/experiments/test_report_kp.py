@@ -232,6 +232,35 @@ def test_fig7_gap_is_not_judged_across_cloth_sizes(site):
             "run at one size") in headlines(site)
 
 
+def test_fig7_gap_is_not_judged_across_fold_starts(site):
+    """A multi-layer fold planned from the prepared start and one chained from the flat sheet
+    are different experiments: gaps that would grow are not called growing when the
+    reflective and underneath folds start differently; the one-fold goals' start is moot."""
+    for goal, gap, start in (("diagonal", 0.010, None), ("side", 0.020, None),
+                             ("reflective", 0.030, "prepared"), ("underneath", 0.040, None)):
+        data = fig7(goal=goal, protocol="paper", settings={**fig7()["settings"], "goal": goal,
+                                         **({"fold_start": start} if start else {})})
+        data["methods"]["original"]["final_cost_mean"] = (
+            data["methods"]["simple"]["final_cost_mean"] + gap)
+        write(site["results"], f"fig7-cloth-{goal}.json", data)
+    (claims,) = report_fig7.fig7_claims(base.load_results(site["results"]))["cloth"]
+    assert claims["starts"] == [("reflective", "prepared"), ("underneath", "chained")]
+    assert claims["grows"] is None
+    assert run(site) == 0
+    assert ("diagonal 10.0, side 20.0, reflective 30.0 (prepared start), underneath 40.0 "
+            "(chained start); whether it grows cannot be judged until reflective and "
+            "underneath are run from one start") in headlines(site)
+    page = (site["md"].parent / "KEY-PARTICLES.md").read_text()
+    assert "reflective 30.0 mm (prepared start), underneath 40.0 mm (chained start)" in page
+    data = fig7(goal="underneath", protocol="paper",
+                settings={**fig7()["settings"], "goal": "underneath", "fold_start": "prepared"})
+    data["methods"]["original"]["final_cost_mean"] = (
+        data["methods"]["simple"]["final_cost_mean"] + 0.040)
+    write(site["results"], "fig7-cloth-underneath.json", data)
+    (claims,) = report_fig7.fig7_claims(base.load_results(site["results"]))["cloth"]
+    assert claims["grows"] is True
+
+
 def test_a_departing_rope_fold_is_compared_on_the_matching_distance(site):
     m = fig7()["methods"]["simple"]
     rope = {"task": "rope", "goal": "fold", "protocol": "paper",
