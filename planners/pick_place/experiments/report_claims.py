@@ -6,7 +6,7 @@ from __future__ import annotations
 from dopt.lab.report.base import Result, _and, _finite, mm
 from dopt.lab.report.claims import Claim, Finding, newest, share
 from planners.pick_place.experiments.report_encoding import TITLE as ENCODING_TITLE
-from planners.pick_place.experiments.report_fig7 import _departs, fig7_claims
+from planners.pick_place.experiments.report_fig7 import _departs, fig7_claims, start_labels
 from planners.pick_place.experiments.report_paper import (
     KP,
     encoding_families,
@@ -95,15 +95,13 @@ def _cloth_gap_grows(results: list[Result]) -> Finding | None:
     apart = ("no two folds' gaps apart" if g["separate"] == [] else
              f"gaps apart only for {_and([f'{a} vs {b}' for a, b in g['separate']])}"
              if g["separate"] else "")
-    start = dict(g["starts"])
-    mixed = len(set(start.values())) > 1
+    labels = start_labels(g)
     return Finding(verdict, "the gap Original - Simple, diagonal to underneath: "
-                   + ", ".join(f"{goal} {mm(gap)} mm"
-                               + (f" ({start[goal]} start)" if mixed and goal in start else "")
+                   + ", ".join(f"{goal} {mm(gap)} mm" + labels.get(goal, "")
                                for goal, gap in g["gaps"])
                    + (f" ({apart})" if apart else "")
                    + ("; the multi-layer folds start differently, so their gaps belong to two "
-                      "experiments" if mixed else ""), tuple(files))
+                      "experiments" if labels else ""), tuple(files))
 
 
 def _random_over_original(results: list[Result]) -> Finding | None:

@@ -369,6 +369,15 @@ def _several_stages(goal: str) -> bool:
         return False
 
 
+def start_labels(cloth: dict) -> dict[str, str]:
+    """For one setup's cloth claims (``fig7_claims``' "cloth" entry), each multi-layer fold's
+    " (<start> start)" where the folds' starts differ; {} where they agree."""
+    start = dict(cloth["starts"])
+    if len(set(start.values())) < 2:
+        return {}
+    return {goal: f" ({s} start)" for goal, s in start.items()}
+
+
 def fig7_claims(results: list[Result]) -> dict:
     """The paper's Fig. 7 claims checked on the recorded files (not quick), per setup
     (``fig7_setup``: protocol and departures; one panel may be run under several).
@@ -517,18 +526,17 @@ def fig7_claims_lines(results: list[Result], page: Path) -> list[str]:
             continue
         size, half = dict(g["sizes"]), dict(g["gap_ci95"])
         mixed = len(set(size.values())) > 1
-        start = dict(g["starts"])
-        mixed_start = len(set(start.values())) > 1
+        labels = start_labels(g)
         gaps = ", ".join(f"{goal} {mm(gap)}"
                          + (f" ± {mm(half[goal])}" if half[goal] is not None else "")
                          + (f" at {size[goal]} x {size[goal]}" if mixed else "")
-                         + (f" ({start[goal]} start)" if mixed_start and goal in start else "")
+                         + labels.get(goal, "")
                          for goal, gap in g["gaps"])
         missing = [goal for goal in CLOTH_DIFFICULTY if goal not in size]
         if mixed:
             verdict = "whether it grows cannot be judged until all folds are run at one size"
-        elif mixed_start:
-            verdict = (f"whether it grows cannot be judged until {_and(list(start))} "
+        elif labels:
+            verdict = (f"whether it grows cannot be judged until {_and(list(labels))} "
                        "are run from one start")
         elif missing:
             verdict = (f"whether it grows cannot be judged until {_and(missing)} "
