@@ -29,6 +29,7 @@ from dopt.lab.report.stats import (
     welch_p,
     welch_p_from_intervals,
 )
+from planners.pick_place.experiments.report_idle import idle_plans_line, trial_records
 from planners.pick_place.experiments.report_paper import (
     _label,
     _methods_in_order,
@@ -177,8 +178,10 @@ def fig7_detail(r: Result, page: Path, results: list[Result]) -> list[str]:
                           num(None if ci is None else 1e3 * ci, 1)))
         rows.append(row)
     lines += table(header, rows)
-    reference = fold_reference(s)
-    lines += ["", reference] if reference else []
+    info = r.notes.get("trials")
+    notes = [fold_reference(s),
+             idle_plans_line(trial_records(info.files if info is not None else []))]
+    lines += [x for n in notes if n for x in ("", n)]
     lines += fig7_against_protocol(r, results, page)
     return lines + [""] + source_lines([r], page) + failed_lines(r)
 
