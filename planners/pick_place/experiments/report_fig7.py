@@ -123,6 +123,14 @@ def fold_reference(settings: dict) -> str:
             "it is ends near there.")
 
 
+def fold_notes(settings: dict, records) -> list[str]:
+    """The lines under a Fig. 7 table, each after a blank line: the last fold's share
+    (``fold_reference`` of the trials' ``settings``) and the plans that pick nothing among
+    ``records``, (method, trial result) pairs (``report_idle.idle_plans_line``)."""
+    notes = [fold_reference(settings), idle_plans_line(records)]
+    return [x for n in notes if n for x in ("", n)]
+
+
 def fig7_detail(r: Result, page: Path, results: list[Result]) -> list[str]:
     d = r.data
     s = d.get("settings") or {}
@@ -179,9 +187,7 @@ def fig7_detail(r: Result, page: Path, results: list[Result]) -> list[str]:
         rows.append(row)
     lines += table(header, rows)
     info = r.notes.get("trials")
-    notes = [fold_reference(s),
-             idle_plans_line(trial_records(info.files if info is not None else []))]
-    lines += [x for n in notes if n for x in ("", n)]
+    lines += fold_notes(s, trial_records(info.files if info is not None else []))
     lines += fig7_against_protocol(r, results, page)
     return lines + [""] + source_lines([r], page) + failed_lines(r)
 

@@ -12,8 +12,7 @@ from dopt.lab.experiment import own_trials
 from dopt.lab.report.base import ReportError, Result, _finite, _median, mm, num, table
 from dopt.lab.trialpack import PackError, StoredTrial, stored_trials
 from planners.pick_place.encoding import BASE
-from planners.pick_place.experiments.report_fig7 import fold_reference
-from planners.pick_place.experiments.report_idle import idle_plans_line
+from planners.pick_place.experiments.report_fig7 import fold_notes
 from planners.pick_place.experiments.report_paper import (
     _in_label_order,
     _label,
@@ -212,9 +211,7 @@ def sweeps_in_progress_section(results_dir: Path, results: list[Result]) -> list
                     + (f", {s['fold_start']} start" if s.get("fold_start") else "")
                     + f"; {_budget(s)}.", ""]
             lines += _group_table(group)
-            notes = [fold_reference(s),
-                     idle_plans_line((r["method"], r["result"]) for r in group)]
-            lines += [x for n in notes if n for x in ("", n)]
+            lines += fold_notes(s, [(r["method"], r["result"]) for r in group])
             wall = sum(x for r in group if _finite(x := r["result"].get("wall_s")))
             n = len(group)
             lines += ["", f"{n} trial{'s' if n != 1 else ''}, {num(wall, 0)} s of trials "
