@@ -140,8 +140,7 @@ def test_the_auditor_reads_commits_as_git_does():
 
 @pytest.mark.xfail(strict=True, reason=(
     "issue 57: result summaries and committed trial files recorded from uncommitted code "
-    "before issue 57's rule (the cloth underneath fold, the 12 x 12 cloth physics bench, "
-    "the H200 Warp runs; "
+    "before issue 57's rule (the 12 x 12 cloth physics bench, the H200 Warp runs; "
     "`python -m tests.test_results_provenance` lists them); every named commit is an "
     "ancestor of HEAD. Remove this mark when they are re-recorded."))
 def test_no_result_comes_from_uncommitted_or_foreign_code():
