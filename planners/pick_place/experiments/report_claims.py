@@ -7,6 +7,7 @@ from dopt.lab.report.base import Result, _and, _finite, mm
 from dopt.lab.report.claims import Claim, Finding, newest, share
 from planners.pick_place.experiments.report_encoding import TITLE as ENCODING_TITLE
 from planners.pick_place.experiments.report_fig7 import _departs, fig7_claims, start_labels
+from planners.pick_place.experiments.report_idle import idle_counts, idle_share, trial_records
 from planners.pick_place.experiments.report_paper import (
     KP,
     encoding_families,
@@ -86,8 +87,23 @@ def _cloth_beats_original(results: list[Result]) -> Finding | None:
                    + ")", tuple(files))
 
 
+def _idle_from_prepared(panels: dict) -> str:
+    """Per fold of ``panels`` ({goal: panel}) that starts from the prepared previous fold,
+    how many of each method's plans pick nothing (``report_idle.idle_share``); "" if none."""
+    parts = []
+    for goal, p in panels.items():
+        info = p["file"].notes.get("trials")
+        if (p["file"].data.get("settings") or {}).get("fold_start") != "prepared" or not info:
+            continue
+        records = trial_records(info.files)
+        if any(i for i, _ in idle_counts(records).values()):
+            parts.append(f"{goal} {idle_share(records)}")
+    return ("; plans that pick nothing, leaving the prepared start to settle: "
+            + "; ".join(parts)) if parts else ""
+
+
 def _cloth_gap_grows(results: list[Result]) -> Finding | None:
-    _, files = _paper_panels(results, "cloth")
+    panels, files = _paper_panels(results, "cloth")
     g = next((g for g in fig7_claims(files)["cloth"] if g["setup"] == "preset paper"), None)
     if g is None or all(gap is None for _, gap in g["gaps"]):
         return None
@@ -101,7 +117,8 @@ def _cloth_gap_grows(results: list[Result]) -> Finding | None:
                                for goal, gap in g["gaps"])
                    + (f" ({apart})" if apart else "")
                    + ("; the multi-layer folds start differently, so their gaps belong to two "
-                      "experiments" if labels else ""), tuple(files))
+                      "experiments" if labels else "")
+                   + _idle_from_prepared(panels), tuple(files))
 
 
 def _random_over_original(results: list[Result]) -> Finding | None:

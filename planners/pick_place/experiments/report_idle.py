@@ -46,11 +46,25 @@ def trial_records(files: Iterable[StoredTrial]) -> list[tuple[str, dict]]:
     return out
 
 
+def idle_counts(records: Iterable[tuple[str, dict]]) -> dict[str, tuple[int, int]]:
+    """records: (method, trial result) pairs. {method: (trials whose plan picks nothing,
+    trials)}, the methods in the figures' order."""
+    records = [(m, r) for m, r in records if isinstance(r, dict)]
+    return {m: (sum(picks_nothing(r) for k, r in records if k == m),
+                sum(k == m for k, _ in records))
+            for m in _in_label_order(m for m, _ in records)}
+
+
+def idle_share(records: Iterable[tuple[str, dict]]) -> str:
+    """"CEM(Simple) 4 of 10, ..." from ``idle_counts`` of ``records``."""
+    return ", ".join(f"{_label(m)} {i} of {n}" for m, (i, n) in idle_counts(records).items())
+
+
 def idle_plans_line(records: Iterable[tuple[str, dict]]) -> str:
     """records: (method, trial result) pairs. The sentence naming, per method, how many
-    trials' plans pick nothing and how many end closer than those do (by more than
-    ``BEAT_MARGIN``); "" when no plan picks nothing. The settled start's cost is the idle
-    trials' final cost (a range when they differ)."""
+    trials' plans pick nothing (``idle_counts``) and how many end closer than those do (by
+    more than ``BEAT_MARGIN``); "" when no plan picks nothing. The settled start's cost is the
+    idle trials' final cost (a range when they differ)."""
     records = [(m, r) for m, r in records if isinstance(r, dict)]
     idle = [r["final_cost"] for _, r in records
             if picks_nothing(r) and _finite(r.get("final_cost"))]
@@ -58,15 +72,9 @@ def idle_plans_line(records: Iterable[tuple[str, dict]]) -> str:
         return ""
     low, high = min(idle), max(idle)
     start = mm(low) if mm(low) == mm(high) else f"{mm(low)}-{mm(high)}"
-    methods = _in_label_order(m for m, _ in records)
-    counts, beats = [], []
-    for m in methods:
-        mine = [r for k, r in records if k == m]
-        n_idle = sum(picks_nothing(r) for r in mine)
-        n_beat = sum(_finite(c := r.get("final_cost")) and c < low - BEAT_MARGIN
-                     for r in mine)
-        counts.append(f"{_label(m)} {n_idle} of {len(mine)}")
-        beats.append(f"{_label(m)} {n_beat}")
+    closer = [k for k, r in records
+              if _finite(c := r.get("final_cost")) and c < low - BEAT_MARGIN]
+    beats = [f"{_label(m)} {closer.count(m)}" for m in idle_counts(records)]
     return (f"Plans that pick nothing (CEM's None at every action, so the start only "
-            f"settles, to {start} mm from this goal): {', '.join(counts)}. Trials that end "
+            f"settles, to {start} mm from this goal): {idle_share(records)}. Trials that end "
             f"closer than that: {', '.join(beats)}.")

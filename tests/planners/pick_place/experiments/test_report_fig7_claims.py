@@ -8,8 +8,16 @@ import numpy as np
 import pytest
 
 from dopt.lab.report import base
+from planners.cem import NONE
 from planners.pick_place.experiments import report_fig7, report_paper
-from tests.dopt.lab.report.report_site import fig7, headlines, make_site, run, write
+from tests.dopt.lab.report.report_site import (
+    fig7,
+    headlines,
+    make_site,
+    provenance,
+    run,
+    write,
+)
 
 
 @pytest.fixture
@@ -211,3 +219,35 @@ def test_fig7_cloth_claims_are_judged_as_one_family_with_holm(site):
     for i, name in enumerate(names):            # each panel's line: its adjusted p
         shown = "< 0.001" if adjusted[i] < 0.001 else f"{adjusted[i]:.3f}"
         assert f"Holm p {shown})" in text, name
+
+
+def test_the_gap_claim_counts_idle_plans_on_the_folds_from_the_prepared_start(site):
+    """From the prepared start a plan that picks nothing leaves the previous fold to settle:
+    the gap-grows finding says, per prepared fold, how many of each method's trials did so,
+    read from the fold's committed trials; a fold without such plans is not named."""
+    for goal, start in (("diagonal", None), ("side", None), ("reflective", "prepared"),
+                        ("underneath", "prepared")):
+        data = fig7(goal=goal, protocol="paper", settings={**fig7()["settings"], "goal": goal,
+                                         **({"fold_start": start} if start else {})},
+                    provenance=provenance(f"python experiments/cloth_fold.py --goal {goal} "
+                                          f"--out docs/results/runs/fig7-cloth-{goal}"))
+        write(site["results"], f"fig7-cloth-{goal}.json", data)
+        picks = {"underneath": {"simple": [NONE, NONE, 4], "original": [3, 7, 9]},
+                 "reflective": {"simple": [5, 6], "original": [8, 2]},
+                 "side": {"simple": [NONE], "original": [NONE]}}.get(goal, {})
+        trials = site["results"] / "runs" / f"fig7-cloth-{goal}" / "trials"
+        trials.mkdir(parents=True)
+        for method, firsts in picks.items():
+            for seed, first in enumerate(firsts):
+                actions = [{"stage": "fold", "particles": [first, NONE]}]
+                (trials / f"{method}-seed{seed}-0badc0de.json").write_text(json.dumps({
+                    "key": f"{method}-seed{seed}-0badc0de",
+                    "params": {"method": method, "seed": seed, "settings": data["settings"]},
+                    "result": {"method": method, "seed": seed, "final_cost": 0.02,
+                               "actions": actions}}))
+    assert run(site) == 0
+    page = (site["md"].parent / "KEY-PARTICLES.md").read_text()
+    assert ("plans that pick nothing, leaving the prepared start to settle: underneath "
+            "CEM(Simple) 2 of 3, CEM(Original) 0 of 3.") in page
+    assert "reflective CEM(Simple)" not in page      # no idle plan there
+    assert "side CEM(Simple)" not in page            # one fold: no prepared start
