@@ -10,14 +10,8 @@ import pytest
 from dopt.lab.report import base
 from planners.cem import NONE
 from planners.pick_place.experiments import report_fig7, report_paper
-from tests.dopt.lab.report.report_site import (
-    fig7,
-    headlines,
-    make_site,
-    provenance,
-    run,
-    write,
-)
+from tests.dopt.lab.report import report_site
+from tests.dopt.lab.report.report_site import fig7, headlines, make_site, run, write
 
 
 @pytest.fixture
@@ -227,10 +221,11 @@ def test_the_gap_claim_counts_idle_plans_on_the_folds_from_the_prepared_start(si
     read from the fold's committed trials; a fold without such plans is not named."""
     for goal, start in (("diagonal", None), ("side", None), ("reflective", "prepared"),
                         ("underneath", "prepared")):
+        command = (f"python experiments/cloth_fold.py --goal {goal} "
+                   f"--out docs/results/runs/fig7-cloth-{goal}")
         data = fig7(goal=goal, protocol="paper", settings={**fig7()["settings"], "goal": goal,
                                          **({"fold_start": start} if start else {})},
-                    provenance=provenance(f"python experiments/cloth_fold.py --goal {goal} "
-                                          f"--out docs/results/runs/fig7-cloth-{goal}"))
+                    provenance=report_site.provenance(command))
         write(site["results"], f"fig7-cloth-{goal}.json", data)
         picks = {"underneath": {"simple": [NONE, NONE, 4], "original": [3, 7, 9]},
                  "reflective": {"simple": [5, 6], "original": [8, 2]},
