@@ -95,9 +95,9 @@ def _idle_from_prepared(panels: dict) -> str:
         info = p["file"].notes.get("trials")
         if (p["file"].data.get("settings") or {}).get("fold_start") != "prepared" or not info:
             continue
-        records = trial_records(info.files)
-        if any(i for i, _ in idle_counts(records).values()):
-            parts.append(f"{goal} {idle_share(records)}")
+        counts = idle_counts(trial_records(info.files))
+        if any(i for i, _ in counts.values()):
+            parts.append(f"{goal} {idle_share(counts)}")
     return ("; plans that pick nothing, leaving the prepared start to settle: "
             + "; ".join(parts)) if parts else ""
 

@@ -55,9 +55,9 @@ def idle_counts(records: Iterable[tuple[str, dict]]) -> dict[str, tuple[int, int
             for m in _in_label_order(m for m, _ in records)}
 
 
-def idle_share(records: Iterable[tuple[str, dict]]) -> str:
-    """"CEM(Simple) 4 of 10, ..." from ``idle_counts`` of ``records``."""
-    return ", ".join(f"{_label(m)} {i} of {n}" for m, (i, n) in idle_counts(records).items())
+def idle_share(counts: dict[str, tuple[int, int]]) -> str:
+    """"CEM(Simple) 4 of 10, ..." from ``counts`` (``idle_counts``)."""
+    return ", ".join(f"{_label(m)} {i} of {n}" for m, (i, n) in counts.items())
 
 
 def idle_plans_line(records: Iterable[tuple[str, dict]]) -> str:
@@ -74,7 +74,8 @@ def idle_plans_line(records: Iterable[tuple[str, dict]]) -> str:
     start = mm(low) if mm(low) == mm(high) else f"{mm(low)}-{mm(high)}"
     closer = [k for k, r in records
               if _finite(c := r.get("final_cost")) and c < low - BEAT_MARGIN]
-    beats = [f"{_label(m)} {closer.count(m)}" for m in idle_counts(records)]
+    counts = idle_counts(records)
+    beats = [f"{_label(m)} {closer.count(m)}" for m in counts]
     return (f"Plans that pick nothing (CEM's None at every action, so the start only "
-            f"settles, to {start} mm from this goal): {idle_share(records)}. Trials that end "
+            f"settles, to {start} mm from this goal): {idle_share(counts)}. Trials that end "
             f"closer than that: {', '.join(beats)}.")
