@@ -1,5 +1,6 @@
 """MPC sweeps in progress (RESULTS.md): committed trials of Table 1's protocol that no recorded
-summary holds yet, counted per row and scene.
+summary holds yet (a sweep stopped part-way, or episodes committed for dopt-view's replay),
+counted per row and scene.
 """
 
 from __future__ import annotations
@@ -16,8 +17,9 @@ from dopt.lab.trialpack import PackError, stored_trials
 def mpc_sweeps_in_progress_section(results_dir: Path, results: list[Result]) -> list[str]:
     """Per MPC sweep folder ``runs/<sweep>`` (Table 1, Fig. 4: not ``fig7-*``) with committed
     trials that no recorded summary's ``--out`` names: its trials counted per row (method,
-    rho, theta) and scene, their commits and machines. No costs: means, intervals and claims
-    wait for the summary the sweep's command records."""
+    rho, theta) and scene, their commits and machines, and whether every trial keeps its start
+    state and controls (``--keep-controls``: the folder replays in dopt-view). No costs: means,
+    intervals and claims wait for the summary the sweep's command records."""
     named = {out_folder(results_dir, r.origin_command) for r in results}
     lines = []
     for folder in sorted(Path(results_dir).glob("runs/*")):
@@ -40,18 +42,24 @@ def mpc_sweeps_in_progress_section(results_dir: Path, results: list[Result]) -> 
         stamps = [record_stamp(rec) for rec in records]
         info = TrialInfo(folder.name, files, machines=Counter(m for _, m in stamps))
         commits = Counter(c for c, _ in stamps)
+        replayable = all("controls" in (rec.get("result") or {}) for rec in records)
         first = params[0]
         problem = "the authors' problem" if first.get("problem") == "authors" else "our problem"
         lines += ["", f"### `{folder.name}`: {first.get('task')}, {problem}",
                   "", f"{len(files)} trials over {len(rows)} rows (method, rho, theta: "
                   + ", ".join(f"{m} {n}" for m, n in sorted(methods.items()))
                   + f"), {scenes[0]}" + (f"-{scenes[-1]}" if scenes[-1] != scenes[0] else "")
-                  + f" scenes each (seeds {seeds[0]}-{seeds[-1]}); written at "
+                  + (" scene" if scenes[-1] == 1 else " scenes")
+                  + (f" each (seed {seeds[0]})" if len(seeds) == 1
+                     else f" each (seeds {seeds[0]}-{seeds[-1]})") + "; written at "
                   + ", ".join(f"`{short_commit(c)}` ({n})" for c, n in commits.most_common())
-                  + f"; {machines_text(info)}."]
+                  + f"; {machines_text(info)}."
+                  + (f" Every trial keeps its start state and executed controls: `dopt-view "
+                     f"docs/results/runs/{folder.name}` replays them." if replayable else "")]
     if not lines:
         return []
     return ["## MPC sweeps in progress", "",
             "Trials committed under `docs/results/runs/<sweep>/trials/` that no recorded "
-            "summary holds yet, counted per row and scene; costs, intervals and claims wait for "
-            "the summary the sweep's command records (the same command resumes it).", *lines]
+            "summary holds yet (a sweep stopped part-way, or episodes kept for replay in "
+            "dopt-view), counted per row and scene; costs, intervals and claims wait for the "
+            "summary the sweep's command records (the same command resumes it).", *lines]

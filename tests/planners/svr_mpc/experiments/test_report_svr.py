@@ -356,6 +356,29 @@ def test_an_mpc_sweep_in_progress_is_counted_until_a_summary_names_it(site):
     assert "## MPC sweeps in progress" not in site["md"].read_text()
 
 
+def test_mpc_trials_that_all_keep_their_controls_are_named_replayable(site):
+    """A folder whose every trial keeps its executed controls (--keep-controls: episodes
+    committed for the viewer) says that dopt-view replays it; one trial without them and the
+    folder reads as a plain sweep part-way."""
+    trials = site["results"] / "runs" / "replays-x" / "trials"
+    base = {"task": "clutter", "problem": "authors", "theta": 0, "rho": 1.0, "seed": 0}
+    for method in ("baseline", "svr-sum"):
+        _trial(trials, method, {**base, "method": method}, "c" * 40)
+        path = trials / f"{method}.json"
+        record = json.loads(path.read_text())
+        record["result"]["controls"] = [[0.0]]
+        path.write_text(json.dumps(record))
+    write(site["results"], "t1.json", table1())
+    assert run(site) == 0
+    sentence = ("Every trial keeps its start state and executed controls: `dopt-view "
+                "docs/results/runs/replays-x` replays them.")
+    assert sentence in site["md"].read_text()
+    _trial(trials, "naive", {**base, "method": "naive"}, "c" * 40)          # no controls
+    assert run(site) == 0
+    md = site["md"].read_text()
+    assert "### `replays-x`" in md and sentence not in md
+
+
 def test_machine_speed_behind_the_virtual_clock_compares_each_sweeps_own_baselines(site):
     """Per group of sweeps with the same baseline settings under the virtual clock: the one with
     the most baseline scenes is the reference; another sweep's own baseline trials (not copies
