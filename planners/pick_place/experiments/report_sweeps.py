@@ -149,6 +149,19 @@ def _group_table(group: list[dict]) -> list[str]:
                   "planning rollouts flagged", "executed plans unstable"], rows)
 
 
+def _size_words(s: dict) -> str:
+    """"<n> x <n> particles (<side> m a side, <spacing> mm apart)" for a cloth trial's
+    settings (its side when they name one), "<n> particles" for a rope's."""
+    n = s.get("n")
+    if s.get("task") != "cloth":
+        return f"{n} particles"
+    side = s.get("side")
+    if not (_finite(side) and isinstance(n, int) and n > 1):
+        return f"{n} x {n} particles"
+    return (f"{n} x {n} particles ({num(side, 3)} m a side, "
+            f"{num(side / (n - 1) * 1e3, 1)} mm apart)")
+
+
 def _budget(s: dict) -> str:
     """A trial's planning budget in words: CEM's per stage, or the drag encoding's (its
     candidate points, decisions and CEM budget, ``DragSettings``)."""
@@ -203,10 +216,8 @@ def sweeps_in_progress_section(results_dir: Path, results: list[Result]) -> list
             by_settings.setdefault(json.dumps(named, sort_keys=True), []).append(rec)
         for group in by_settings.values():
             s = group[0]["settings"]
-            size = (f"{s.get('n')} x {s.get('n')}" if s.get("task") == "cloth"
-                    else str(s.get("n")))
             lines += _sweep_heading(name, s) + [
-                "", f"{size} particles, self-collision "
+                "", f"{_size_words(s)}, self-collision "
                     f"{'on' if s.get('selfcollide') else 'off'}, physics {s.get('physics')}"
                     + (f", {s['fold_start']} start" if s.get("fold_start") else "")
                     + f"; {_budget(s)}.", ""]

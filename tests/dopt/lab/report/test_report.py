@@ -137,6 +137,22 @@ def test_a_table_escapes_pipes_in_its_header_and_cells():
         assert len(re.findall(r"(?<!\\)\|", line)) == 3
 
 
+def test_a_sweep_in_progress_names_the_cloths_side_and_spacing(site):
+    """A cloth trial that names its side shows the sheet's size and the particle spacing,
+    side / (n - 1), so a size-at-fixed-spacing sweep reads as one: n = 20 on 0.3 m is
+    15.8 mm apart, n = 10 on 0.1421 m the same spacing."""
+    trials = site["results"] / "runs" / "fig7-x" / "trials"
+    for n, side in ((20, 0.3), (10, 0.3 * 9 / 19)):
+        record = trial_record("simple", 0, 0.005, 100.0)
+        record["params"]["settings"].update(n=n, side=side)
+        write(trials, f"simple-seed0-{n:08x}.json", record)
+    write(site["results"], "fig7_cloth_diagonal.json", fig7())
+    assert run(site) == 0
+    part = site["md"].read_text().split("## Fig. 7 sweeps in progress")[1]
+    assert "20 x 20 particles (0.300 m a side, 15.8 mm apart)" in part
+    assert "10 x 10 particles (0.142 m a side, 15.8 mm apart)" in part
+
+
 def test_a_sweep_without_its_summary_is_shown_seed_by_seed_until_recorded(site):
     trials = site["results"] / "runs" / "fig7-cloth-side" / "trials"
     for method, seed, cost, wall in (("simple", 3, 0.0049, 2000.0), ("simple", 0, 0.0069, 2100.0),
