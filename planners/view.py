@@ -199,7 +199,7 @@ def object_shade(model: mujoco.MjModel, dofs: np.ndarray, robot_dofs: np.ndarray
 def load_mpc(path, max_frames: int = 300) -> Episode:
     """An MPC trial file as an ``Episode`` (module docstring)."""
     from dopt.tasks.push import warm_start
-    from planners.svr_mpc.episode import dofs_of_mask
+    from planners.svr_mpc.episode import CONTROLS_FIELDS, dofs_of_mask
     from planners.svr_mpc.settings import split_params
 
     record = _record(path, "MPC")
@@ -209,7 +209,7 @@ def load_mpc(path, max_frames: int = 300) -> Episode:
     task = settings.build_task(seed)
     model = task.model
     final = np.asarray(res["final_state"], dtype=float)
-    if "controls" in res and "start_state" in res:
+    if set(CONTROLS_FIELDS) <= set(res):
         states = replay_controls(model, res["start_state"], res["controls"])
         error = float(np.max(np.abs(states[-1] - final)))
         steps = np.arange(len(states))

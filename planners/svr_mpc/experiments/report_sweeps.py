@@ -12,14 +12,16 @@ from pathlib import Path
 from dopt.lab.report.base import ReportError, Result, short_commit
 from dopt.lab.report.trials import TrialInfo, machines_text, out_folder, record_stamp
 from dopt.lab.trialpack import PackError, stored_trials
+from planners.svr_mpc.episode import CONTROLS_FIELDS
 
 
 def mpc_sweeps_in_progress_section(results_dir: Path, results: list[Result]) -> list[str]:
     """Per MPC sweep folder ``runs/<sweep>`` (Table 1, Fig. 4: not ``fig7-*``) with committed
     trials that no recorded summary's ``--out`` names: its trials counted per row (method,
     rho, theta) and scene, their commits and machines, and whether every trial keeps its start
-    state and controls (``--keep-controls``: the folder replays in dopt-view). No costs: means,
-    intervals and claims wait for the summary the sweep's command records."""
+    state and controls (``CONTROLS_FIELDS``, ``--keep-controls``: the folder replays in
+    dopt-view). No costs: means, intervals and claims wait for the summary the sweep's
+    command records."""
     named = {out_folder(results_dir, r.origin_command) for r in results}
     lines = []
     for folder in sorted(Path(results_dir).glob("runs/*")):
@@ -42,7 +44,7 @@ def mpc_sweeps_in_progress_section(results_dir: Path, results: list[Result]) -> 
         stamps = [record_stamp(rec) for rec in records]
         info = TrialInfo(folder.name, files, machines=Counter(m for _, m in stamps))
         commits = Counter(c for c, _ in stamps)
-        replayable = all("controls" in (rec.get("result") or {}) for rec in records)
+        replayable = all(set(CONTROLS_FIELDS) <= set(rec.get("result") or {}) for rec in records)
         first = params[0]
         problem = "the authors' problem" if first.get("problem") == "authors" else "our problem"
         lines += ["", f"### `{folder.name}`: {first.get('task')}, {problem}",

@@ -366,7 +366,7 @@ def test_mpc_trials_that_all_keep_their_controls_are_named_replayable(site):
         _trial(trials, method, {**base, "method": method}, "c" * 40)
         path = trials / f"{method}.json"
         record = json.loads(path.read_text())
-        record["result"]["controls"] = [[0.0]]
+        record["result"].update(start_state=[0.0], controls=[[0.0]])    # CONTROLS_FIELDS
         path.write_text(json.dumps(record))
     write(site["results"], "t1.json", table1())
     assert run(site) == 0
