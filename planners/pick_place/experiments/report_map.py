@@ -105,9 +105,24 @@ def cloth_line(results: list[Result]) -> str | None:
     return text
 
 
-def scaling_line(results: list[Result]) -> str | None:
-    """Sec. V's claim per recorded scaling fold (``trend_line``: the particle counts N)."""
-    return trend_line(*scaling_families(results), "n_particles")
+def scaling_line(mode: str) -> Callable[[list[Result]], str | None]:
+    """Sec. V's claim per recorded scaling fold of the sweep ``mode`` (``fig7_scaling.py
+    --mode``; a file without one refined the fixed sheet) but quick runs (``trend_line``: the
+    particle counts N), each fold named by its goal, with the Holm family of that sweep's
+    folds."""
+    def line(results: list[Result]) -> str | None:
+        files, family = scaling_families(results)
+        goal = {k: r.data.get("goal") for k, r in files.items() if _scaling_mode(mode)(r)}
+        return trend_line({goal[k]: files[k] for k in goal},
+                          {(goal[k], t): v for (k, t), v in family.items() if k in goal},
+                          "n_particles")
+    return line
+
+
+def _scaling_mode(mode: str) -> Callable[[Result], bool]:
+    """Whether a result is a recorded (not quick) scaling file of the sweep ``mode``."""
+    return lambda r: (r.kind == "fig7_scaling" and not r.quick
+                      and r.data.get("mode", "resolution") == mode)
 
 
 def encoding_line(results: list[Result]) -> str | None:
@@ -189,12 +204,16 @@ ROWS = (
            "python experiments/cloth_fold.py --preset paper --goal diagonal",
            "Key particles, Fig. 7: final cost of pick-and-place", cloth_line, _fig7("cloth"),
            "Cloth: Simple beats Original on every fold"),
-    MapRow(KP, "Sec. V: the gain against the particle count (a finer sheet of one size; a "
-               "bigger sheet at fixed spacing)",
+    MapRow(KP, "Sec. V: the gain against the particle count (a finer sheet of one size)",
            "python experiments/fig7_scaling.py --goal diagonal",
-           "Key particles: the gain against the particle count", scaling_line,
-           lambda r: r.kind == "fig7_scaling" and not r.quick,
+           "Key particles: the gain against the particle count",
+           scaling_line("resolution"), _scaling_mode("resolution"),
            "The gain grows with the particle count"),
+    MapRow(KP, "Sec. V: the gain against the particle count (a bigger sheet at fixed spacing)",
+           "python experiments/fig7_scaling.py --goal diagonal --mode size",
+           "Key particles: the gain against the particle count",
+           scaling_line("size"), _scaling_mode("size"),
+           "The gain grows with the particle count", hidden_until_recorded=True),
     MapRow(KP, "Sec. V under the authors' drag encoding: the gain against N candidate points "
                "on one physics mesh",
            "python experiments/fig7_encoding.py --goal diagonal",

@@ -359,8 +359,8 @@ def test_scaling_study_renders_sizes_and_the_trend(site):
     assert run(site) == 0
     assert "](images/fig7-scaling-diagonal.png)" in site["md"].read_text()
     t = stats["trend"]["original_minus_simple"]
-    assert (f"| Sec. V: the gain against the particle count (a finer sheet of one size; a bigger "
-            f"sheet at fixed spacing) | `python experiments/fig7_scaling.py "
+    assert (f"| Sec. V: the gain against the particle count (a finer sheet of one size) | "
+            f"`python experiments/fig7_scaling.py "
             f"--goal diagonal` | Original - Simple gap per log N (N 100-400, 3 seeds): "
             f"diagonal grows ({t['slope'] * 1e3:.1f} ± {t['slope_ci95'] * 1e3:.1f} mm) |") \
         in block(site["readme"])
@@ -414,6 +414,48 @@ def test_a_fixed_spacing_scaling_file_stands_beside_the_resolution_one(site):
     assert "### side at fixed spacing: `fig7-scaling-spacing-side.json`" in md
     assert "normalised by the flat sheet's cost, original - simple: slope" in md
     assert "tests of the 2 folds" not in md          # one file per mode: no shared family
+    # the README gives each sweep its own row, its numbers from its own files
+    rows = {line.split(" | ")[1]: line for line in block(site["readme"]).splitlines()
+            if line.count(" | ") > 1}
+    finer = rows["Sec. V: the gain against the particle count (a finer sheet of one size)"]
+    bigger = rows["Sec. V: the gain against the particle count (a bigger sheet at fixed "
+                  "spacing)"]
+    assert "--mode size" in bigger and "--mode" not in finer
+    for line, stats in ((finer, plain), (bigger, grown)):
+        t = stats["trend"]["original_minus_simple"]
+        assert (f"Original - Simple gap per log N (N 100-400, 3 seeds): side grows "
+                f"({t['slope'] * 1e3:.1f} ± {t['slope_ci95'] * 1e3:.1f} mm) |") in line
+    # a second fold of the finer sheet: its two files are one family, the bigger sheet's lone
+    # fold keeps its own test
+    write(site["results"], "fig7-scaling-diagonal.json",
+          {"experiment": "fig7_scaling", "task": "cloth", "goal": "diagonal",
+           "protocol": "paper", "physics_preset": "default", **plain, "failed": {},
+           "provenance": provenance("python experiments/fig7_scaling.py --goal diagonal")})
+    assert run(site) == 0
+    rows = {line.split(" | ")[1]: line for line in block(site["readme"]).splitlines()
+            if line.count(" | ") > 1}
+    assert "; Holm over 4 tests |" in rows[finer.split(" | ")[1]]
+    headline = rows[bigger.split(" | ")[1]].split(" | ")[3]
+    assert "Holm" not in headline and "diagonal" not in headline
+
+
+def test_the_fixed_spacing_row_waits_for_its_file(site):
+    """Without a fixed-spacing scaling file the README has no row for that sweep (the finer
+    sheet's row stands alone and does not claim the other)."""
+    from planners.pick_place.scaling import scaling_summary
+
+    records = [{"params": {"settings": {"n": n}, "method": m, "seed": seed},
+                "result": {"final_cost": 0.01 + 0.0001 * seed, "unstable": False}}
+               for n in (10, 20) for seed in range(3) for m in ("simple", "original", "random")]
+    write(site["results"], "fig7-scaling-side.json",
+          {"experiment": "fig7_scaling", "task": "cloth", "goal": "side",
+           "protocol": "paper", "physics_preset": "default", **scaling_summary(records),
+           "failed": {},
+           "provenance": provenance("python experiments/fig7_scaling.py --goal side")})
+    assert run(site) == 0
+    readme = block(site["readme"])
+    assert "(a finer sheet of one size) |" in readme
+    assert "fixed spacing" not in readme
 
 
 def test_a_run_that_departs_from_its_protocol_is_judged_apart_and_seed_by_seed(site):
