@@ -62,8 +62,8 @@ def finite(x) -> float | None:
 
 def finite_mean_ci(values, level: float = 0.95) -> tuple[float | None, float | None]:
     """``mean_ci`` of ``values`` (n,) with each number ``finite`` (one value: no half-width);
-    (None, None) for no values."""
-    if len(values) == 0:
+    (None, None) for no values or a value that is not finite."""
+    if len(values) == 0 or not np.all(np.isfinite(values)):
         return None, None
     mean, half = mean_ci(values, level)
     return finite(mean), finite(half)

@@ -298,7 +298,8 @@ def fig4_fields(records: list[dict], method: str, baseline: str = "baseline") ->
     of ``method``'s trials in that order, each {"rho", "theta", **``summarize``'s row
     normalised by ``baseline``'s trials}; "versus", every point's row against ``baseline``
     paired by seed, one Holm family over the grid (``versus``); "cost_dofs_r", Pearson's r of
-    the points' mean |C| and mean normalised cost (the authors' data: -0.70)."""
+    the points' mean |C| and mean normalised cost (the authors' data: -0.70; None for fewer
+    than 3 finite points or a constant coordinate)."""
     base = [r for r in records if r["params"]["method"] == "baseline"]
     mine = [r for r in records if r["params"]["method"] == method]
     points = []
@@ -308,6 +309,9 @@ def fig4_fields(records: list[dict], method: str, baseline: str = "baseline") ->
             row_label(group[0]["params"])]))
     pts = [(p["n_dofs_mean"], p["mpc_cost_normalised_mean"]) for p in points
            if np.isfinite(p["mpc_cost_normalised_mean"])]
-    r = (float(stats.pearsonr(*zip(*pts, strict=True))[0]) if len(pts) >= 3 else None)
+    xs, ys = np.asarray(pts, dtype=float).reshape(-1, 2).T
+    # Pearson's r needs 3 points and neither coordinate constant (undefined otherwise: None)
+    r = (float(stats.pearsonr(xs, ys)[0])
+         if len(pts) >= 3 and np.ptp(xs) > 0 and np.ptp(ys) > 0 else None)
     return {"points": points, "versus": versus(base + mine, references=(baseline,)),
             "cost_dofs_r": r}

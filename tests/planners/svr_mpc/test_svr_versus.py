@@ -172,6 +172,17 @@ def test_fig4_fields_compare_every_grid_point_with_the_baseline_in_one_family():
     assert verdicts == {"sum-t0-r1 vs baseline": "no difference shown",
                         "sum-t10-r1 vs baseline": "cheaper",
                         "sum-t10-r500 vs baseline": "no difference shown"}
+    # every point keeps 20 DoFs: Pearson's r of DoFs and cost is undefined, so None (not NaN)
+    assert out["cost_dofs_r"] is None
+    dofs = {(10, 500.0): 12.0, (0, 1.0): 20.0, (10, 1.0): 7.0}
+    for r in recs:
+        if r["params"]["method"] == "svr-sum":
+            r["result"] = {**r["result"], "dofs_mean": dofs[r["params"]["theta"],
+                                                           r["params"]["rho"]]}
+    points = fig4_fields(recs, "svr-sum")
+    xs = [dofs[p["theta"], p["rho"]] for p in points["points"]]
+    ys = [p["mpc_cost_normalised_mean"] for p in points["points"]]
+    assert points["cost_dofs_r"] == pytest.approx(stats.pearsonr(xs, ys)[0], rel=1e-12)
 
 
 def test_unstable_episodes_leave_their_pairs_unless_kept():
