@@ -172,10 +172,14 @@ def trend_finding(files: dict, family: dict, counts: str, what: str = "") -> Fin
     shrinks = sum(w.startswith("shrinks") for w in words.values())
     verdict = ("not judged" if not fitted else "not shown" if grows == shrinks == 0
                else "does not hold" if grows == 0 else share(grows, len(words)))
-    sizes = sorted({n for r in files.values() for n in r.data[counts]})
-    return Finding(verdict, f"the gap Original - Simple against log N (N {sizes[0]}-"
-                   f"{sizes[-1]}{what}): " + ", ".join(f"{g} {w}" for g, w in words.items()),
-                   tuple(files.values()))
+    ranges = {g: f"N {min(r.data[counts])}-{max(r.data[counts])}" for g, r in files.items()}
+    if len(set(ranges.values())) == 1:            # one range: said once
+        head, words = f"{next(iter(ranges.values()))}{what}", words
+    else:                                          # each file its own
+        head, words = what.lstrip(), {g: f"({ranges[g]}) {w}" for g, w in words.items()}
+    return Finding(verdict, "the gap Original - Simple against log N"
+                   + (f" ({head})" if head else "") + ": "
+                   + ", ".join(f"{g} {w}" for g, w in words.items()), tuple(files.values()))
 
 
 def _panda(results: list[Result]) -> Finding | None:

@@ -376,6 +376,10 @@ def test_scaling_study_renders_sizes_and_the_trend(site):
     assert (f"Original - Simple gap per log N (3 seeds): diagonal (N 100-400) grows "
             f"({t['slope'] * 1e3:.1f} ± {t['slope_ci95'] * 1e3:.1f} mm), side (N 100-900) "
             ) in block(site["readme"])
+    # the claim on the paper's page names each file's range where they differ
+    claims = (site["md"].parent / "KEY-PARTICLES.md").read_text()
+    assert "the gap Original - Simple against log N: diagonal (N 100-400) grows (" in claims
+    assert ", side (N 100-900) grows (" in claims
     # two folds are one family: Holm over their four tests (by hand), said in both documents
     ps = [f["trend"][k]["p"] for f in (stats, side) for k in ("original_minus_simple",
                                                              "random_minus_simple")]
