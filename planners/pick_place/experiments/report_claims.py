@@ -174,7 +174,7 @@ def trend_finding(files: dict, family: dict, counts: str, what: str = "") -> Fin
                else "does not hold" if grows == 0 else share(grows, len(words)))
     ranges = {g: f"N {min(r.data[counts])}-{max(r.data[counts])}" for g, r in files.items()}
     if len(set(ranges.values())) == 1:            # one range: said once
-        head, words = f"{next(iter(ranges.values()))}{what}", words
+        head = f"{next(iter(ranges.values()))}{what}"
     else:                                          # each file its own
         head, words = what.lstrip(), {g: f"({ranges[g]}) {w}" for g, w in words.items()}
     return Finding(verdict, "the gap Original - Simple against log N"
