@@ -11,6 +11,7 @@ from planners.pick_place.experiments.report_idle import idle_counts, idle_share,
 from planners.pick_place.experiments.report_paper import (
     KP,
     encoding_families,
+    n_range,
     scaling_families,
 )
 
@@ -172,7 +173,7 @@ def trend_finding(files: dict, family: dict, counts: str, what: str = "") -> Fin
     shrinks = sum(w.startswith("shrinks") for w in words.values())
     verdict = ("not judged" if not fitted else "not shown" if grows == shrinks == 0
                else "does not hold" if grows == 0 else share(grows, len(words)))
-    ranges = {g: f"N {min(r.data[counts])}-{max(r.data[counts])}" for g, r in files.items()}
+    ranges = {g: n_range(r, counts) for g, r in files.items()}
     if len(set(ranges.values())) == 1:            # one range: said once
         head = f"{next(iter(ranges.values()))}{what}"
     else:                                          # each file its own

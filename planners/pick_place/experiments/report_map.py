@@ -13,6 +13,7 @@ from planners.pick_place.experiments.report_paper import (
     KP,
     _label,
     encoding_families,
+    n_range,
     scaling_families,
 )
 
@@ -147,7 +148,7 @@ def trend_line(files: dict, family: dict, counts: str) -> str | None:
                             for m in ("simple", "original")})
         seeds.append(str(counts_of[0]) if len(counts_of) == 1
                      else f"{counts_of[0]}-{counts_of[-1]}")
-        sizes.append(f"N {d[counts][0]}-{d[counts][-1]}")
+        sizes.append(n_range(r, counts))
         slope = (f" ({pm(mm(t['slope']), mm(t.get('slope_ci95')))} mm)"
                  if t.get("slope") is not None else "")
         verdict = t["verdict"] if t["verdict"] in ("grows", "shrinks") else "no trend"

@@ -75,6 +75,11 @@ def trend_families(files: dict, group=lambda r: "") -> dict:
     return family
 
 
+def n_range(r, counts: str) -> str:
+    """A scaling or drag-encoding file's counts N (its ``counts`` field) as 'N lo-hi'."""
+    return f"N {min(r.data[counts])}-{max(r.data[counts])}"
+
+
 def scaling_families(results: list) -> tuple[dict, dict]:
     """({scaling_key: file} of the scaling files, {(key, test): Holm over the trend tests of
     the files of one mode together, ``trend_families``})."""
