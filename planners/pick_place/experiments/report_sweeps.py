@@ -123,9 +123,40 @@ def checkpointed_trials(checkpoints: list[tuple[dict, int, float]]) -> list[str]
             for trial, n, wall in checkpoints]
 
 
-def _sweep_heading(name: str, settings: dict) -> list[str]:
-    """The blank line and "### `<sweep>`: Fig. 7 <panel>" heading of one sweep's block."""
-    return ["", f"### `{name}`: Fig. 7 {_panel_of(settings.get('task'), settings.get('goal'))}"]
+def _sweep_heading(name: str, settings: dict, label: str = "") -> list[str]:
+    """The blank line and "### `<sweep>`: Fig. 7 <panel>" heading of one sweep's block,
+    "### `<sweep>` at <label>: ..." for one of its settings groups (``_group_labels``)."""
+    at = f" at {label}" if label else ""
+    return ["", f"### `{name}`{at}: Fig. 7 "
+                f"{_panel_of(settings.get('task'), settings.get('goal'))}"]
+
+
+def _size_key(s: dict) -> tuple:
+    """A settings group's place in its sweep: by the cloth's (or rope's) particles, then by
+    the drag encoding's candidate points."""
+    drag = s.get("drag") if isinstance(s.get("drag"), dict) else {}
+    n, points = s.get("n"), drag.get("n_points")
+    return (n if isinstance(n, int) else 0, points if isinstance(points, int) else 0)
+
+
+def _group_labels(groups: list[dict]) -> list[str]:
+    """What tells one sweep's settings ``groups`` apart in their headings: the drag
+    encoding's candidate points, else the cloth's "<n> x <n>" (a rope's "<n> particles");
+    numbered "settings <i> of <k>" where those do not tell them apart; none for one group."""
+    if len(groups) < 2:
+        return [""] * len(groups)
+    labels = []
+    for s in groups:
+        drag = s.get("drag")
+        if isinstance(drag, dict):
+            labels.append(f"{drag.get('n_points')} candidate points")
+        elif s.get("task") == "cloth":
+            labels.append(f"{s.get('n')} x {s.get('n')}")
+        else:
+            labels.append(f"{s.get('n')} particles")
+    if len(set(labels)) < len(labels):
+        return [f"settings {i} of {len(groups)}" for i in range(1, len(groups) + 1)]
+    return labels
 
 
 def _group_table(group: list[dict]) -> list[str]:
@@ -177,7 +208,8 @@ def _budget(s: dict) -> str:
 
 def sweeps_in_progress_section(results_dir: Path, results: list[Result]) -> list[str]:
     """Per unrecorded Fig. 7 sweep (``unrecorded_sweeps``) and per settings in it (those
-    that name a trial: ``RUN_ONLY_SETTINGS`` such as the thread count left out): each
+    that name a trial: ``RUN_ONLY_SETTINGS`` such as the thread count left out; smallest
+    first, each heading naming its size where the sweep has more than one): each
     method's committed seeds with their final costs, and the measured cost of a trial. No
     means or claims: those wait for the recorded summary."""
     sweeps = unrecorded_sweeps(results_dir, results)
@@ -214,9 +246,11 @@ def sweeps_in_progress_section(results_dir: Path, results: list[Result]) -> list
         for rec in records:
             named = {k: v for k, v in rec["settings"].items() if k not in RUN_ONLY_SETTINGS}
             by_settings.setdefault(json.dumps(named, sort_keys=True), []).append(rec)
-        for group in by_settings.values():
+        groups = sorted(by_settings.values(), key=lambda g: _size_key(g[0]["settings"]))
+        labels = _group_labels([g[0]["settings"] for g in groups])
+        for group, label in zip(groups, labels, strict=True):
             s = group[0]["settings"]
-            lines += _sweep_heading(name, s) + [
+            lines += _sweep_heading(name, s, label) + [
                 "", f"{_size_words(s)}, self-collision "
                     f"{'on' if s.get('selfcollide') else 'off'}, physics {s.get('physics')}"
                     + (f", {s['fold_start']} start" if s.get("fold_start") else "")

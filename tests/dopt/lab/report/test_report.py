@@ -209,6 +209,24 @@ def test_trials_differing_only_in_their_thread_count_share_one_table(site):
     part = site["md"].read_text().split("## Fig. 7 sweeps in progress")[1]
     assert part.count("### `fig7-cloth-side`") == 2          # 20 x 20 and 30 x 30
     assert "| CEM(Simple) | 0, 1 | 5.0, 5.0 |" in part
+    # each size its own heading, the smaller first (the 30 x 30 trial's file sorts first)
+    small = part.index("### `fig7-cloth-side` at 20 x 20: Fig. 7 (d) cloth side fold")
+    assert small < part.index("### `fig7-cloth-side` at 30 x 30: Fig. 7 (d) cloth side fold")
+
+
+def test_the_groups_of_one_sweep_are_told_apart_in_their_headings():
+    from planners.pick_place.experiments.report_sweeps import _group_labels
+
+    cloth = {"task": "cloth", "n": 20}
+    assert _group_labels([cloth]) == [""]
+    assert _group_labels([cloth, {**cloth, "n": 25}]) == ["20 x 20", "25 x 25"]
+    drag = [{**cloth, "drag": {"n_points": p}} for p in (100, 400)]
+    assert _group_labels(drag) == ["100 candidate points", "400 candidate points"]
+    assert _group_labels([{"task": "rope", "n": 40}, {"task": "rope", "n": 80}]) == [
+        "40 particles", "80 particles"]
+    # one size, two settings (self-collision on and off): numbered
+    assert _group_labels([cloth, {**cloth, "selfcollide": True}]) == [
+        "settings 1 of 2", "settings 2 of 2"]
 
 
 def test_a_sweep_lists_its_checkpointed_trials(site, capsys):
