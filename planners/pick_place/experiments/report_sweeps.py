@@ -145,15 +145,8 @@ def _group_labels(groups: list[dict]) -> list[str]:
     numbered "settings <i> of <k>" where those do not tell them apart; none for one group."""
     if len(groups) < 2:
         return [""] * len(groups)
-    labels = []
-    for s in groups:
-        drag = s.get("drag")
-        if isinstance(drag, dict):
-            labels.append(f"{drag.get('n_points')} candidate points")
-        elif s.get("task") == "cloth":
-            labels.append(f"{s.get('n')} x {s.get('n')}")
-        else:
-            labels.append(f"{s.get('n')} particles")
+    labels = [f"{s['drag'].get('n_points')} candidate points"
+              if isinstance(s.get("drag"), dict) else _grid_words(s) for s in groups]
     if len(set(labels)) < len(labels):
         return [f"settings {i} of {len(groups)}" for i in range(1, len(groups) + 1)]
     return labels
@@ -180,16 +173,21 @@ def _group_table(group: list[dict]) -> list[str]:
                   "planning rollouts flagged", "executed plans unstable"], rows)
 
 
+def _grid_words(s: dict) -> str:
+    """"<n> x <n>" for a cloth trial's settings, "<n> particles" for a rope's."""
+    n = s.get("n")
+    return f"{n} x {n}" if s.get("task") == "cloth" else f"{n} particles"
+
+
 def _size_words(s: dict) -> str:
     """"<n> x <n> particles (<side> m a side, <spacing> mm apart)" for a cloth trial's
     settings (its side when they name one), "<n> particles" for a rope's."""
-    n = s.get("n")
     if s.get("task") != "cloth":
-        return f"{n} particles"
-    side = s.get("side")
+        return _grid_words(s)
+    n, side = s.get("n"), s.get("side")
     if not (_finite(side) and isinstance(n, int) and n > 1):
-        return f"{n} x {n} particles"
-    return (f"{n} x {n} particles ({num(side, 3)} m a side, "
+        return f"{_grid_words(s)} particles"
+    return (f"{_grid_words(s)} particles ({num(side, 3)} m a side, "
             f"{num(side / (n - 1) * 1e3, 1)} mm apart)")
 
 
