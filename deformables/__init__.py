@@ -19,6 +19,8 @@ dopt.lab.provenance and dopt.lab.cli. Modules:
                      outside the project) and their key particles beside ours
     bench.py         python -m deformables.bench: timings, the paper's scale, paper vs default
 """
+import dopt.blas  # noqa: F401  first: it pins OpenBLAS's kernels before numpy loads
+
 from .cloth import ClothConfig, cloth_key_particles
 from .goals import (
     GOAL_SEQUENCES,

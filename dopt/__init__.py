@@ -12,8 +12,9 @@ It knows MuJoCo and no planner (docs/ARCHITECTURE.md has the map and the rule). 
                             written for dopt-view (which reads them; the runtime no viewer)
     costs.py, mpc.py        QuadraticCost + residual terms (Eq. 2-3); asynchronous MPC (Alg. 1)
                             with its real, virtual and model clocks, mpc_cost (Eq. 5)
-    validation.py, atomic.py argument checks; the one atomic writer of files (the base
-                            modules every room, the lab's included, may import)
+    validation.py, atomic.py argument checks; the one atomic writer of files; the OpenBLAS
+    blas.py                 kernels, pinned at import (the base modules every room, the lab's
+                            included, may import)
     lab/                    the research machinery, apart from the runtime: sweeps, trial
                             files, provenance, statistics, command lines (dopt.lab)
     render.py               offscreen images of states (numpy arrays; no task knowledge)
@@ -32,6 +33,10 @@ Glossary of shape letters used in every docstring:
 """
 
 import importlib
+
+from . import blas as _blas
+
+_blas.pin()      # before anything loads numpy: the same BLAS bits on any machine (dopt/blas.py)
 
 #: the version a result records (``dopt.lab.provenance.code_version``); bump it for a
 #: result-changing release. pyproject.toml reads it from here.

@@ -30,7 +30,8 @@ schedule in one thread on a virtual time line: the agent takes step k at virtual
 k dt slowdown; an optimisation that starts at virtual time c from the agent's state then lasts
 its measured CPU time (``time.process_time``: all threads of the process, which runs nothing
 else meanwhile) divided by ``threads`` (``virtual``), or ``a + b |C|`` ms (``model``,
-a fixed cost model, so the same seed gives the same episode bit for bit, on any machine);
+a fixed cost model, so the same seed gives the same episode bit for bit, on any machine
+whose OpenBLAS runs ``dopt.blas``'s kernels);
 the agent executes the old plan for the steps that fall before c + duration, and the new
 plan lands shifted by them.
 On every clock an optimisation starts from a state the optimiser has not started from: one

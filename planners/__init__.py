@@ -22,3 +22,5 @@ loop and summaries. Modules:
     _checks.py        input checks the planners share (particle indices, a picker bound)
     bench/            python -m planners.bench: CEM, iLQR, the model clock, physics sweeps
 """
+
+import dopt  # noqa: F401  first, so that it pins OpenBLAS's kernels before numpy loads (dopt/blas.py)

@@ -6,6 +6,8 @@ import os
 
 import pytest
 
+import dopt  # noqa: F401  before any test loads numpy: the pinned OpenBLAS kernels (dopt/blas.py)
+
 os.environ.setdefault("MUJOCO_GL", "egl")
 
 

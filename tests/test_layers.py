@@ -2,8 +2,8 @@
 
 Every import statement of every module (top level, inside functions, under TYPE_CHECKING) is
 parsed with ast, so a lazy import that runs up the house fails here as well. deformables may
-import the pure-Python modules of dopt, dopt.validation, dopt.lab.provenance, dopt.lab.cli and
-dopt.atomic, and importing them must not load MuJoCo.
+import the pure-Python modules of dopt, dopt.validation, dopt.lab.provenance, dopt.lab.cli,
+dopt.atomic and dopt.blas, and importing them must not load MuJoCo.
 
 Inside dopt the same holds between its rooms (``room``): the core (every module outside
 dopt/tasks, dopt/bench and dopt/view) imports nothing of ``dopt.tasks``; the two task wings,
@@ -37,16 +37,17 @@ ROOT = Path(__file__).resolve().parents[1]
 #: package -> top-level names its modules must never import
 FORBIDDEN = {
     "dopt": {"planners", "deformables", "experiments"},
-    # deformables may import dopt.validation, dopt.lab.provenance, dopt.lab.cli, dopt.atomic
-    # (ALLOWED)
+    # deformables may import dopt.validation, dopt.lab.provenance, dopt.lab.cli, dopt.atomic,
+    # dopt.blas (ALLOWED)
     "deformables": {"dopt", "planners", "experiments", "mujoco"},
     "planners": {"experiments"},
 }
 
 
 #: modules importable across the rule above (pure Python, no MuJoCo, no torch; dopt.atomic:
-#: the one atomic writer of every result file, the benchmarks' included)
-ALLOWED = {"dopt.validation", "dopt.lab.provenance", "dopt.lab.cli", "dopt.atomic"}
+#: the one atomic writer of every result file, the benchmarks' included; dopt.blas: the
+#: OpenBLAS kernels, pinned before numpy loads)
+ALLOWED = {"dopt.validation", "dopt.lab.provenance", "dopt.lab.cli", "dopt.atomic", "dopt.blas"}
 
 
 def imported_roots(path: Path) -> set[str]:
@@ -144,8 +145,9 @@ DOPT_FORBIDDEN = {
     "lab": {"core", "front", "pick", "push", "neutral", "view", "bench"},
 }
 
-#: pure-Python modules every room may import: argument checks and the atomic file writer
-BASE = {"dopt", "dopt.validation", "dopt.atomic"}
+#: pure-Python modules every room may import: argument checks, the atomic file writer and the
+#: BLAS pin
+BASE = {"dopt", "dopt.validation", "dopt.atomic", "dopt.blas"}
 
 
 def room(module: str) -> str | None:

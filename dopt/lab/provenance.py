@@ -51,7 +51,7 @@ import sys
 from dataclasses import dataclass
 from pathlib import Path
 
-from dopt import __version__
+from dopt import __version__, blas
 
 #: the packages whose versions a result records
 PACKAGES = ("dopt", "mujoco", "torch", "numpy", "scipy", "cvxpy", "pymeshlab", "trimesh")
@@ -321,11 +321,13 @@ def provenance(argv: list[str] | None = None, root: Path | str | None = None) ->
 
 
 def machine() -> dict:
-    """{"platform", "cpu", "cpus"} of this process: the OS, the processor's model name (from
-    /proc/cpuinfo, else ``platform.processor()``; "" when neither says) and the cores it may
-    use. A sweep's trial records carry it: a CPU-time clock (the virtual clock of the MPC
-    experiments) runs at the speed of the machine a trial ran on. A new dict each call."""
-    return dict(_machine())
+    """{"platform", "cpu", "cpus", "blas"} of this process: the OS, the processor's model name
+    (from /proc/cpuinfo, else ``platform.processor()``; "" when neither says), the cores it may
+    use and the kernels numpy's OpenBLAS runs (``dopt.blas.kernels``: the bits of a BLAS
+    result depend on them). A sweep's trial records carry it: a CPU-time clock (the virtual
+    clock of the MPC experiments) runs at the speed of the machine a trial ran on. A new dict
+    each call."""
+    return {**_machine(), "blas": blas.kernels()}
 
 
 @functools.cache

@@ -4,8 +4,8 @@ A comparison of MPC planners whose lag is measured on the host drifts with the h
 machine makes every row slower and reorders rows whose costs differ by a few per cent). The
 ``authors`` clock (``SVRMPCSettings.timing.clock``) gives every optimisation the duration the
 authors' machine took for one of its size, from their per-episode files (``PaperData/MPC_push_*``,
-``../shared/external/ilqr_svr/paper_data``), so a trial gives the same cost on any machine and
-its lag is the authors' lag.
+``../shared/external/ilqr_svr/paper_data``), so a trial gives the same cost on any machine (with
+``dopt.blas``'s kernels) and its lag is the authors' lag.
 
 The model, per task: ``ms = a + b |C| + s [SVD ranking]``. Each of the task's runs (every
 ``iLQR_SVR`` run, Table 1 rows and Fig. 4 points alike, and the two plain ``iLQR`` runs:
