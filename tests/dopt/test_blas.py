@@ -40,7 +40,10 @@ def _run(first: str, env_value: str | None = None) -> list:
 @needs_avx2
 @pytest.mark.parametrize("first", ["dopt", "planners", "deformables"])
 def test_importing_a_package_first_pins_the_haswell_kernels(first):
-    assert _run(first) == ["Haswell", "Haswell"]
+    env_value, running = _run(first)
+    if running is None:
+        pytest.skip("numpy's BLAS here is not an OpenBLAS that names its kernels")
+    assert [env_value, running] == ["Haswell", "Haswell"]
 
 
 @needs_avx2
@@ -50,7 +53,10 @@ def test_the_users_own_choice_wins():
 
 
 def test_numpy_loaded_first_keeps_what_openblas_chose():
-    env_value, chosen = _run("numpy")
-    assert env_value is None                   # dopt set nothing: it would come too late
-    if "avx512f" in _flags() and chosen is not None:
-        assert chosen == "SkylakeX"            # the kernels the pin exists to avoid
+    env = {k: v for k, v in os.environ.items() if k != "OPENBLAS_CORETYPE"}
+    code = ("import numpy, os, json; from dopt import blas; "
+            "print(json.dumps([os.environ.get('OPENBLAS_CORETYPE'), blas.pin()]))")
+    out = subprocess.run([sys.executable, "-c", code], cwd=ROOT, env=env, capture_output=True,
+                         text=True, check=True)
+    # dopt set nothing on import, and a later pin() declines: it would come too late
+    assert json.loads(out.stdout.strip().splitlines()[-1]) == [None, None]
