@@ -1,7 +1,7 @@
 """Goal shapes of ropes and cloth and their simplification to key particles (no MuJoCo).
 
 Imports neither MuJoCo nor torch, and of dopt only its pure-Python dopt.validation,
-dopt.lab.provenance and dopt.lab.cli. Modules:
+dopt.lab.provenance, dopt.lab.cli and dopt.blas (first: it pins OpenBLAS's kernels). Modules:
 
     goals.py         rope and cloth goal shapes registered by name (GOALS, GOAL_SEQUENCES),
                      flexcomp-compatible numbering and triangulations
