@@ -327,7 +327,7 @@ def machine() -> dict:
     result depend on them). A sweep's trial records carry it: a CPU-time clock (the virtual
     clock of the MPC experiments) runs at the speed of the machine a trial ran on. A new dict
     each call."""
-    return {**_machine(), "blas": blas.kernels()}
+    return dict(_machine())
 
 
 @functools.cache
@@ -339,7 +339,8 @@ def _machine() -> dict:
                         if line.startswith("model name")), "")
     except OSError:
         pass
-    return {"platform": platform.platform(), "cpu": cpu or platform.processor(), "cpus": _cpus()}
+    return {"platform": platform.platform(), "cpu": cpu or platform.processor(), "cpus": _cpus(),
+            "blas": blas.kernels()}           # fixed once OpenBLAS has loaded
 
 
 def command_line(argv: list[str], root: Path | str | None = None) -> str:
