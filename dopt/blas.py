@@ -53,23 +53,36 @@ def pin() -> str | None:
 def _runs_avx2() -> bool:
     if platform.system() != "Linux" or platform.machine().lower() not in ("x86_64", "amd64"):
         return False
+    flags = cpuinfo("flags").split()
+    return "avx2" in flags and "fma" in flags
+
+
+def cpuinfo(field: str) -> str:
+    """The value of ``field`` ("model name", "flags", ...) for the first processor in Linux's
+    /proc/cpuinfo, stripped; "" where the file or the field is absent (not Linux)."""
     try:
         with open("/proc/cpuinfo", encoding="utf-8", errors="replace") as f:
-            flags = next((line.split(":", 1)[1].split() for line in f
-                          if line.startswith("flags")), [])
+            for line in f:
+                key, sep, value = line.partition(":")
+                if sep and key.strip() == field:
+                    return value.strip()
     except OSError:
-        return False
-    return "avx2" in flags and "fma" in flags
+        pass
+    return ""
 
 
 def kernels() -> str | None:
     """The kernels numpy's OpenBLAS runs in this process ("Haswell", "SkylakeX", ...; it
-    imports numpy), or None where numpy computes with another BLAS or its OpenBLAS does not
-    say."""
+    imports numpy), or None where numpy computes with another BLAS (Accelerate on Apple
+    silicon) or its OpenBLAS does not say. The wheels bundle OpenBLAS beside the package
+    (``numpy.libs`` on Linux and Windows) or inside it (``numpy/.dylibs`` on macOS)."""
     import numpy
 
-    libs = Path(numpy.__file__).resolve().parent.parent / "numpy.libs"
-    for path in sorted(libs.glob("libscipy_openblas*")) + sorted(libs.glob("libopenblas*")):
+    pkg = Path(numpy.__file__).resolve().parent
+    found = [path for libs in (pkg.parent / "numpy.libs", pkg / ".dylibs")
+             for pattern in ("libscipy_openblas*", "libopenblas*")
+             for path in sorted(libs.glob(pattern))]
+    for path in found:
         try:
             lib = ctypes.CDLL(str(path))           # already loaded: the same library
         except OSError:

@@ -332,13 +332,7 @@ def machine() -> dict:
 
 @functools.cache
 def _machine() -> dict:
-    cpu = ""
-    try:
-        with open("/proc/cpuinfo", encoding="utf-8", errors="replace") as f:
-            cpu = next((line.split(":", 1)[1].strip() for line in f
-                        if line.startswith("model name")), "")
-    except OSError:
-        pass
+    cpu = blas.cpuinfo("model name")
     return {"platform": platform.platform(), "cpu": cpu or platform.processor(), "cpus": _cpus(),
             "blas": blas.kernels()}           # fixed once OpenBLAS has loaded
 

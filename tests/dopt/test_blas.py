@@ -60,3 +60,13 @@ def test_numpy_loaded_first_keeps_what_openblas_chose():
                          text=True, check=True)
     # dopt set nothing on import, and a later pin() declines: it would come too late
     assert json.loads(out.stdout.strip().splitlines()[-1]) == [None, None]
+
+
+@pytest.mark.skipif(not Path("/proc/cpuinfo").exists(), reason="Linux's /proc/cpuinfo only")
+def test_cpuinfo_reads_the_first_processors_fields():
+    from dopt import blas
+
+    assert blas.cpuinfo("processor") == "0"                 # the first processor's index
+    assert set(blas.cpuinfo("flags").split()) == _flags()   # this file's own reader
+    assert blas.cpuinfo("no such field") == ""
+    assert blas.cpuinfo("flag") == ""                       # a whole field name, not a prefix
