@@ -31,6 +31,7 @@ import time
 import mujoco
 import numpy as np
 
+from dopt import blas
 from dopt.bench.cloth_steps import _step_action, action_rows, mujoco_messages
 from dopt.state import INTEGRATION, get_state
 
@@ -77,8 +78,9 @@ def bench_cloth_warp(sizes: list[int], nworlds: list[int], preset: str = "defaul
     wp.config.quiet = True
     wp.init()
     dev = wp.get_device(device)
-    machine = {"cpu": _cpu_model(), "cpu_count": os.cpu_count(), "warp_device": dev.name,
-               "warp": wp.__version__, "mujoco_warp": importlib.metadata.version("mujoco-warp")}
+    machine = {"cpu": blas.cpuinfo("model name") or None, "cpu_count": os.cpu_count(),
+               "warp_device": dev.name, "warp": wp.__version__,
+               "mujoco_warp": importlib.metadata.version("mujoco-warp")}
     if preload_workers and dev.is_cuda:
         t0 = time.perf_counter()
         try:
@@ -117,16 +119,6 @@ def bench_cloth_warp(sizes: list[int], nworlds: list[int], preset: str = "defaul
             if on_rows is not None:
                 on_rows(rows)
     return rows
-
-
-def _cpu_model() -> str | None:
-    """The processor's model name from /proc/cpuinfo (None where there is none)."""
-    try:
-        with open("/proc/cpuinfo") as f:
-            return next((ln.split(":", 1)[1].strip() for ln in f
-                         if ln.startswith("model name")), None)
-    except OSError:
-        return None
 
 
 def _captured_step(wp, mjw, dev, wm, wd, out: dict):
