@@ -73,9 +73,10 @@ def cpuinfo(field: str) -> str:
 
 def kernels() -> str | None:
     """The kernels numpy's OpenBLAS runs in this process ("Haswell", "SkylakeX", ...; it
-    imports numpy), or None where numpy computes with another BLAS (Accelerate on Apple
-    silicon) or its OpenBLAS does not say. The wheels bundle OpenBLAS beside the package
-    (``numpy.libs`` on Linux and Windows) or inside it (``numpy/.dylibs`` on macOS)."""
+    imports numpy), or None where numpy computes with another BLAS (Accelerate, in the
+    arm64 wheels for macOS 14 and later) or its OpenBLAS does not say. The wheels bundle
+    OpenBLAS beside the package (``numpy.libs`` on Linux and Windows) or inside it
+    (``numpy/.dylibs`` on macOS)."""
     import numpy
 
     pkg = Path(numpy.__file__).resolve().parent
